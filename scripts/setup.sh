@@ -1,0 +1,17 @@
+#!/usr/bin/env bash
+# Installs everything toposimp needs on Debian 12, from Debian packages only. Idempotent.
+set -euo pipefail
+packages=(build-essential cmake ninja-build pkg-config
+          libgdal-dev gdal-bin libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "setup: installing ${missing[*]}"
+  sudo_cmd=""
+  [ "$(id -u)" -eq 0 ] || sudo_cmd="sudo"
+  $sudo_cmd apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo_cmd apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+echo "setup: dependencies present"

@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# The second README command: installs the dependencies, builds (dev preset: debug, -Werror) and
+# runs every test through ctest (labels: unit, cli, property, golden).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup.sh
+scripts/build.sh "${PRESET:-dev}"
+ctest --preset "${PRESET:-dev}" -j "$(nproc)" "$@"

@@ -1,0 +1,261 @@
+#include "cli/map_command.hpp"
+
+#include "cli/logging.hpp"
+#include "core/map/simplify.hpp"
+#include "io/errors.hpp"
+#include "io/giscup.hpp"
+#include "io/ogr_lines.hpp"
+#include "io/output_file.hpp"
+
+#include <cpl_conv.h>
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+namespace toposimp::cli {
+
+CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
+    CLI::App* map = app.add_subcommand("map", "Simplify line layers, keeping their topology and control points' sides");
+    map->footer(
+        "Stopping criteria (one; default --keep 10%): --keep, --keep-points, --remove-points, --max-area, --max.\n"
+        "A vertex is removed only if the closed triangle it forms with its neighbours holds no other vertex and\n"
+        "no control point (exact predicates), so no new crossing or touching appears and no control point changes\n"
+        "side, for input whose lines meet only at shared vertices. Output vertices are a subset of the input's,\n"
+        "coordinates untouched, each line keeping its first and last vertex.\n"
+        "Exit status: 0 ok, 2 usage or input error.");
+    map->add_option("input", options.input, "Input line layer (any OGR source; with --giscup, a GIS Cup lines file)")->required();
+    map->add_option("-o,--output", options.output, "Output file (format from the extension or -f); /vsistdout/ for stdout")
+        ->required();
+    map->add_option("-p,--points", options.points, "Control points: FILE or FILE:LAYER (Point/MultiPoint)");
+    map->add_option("-l,--layer", options.layer, "Input layer name (default: the first layer)");
+    map->add_option("-f,--format", options.format, "Output OGR driver, e.g. GPKG, 'ESRI Shapefile', FlatGeobuf, GeoJSON");
+    map->add_option("--nln", options.layer_name, "Output layer name (GDAL's -nln; default: the input layer's)");
+    map->add_option("--lco", options.layer_options, "Layer creation option KEY=VALUE (GDAL's -lco; repeatable)")
+        ->allow_extra_args(false);
+    map->add_option("--dsco", options.dataset_options, "Dataset creation option KEY=VALUE (GDAL's -dsco; repeatable)")
+        ->allow_extra_args(false);
+    map->add_option("--config", options.config, "GDAL configuration option KEY VALUE (repeatable)")
+        ->allow_extra_args(false);
+    auto* keep = map->add_option("--keep", options.keep, "Keep this share of the vertices: 10% or 0.1 (default 10%)");
+    auto* keep_points = map->add_option("--keep-points", options.keep_points, "Keep N vertices in total")
+                            ->check(CLI::NonNegativeNumber);
+    auto* remove_points = map->add_option("--remove-points", options.remove_points, "Remove N vertices (GIS Cup 2014)")
+                              ->check(CLI::NonNegativeNumber);
+    auto* max_area = map->add_option("--max-area", options.max_area,
+                                     "Remove vertices whose effective area is at most A (map units squared)")
+                         ->check(CLI::NonNegativeNumber);
+    auto* max = map->add_flag("--max", options.max, "Remove every vertex that can be removed");
+    const std::vector<CLI::Option*> criteria{keep, keep_points, remove_points, max_area, max};
+    for (CLI::Option* a : criteria) {
+        for (CLI::Option* b : criteria) {
+            if (a != b) a->excludes(b);
+        }
+    }
+    map->add_option("--arithmetic", options.arithmetic,
+                    "exact (default: float filter, GMP fallback), rational (all GMP, as EPLSimp), "
+                    "float (naive doubles as TopoVW: UNSAFE, for experiments only)")
+        ->check(CLI::IsMember({"exact", "rational", "float"}));
+    map->add_flag("--giscup", options.giscup, "Input, --points and output are GIS Cup 2014 text files");
+    map->add_flag("--json", options.json, "Print a JSON summary on stdout (on stderr when the output is stdout)");
+    map->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
+    map->add_flag("-q,--quiet", options.quiet, "Print errors only");
+    map->add_flag("-v,--verbose", options.verbosity, "More detail (repeat for more)");
+    return map;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::optional<map::StopCriterion> stop_criterion(const MapOptions& options, std::string& problem) {
+    map::StopCriterion stop;
+    if (options.max) {
+        stop.target = map::Target::max;
+    } else if (options.keep_points >= 0) {
+        stop = {map::Target::keep_points, std::floor(options.keep_points)};
+    } else if (options.remove_points >= 0) {
+        stop = {map::Target::remove_points, std::floor(options.remove_points)};
+    } else if (options.max_area >= 0) {
+        stop = {map::Target::max_area, options.max_area};
+    } else if (!options.keep.empty()) {
+        std::string text = options.keep;
+        const bool percent = text.back() == '%';
+        if (percent) text.pop_back();
+        double value = 0;
+        std::istringstream parse(text);
+        if (!(parse >> value) || !parse.eof() || !std::isfinite(value) || value < 0) {
+            problem = "--keep takes a share such as 10% or 0.1, not '" + options.keep + "'";
+            return std::nullopt;
+        }
+        if (percent) value /= 100.0;
+        if (value > 1.0) {
+            problem = "--keep " + options.keep + " is more than all vertices (did you mean " + options.keep + "%?)";
+            return std::nullopt;
+        }
+        stop = {map::Target::keep_fraction, value};
+    }
+    return stop;
+}
+
+std::string describe(const map::StopCriterion& stop) {
+    std::ostringstream text;
+    switch (stop.target) {
+        case map::Target::keep_fraction: text << "keep " << stop.value * 100 << "%"; break;
+        case map::Target::keep_points: text << "keep " << stop.value << " vertices"; break;
+        case map::Target::remove_points: text << "remove " << stop.value << " vertices"; break;
+        case map::Target::max_area: text << "effective area <= " << stop.value; break;
+        case map::Target::max: text << "max"; break;
+    }
+    return text.str();
+}
+
+std::string json_string(const std::string& text) {
+    std::string out = "\"";
+    for (char c : text) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += c;
+        } else if (static_cast<unsigned char>(c) < 0x20) {
+            char escaped[8];
+            std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
+            out += escaped;
+        } else {
+            out += c;
+        }
+    }
+    return out + "\"";
+}
+
+struct Timings {
+    double read = 0, simplify = 0, write = 0, total = 0;
+};
+
+void print_json(std::ostream& out, const MapOptions& options, const map::StopCriterion& stop,
+                const map::SimplifyStats& stats, const Timings& time, std::uint64_t features) {
+    out << "{\"command\":\"map\",\"input\":" << json_string(options.input) << ",\"output\":" << json_string(options.output)
+        << ",\"features\":" << features << ",\"vertices_in\":" << stats.vertices_in
+        << ",\"vertices_out\":" << stats.vertices_out << ",\"removed\":" << stats.removed
+        << ",\"control_points\":" << stats.control_points << ",\"target\":{\"criterion\":" << json_string(describe(stop))
+        << ",\"removal_goal\":" << stats.removal_goal << ",\"reached\":" << (stats.target_reached ? "true" : "false")
+        << "},\"blocked\":{\"total\":" << stats.blocked() << ",\"point_in_triangle\":" << stats.blocked_by_point
+        << ",\"ring\":" << stats.blocked_by_ring << ",\"coincident_segment\":" << stats.blocked_by_coincidence
+        << "},\"arithmetic\":" << json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
+        << stats.predicates.filter_decided << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
+        << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
+        << ",\"total\":" << time.total << "}}\n";
+}
+
+exact::Arithmetic arithmetic_of(const std::string& name) {
+    if (name == "rational") return exact::Arithmetic::rational;
+    if (name == "float") return exact::Arithmetic::floating;
+    return exact::Arithmetic::exact;
+}
+
+}  // namespace
+
+int run_map(const MapOptions& options, Context& context) {
+    auto log = make_logger(context.err, options.verbosity, options.quiet);
+    std::string problem;
+    const std::optional<map::StopCriterion> stop = stop_criterion(options, problem);
+    if (!stop) {
+        log->error("{}", problem);
+        return kUsageError;
+    }
+    for (const auto& [key, value] : options.config) CPLSetConfigOption(key.c_str(), value.c_str());
+
+    map::SimplifyOptions simplify_options;
+    simplify_options.stop = *stop;
+    simplify_options.arithmetic = arithmetic_of(options.arithmetic);
+    if (simplify_options.arithmetic == exact::Arithmetic::floating) {
+        log->warn("--arithmetic float uses naive double predicates: the output may break topology");
+    }
+
+    const auto start = Clock::now();
+    Timings time;
+    try {
+        // read → simplify → write; the engine builds chains, indexes and ranks inside simplify().
+        map::MapData map;
+        std::optional<io::OgrLines> layer;
+        io::GiscupLines giscup_lines;
+        if (options.giscup) {
+            giscup_lines = io::read_giscup_lines(options.input, map);
+            if (!options.points.empty()) map.control_points = io::read_giscup_points(options.points);
+        } else {
+            layer.emplace(io::OgrLines::read(options.input, options.layer, map));
+            if (!options.points.empty()) map.control_points = io::read_control_points(options.points);
+            const io::LayerSummary& summary = layer->summary();
+            log->debug("read {} ({}), layer '{}': {} features{}{}", options.input, summary.driver, summary.layer,
+                       summary.features, summary.has_z ? ", Z kept" : "", summary.has_m ? ", M kept" : "");
+            if (summary.empty_geometries > 0) {
+                log->warn("{} features with an empty or NULL geometry are written unchanged", summary.empty_geometries);
+            }
+        }
+        time.read = seconds_since(start);
+        log->debug("{} chains, {} vertices, {} control points", map.chains.size(), map.vertices.size(),
+                   map.control_points.size());
+
+        const auto simplify_start = Clock::now();
+        const map::SimplifyResult result = map::simplify(map, simplify_options);
+        time.simplify = seconds_since(simplify_start);
+        const map::SimplifyStats& stats = result.stats;
+
+        const auto write_start = Clock::now();
+        if (options.giscup) {
+            io::OutputFile output(options.output, options.overwrite);
+            {
+                std::ofstream out(output.staging_path(), std::ios::binary);
+                io::write_giscup_lines(out, giscup_lines, map, result.kept);
+                out.close();
+                if (!out) throw io::OutputError("error writing '" + options.output + "'");
+            }
+            output.commit();
+        } else {
+            io::WriteOptions write;
+            write.path = options.output;
+            write.format = options.format;
+            write.layer_name = options.layer_name;
+            write.layer_options = options.layer_options;
+            write.dataset_options = options.dataset_options;
+            write.overwrite = options.overwrite;
+            for (const std::string& warning : layer->write(write, map, result.kept)) log->warn("{}", warning);
+        }
+        time.write = seconds_since(write_start);
+        time.total = seconds_since(start);
+
+        if (!stats.target_reached) {
+            log->warn("target not reached: removed {} of the {} vertices asked for; no more can go without changing topology",
+                      stats.removed, stats.removal_goal);
+        }
+        log->debug("predicates: {} decided by the float filter, {} by GMP", stats.predicates.filter_decided,
+                   stats.predicates.gmp_fallbacks);
+        log->debug("refused removals: {} point in triangle, {} ring, {} coincident segment", stats.blocked_by_point,
+                   stats.blocked_by_ring, stats.blocked_by_coincidence);
+        const std::string summary_line = fmt::format("{} -> {} vertices ({} removed, {} refused), {}, {:.3f} s",
+                                                     stats.vertices_in, stats.vertices_out, stats.removed,
+                                                     stats.blocked(), describe(*stop), time.total);
+        if (context.err_is_terminal || options.verbosity > 0) log->info("{}", summary_line);
+        if (options.json) {
+            const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
+            print_json(output_is_stdout ? context.err : context.out, options, *stop, stats, time,
+                       layer ? layer->summary().features : map.chains.size());
+        }
+        return kOk;
+    } catch (const io::InputError& error) {
+        log->error("{}", error.what());
+    } catch (const io::OutputError& error) {
+        log->error("{}", error.what());
+    } catch (const std::bad_alloc&) {
+        log->error("out of memory");
+    }
+    return kUsageError;
+}
+
+}  // namespace toposimp::cli

@@ -1,0 +1,42 @@
+// `toposimp map`: topology-preserving simplification of line layers (EPLSimp).
+#pragma once
+
+#include "cli/cli.hpp"
+
+#include <CLI/App.hpp>
+
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace toposimp::cli {
+
+struct MapOptions {
+    std::string input;
+    std::string output;
+    std::string points;
+    std::string layer;
+    std::string format;
+    std::string layer_name;
+    std::vector<std::string> layer_options;
+    std::vector<std::string> dataset_options;
+    std::vector<std::pair<std::string, std::string>> config;
+    std::string keep;
+    double keep_points = -1;
+    double remove_points = -1;
+    double max_area = -1;
+    bool max = false;
+    std::string arithmetic = "exact";
+    bool giscup = false;
+    bool json = false;
+    bool overwrite = false;
+    bool quiet = false;
+    int verbosity = 0;
+};
+
+// Declares the subcommand's options on `app`, bound to `options`.
+CLI::App* add_map_command(CLI::App& app, MapOptions& options);
+
+int run_map(const MapOptions& options, Context& context);
+
+}  // namespace toposimp::cli

@@ -1,0 +1,67 @@
+#include "cli/cli.hpp"
+
+#include "cli/map_command.hpp"
+#include "io/ogr_lines.hpp"
+
+#include <CLI/CLI.hpp>
+#include <gmp.h>
+
+#include <algorithm>
+#include <ostream>
+
+namespace toposimp::cli {
+namespace {
+
+constexpr const char* kVersion = "0.1.0";
+
+// GDAL's tools spell some options with one dash (-lco, -dsco, -nln); CLI11 wants two.
+std::vector<std::string> gdal_style_to_cli11(const std::vector<std::string>& args) {
+    std::vector<std::string> out;
+    out.reserve(args.size());
+    for (const std::string& arg : args) {
+        if (arg == "-lco" || arg == "-dsco" || arg == "-nln") {
+            out.push_back("-" + arg);
+        } else {
+            out.push_back(arg);
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+int run(const std::vector<std::string>& args, Context& context) {
+    CLI::App app{"toposimp: exact, topology-preserving simplification of maps and meshes", "toposimp"};
+    app.require_subcommand(0, 1);
+    app.set_version_flag("--version",
+                         std::string("toposimp ") + kVersion + " (GDAL " + io::gdal_version() + ", GMP " + gmp_version + ")");
+    app.footer("Run 'toposimp COMMAND --help' for a command's options; 'man toposimp' for details.\n"
+               "Exit status: 0 ok, 1 topology or validation failure, 2 usage or input error.");
+    MapOptions map_options;
+    CLI::App* map = add_map_command(app, map_options);
+
+    std::vector<std::string> reversed = gdal_style_to_cli11(args);
+    std::reverse(reversed.begin(), reversed.end());
+    try {
+        app.parse(reversed);
+    } catch (const CLI::CallForHelp&) {
+        context.out << (app.got_subcommand(map) ? map->help() : app.help());
+        return kOk;
+    } catch (const CLI::CallForVersion&) {
+        context.out << app.version() << '\n';
+        return kOk;
+    } catch (const CLI::ParseError& error) {
+        if (error.get_exit_code() == 0) {
+            context.out << (app.got_subcommand(map) ? map->help() : app.help());
+            return kOk;
+        }
+        context.err << "toposimp: error: " << error.what() << "\n";
+        context.err << "Run 'toposimp " << (app.got_subcommand(map) ? "map " : "") << "--help' for usage.\n";
+        return kUsageError;
+    }
+    if (app.got_subcommand(map)) return run_map(map_options, context);
+    context.err << app.help();
+    return kUsageError;
+}
+
+}  // namespace toposimp::cli

@@ -1,0 +1,100 @@
+#include "core/exact/predicates.hpp"
+
+#include <gmpxx.h>
+
+#include <cmath>
+
+namespace toposimp::exact {
+
+std::string_view to_string(Arithmetic arithmetic) {
+    switch (arithmetic) {
+        case Arithmetic::exact: return "exact";
+        case Arithmetic::rational: return "rational";
+        case Arithmetic::floating: return "float";
+    }
+    return "?";
+}
+
+namespace {
+
+constexpr double kEpsilon = 0x1p-53;  // half an ulp of 1.0: the unit roundoff of binary64
+constexpr double kOrientBound = (3.0 + 16.0 * kEpsilon) * kEpsilon;
+// Below this magnitude products may be subnormal and the relative bound no longer holds; such
+// cases go to GMP. Far above the subnormal range so the bound's own rounding cannot matter.
+constexpr double kMinCertifiable = 0x1p-900;
+
+int sign_of(const mpq_class& value) { return sgn(value); }
+
+int orient_rational(Point a, Point b, Point c) {
+    // mpq_class(double) is exact: every finite double is a dyadic rational.
+    const mpq_class ax(a.x), ay(a.y), bx(b.x), by(b.y), cx(c.x), cy(c.y);
+    const mpq_class det = (ax - cx) * (by - cy) - (ay - cy) * (bx - cx);
+    return sign_of(det);
+}
+
+// Point in the closed segment hull of three collinear points (exact: only comparisons).
+bool in_collinear_hull(Point a, Point b, Point c, Point p, Arithmetic arithmetic, PredicateStats& stats) {
+    const Box box = triangle_box(a, b, c);
+    if (!box_contains(box, p)) return false;
+    // The two corners farthest apart span the hull; if all coincide the hull is one point.
+    Point u = a, v = b;
+    if (same_location(u, v)) v = c;
+    if (same_location(u, v)) return same_location(p, u);
+    // u != v span the line through all three corners; p on that line and in their box is in.
+    const int side = arithmetic == Arithmetic::rational ? orient_rational(u, v, p) : orient2d(u, v, p, stats);
+    return side == 0;
+}
+
+}  // namespace
+
+int orient2d_gmp(Point a, Point b, Point c) { return orient_rational(a, b, c); }
+
+int orient2d(Point a, Point b, Point c, PredicateStats& stats) {
+    const double detleft = (a.x - c.x) * (b.y - c.y);
+    const double detright = (a.y - c.y) * (b.x - c.x);
+    const double det = detleft - detright;
+    const double detsum = std::fabs(detleft) + std::fabs(detright);
+    // The filter certifies the sign only with finite, well-scaled terms (no overflow, no
+    // subnormal products). NaN compares false everywhere and falls through to GMP as well.
+    if (detsum >= kMinCertifiable && detsum <= 0x1p1000) {
+        const double bound = kOrientBound * detsum;
+        if (det > bound) {
+            ++stats.filter_decided;
+            return 1;
+        }
+        if (-det > bound) {
+            ++stats.filter_decided;
+            return -1;
+        }
+    } else if (detleft == 0.0 && detright == 0.0 && (a.x == c.x || b.y == c.y) && (a.y == c.y || b.x == c.x)) {
+        // Both products are exactly zero because a factor is exactly zero: det is exactly 0.
+        ++stats.filter_decided;
+        return 0;
+    }
+    ++stats.gmp_fallbacks;
+    return orient_rational(a, b, c);
+}
+
+bool in_closed_triangle(Point a, Point b, Point c, Point p, Arithmetic arithmetic, PredicateStats& stats) {
+    if (arithmetic == Arithmetic::floating) return in_closed_triangle_float(a, b, c, p);
+    auto orient = [&](Point u, Point v, Point w) {
+        return arithmetic == Arithmetic::rational ? orient_rational(u, v, w) : orient2d(u, v, w, stats);
+    };
+    const int turn = orient(a, b, c);
+    if (turn == 0) return in_collinear_hull(a, b, c, p, arithmetic, stats);
+    // p is in the closed triangle iff it is not strictly on the outer side of any edge.
+    if (orient(a, b, p) * turn < 0) return false;
+    if (orient(b, c, p) * turn < 0) return false;
+    return orient(c, a, p) * turn >= 0;
+}
+
+bool in_closed_triangle_float(Point a, Point b, Point c, Point p) {
+    // Barycentric coordinates of p in abc, as TopoVW computed them.
+    const double denominator = (b.y - c.y) * (a.x - c.x) + (c.x - b.x) * (a.y - c.y);
+    const double alpha = ((b.y - c.y) * (p.x - c.x) + (c.x - b.x) * (p.y - c.y)) / denominator;
+    const double beta = ((c.y - a.y) * (p.x - c.x) + (a.x - c.x) * (p.y - c.y)) / denominator;
+    const double gamma = 1.0 - alpha - beta;
+    return alpha >= 0.0 && alpha <= 1.0 && beta >= 0.0 && beta <= 1.0 && gamma >= 0.0 && gamma <= 1.0;
+}
+
+}  // namespace toposimp::exact

@@ -1,0 +1,50 @@
+// Exact geometric predicates on double coordinates.
+//
+// Every sign decision the simplifier makes goes through this file. The `exact` mode evaluates
+// each predicate first in double precision with a semi-static error bound (Shewchuk, "Adaptive
+// Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997, §4.2: the
+// orient2d bound (3 + 16ε)ε·(|detleft| + |detright|)); only when that bound cannot certify the
+// sign is the determinant recomputed exactly with GMP rationals. `rational` always uses GMP, as
+// the dissertation's EPLSimp did (chapter 3). `floating` is the naive double barycentric test of
+// TopoVW (chapter 2): it can answer wrongly near edges and is kept for experiments only.
+#pragma once
+
+#include "core/geometry.hpp"
+
+#include <cstdint>
+#include <string_view>
+
+namespace toposimp::exact {
+
+enum class Arithmetic { exact, rational, floating };
+
+std::string_view to_string(Arithmetic arithmetic);
+
+// How often the float filter decided, and how often GMP had to.
+struct PredicateStats {
+    std::uint64_t filter_decided = 0;
+    std::uint64_t gmp_fallbacks = 0;
+
+    PredicateStats& operator+=(const PredicateStats& other) {
+        filter_decided += other.filter_decided;
+        gmp_fallbacks += other.gmp_fallbacks;
+        return *this;
+    }
+};
+
+// Sign of the orientation determinant, computed exactly with GMP:
+// > 0: c lies left of the directed line a→b (counter-clockwise turn), < 0: right, 0: collinear.
+int orient2d_gmp(Point a, Point b, Point c);
+
+// The same sign, decided by the float filter when it can be certified, by GMP otherwise.
+int orient2d(Point a, Point b, Point c, PredicateStats& stats);
+
+// Is p in the closed triangle abc (interior or boundary)? Degenerate triangles (collinear or
+// coincident corners) are the closed segment or point they span.
+bool in_closed_triangle(Point a, Point b, Point c, Point p, Arithmetic arithmetic, PredicateStats& stats);
+
+// TopoVW's barycentric test in plain doubles (unsafe: wrong near edges, false for degenerate
+// triangles). Exposed for tests that show what it gets wrong.
+bool in_closed_triangle_float(Point a, Point b, Point c, Point p);
+
+}  // namespace toposimp::exact

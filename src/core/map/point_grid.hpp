@@ -1,0 +1,58 @@
+// A uniform grid over points (dissertation §2.3.1): each cell lists the ids of the points in it,
+// stored compactly (counting sort into one array, no per-cell allocation).
+//
+// Cell lookup is a monotone function of each coordinate, so every point inside a query box is
+// in one of the cells the box's corners map to: the grid never misses a point, whatever the
+// rounding in the cell computation. Exactness of the final answer is the caller's predicate.
+#pragma once
+
+#include "core/geometry.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace toposimp::map {
+
+class PointGrid {
+public:
+    // Indexes points[0..n); about `points_per_cell` points share a cell on average.
+    PointGrid(std::span<const Point> points, double points_per_cell = 2.0);
+
+    // Calls visit(id) for each point id in the cells overlapping `box` (a superset of the points
+    // inside it) until visit returns true; returns whether it did.
+    template <class Visit>
+    bool any_in_cells(const Box& box, Visit&& visit) const {
+        const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
+        const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
+        for (std::uint32_t y = y0; y <= y1; ++y) {
+            const std::size_t row_start = std::size_t{y} * columns_;
+            for (std::size_t cell = row_start + x0; cell <= row_start + x1; ++cell) {
+                for (std::uint32_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
+                    if (visit(ids_[k])) return true;
+                }
+            }
+        }
+        return false;
+    }
+
+    std::uint32_t columns() const { return columns_; }
+    std::uint32_t rows() const { return rows_; }
+
+private:
+    static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
+        double t = (value - origin) * scale;
+        if (!(t >= 0.0)) t = 0.0;  // also catches NaN from 0·∞ in a zero-width grid
+        if (t >= static_cast<double>(count)) return count - 1;
+        return static_cast<std::uint32_t>(t);
+    }
+    std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
+    std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
+
+    double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
+    std::uint32_t columns_ = 1, rows_ = 1;
+    std::vector<std::uint32_t> cell_start_;
+    std::vector<std::uint32_t> ids_;
+};
+
+}  // namespace toposimp::map

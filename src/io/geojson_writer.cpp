@@ -1,0 +1,260 @@
+#include "io/geojson_writer.hpp"
+
+#include "io/errors.hpp"
+#include "io/number_format.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+namespace toposimp::io {
+namespace {
+
+void append_string(std::string& out, const char* text) {
+    out += '"';
+    for (const unsigned char* c = reinterpret_cast<const unsigned char*>(text); *c; ++c) {
+        switch (*c) {
+            case '"': out += "\\\""; break;
+            case '\\': out += "\\\\"; break;
+            case '\n': out += "\\n"; break;
+            case '\r': out += "\\r"; break;
+            case '\t': out += "\\t"; break;
+            default:
+                if (*c < 0x20) {
+                    char escaped[8];
+                    std::snprintf(escaped, sizeof escaped, "\\u%04x", *c);
+                    out += escaped;
+                } else {
+                    out += static_cast<char>(*c);
+                }
+        }
+    }
+    out += '"';
+}
+
+void append_real(std::string& out, double value) {
+    if (std::isfinite(value)) {
+        append_number(out, value);
+    } else {
+        out += "null";  // JSON has no NaN or infinity
+    }
+}
+
+void append_two_digits(std::string& out, int value) {
+    out += static_cast<char>('0' + value / 10);
+    out += static_cast<char>('0' + value % 10);
+}
+
+void append_date_time(std::string& out, const OGRFeature& feature, int field, OGRFieldType type) {
+    int year = 0, month = 0, day = 0, hour = 0, minute = 0, zone = 0;
+    float second = 0;
+    feature.GetFieldAsDateTime(field, &year, &month, &day, &hour, &minute, &second, &zone);
+    std::string text;
+    if (type != OFTTime) {
+        char date[16];
+        std::snprintf(date, sizeof date, "%04d-", year);
+        text += date;
+        append_two_digits(text, month);
+        text += '-';
+        append_two_digits(text, day);
+    }
+    if (type != OFTDate) {
+        if (type == OFTDateTime) text += 'T';
+        append_two_digits(text, hour);
+        text += ':';
+        append_two_digits(text, minute);
+        text += ':';
+        const int whole = static_cast<int>(second);
+        append_two_digits(text, whole);
+        const int millis = static_cast<int>(std::lround((second - static_cast<float>(whole)) * 1000.0));
+        if (millis > 0 && millis < 1000) {
+            char fraction[16];
+            std::snprintf(fraction, sizeof fraction, ".%03d", millis);
+            text += fraction;
+        }
+        // GDAL time zone flag: 100 = UTC, each step is 15 minutes; 0/1 = unknown/local.
+        if (zone == 100) {
+            text += 'Z';
+        } else if (zone > 1) {
+            const int offset = (zone - 100) * 15;
+            text += offset < 0 ? '-' : '+';
+            append_two_digits(text, std::abs(offset) / 60);
+            text += ':';
+            append_two_digits(text, std::abs(offset) % 60);
+        }
+    }
+    append_string(out, text.c_str());
+}
+
+void append_property(std::string& out, const OGRFeature& feature, int field) {
+    const OGRFieldDefn* definition = feature.GetFieldDefnRef(field);
+    const OGRFieldType type = definition->GetType();
+    const bool boolean = definition->GetSubType() == OFSTBoolean;
+    int count = 0;
+    switch (type) {
+        case OFTInteger:
+            if (boolean) {
+                out += feature.GetFieldAsInteger(field) ? "true" : "false";
+            } else {
+                out += std::to_string(feature.GetFieldAsInteger(field));
+            }
+            return;
+        case OFTInteger64: out += std::to_string(feature.GetFieldAsInteger64(field)); return;
+        case OFTReal: append_real(out, feature.GetFieldAsDouble(field)); return;
+        case OFTDate:
+        case OFTTime:
+        case OFTDateTime: append_date_time(out, feature, field, type); return;
+        case OFTIntegerList: {
+            const int* values = feature.GetFieldAsIntegerList(field, &count);
+            out += '[';
+            for (int i = 0; i < count; ++i) {
+                if (i) out += ',';
+                out += boolean ? (values[i] ? "true" : "false") : std::to_string(values[i]);
+            }
+            out += ']';
+            return;
+        }
+        case OFTInteger64List: {
+            const GIntBig* values = feature.GetFieldAsInteger64List(field, &count);
+            out += '[';
+            for (int i = 0; i < count; ++i) {
+                if (i) out += ',';
+                out += std::to_string(values[i]);
+            }
+            out += ']';
+            return;
+        }
+        case OFTRealList: {
+            const double* values = feature.GetFieldAsDoubleList(field, &count);
+            out += '[';
+            for (int i = 0; i < count; ++i) {
+                if (i) out += ',';
+                append_real(out, values[i]);
+            }
+            out += ']';
+            return;
+        }
+        case OFTStringList: {
+            char** values = feature.GetFieldAsStringList(field);
+            out += '[';
+            for (int i = 0; values && values[i]; ++i) {
+                if (i) out += ',';
+                append_string(out, values[i]);
+            }
+            out += ']';
+            return;
+        }
+        default: append_string(out, feature.GetFieldAsString(field)); return;
+    }
+}
+
+struct CoordinateWriter {
+    std::string& out;
+    bool dropped_m = false;
+
+    void line(const OGRSimpleCurve& curve) {
+        out += '[';
+        for (int i = 0; i < curve.getNumPoints(); ++i) {
+            if (i) out += ',';
+            out += '[';
+            append_number(out, curve.getX(i));
+            out += ',';
+            append_number(out, curve.getY(i));
+            if (curve.Is3D()) {
+                out += ',';
+                append_number(out, curve.getZ(i));
+            }
+            out += ']';
+        }
+        out += ']';
+        dropped_m = dropped_m || curve.IsMeasured();
+    }
+
+    void geometry(const OGRGeometry* geometry) {
+        if (geometry == nullptr) {
+            out += "null";
+            return;
+        }
+        switch (wkbFlatten(geometry->getGeometryType())) {
+            case wkbLineString:
+                out += R"({"type":"LineString","coordinates":)";
+                line(*geometry->toLineString());
+                break;
+            case wkbMultiLineString: {
+                out += R"({"type":"MultiLineString","coordinates":[)";
+                const OGRMultiLineString* multi = geometry->toMultiLineString();
+                for (int i = 0; i < multi->getNumGeometries(); ++i) {
+                    if (i) out += ',';
+                    line(*multi->getGeometryRef(i));
+                }
+                out += ']';
+                break;
+            }
+            default:
+                throw OutputError(std::string("GeoJSON writer: unsupported geometry type ") +
+                                  OGRGeometryTypeToName(geometry->getGeometryType()));
+        }
+        out += '}';
+    }
+};
+
+void append_crs(std::string& out, const OGRSpatialReference* srs, std::vector<std::string>& warnings) {
+    if (srs == nullptr) return;
+    const char* authority = srs->GetAuthorityName(nullptr);
+    const char* code = srs->GetAuthorityCode(nullptr);
+    if (authority && code) {
+        std::string name = std::string("urn:ogc:def:crs:") + authority + "::" + code;
+        if (std::string(authority) == "EPSG" && std::string(code) == "4326") name = "urn:ogc:def:crs:OGC:1.3:CRS84";
+        out += R"("crs":{"type":"name","properties":{"name":)";
+        append_string(out, name.c_str());
+        out += "}},\n";
+    } else {
+        warnings.push_back("the layer's CRS has no authority code and cannot be written to GeoJSON; it is left out");
+    }
+}
+
+}  // namespace
+
+std::vector<std::string> write_geojson(const std::string& path, const GeoJsonLayer& layer) {
+    std::vector<std::string> warnings;
+    std::ofstream file(path, std::ios::binary);
+    if (!file) throw OutputError("cannot create '" + path + "'");
+    std::string out = "{\n\"type\":\"FeatureCollection\",\n\"name\":";
+    append_string(out, layer.name.c_str());
+    out += ",\n";
+    append_crs(out, layer.srs, warnings);
+    out += "\"features\":[\n";
+    CoordinateWriter coordinates{out};
+    for (std::size_t i = 0; i < layer.feature_count; ++i) {
+        const OGRFeature& feature = *layer.feature(i);
+        out += i ? ",\n{\"type\":\"Feature\",\"properties\":{" : "{\"type\":\"Feature\",\"properties\":{";
+        bool first = true;
+        for (int field = 0; field < layer.definition->GetFieldCount(); ++field) {
+            if (!feature.IsFieldSet(field)) continue;
+            if (!first) out += ',';
+            first = false;
+            append_string(out, layer.definition->GetFieldDefn(field)->GetNameRef());
+            out += ':';
+            if (feature.IsFieldNull(field)) {
+                out += "null";
+            } else {
+                append_property(out, feature, field);
+            }
+        }
+        out += "},\"geometry\":";
+        coordinates.geometry(layer.geometry(i).get());
+        out += '}';
+        if (out.size() > (1 << 20)) {
+            file << out;
+            out.clear();
+        }
+    }
+    out += "\n]\n}\n";
+    file << out;
+    file.close();
+    if (!file) throw OutputError("error writing '" + path + "'");
+    if (coordinates.dropped_m) warnings.push_back("GeoJSON has no M coordinates: M values were not written");
+    return warnings;
+}
+
+}  // namespace toposimp::io

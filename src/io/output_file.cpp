@@ -1,0 +1,81 @@
+#include "io/output_file.hpp"
+
+#include "io/errors.hpp"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <random>
+
+namespace fs = std::filesystem;
+
+namespace toposimp::io {
+namespace {
+
+fs::path make_private_dir(const fs::path& parent, const std::string& stem) {
+    std::random_device entropy;
+    for (int attempt = 0; attempt < 100; ++attempt) {
+        const fs::path dir = parent / ("." + stem + ".toposimp-" + std::to_string(::getpid()) + "-" +
+                                       std::to_string(entropy() % 1000000));
+        std::error_code error;
+        if (fs::create_directory(dir, error)) return dir;
+        if (error) throw OutputError("cannot create a temporary folder in '" + parent.string() + "': " + error.message());
+    }
+    throw OutputError("cannot create a temporary folder in '" + parent.string() + "'");
+}
+
+}  // namespace
+
+OutputFile::OutputFile(std::string destination, bool overwrite)
+    : destination_(std::move(destination)), overwrite_(overwrite) {
+    to_stdout_ = destination_ == "/vsistdout/" || destination_ == "/vsistdout" || destination_ == "-";
+    fs::path target = to_stdout_ ? fs::path("stdout") : fs::path(destination_);
+    if (!to_stdout_) {
+        if (target.filename().empty()) throw OutputError("output '" + destination_ + "' is a folder, not a file name");
+        std::error_code error;
+        if (fs::exists(target, error) && !overwrite_) {
+            throw OutputError("output '" + destination_ + "' exists; pass --overwrite to replace it");
+        }
+        const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+        if (!fs::is_directory(parent, error)) throw OutputError("output folder '" + parent.string() + "' does not exist");
+        staging_dir_ = make_private_dir(parent, target.filename().string());
+    } else {
+        staging_dir_ = make_private_dir(fs::temp_directory_path(), "stdout");
+    }
+    staging_path_ = (staging_dir_ / target.filename()).string();
+}
+
+OutputFile::~OutputFile() {
+    std::error_code ignored;
+    fs::remove_all(staging_dir_, ignored);
+}
+
+void OutputFile::commit(const std::function<void(const std::string&)>& remove_existing) {
+    if (committed_) return;
+    if (to_stdout_) {
+        std::ifstream in(staging_path_, std::ios::binary);
+        if (!in) throw OutputError("cannot read back the output written for stdout");
+        std::cout << in.rdbuf();
+        std::cout.flush();
+        if (!std::cout) throw OutputError("cannot write to stdout");
+        committed_ = true;
+        return;
+    }
+    const fs::path target(destination_);
+    std::error_code error;
+    if (fs::exists(target, error)) {
+        if (!overwrite_) throw OutputError("output '" + destination_ + "' appeared while writing; not replaced");
+        if (remove_existing) remove_existing(destination_);
+        if (fs::exists(target, error)) fs::remove(target, error);
+    }
+    const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    for (const auto& entry : fs::directory_iterator(staging_dir_)) {
+        fs::rename(entry.path(), parent / entry.path().filename(), error);
+        if (error) throw OutputError("cannot move '" + entry.path().string() + "' into place: " + error.message());
+    }
+    committed_ = true;
+}
+
+}  // namespace toposimp::io

@@ -1,0 +1,40 @@
+// Output that appears only on success: everything is written into a private temporary folder
+// beside the destination and moved into place by commit(); if commit() is never reached the
+// folder is removed, so a failed run leaves no half-written file behind.
+// /vsistdout/ is handled the same way: written to a temporary file, then copied to stdout.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+
+namespace toposimp::io {
+
+class OutputFile {
+public:
+    // Refuses (OutputError) if `destination` exists and `overwrite` is false.
+    OutputFile(std::string destination, bool overwrite);
+    ~OutputFile();
+    OutputFile(const OutputFile&) = delete;
+    OutputFile& operator=(const OutputFile&) = delete;
+
+    // Where to write: a path with the destination's file name inside the temporary folder.
+    const std::string& staging_path() const { return staging_path_; }
+    const std::string& destination() const { return destination_; }
+    bool to_stdout() const { return to_stdout_; }
+
+    // Moves every file written into the staging folder to the destination folder (a Shapefile's
+    // .shp/.shx/.dbf/.prj/.cpg together). `remove_existing` deletes an existing destination
+    // first (e.g. with the GDAL driver, which knows a format's side files).
+    void commit(const std::function<void(const std::string&)>& remove_existing = {});
+
+private:
+    std::string destination_;
+    std::filesystem::path staging_dir_;
+    std::string staging_path_;
+    bool overwrite_ = false;
+    bool to_stdout_ = false;
+    bool committed_ = false;
+};
+
+}  // namespace toposimp::io

@@ -1,0 +1,97 @@
+// Invariants over many random planar maps, checked by the independent exact checker:
+// vertex subset with endpoints, no new contact between segments, every detour empty.
+#include "core/map/simplify.hpp"
+
+#include "support/exact_checker.hpp"
+#include "support/random_maps.hpp"
+
+#include <gtest/gtest.h>
+
+namespace toposimp {
+namespace {
+
+struct Setting {
+    const char* name;
+    testing::RandomMapOptions map;
+};
+
+std::vector<Setting> settings() {
+    std::vector<Setting> list;
+    testing::RandomMapOptions options;
+    list.push_back({"around_origin", options});
+    options.origin_x = 500000.25;
+    options.origin_y = 4.6e6;
+    list.push_back({"utm_metres", options});
+    options.origin_x = 0;
+    options.origin_y = 0;
+    options.extent = 1e-6;
+    list.push_back({"tiny", options});
+    options.extent = 1e12;
+    options.origin_x = -3e11;
+    list.push_back({"huge_mixed_signs", options});
+    options = {};
+    options.chains = 30;
+    options.max_steps = 40;
+    options.control_points = 120;
+    list.push_back({"crowded", options});
+    return list;
+}
+
+class RandomMaps : public ::testing::TestWithParam<map::StopCriterion> {};
+
+TEST_P(RandomMaps, KeepTopologyAndSubset) {
+    int maps = 0;
+    std::uint64_t removed = 0;
+    for (const Setting& setting : settings()) {
+        for (std::uint64_t seed = 0; seed < 40; ++seed) {
+            std::mt19937_64 rng(seed * 7919 + 17);
+            const map::MapData input = testing::random_planar_map(rng, setting.map);
+            ASSERT_TRUE(testing::check_planar(input).ok()) << setting.name << " seed " << seed << ": generator made a non-planar map";
+            map::SimplifyOptions options;
+            options.stop = GetParam();
+            const map::SimplifyResult result = map::simplify(input, options);
+            const testing::CheckReport report = testing::check_simplification(input, result.kept);
+            ASSERT_TRUE(report.ok()) << setting.name << " seed " << seed << ": " << report.summary();
+            for (std::uint32_t v = 0; v < input.vertices.size(); ++v) removed += result.kept[v] ? 0 : 1;
+            ++maps;
+        }
+    }
+    EXPECT_EQ(maps, 200);
+    EXPECT_GT(removed, 1000u) << "the maps should simplify substantially";
+}
+
+INSTANTIATE_TEST_SUITE_P(Targets, RandomMaps,
+                         ::testing::Values(map::StopCriterion{map::Target::max, 0},
+                                           map::StopCriterion{map::Target::keep_fraction, 0.5},
+                                           map::StopCriterion{map::Target::keep_fraction, 0.1}),
+                         [](const auto& test_info) { return std::to_string(test_info.index); });
+
+// The float filter never changes a decision: exact and all-GMP modes give the same output.
+TEST(RandomMapsModes, ExactAndRationalAgree) {
+    for (const Setting& setting : settings()) {
+        for (std::uint64_t seed = 0; seed < 10; ++seed) {
+            std::mt19937_64 rng(seed + 1000);
+            const map::MapData input = testing::random_planar_map(rng, setting.map);
+            map::SimplifyOptions options;
+            options.stop.target = map::Target::max;
+            const auto exact = map::simplify(input, options);
+            options.arithmetic = exact::Arithmetic::rational;
+            const auto rational = map::simplify(input, options);
+            ASSERT_EQ(exact.kept, rational.kept) << setting.name << " seed " << seed;
+        }
+    }
+}
+
+// Repeated runs give the same output (no dependence on addresses or hash order).
+TEST(RandomMapsModes, Deterministic) {
+    std::mt19937_64 rng(99);
+    testing::RandomMapOptions options;
+    options.chains = 40;
+    const map::MapData input = testing::random_planar_map(rng, options);
+    map::SimplifyOptions simplify_options;
+    simplify_options.stop = {map::Target::keep_fraction, 0.3};
+    EXPECT_EQ(map::simplify(input, simplify_options).kept, map::simplify(input, simplify_options).kept);
+}
+
+}  // namespace
+}  // namespace toposimp

@@ -1,0 +1,34 @@
+// An independent, brute-force, exact checker of DESIGN.md's map promises, written for the tests
+// only: it shares no predicate code with the engine (its own GMP orientation test) and looks at
+// every pair it needs to, with nothing but exact bounding-box comparisons to skip work.
+#pragma once
+
+#include "core/map/map_data.hpp"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace toposimp::testing {
+
+int exact_orient(Point a, Point b, Point c);
+
+// Do the closed segments pq and rs meet anywhere other than at a location that is an endpoint
+// of both (or overlap along a stretch)? That is a contact a planar map must not have.
+bool improper_contact(Point p, Point q, Point r, Point s);
+
+struct CheckReport {
+    std::vector<std::string> violations;
+    bool ok() const { return violations.empty(); }
+    std::string summary() const;
+};
+
+// Every chain keeps its first and last vertex; every pair of output segments meets only at
+// common endpoints; every detour (removed sub-chain + replacing segment) holds no other output
+// vertex or control point, neither inside (winding number or crossing parity) nor on it.
+CheckReport check_simplification(const map::MapData& input, const std::vector<std::uint8_t>& kept);
+
+// Is the input itself planar in the sense above (the precondition of the promises)?
+CheckReport check_planar(const map::MapData& input);
+
+}  // namespace toposimp::testing

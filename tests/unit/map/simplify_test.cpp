@@ -1,0 +1,194 @@
+// Small hand-built maps with exact expected output.
+#include "core/map/simplify.hpp"
+
+#include "support/exact_checker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace toposimp::map {
+namespace {
+
+SimplifyResult simplify_max(const MapData& map, exact::Arithmetic arithmetic = exact::Arithmetic::exact) {
+    SimplifyOptions options;
+    options.stop.target = Target::max;
+    options.arithmetic = arithmetic;
+    return simplify(map, options);
+}
+
+std::vector<Point> kept_chain(const MapData& map, const SimplifyResult& result, std::uint32_t chain) {
+    std::vector<Point> points;
+    for (std::uint32_t v = map.chains[chain].first; v <= map.chains[chain].last; ++v) {
+        if (result.kept[v]) points.push_back(map.vertices[v]);
+    }
+    return points;
+}
+
+TEST(MapSimplify, RemovesVertexWhoseTriangleIsEmpty) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_EQ(result.stats.removed, 1u);
+    EXPECT_EQ(kept_chain(map, result, 0).size(), 2u);
+}
+
+TEST(MapSimplify, ControlPointInsideTriangleBlocksRemoval) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    map.control_points = {{1, 0.5}};
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_EQ(result.stats.removed, 0u);
+    EXPECT_EQ(result.stats.blocked_by_point, 1u);
+}
+
+TEST(MapSimplify, ControlPointOnTheNewSegmentBlocksRemoval) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    map.control_points = {{1, 0}};  // exactly on the segment that would replace the corner
+    EXPECT_EQ(simplify_max(map).stats.removed, 0u);
+}
+
+TEST(MapSimplify, ControlPointOneUlpOutsideDoesNotBlock) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    map.control_points = {{1, std::nextafter(0.0, -1.0)}};
+    EXPECT_EQ(simplify_max(map).stats.removed, 1u);
+}
+
+TEST(MapSimplify, ControlPointAtTheRemovedVertexBlocks) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    map.control_points = {{1, 1}};
+    EXPECT_EQ(simplify_max(map).stats.removed, 0u);
+}
+
+TEST(MapSimplify, KeepsRingWithThreeCornersAndItsOrientation) {
+    MapData map;
+    map.add_chain({{0, 0}, {4, 0}, {4, 1}, {4, 4}, {0, 4}, {0, 0}});  // counter-clockwise square
+    const SimplifyResult result = simplify_max(map);
+    const std::vector<Point> ring = kept_chain(map, result, 0);
+    ASSERT_EQ(ring.size(), 4u);  // three corners and the closing vertex
+    EXPECT_TRUE(same_location(ring.front(), ring.back()));
+    EXPECT_EQ(testing::exact_orient(ring[0], ring[1], ring[2]), 1);
+}
+
+TEST(MapSimplify, RingNeverEndsOnThreeCollinearCorners) {
+    MapData map;
+    // A thin ring whose only triangle left after a naive pass would be flat: (0,0) (2,0) (4,0).
+    map.add_chain({{0, 0}, {2, 0}, {4, 0}, {2, 1}, {0, 0}});
+    const SimplifyResult result = simplify_max(map);
+    const std::vector<Point> ring = kept_chain(map, result, 0);
+    ASSERT_GE(ring.size(), 4u);
+    bool flat = ring.size() == 4 && testing::exact_orient(ring[0], ring[1], ring[2]) == 0;
+    EXPECT_FALSE(flat);
+    EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+}
+
+TEST(MapSimplify, LinesMeetingAtANodeSimplifyFully) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});     // ends at node (2, 0)
+    map.add_chain({{2, 0}, {3, -1}, {4, 0}});    // starts there
+    map.add_chain({{2, 0}, {2.5, 2}, {2, 4}});   // and a third line
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_EQ(result.stats.removed, 3u);
+}
+
+TEST(MapSimplify, LinesWithTheSameEndpointsNeverCoincide) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    map.add_chain({{0, 0}, {2, 0}});
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_EQ(result.stats.removed, 0u);
+    EXPECT_EQ(result.stats.blocked_by_coincidence, 1u);
+}
+
+TEST(MapSimplify, OfTwoArcsBetweenTheSameNodesOnlyOneStraightens) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 1}, {2, 0}});
+    map.add_chain({{0, 0}, {1, -1}, {2, 0}});
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_EQ(result.stats.removed, 1u);
+    EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+}
+
+TEST(MapSimplify, SelfTouchingLoopDoesNotFoldBackOnItself) {
+    MapData map;
+    // The line touches itself at (2, 0), enclosing the loop (2,0) (0,0) (1,1) (2,0).
+    map.add_chain({{3, -3}, {2, 0}, {0, 0}, {1, 1}, {2, 0}, {3, 3}});
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_TRUE(result.kept[2] && result.kept[3]) << "the loop keeps both its corners";
+    EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+}
+
+TEST(MapSimplify, DuplicateAndCollinearVerticesGo) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 0}, {1, 0}, {2, 0}, {3, 0}, {3, 0}});
+    const SimplifyResult result = simplify_max(map);
+    const std::vector<Point> line = kept_chain(map, result, 0);
+    ASSERT_EQ(line.size(), 2u);
+    EXPECT_TRUE(same_location(line[0], {0, 0}));
+    EXPECT_TRUE(same_location(line[1], {3, 0}));
+}
+
+TEST(MapSimplify, CollinearRunWithAPointOnItStays) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 0}, {2, 0}, {3, 0}});
+    map.control_points = {{1.5, 0}};
+    const SimplifyResult result = simplify_max(map);
+    // Both flat triangles, [0, 2] and [1, 3], hold the point: a point on a line stays on it.
+    EXPECT_EQ(result.stats.removed, 0u);
+    EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+}
+
+TEST(MapSimplify, RefusedVertexIsRetriedWhenItsBlockerGoes) {
+    MapData map;
+    // v = (5, 1) has the smaller area (5) and is tried first, but its triangle holds
+    // w = (5, 0.5), the tip of another line whose own, larger triangle (27.5) is empty.
+    map.add_chain({{0, 0}, {5, 1}, {10, 0}});
+    map.add_chain({{0, -5}, {5, 0.5}, {10, -5}});
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_EQ(result.stats.removed, 2u);
+    EXPECT_GE(result.stats.blocked_by_point, 1u);
+}
+
+TEST(MapSimplify, CountTargetsLandExactly) {
+    MapData map;
+    std::vector<Point> line;
+    for (int i = 0; i <= 100; ++i) line.push_back({static_cast<double>(i), (i % 2) * 1.0 + (i % 7) * 0.1});
+    map.add_chain(line);
+    SimplifyOptions options;
+    options.stop = {Target::keep_points, 40};
+    EXPECT_EQ(simplify(map, options).stats.vertices_out, 40u);
+    options.stop = {Target::remove_points, 13};
+    EXPECT_EQ(simplify(map, options).stats.removed, 13u);
+    options.stop = {Target::keep_fraction, 0.5};
+    EXPECT_EQ(simplify(map, options).stats.vertices_out, 51u);  // ceil(0.5 · 101)
+    options.stop = {Target::keep_points, 1};
+    const SimplifyResult floor = simplify(map, options);
+    EXPECT_EQ(floor.stats.vertices_out, 2u) << "endpoints always stay";
+    EXPECT_FALSE(floor.stats.target_reached);
+}
+
+TEST(MapSimplify, MaxAreaStopsAtTheThreshold) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 0.1}, {2, 0}, {3, 5}, {4, 0}});  // areas 0.1 and 10
+    SimplifyOptions options;
+    options.stop = {Target::max_area, 1.0};
+    const SimplifyResult result = simplify(map, options);
+    EXPECT_FALSE(result.kept[1]);
+    EXPECT_TRUE(result.kept[3]);
+}
+
+TEST(MapSimplify, RationalAndExactModesDecideAlike) {
+    MapData map;
+    map.add_chain({{0.1, 0.1}, {0.2, 0.35}, {0.3, 0.3}, {0.7, 0.1}});
+    map.control_points = {{0.25, 0.3}, {0.5, 0.2}};
+    const SimplifyResult exact = simplify_max(map, exact::Arithmetic::exact);
+    const SimplifyResult rational = simplify_max(map, exact::Arithmetic::rational);
+    EXPECT_EQ(exact.kept, rational.kept);
+    EXPECT_EQ(rational.stats.predicates.filter_decided, 0u);
+}
+
+}  // namespace
+}  // namespace toposimp::map
