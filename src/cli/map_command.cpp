@@ -209,7 +209,7 @@ int run_map(const MapOptions& options, Context& context) {
 
         const auto write_start = Clock::now();
         if (options.giscup) {
-            io::OutputFile output(options.output, options.overwrite);
+            io::OutputFile output(options.output, options.overwrite, &context.out);
             {
                 std::ofstream out(output.staging_path(), std::ios::binary);
                 io::write_giscup_lines(out, giscup_lines, map, result.kept);
@@ -225,6 +225,7 @@ int run_map(const MapOptions& options, Context& context) {
             write.layer_options = options.layer_options;
             write.dataset_options = options.dataset_options;
             write.overwrite = options.overwrite;
+            write.stdout_stream = &context.out;
             for (const std::string& warning : layer->write(write, map, result.kept)) log->warn("{}", warning);
         }
         time.write = seconds_since(write_start);

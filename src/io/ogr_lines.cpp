@@ -348,7 +348,7 @@ std::vector<std::string> OgrLines::write(const WriteOptions& options, const map:
     std::vector<std::string> warnings;
     GDALDriver* driver = choose_driver(options);
     const std::string driver_name = driver->GetDescription();
-    OutputFile output(options.path, options.overwrite);
+    OutputFile output(options.path, options.overwrite, options.stdout_stream);
     const std::string layer_name = options.layer_name.empty() ? layer.summary.layer : options.layer_name;
 
     if (driver_name == "GeoJSON") {

@@ -6,6 +6,7 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
+#include <iosfwd>
 #include <memory>
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct WriteOptions {
     std::vector<std::string> layer_options;    // -lco KEY=VALUE
     std::vector<std::string> dataset_options;  // -dsco KEY=VALUE
     bool overwrite = false;
+    std::ostream* stdout_stream = nullptr;     // where /vsistdout/ output goes
 };
 
 class OgrLines {

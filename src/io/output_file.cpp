@@ -6,7 +6,7 @@
 
 #include <cstdio>
 #include <fstream>
-#include <iostream>
+#include <ostream>
 #include <random>
 
 namespace fs = std::filesystem;
@@ -28,8 +28,8 @@ fs::path make_private_dir(const fs::path& parent, const std::string& stem) {
 
 }  // namespace
 
-OutputFile::OutputFile(std::string destination, bool overwrite)
-    : destination_(std::move(destination)), overwrite_(overwrite) {
+OutputFile::OutputFile(std::string destination, bool overwrite, std::ostream* stdout_stream)
+    : destination_(std::move(destination)), overwrite_(overwrite), stdout_stream_(stdout_stream) {
     to_stdout_ = destination_ == "/vsistdout/" || destination_ == "/vsistdout" || destination_ == "-";
     fs::path target = to_stdout_ ? fs::path("stdout") : fs::path(destination_);
     if (!to_stdout_) {
@@ -57,9 +57,10 @@ void OutputFile::commit(const std::function<void(const std::string&)>& remove_ex
     if (to_stdout_) {
         std::ifstream in(staging_path_, std::ios::binary);
         if (!in) throw OutputError("cannot read back the output written for stdout");
-        std::cout << in.rdbuf();
-        std::cout.flush();
-        if (!std::cout) throw OutputError("cannot write to stdout");
+        if (stdout_stream_ == nullptr) throw OutputError("no standard output to write to");
+        *stdout_stream_ << in.rdbuf();
+        stdout_stream_->flush();
+        if (!*stdout_stream_) throw OutputError("cannot write to stdout");
         committed_ = true;
         return;
     }

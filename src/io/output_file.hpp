@@ -6,14 +6,16 @@
 
 #include <filesystem>
 #include <functional>
+#include <iosfwd>
 #include <string>
 
 namespace toposimp::io {
 
 class OutputFile {
 public:
-    // Refuses (OutputError) if `destination` exists and `overwrite` is false.
-    OutputFile(std::string destination, bool overwrite);
+    // Refuses (OutputError) if `destination` exists and `overwrite` is false. Output for
+    // /vsistdout/ (or "-") is copied to `stdout_stream` on commit.
+    OutputFile(std::string destination, bool overwrite, std::ostream* stdout_stream);
     ~OutputFile();
     OutputFile(const OutputFile&) = delete;
     OutputFile& operator=(const OutputFile&) = delete;
@@ -35,6 +37,7 @@ private:
     bool overwrite_ = false;
     bool to_stdout_ = false;
     bool committed_ = false;
+    std::ostream* stdout_stream_ = nullptr;
 };
 
 }  // namespace toposimp::io

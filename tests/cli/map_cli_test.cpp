@@ -198,3 +198,17 @@ TEST(MapCli, GiscupFormatLikeTheContestProgram) {
 
 }  // namespace
 }  // namespace toposimp::testing
+
+namespace toposimp::testing {
+namespace {
+
+TEST(MapCli, WritesToStdoutForPipelines) {
+    const CliResult result = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-f", "GeoJSON", "-o", "/vsistdout/", "--json"});
+    ASSERT_EQ(result.code, 0) << result.err;
+    EXPECT_EQ(result.out.rfind("{\n\"type\":\"FeatureCollection\"", 0), 0u) << result.out.substr(0, 80);
+    EXPECT_NE(result.out.find("\"name\":\"border 1\""), std::string::npos);
+    EXPECT_NE(result.err.find("\"command\":\"map\""), std::string::npos) << "the JSON summary goes to stderr";
+}
+
+}  // namespace
+}  // namespace toposimp::testing

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <optional>
 
 namespace toposimp::map {
 namespace {
@@ -188,6 +189,43 @@ TEST(MapSimplify, RationalAndExactModesDecideAlike) {
     const SimplifyResult rational = simplify_max(map, exact::Arithmetic::rational);
     EXPECT_EQ(exact.kept, rational.kept);
     EXPECT_EQ(rational.stats.predicates.filter_decided, 0u);
+}
+
+}  // namespace
+}  // namespace toposimp::map
+
+namespace toposimp::map {
+namespace {
+
+// TopoVW's float test misjudges points near the replacing segment; the map then changes
+// topology. Find such a point on an ulp grid, and show exact mode keeps the vertex.
+TEST(MapSimplify, FloatModeBreaksTopologyWhereExactDoesNot) {
+    const Point a{0.1, 0.3}, v{0.1, 12.7}, c{17.3, 12.7};
+    exact::PredicateStats stats;
+    std::optional<Point> misjudged;  // in the closed triangle, but called outside by the float test
+    for (const double t : {0.13, 0.37, 0.5, 0.71, 0.93}) {
+        for (int i = -40; i < 40 && !misjudged; ++i) {
+            for (int j = -40; j < 40 && !misjudged; ++j) {
+                Point p{a.x + t * (c.x - a.x), a.y + t * (c.y - a.y)};
+                for (int k = 0; k < std::abs(i); ++k) p.x = std::nextafter(p.x, i > 0 ? INFINITY : -INFINITY);
+                for (int k = 0; k < std::abs(j); ++k) p.y = std::nextafter(p.y, j > 0 ? INFINITY : -INFINITY);
+                if (exact::in_closed_triangle(a, v, c, p, exact::Arithmetic::exact, stats) &&
+                    !exact::in_closed_triangle_float(a, v, c, p)) {
+                    misjudged = p;
+                }
+            }
+        }
+    }
+    ASSERT_TRUE(misjudged) << "no point near the edge fooled the float test";
+    MapData map;
+    map.add_chain({a, v, c});
+    map.control_points = {*misjudged};
+    const SimplifyResult unsafe = simplify_max(map, exact::Arithmetic::floating);
+    EXPECT_EQ(unsafe.stats.removed, 1u);
+    EXPECT_FALSE(testing::check_simplification(map, unsafe.kept).ok()) << "the float run should break topology";
+    const SimplifyResult safe = simplify_max(map, exact::Arithmetic::exact);
+    EXPECT_EQ(safe.stats.removed, 0u);
+    EXPECT_TRUE(testing::check_simplification(map, safe.kept).ok());
 }
 
 }  // namespace
