@@ -2,7 +2,7 @@
 # Installs everything toposimp needs on Debian 12, from Debian packages only. Idempotent.
 set -euo pipefail
 packages=(build-essential cmake ninja-build pkg-config
-          libgdal-dev gdal-bin libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev)
+          libgdal-dev gdal-bin libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev groff-base)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -75,17 +75,26 @@ int orient2d(Point a, Point b, Point c, PredicateStats& stats) {
     return orient_rational(a, b, c);
 }
 
-bool in_closed_triangle(Point a, Point b, Point c, Point p, Arithmetic arithmetic, PredicateStats& stats) {
-    if (arithmetic == Arithmetic::floating) return in_closed_triangle_float(a, b, c, p);
-    auto orient = [&](Point u, Point v, Point w) {
-        return arithmetic == Arithmetic::rational ? orient_rational(u, v, w) : orient2d(u, v, w, stats);
-    };
-    const int turn = orient(a, b, c);
-    if (turn == 0) return in_collinear_hull(a, b, c, p, arithmetic, stats);
+ClosedTriangle::ClosedTriangle(Point a, Point b, Point c, Arithmetic arithmetic, PredicateStats& stats)
+    : a_(a), b_(b), c_(c), arithmetic_(arithmetic), stats_(stats) {
+    if (arithmetic_ != Arithmetic::floating) turn_ = orient(a, b, c);
+}
+
+int ClosedTriangle::orient(Point u, Point v, Point w) {
+    return arithmetic_ == Arithmetic::rational ? orient_rational(u, v, w) : orient2d(u, v, w, stats_);
+}
+
+bool ClosedTriangle::contains(Point p) {
+    if (arithmetic_ == Arithmetic::floating) return in_closed_triangle_float(a_, b_, c_, p);
+    if (turn_ == 0) return in_collinear_hull(a_, b_, c_, p, arithmetic_, stats_);
     // p is in the closed triangle iff it is not strictly on the outer side of any edge.
-    if (orient(a, b, p) * turn < 0) return false;
-    if (orient(b, c, p) * turn < 0) return false;
-    return orient(c, a, p) * turn >= 0;
+    if (orient(a_, b_, p) * turn_ < 0) return false;
+    if (orient(b_, c_, p) * turn_ < 0) return false;
+    return orient(c_, a_, p) * turn_ >= 0;
+}
+
+bool in_closed_triangle(Point a, Point b, Point c, Point p, Arithmetic arithmetic, PredicateStats& stats) {
+    return ClosedTriangle(a, b, c, arithmetic, stats).contains(p);
 }
 
 bool in_closed_triangle_float(Point a, Point b, Point c, Point p) {

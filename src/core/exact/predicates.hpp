@@ -43,6 +43,22 @@ int orient2d(Point a, Point b, Point c, PredicateStats& stats);
 // coincident corners) are the closed segment or point they span.
 bool in_closed_triangle(Point a, Point b, Point c, Point p, Arithmetic arithmetic, PredicateStats& stats);
 
+// The same test for many points against one triangle: the triangle's orientation is decided
+// once, up front.
+class ClosedTriangle {
+public:
+    ClosedTriangle(Point a, Point b, Point c, Arithmetic arithmetic, PredicateStats& stats);
+    bool contains(Point p);
+
+private:
+    int orient(Point u, Point v, Point w);
+
+    Point a_, b_, c_;
+    Arithmetic arithmetic_;
+    PredicateStats& stats_;
+    int turn_ = 0;  // orientation of abc: +1 counter-clockwise, -1 clockwise, 0 degenerate
+};
+
 // TopoVW's barycentric test in plain doubles (unsafe: wrong near edges, false for degenerate
 // triangles). Exposed for tests that show what it gets wrong.
 bool in_closed_triangle_float(Point a, Point b, Point c, Point p);

@@ -213,11 +213,13 @@ private:
         if (!keeps_ring_valid(v, a, b, c)) return Verdict::blocked_by_ring;
 
         const Box box = triangle_box(a, b, c);
+        std::optional<exact::ClosedTriangle> triangle;  // prepared at the first candidate point
         const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id) {
             if (id == v || (id < vertex_count_ && !alive_[id])) return false;
             const Point q = points_[id];
             if (!box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
-            if (!exact::in_closed_triangle(a, b, c, q, options_.arithmetic, stats_.predicates)) return false;
+            if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats_.predicates);
+            if (!triangle->contains(q)) return false;
             blocker = id;
             return true;
         });
