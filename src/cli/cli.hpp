@@ -12,8 +12,8 @@ enum ExitCode : int { kOk = 0, kTopologyFailure = 1, kUsageError = 2 };
 
 struct Context {
     std::ostream& out;                // results: --json, help text
-    std::ostream& err;                // messages and progress
-    bool err_is_terminal = false;     // show progress and the summary line
+    std::ostream& err;                // messages
+    bool err_is_terminal = false;     // print the one-line summary even without -v
 };
 
 // Runs `toposimp ARGS...` (args excludes the program name) and returns the exit status.

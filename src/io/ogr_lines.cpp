@@ -79,12 +79,9 @@ OGRLayer& pick_layer(GDALDataset& dataset, const std::string& path, const std::s
     return *layer;
 }
 
-std::string feature_label(const std::string& path, const OGRLayer& layer, GIntBig fid) {
-    return "'" + path + "', layer '" + std::string(const_cast<OGRLayer&>(layer).GetName()) + "', feature " +
-           std::to_string(fid);
+std::string feature_label(const std::string& path, OGRLayer& layer, GIntBig fid) {
+    return "'" + path + "', layer '" + std::string(layer.GetName()) + "', feature " + std::to_string(fid);
 }
-
-OGRGeometry* geometry_of(OGRFeature& feature) { return feature.GetGeometryRef(); }
 
 bool is_empty(const OGRGeometry* geometry) { return geometry == nullptr || geometry->IsEmpty(); }
 
@@ -172,7 +169,7 @@ OgrLines OgrLines::read(const std::string& path, const std::string& layer_name, 
         const std::string label = feature_label(path, source, feature->GetFID());
         Layer::Shape shape;
         shape.first_part = static_cast<std::uint32_t>(layer->parts.size());
-        OGRGeometry* geometry = geometry_of(*feature);
+        OGRGeometry* geometry = feature->GetGeometryRef();
         if (geometry != nullptr) {
             shape.null = false;
             shape.type = geometry->getGeometryType();
@@ -349,6 +346,9 @@ std::vector<std::string> OgrLines::write(const WriteOptions& options, const map:
     GDALDriver* driver = choose_driver(options);
     const std::string driver_name = driver->GetDescription();
     OutputFile output(options.path, options.overwrite, options.stdout_stream);
+    if (output.to_stdout() && (driver_name == "ESRI Shapefile" || driver_name == "MapInfo File")) {
+        throw OutputError("a " + driver_name + " is several files and cannot go to stdout; use -f GeoJSON, FlatGeobuf or GPKG");
+    }
     const std::string layer_name = options.layer_name.empty() ? layer.summary.layer : options.layer_name;
 
     if (driver_name == "GeoJSON") {

@@ -89,6 +89,13 @@ TEST(MapBadInput, OutputFolderMissingOrFormatUnknown) {
     expect_clean_failure(result, dir, "unknown vector output format 'NoSuchDriver'", {});
 }
 
+TEST(MapBadInput, ShapefileCannotGoToStdout) {
+    const auto dir = fresh_dir("bad-stdout");
+    const auto result = run_cli({"map", testdata("nh_borders.gpkg"), "-f", "ESRI Shapefile", "-o", "/vsistdout/"});
+    expect_clean_failure(result, dir, "cannot go to stdout", {});
+    EXPECT_TRUE(result.out.empty());
+}
+
 TEST(MapBadInput, MalformedGiscupFile) {
     const auto dir = fresh_dir("bad-giscup");
     std::ofstream(dir / "lines.txt") << "1:<gml:LineString><gml:coordinates>0,0 1,1 2,zero </gml:coordinates></gml:LineString>\n";

@@ -15,10 +15,7 @@ public:
     explicit IndexedHeap(std::size_t capacity) : key_(capacity, 0.0), position_(capacity, kAbsent) {}
 
     bool empty() const { return heap_.empty(); }
-    bool contains(std::uint32_t id) const { return position_[id] != kAbsent; }
-    std::uint32_t top() const { return heap_.front(); }
     double top_key() const { return key_[heap_.front()]; }
-    double key(std::uint32_t id) const { return key_[id]; }
 
     // Inserts id, or moves it to its new key if it is already queued.
     void set(std::uint32_t id, double key) {
@@ -37,10 +34,6 @@ public:
         const std::uint32_t id = heap_.front();
         erase_at(0);
         return id;
-    }
-
-    void erase(std::uint32_t id) {
-        if (position_[id] != kAbsent) erase_at(position_[id]);
     }
 
 private:

@@ -36,9 +36,6 @@ public:
         return false;
     }
 
-    std::uint32_t columns() const { return columns_; }
-    std::uint32_t rows() const { return rows_; }
-
 private:
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;

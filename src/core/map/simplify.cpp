@@ -15,14 +15,15 @@
 namespace toposimp::map {
 
 std::uint64_t removal_goal(const StopCriterion& stop, std::uint64_t vertices) {
+    const double all = static_cast<double>(vertices);
     auto keep = [&](double count) -> std::uint64_t {
-        if (!(count < static_cast<double>(vertices))) return 0;
+        if (!(count < all)) return 0;
         return vertices - static_cast<std::uint64_t>(std::max(0.0, count));
     };
     switch (stop.target) {
-        case Target::keep_fraction: return keep(std::ceil(stop.value * static_cast<double>(vertices)));
+        case Target::keep_fraction: return keep(std::ceil(stop.value * all));
         case Target::keep_points: return keep(stop.value);
-        case Target::remove_points: return static_cast<std::uint64_t>(stop.value);
+        case Target::remove_points: return stop.value < all ? static_cast<std::uint64_t>(std::max(0.0, stop.value)) : vertices;
         case Target::max_area:
         case Target::max: return std::numeric_limits<std::uint64_t>::max();
     }
@@ -199,9 +200,6 @@ private:
                     break;
                 case Verdict::blocked_by_ring: ++stats_.blocked_by_ring; break;
                 case Verdict::blocked_by_coincidence: ++stats_.blocked_by_coincidence; break;
-            }
-            if (options_.progress && (stats_.removed & 0xffff) == 0 && stats_.removed > 0) {
-                options_.progress(stats_.removed);
             }
         }
         if (!by_area && options_.stop.target != Target::max) stats_.target_reached = stats_.removed >= goal;

@@ -19,7 +19,6 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
-#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,8 +41,6 @@ struct StopCriterion {
 struct SimplifyOptions {
     StopCriterion stop;
     exact::Arithmetic arithmetic = exact::Arithmetic::exact;
-    // Called now and then with the number of vertices removed so far; may be empty.
-    std::function<void(std::uint64_t removed)> progress;
 };
 
 struct SimplifyStats {

@@ -165,6 +165,8 @@ TEST(MapSimplify, CountTargetsLandExactly) {
     EXPECT_EQ(simplify(map, options).stats.removed, 13u);
     options.stop = {Target::keep_fraction, 0.5};
     EXPECT_EQ(simplify(map, options).stats.vertices_out, 51u);  // ceil(0.5 · 101)
+    options.stop = {Target::remove_points, 1e30};  // more than there are: remove all that can go
+    EXPECT_EQ(simplify(map, options).stats.removal_goal, 101u);
     options.stop = {Target::keep_points, 1};
     const SimplifyResult floor = simplify(map, options);
     EXPECT_EQ(floor.stats.vertices_out, 2u) << "endpoints always stay";
