@@ -58,6 +58,12 @@ public:
                 to = from;  // duplicate consecutive vertex
             } else if (kind < 0.2 && !map_.vertices.empty()) {
                 to = existing_vertex();  // end on a node
+            } else if (kind < 0.3 && !map_.vertices.empty() && options_.near_degenerate) {
+                // Within an ulp or two of another vertex: nearly touching, never quite.
+                to = existing_vertex();
+                const int ulps = integer(1, 2) * (chance(0.5) ? 1 : -1);
+                double& coordinate = chance(0.5) ? to.x : to.y;
+                for (int k = 0; k < std::abs(ulps); ++k) coordinate = std::nextafter(coordinate, ulps > 0 ? INFINITY : -INFINITY);
             } else {
                 const double angle = uniform(0, 2 * M_PI);
                 const double length = step * uniform(0.05, 1);
