@@ -24,7 +24,7 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
         "Stopping criteria (one; default --keep 10%): --keep, --keep-points, --remove-points, --max-area, --max.\n"
         "A vertex is removed only if the closed triangle it forms with its neighbours holds no other vertex and\n"
         "no control point (exact predicates), so no new crossing or touching appears and no control point changes\n"
-        "side, for input whose lines meet only at shared vertices. Output vertices are a subset of the input's,\n"
+        "side; crossings in the input are kept as they are. Output vertices are a subset of the input's,\n"
         "coordinates untouched, each line keeping its first and last vertex.\n"
         "Exit status: 0 ok, 2 usage or input error.");
     map->add_option("input", options.input, "Input line layer (any OGR source; with --giscup, a GIS Cup lines file)")->required();
@@ -147,7 +147,7 @@ void print_json(std::ostream& out, const MapOptions& options, const map::StopCri
         << ",\"removal_goal\":" << stats.removal_goal << ",\"reached\":" << (stats.target_reached ? "true" : "false")
         << "},\"blocked\":{\"total\":" << stats.blocked() << ",\"point_in_triangle\":" << stats.blocked_by_point
         << ",\"ring\":" << stats.blocked_by_ring << ",\"coincident_segment\":" << stats.blocked_by_coincidence
-        << "},\"arithmetic\":" << json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
+        << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
         << stats.predicates.filter_decided << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
         << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
         << ",\"total\":" << time.total << "}}\n";
@@ -239,6 +239,10 @@ int run_map(const MapOptions& options, Context& context) {
                    stats.predicates.gmp_fallbacks);
         log->debug("refused removals: {} point in triangle, {} ring, {} coincident segment", stats.blocked_by_point,
                    stats.blocked_by_ring, stats.blocked_by_coincidence);
+        if (stats.pinned_by_crossing > 0) {
+            log->debug("{} vertices kept at the ends of segments that cross or touch other lines in the input",
+                      stats.pinned_by_crossing);
+        }
         const std::string summary_line = fmt::format("{} -> {} vertices ({} removed, {} refused), {}, {:.3f} s",
                                                      stats.vertices_in, stats.vertices_out, stats.removed,
                                                      stats.blocked(), describe(*stop), time.total);

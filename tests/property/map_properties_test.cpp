@@ -82,6 +82,35 @@ TEST(RandomMapsModes, ExactAndRationalAgree) {
     }
 }
 
+// Roads laid over a planar map cross it anywhere: every crossing between two lines stays (same
+// count for every pair of lines), and no new contact or side change appears.
+TEST(RandomMapsWithCrossings, KeepEveryCrossingAndAddNone) {
+    int crossing_maps = 0;
+    for (const Setting& setting : settings()) {
+        for (std::uint64_t seed = 0; seed < 20; ++seed) {
+            std::mt19937_64 rng(seed * 104729 + 5);
+            testing::RandomMapOptions options = setting.map;
+            options.roads = 4;
+            const map::MapData input = testing::random_planar_map(rng, options);
+            const std::vector<std::uint8_t> all(input.vertices.size(), 1);
+            const auto before = testing::crossings_between_chains(input, all);
+            for (const map::StopCriterion stop : {map::StopCriterion{map::Target::max, 0}, map::StopCriterion{map::Target::keep_fraction, 0.5}}) {
+                map::SimplifyOptions simplify_options;
+                simplify_options.stop = stop;
+                const map::SimplifyResult result = map::simplify(input, simplify_options);
+                const testing::CheckReport report = testing::check_simplification(input, result.kept);
+                ASSERT_TRUE(report.ok()) << setting.name << " seed " << seed << ": " << report.summary();
+                ASSERT_EQ(testing::crossings_between_chains(input, result.kept), before) << setting.name << " seed " << seed;
+                EXPECT_GT(result.stats.removed, 0u);
+            }
+            std::uint64_t crossings = 0;
+            for (const auto count : before) crossings += count;
+            crossing_maps += crossings > 0;
+        }
+    }
+    EXPECT_GT(crossing_maps, 80) << "most maps should have crossings";
+}
+
 // Repeated runs give the same output (no dependence on addresses or hash order).
 TEST(RandomMapsModes, Deterministic) {
     std::mt19937_64 rng(99);

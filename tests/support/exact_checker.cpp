@@ -77,6 +77,7 @@ namespace {
 struct Segment {
     Point a, b;
     std::uint32_t chain;
+    bool original;  // joins two vertices that were consecutive in the input
 };
 
 std::vector<Segment> segments_of(const map::MapData& map, const std::vector<std::uint8_t>& kept) {
@@ -85,14 +86,14 @@ std::vector<Segment> segments_of(const map::MapData& map, const std::vector<std:
         std::uint32_t last = map.chains[c].first;
         for (std::uint32_t v = map.chains[c].first + 1; v <= map.chains[c].last; ++v) {
             if (!kept[v]) continue;
-            segments.push_back({map.vertices[last], map.vertices[v], c});
+            segments.push_back({map.vertices[last], map.vertices[v], c, v == last + 1});
             last = v;
         }
     }
     return segments;
 }
 
-void check_contacts(const std::vector<Segment>& segments, CheckReport& report) {
+void check_contacts(const std::vector<Segment>& segments, bool allow_input_contacts, CheckReport& report) {
     std::vector<std::size_t> order(segments.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
     auto min_x = [&](std::size_t i) { return std::min(segments[i].a.x, segments[i].b.x); };
@@ -102,6 +103,8 @@ void check_contacts(const std::vector<Segment>& segments, CheckReport& report) {
         const Segment& s = segments[order[i]];
         for (std::size_t j = i + 1; j < order.size() && min_x(order[j]) <= max_x(order[i]); ++j) {
             const Segment& t = segments[order[j]];
+            // Two input segments met the same way in the input: not a new contact.
+            if (s.original && t.original && allow_input_contacts) continue;
             if (improper_contact(s.a, s.b, t.a, t.b)) {
                 report.violations.push_back("segments " + text(s.a) + "-" + text(s.b) + " (chain " +
                                             std::to_string(s.chain) + ") and " + text(t.a) + "-" + text(t.b) +
@@ -132,7 +135,7 @@ bool inside_polygon(Point p, const std::vector<Point>& ring) {
 
 CheckReport check_planar(const map::MapData& input) {
     CheckReport report;
-    check_contacts(segments_of(input, std::vector<std::uint8_t>(input.vertices.size(), 1)), report);
+    check_contacts(segments_of(input, std::vector<std::uint8_t>(input.vertices.size(), 1)), false, report);
     return report;
 }
 
@@ -176,8 +179,26 @@ CheckReport check_simplification(const map::MapData& input, const std::vector<st
             start = v;
         }
     }
-    check_contacts(segments_of(input, kept), report);
+    check_contacts(segments_of(input, kept), true, report);
     return report;
+}
+
+std::vector<std::uint64_t> crossings_between_chains(const map::MapData& map, const std::vector<std::uint8_t>& kept) {
+    const std::size_t n = map.chains.size();
+    std::vector<std::uint64_t> counts(n * n, 0);
+    const std::vector<Segment> segments = segments_of(map, kept);
+    for (std::size_t i = 0; i < segments.size(); ++i) {
+        for (std::size_t j = i + 1; j < segments.size(); ++j) {
+            const Segment& s = segments[i];
+            const Segment& t = segments[j];
+            if (s.chain == t.chain || !boxes_meet(s.a, s.b, t.a, t.b)) continue;
+            if (exact_orient(s.a, s.b, t.a) * exact_orient(s.a, s.b, t.b) < 0 &&
+                exact_orient(t.a, t.b, s.a) * exact_orient(t.a, t.b, s.b) < 0) {
+                ++counts[std::min(s.chain, t.chain) * n + std::max(s.chain, t.chain)];
+            }
+        }
+    }
+    return counts;
 }
 
 }  // namespace toposimp::testing

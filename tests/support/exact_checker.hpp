@@ -23,12 +23,15 @@ struct CheckReport {
     std::string summary() const;
 };
 
-// Every chain keeps its first and last vertex; every pair of output segments meets only at
-// common endpoints; every detour (removed sub-chain + replacing segment) holds no other output
+// Every chain keeps its first and last vertex; output segments meet only at common endpoints,
+// unless both are segments of the input unchanged (their contact is the input's); every detour (removed sub-chain + replacing segment) holds no other output
 // vertex or control point, neither inside (winding number or crossing parity) nor on it.
 CheckReport check_simplification(const map::MapData& input, const std::vector<std::uint8_t>& kept);
 
 // Is the input itself planar in the sense above (the precondition of the promises)?
 CheckReport check_planar(const map::MapData& input);
+
+// For each pair of chains (i < j, at i·n + j): how many proper crossings their kept segments have.
+std::vector<std::uint64_t> crossings_between_chains(const map::MapData& map, const std::vector<std::uint8_t>& kept);
 
 }  // namespace toposimp::testing

@@ -109,6 +109,23 @@ public:
         commit(ring);
     }
 
+    // A wiggly line across the whole map, added whatever it crosses (roads over rivers): some
+    // crossings, some T-contacts where a vertex lands on a line, some vertices shared.
+    void add_road() {
+        std::vector<Point> road;
+        const Point from = random_point(), to = random_point();
+        const int steps = integer(3, 3 * options_.max_steps);
+        for (int s = 0; s <= steps; ++s) {
+            const double t = static_cast<double>(s) / steps;
+            Point p{from.x + t * (to.x - from.x), from.y + t * (to.y - from.y)};
+            p.x += uniform(-1, 1) * options_.extent / 200;
+            p.y += uniform(-1, 1) * options_.extent / 200;
+            if (!map_.vertices.empty() && chance(0.05)) p = existing_vertex();
+            road.push_back(p);
+        }
+        roads_.push_back(road);
+    }
+
     void add_control_point() {
         if (map_.vertices.size() < 2 || !options_.near_degenerate || chance(0.4)) {
             map_.control_points.push_back(random_point());
@@ -123,13 +140,17 @@ public:
         map_.control_points.push_back(p);
     }
 
-    map::MapData take() { return std::move(map_); }
+    map::MapData take() {
+        for (const auto& road : roads_) map_.add_chain(road);
+        return std::move(map_);
+    }
 
 private:
     std::mt19937_64& rng_;
     const RandomMapOptions& options_;
     map::MapData map_;
     std::vector<std::pair<Point, Point>> segments_;
+    std::vector<std::vector<Point>> roads_;
 };
 
 }  // namespace
@@ -138,6 +159,7 @@ map::MapData random_planar_map(std::mt19937_64& rng, const RandomMapOptions& opt
     Builder builder(rng, options);
     for (int r = 0; r < options.rings; ++r) builder.add_ring();
     for (int c = 0; c < options.chains; ++c) builder.add_walk();
+    for (int r = 0; r < options.roads; ++r) builder.add_road();
     for (int p = 0; p < options.control_points; ++p) builder.add_control_point();
     return builder.take();
 }

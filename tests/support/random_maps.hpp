@@ -1,4 +1,4 @@
-// Random planar maps for property tests: lines that meet only at shared vertices (nodes,
+// Random maps for property tests: planar ones (`roads` = 0), made of lines that meet only at shared vertices (nodes,
 // touches), rings, duplicate vertices, collinear runs, pairs of lines with the same endpoints,
 // and control points placed on, beside (one ulp away) and between the lines.
 #pragma once
@@ -19,6 +19,7 @@ struct RandomMapOptions {
     int rings = 3;
     int control_points = 30;
     bool near_degenerate = true;  // collinear runs and points within ulps of segments
+    int roads = 0;                // lines laid over the map with no regard for it: they cross
 };
 
 map::MapData random_planar_map(std::mt19937_64& rng, const RandomMapOptions& options);

@@ -1,5 +1,6 @@
 #include "core/map/simplify.hpp"
 
+#include "core/map/crossings.hpp"
 #include "core/map/indexed_heap.hpp"
 #include "core/map/point_grid.hpp"
 
@@ -84,6 +85,7 @@ public:
         build_chains();
         index_points();
         find_shared_locations();
+        pin_crossings();
         rank_vertices();
         simplify_vertices();
         return finish();
@@ -165,6 +167,20 @@ private:
         if (--it->second == 0) segments_.erase(it);
     }
 
+    // Vertices at either end of a segment that crosses or touches another one improperly in the
+    // input are never removed (see crossings.hpp for why that is enough).
+    void pin_crossings() {
+        const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates);
+        pinned_.assign(vertex_count_, 0);
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            if (!improper[v]) continue;
+            pinned_[v] = pinned_[next_[v]] = 1;
+        }
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            if (pinned_[v] && is_interior(v)) ++stats_.pinned_by_crossing;
+        }
+    }
+
     bool is_interior(std::uint32_t v) const { return prev_[v] != kNone && next_[v] != kNone; }
 
     double area_of(std::uint32_t v) const {
@@ -177,7 +193,7 @@ private:
         blocked_prev_.assign(vertex_count_, kNone);
         blocked_next_.assign(vertex_count_, kNone);
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (is_interior(v)) heap_.set(v, area_of(v));
+            if (is_interior(v) && !pinned_[v]) heap_.set(v, area_of(v));
         }
     }
 
@@ -297,7 +313,7 @@ private:
         ++stats_.removed;
         release_waiting_on(v);
         for (const std::uint32_t u : {p, n}) {
-            if (!is_interior(u)) continue;
+            if (!is_interior(u) || pinned_[u]) continue;
             stop_waiting(u);
             heap_.set(u, area_of(u));
         }
@@ -343,7 +359,7 @@ private:
     const SimplifyOptions& options_;
     const std::uint32_t vertex_count_;
     std::vector<std::uint32_t> prev_, next_, chain_of_;
-    std::vector<std::uint8_t> alive_, shared_;
+    std::vector<std::uint8_t> alive_, shared_, pinned_;
     std::vector<std::uint32_t> distinct_;    // per closed chain: distinct live locations; 0 if open
     std::vector<std::int8_t> orientation_;   // per chain: input ring orientation, 2 = unknown
     std::vector<Point> points_;              // vertices then control points, as indexed

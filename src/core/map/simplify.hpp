@@ -9,10 +9,11 @@
 //      the same way as the input ring (non-zero area, same orientation);
 //   3. the new segment (a, c) does not coincide with another live segment with the same two
 //      end locations (two lines with the same endpoints, or a chain folding back on itself).
-// For input whose segments meet only at shared vertices (a planar map), these rules keep every
-// topological relation: no new contact between segments, no control point changes side (the
-// detour a…c swept by the removal is a union of such empty triangles). Predicates are exact
-// unless Arithmetic::floating is asked for.
+// and never removes a vertex at either end of a segment that crosses or touches another segment
+// improperly in the input (crossings.hpp). These rules keep every topological relation: no new
+// contact between segments, crossings of the input kept as they are, no control point changes
+// side (the detour a…c swept by the removals is a union of such empty triangles). Predicates
+// are exact unless Arithmetic::floating is asked for.
 #pragma once
 
 #include "core/exact/predicates.hpp"
@@ -53,6 +54,7 @@ struct SimplifyStats {
     std::uint64_t blocked_by_point = 0;      // removals refused: a point in the triangle
     std::uint64_t blocked_by_ring = 0;       // refused: a ring would lose area or orientation
     std::uint64_t blocked_by_coincidence = 0;  // refused: two segments would coincide
+    std::uint64_t pinned_by_crossing = 0;    // interior vertices kept: ends of crossing segments
     exact::PredicateStats predicates;
 
     std::uint64_t blocked() const { return blocked_by_point + blocked_by_ring + blocked_by_coincidence; }

@@ -232,3 +232,22 @@ TEST(MapSimplify, FloatModeBreaksTopologyWhereExactDoesNot) {
 
 }  // namespace
 }  // namespace toposimp::map
+
+namespace toposimp::map {
+namespace {
+
+TEST(MapSimplify, CrossingLinesKeepTheirCrossingVertices) {
+    MapData map;
+    map.add_chain({{0, 0}, {1, 0.2}, {2, 1}, {3, 0.2}, {4, 0}});  // a river
+    map.add_chain({{1.5, -1}, {1.6, 0.5}, {1.5, 2}});           // a road over it
+    const SimplifyResult result = simplify_max(map);
+    // The river segment (1, 0.2)–(2, 1) and the road segment (1.5, -1)–(1.6, 0.5) cross: their
+    // four ends stay. (3, 0.2) is free to go.
+    EXPECT_TRUE(result.kept[1] && result.kept[2] && result.kept[6]);
+    EXPECT_FALSE(result.kept[3]);
+    EXPECT_EQ(result.stats.pinned_by_crossing, 3u);
+    EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+}
+
+}  // namespace
+}  // namespace toposimp::map

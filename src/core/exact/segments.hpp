@@ -1,0 +1,13 @@
+// Exact segment–segment contact classification for planar maps.
+#pragma once
+
+#include "core/exact/predicates.hpp"
+
+namespace toposimp::exact {
+
+// Do the closed segments pq and rs meet anywhere other than at a location that is an endpoint of
+// both? That is a crossing, a T-contact (an endpoint inside the other segment), or a collinear
+// overlap — a contact a planar map does not have. Segments may be degenerate (p = q).
+bool improper_contact(Point p, Point q, Point r, Point s, Arithmetic arithmetic, PredicateStats& stats);
+
+}  // namespace toposimp::exact

@@ -1,0 +1,114 @@
+#include "core/map/crossings.hpp"
+
+#include "core/exact/segments.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace toposimp::map {
+namespace {
+
+// A uniform grid of segment boxes, stored compactly (counting sort, no per-cell allocation).
+class SegmentGrid {
+public:
+    SegmentGrid(const MapData& map, const std::vector<std::uint32_t>& segments) : map_(map) {
+        Box bounds{INFINITY, INFINITY, -INFINITY, -INFINITY};
+        for (const Point& p : map.vertices) {
+            bounds = {std::min(bounds.min_x, p.x), std::min(bounds.min_y, p.y), std::max(bounds.max_x, p.x),
+                      std::max(bounds.max_y, p.y)};
+        }
+        const double width = bounds.max_x - bounds.min_x, height = bounds.max_y - bounds.min_y;
+        const double side = std::clamp(std::floor(std::sqrt(static_cast<double>(segments.size()) / 2.0)), 1.0, 4096.0);
+        columns_ = static_cast<std::uint32_t>(side);
+        rows_ = columns_;
+        origin_x_ = bounds.min_x;
+        origin_y_ = bounds.min_y;
+        scale_x_ = width > 0 ? columns_ / width : 0.0;
+        scale_y_ = height > 0 ? rows_ / height : 0.0;
+
+        cell_start_.assign(std::size_t{columns_} * rows_ + 1, 0);
+        for_each_registration(segments, [&](std::size_t cell, std::uint32_t) { ++cell_start_[cell + 1]; });
+        for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
+        entries_.resize(cell_start_.back());
+        std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
+        for_each_registration(segments, [&](std::size_t cell, std::uint32_t v) { entries_[fill[cell]++] = v; });
+    }
+
+    Box box_of(std::uint32_t v) const { return segment_box(map_.vertices[v], map_.vertices[v + 1]); }
+
+    std::size_t cell_of(double x, double y) const { return std::size_t{row(y)} * columns_ + column(x); }
+
+    std::size_t cell_count() const { return cell_start_.size() - 1; }
+
+    template <class Visit>
+    void for_each_in_cell(std::size_t cell, Visit&& visit) const {
+        for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) visit(k, entries_[k]);
+    }
+
+    std::uint32_t entry(std::size_t k) const { return entries_[k]; }
+    std::size_t cell_end(std::size_t cell) const { return cell_start_[cell + 1]; }
+
+private:
+    static Box segment_box(Point a, Point b) {
+        return {std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
+    }
+
+    static std::uint32_t index(double value, double origin, double scale, std::uint32_t count) {
+        double t = (value - origin) * scale;
+        if (!(t >= 0.0)) t = 0.0;
+        if (t >= static_cast<double>(count)) return count - 1;
+        return static_cast<std::uint32_t>(t);
+    }
+    std::uint32_t column(double x) const { return index(x, origin_x_, scale_x_, columns_); }
+    std::uint32_t row(double y) const { return index(y, origin_y_, scale_y_, rows_); }
+
+    template <class Register>
+    void for_each_registration(const std::vector<std::uint32_t>& segments, Register&& add) const {
+        for (const std::uint32_t v : segments) {
+            const Box box = box_of(v);
+            for (std::uint32_t y = row(box.min_y); y <= row(box.max_y); ++y) {
+                for (std::uint32_t x = column(box.min_x); x <= column(box.max_x); ++x) add(std::size_t{y} * columns_ + x, v);
+            }
+        }
+    }
+
+    const MapData& map_;
+    double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
+    std::uint32_t columns_ = 1, rows_ = 1;
+    std::vector<std::size_t> cell_start_;
+    std::vector<std::uint32_t> entries_;
+};
+
+}  // namespace
+
+std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
+                                                 exact::PredicateStats& stats) {
+    std::vector<std::uint8_t> improper(map.vertices.size(), 0);
+    std::vector<std::uint32_t> segments;  // each named by its first vertex
+    for (const Chain& chain : map.chains) {
+        for (std::uint32_t v = chain.first; v < chain.last; ++v) segments.push_back(v);
+    }
+    if (segments.size() < 2) return improper;
+    const SegmentGrid grid(map, segments);
+    for (std::size_t cell = 0; cell < grid.cell_count(); ++cell) {
+        grid.for_each_in_cell(cell, [&](std::size_t k, std::uint32_t s) {
+            const Box sb = grid.box_of(s);
+            for (std::size_t j = k + 1; j < grid.cell_end(cell); ++j) {
+                const std::uint32_t t = grid.entry(j);
+                const Box tb = grid.box_of(t);
+                // Test each pair once: in the cell holding the low corner of the boxes' overlap.
+                const double x = std::max(sb.min_x, tb.min_x), y = std::max(sb.min_y, tb.min_y);
+                if (x > std::min(sb.max_x, tb.max_x) || y > std::min(sb.max_y, tb.max_y)) continue;
+                if (grid.cell_of(x, y) != cell) continue;
+                if (improper[s] && improper[t]) continue;
+                if (exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1],
+                                            arithmetic, stats)) {
+                    improper[s] = improper[t] = 1;
+                }
+            }
+        });
+    }
+    return improper;
+}
+
+}  // namespace toposimp::map
