@@ -19,6 +19,7 @@ struct MapData {
     std::vector<Point> vertices;        // all chains' vertices, chain after chain
     std::vector<Chain> chains;          // in input order
     std::vector<Point> control_points;  // points whose side of every chain must not change
+    std::vector<std::uint8_t> frozen;   // per chain (or empty): 1 = keep every vertex, an obstacle only
 
     // Appends a chain made of `points`; returns its index.
     std::uint32_t add_chain(const std::vector<Point>& points) {
@@ -27,6 +28,13 @@ struct MapData {
         chains.push_back({first, static_cast<std::uint32_t>(vertices.size() - 1)});
         return static_cast<std::uint32_t>(chains.size() - 1);
     }
+
+    void freeze(std::uint32_t chain) {
+        if (frozen.size() < chains.size()) frozen.resize(chains.size(), 0);
+        frozen[chain] = 1;
+    }
+
+    bool is_frozen(std::uint32_t chain) const { return chain < frozen.size() && frozen[chain]; }
 };
 
 }  // namespace toposimp::map

@@ -2,13 +2,13 @@
 
 #include "core/map/crossings.hpp"
 #include "core/map/indexed_heap.hpp"
+#include "core/map/location_key.hpp"
 #include "core/map/point_grid.hpp"
 
 #include <gmpxx.h>
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <optional>
 #include <unordered_map>
@@ -35,18 +35,6 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-// Coordinates as a hashable, totally ordered key; -0.0 is folded into 0.0 (same location).
-struct LocationKey {
-    std::uint64_t x, y;
-    explicit LocationKey(Point p) {
-        const double px = p.x == 0.0 ? 0.0 : p.x, py = p.y == 0.0 ? 0.0 : p.y;
-        std::memcpy(&x, &px, sizeof x);
-        std::memcpy(&y, &py, sizeof y);
-    }
-    friend bool operator==(const LocationKey&, const LocationKey&) = default;
-    friend auto operator<=>(const LocationKey&, const LocationKey&) = default;
-};
-
 // An undirected segment between two locations.
 struct SegmentKey {
     LocationKey lo, hi;
@@ -57,13 +45,7 @@ struct SegmentKey {
 };
 
 struct SegmentKeyHash {
-    std::size_t operator()(const SegmentKey& k) const {
-        std::uint64_t h = 0x9e3779b97f4a7c15ull;
-        for (std::uint64_t part : {k.lo.x, k.lo.y, k.hi.x, k.hi.y}) {
-            h ^= part + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-        }
-        return static_cast<std::size_t>(h);
-    }
+    std::size_t operator()(const SegmentKey& k) const { return hash_words({k.lo.x, k.lo.y, k.hi.x, k.hi.y}); }
 };
 
 double effective_area(Point a, Point b, Point c) {
@@ -168,13 +150,13 @@ private:
     }
 
     // Vertices at either end of a segment that crosses or touches another one improperly in the
-    // input are never removed (see crossings.hpp for why that is enough).
+    // input are never removed (see crossings.hpp for why that is enough); nor are frozen chains'.
     void pin_crossings() {
         const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates);
         pinned_.assign(vertex_count_, 0);
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (!improper[v]) continue;
-            pinned_[v] = pinned_[next_[v]] = 1;
+            if (improper[v]) pinned_[v] = pinned_[next_[v]] = 1;
+            if (map_.is_frozen(chain_of_[v])) pinned_[v] = 1;
         }
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
             if (pinned_[v] && is_interior(v)) ++stats_.pinned_by_crossing;
