@@ -4,7 +4,7 @@
 #include "core/map/simplify.hpp"
 #include "io/errors.hpp"
 #include "io/giscup.hpp"
-#include "io/ogr_lines.hpp"
+#include "io/ogr_layer.hpp"
 #include "io/output_file.hpp"
 
 #include <cpl_conv.h>
@@ -183,13 +183,13 @@ int run_map(const MapOptions& options, Context& context) {
     try {
         // read → simplify → write; the engine builds chains, indexes and ranks inside simplify().
         map::MapData map;
-        std::optional<io::OgrLines> layer;
+        std::optional<io::OgrLayer> layer;
         io::GiscupLines giscup_lines;
         if (options.giscup) {
             giscup_lines = io::read_giscup_lines(options.input, map);
             if (!options.points.empty()) map.control_points = io::read_giscup_points(options.points);
         } else {
-            layer.emplace(io::OgrLines::read(options.input, options.layer, map));
+            layer.emplace(io::OgrLayer::read(options.input, options.layer, map));
             if (!options.points.empty()) map.control_points = io::read_control_points(options.points);
             const io::LayerSummary& summary = layer->summary();
             log->debug("read {} ({}), layer '{}': {} features{}{}", options.input, summary.driver, summary.layer,

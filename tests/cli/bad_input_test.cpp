@@ -44,12 +44,22 @@ TEST(MapBadInput, NotALineFile) {
     expect_clean_failure(result, dir, "cannot open", {"junk.gpkg"});
 }
 
-TEST(MapBadInput, PolygonLayerNamesTheFeature) {
-    const auto dir = fresh_dir("bad-polygons");
+TEST(MapBadInput, CurvedGeometryNamesTheFeature) {
+    const auto dir = fresh_dir("bad-curves");
     const std::string input = (dir / "in.gpkg").string();
-    write_layer(input, "GPKG", wkbPolygon, {{"POLYGON ((0 0, 1 0, 1 1, 0 0))", "square"}}, "parcels");
+    write_layer(input, "GPKG", wkbCircularString, {{"CIRCULARSTRING (0 0, 1 1, 2 0)", "arc"}}, "arcs");
     const auto result = run_cli({"map", input, "-o", (dir / "out.gpkg").string()});
-    expect_clean_failure(result, dir, "layer 'parcels', feature 1: geometry is Polygon", {"in.gpkg"});
+    expect_clean_failure(result, dir, "layer 'arcs', feature 1: geometry is Circular String", {"in.gpkg"});
+    EXPECT_NE(result.err.find("CONVERT_TO_LINEAR"), std::string::npos);
+}
+
+TEST(MapBadInput, GeometryCollectionNamesTheFeature) {
+    const auto dir = fresh_dir("bad-collection");
+    const std::string input = (dir / "in.gpkg").string();
+    write_layer(input, "GPKG", wkbUnknown,
+                {{"LINESTRING (0 0, 1 1, 2 0)", "fine"}, {"GEOMETRYCOLLECTION (POINT (0 0), LINESTRING (0 0, 1 1))", "mixed"}}, "things");
+    const auto result = run_cli({"map", input, "-o", (dir / "out.gpkg").string()});
+    expect_clean_failure(result, dir, "layer 'things', feature 2: geometry is Geometry Collection", {"in.gpkg"});
 }
 
 TEST(MapBadInput, OnlyEmptyGeometries) {
@@ -57,7 +67,7 @@ TEST(MapBadInput, OnlyEmptyGeometries) {
     const std::string input = (dir / "in.gpkg").string();
     write_layer(input, "GPKG", wkbLineString, {{"", "null"}, {"LINESTRING EMPTY", "empty"}});
     const auto result = run_cli({"map", input, "-o", (dir / "out.gpkg").string()});
-    expect_clean_failure(result, dir, "has no line geometry", {"in.gpkg"});
+    expect_clean_failure(result, dir, "has no line or polygon geometry", {"in.gpkg"});
 }
 
 TEST(MapBadInput, ControlPointsLayerWithLines) {

@@ -35,6 +35,7 @@ public:
     std::uint32_t source_of(std::uint32_t v) const { return source_[v - first_vertex_]; }
 
     std::uint32_t ring_count() const { return static_cast<std::uint32_t>(ring_start_.size()); }
+    std::uint32_t point_count() const { return static_cast<std::uint32_t>(points_.size()); }
     std::uint64_t arc_count() const { return arcs_; }
     std::uint64_t shared_arc_count() const { return shared_arcs_; }
     std::uint64_t degenerate_ring_count() const { return degenerate_rings_; }

@@ -1,6 +1,7 @@
-// OGR adapter for `toposimp map`: reads a line layer into the engine's MapData, keeps every
-// feature's attributes, and writes the simplified features back through any OGR driver with
-// the same fields, CRS, feature order, layer name and geometry type.
+// OGR adapter for `toposimp map`: reads a line or polygon layer into the engine's MapData (lines
+// as chains, polygon rings as a coverage of shared arcs, points as control points), keeps every
+// feature's attributes, and writes the simplified features back through any OGR driver with the
+// same fields, CRS, feature order, layer name and geometry type.
 #pragma once
 
 #include "core/map/map_data.hpp"
@@ -19,6 +20,11 @@ struct LayerSummary {
     std::string layer;
     std::uint64_t features = 0;
     std::uint64_t empty_geometries = 0;  // NULL or empty: written back unchanged
+    std::uint64_t untouched_points = 0;  // Point features among lines: unchanged, used as control points
+    std::uint64_t polygon_features = 0;
+    std::uint64_t arcs = 0;              // polygon rings split at nodes
+    std::uint64_t shared_arcs = 0;       // arcs used by two rings (or twice)
+    std::uint64_t degenerate_rings = 0;  // fewer than 3 corners or flat: written back unchanged
     bool has_z = false;
     bool has_m = false;
 };
@@ -33,14 +39,14 @@ struct WriteOptions {
     std::ostream* stdout_stream = nullptr;     // where /vsistdout/ output goes
 };
 
-class OgrLines {
+class OgrLayer {
 public:
     // Reads layer `layer` of `path` (empty: the first layer) into `map`, one chain per line part.
     // Throws InputError naming the file, layer and feature for anything it cannot accept.
-    static OgrLines read(const std::string& path, const std::string& layer, map::MapData& map);
+    static OgrLayer read(const std::string& path, const std::string& layer, map::MapData& map);
 
-    OgrLines(OgrLines&&) noexcept;
-    ~OgrLines();
+    OgrLayer(OgrLayer&&) noexcept;
+    ~OgrLayer();
 
     const LayerSummary& summary() const;
 
@@ -53,7 +59,7 @@ public:
     struct Layer;  // the layer's definition, CRS, attributes and geometry shapes
 
 private:
-    explicit OgrLines(std::unique_ptr<Layer> layer);
+    explicit OgrLayer(std::unique_ptr<Layer> layer);
     std::unique_ptr<Layer> layer_;
 };
 

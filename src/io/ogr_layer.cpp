@@ -1,8 +1,9 @@
-#include "io/ogr_lines.hpp"
+#include "io/ogr_layer.hpp"
 
 #include "io/errors.hpp"
 #include "io/geojson_writer.hpp"
 #include "io/output_file.hpp"
+#include "core/map/coverage.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
@@ -83,17 +84,18 @@ std::string feature_label(const std::string& path, OGRLayer& layer, GIntBig fid)
     return "'" + path + "', layer '" + std::string(layer.GetName()) + "', feature " + std::to_string(fid);
 }
 
-bool is_empty(const OGRGeometry* geometry) { return geometry == nullptr || geometry->IsEmpty(); }
 
 }  // namespace
 
-struct OgrLines::Layer {
-    // One feature's geometry: a run of parts (chain indices, kEmptyPart for an empty member).
+struct OgrLayer::Layer {
+    // What a feature's geometry became: chains (lines), coverage rings (polygons), or an
+    // untouched copy (points, which also serve as obstacles).
+    enum class Kind : std::uint8_t { null, lines, polygons, untouched };
     struct Shape {
         OGRwkbGeometryType type = wkbUnknown;  // the feature's own type, with Z/M flags
-        bool null = true;
-        std::uint32_t first_part = 0;
-        std::uint32_t part_count = 0;
+        Kind kind = Kind::null;
+        std::uint32_t first = 0;  // lines: into items (chain per part); polygons: into items
+        std::uint32_t count = 0;  //   (ring count, then ring ids, per polygon); untouched: into untouched
     };
 
     LayerSummary summary;
@@ -103,12 +105,17 @@ struct OgrLines::Layer {
     OGRFeatureDefn* definition = nullptr;  // reference-counted
     std::vector<OGRFeatureUniquePtr> features;  // attributes only: geometries are in the map
     std::vector<Shape> shapes;
-    std::vector<std::uint32_t> parts;
-    std::vector<double> z, m;  // per map vertex, when the layer has Z / M
+    std::vector<std::uint32_t> items;
+    std::vector<std::unique_ptr<OGRGeometry>> untouched;
+    map::Coverage coverage;
+    std::vector<double> z, m;            // per map vertex, when the layer has Z / M
+    std::vector<double> ring_z, ring_m;  // per coverage ring point, until the coverage is built
 
     ~Layer() {
         if (definition) definition->Release();
     }
+
+    bool carries_zm() const { return summary.has_z || summary.has_m; }
 
     std::unique_ptr<OGRGeometry> build_geometry(std::size_t index, const map::MapData& map,
                                                 const std::vector<std::uint8_t>& kept) const;
@@ -116,13 +123,8 @@ struct OgrLines::Layer {
 
 namespace {
 
-std::uint32_t add_part(OgrLines::Layer& layer, const OGRSimpleCurve& curve, map::MapData& map,
-                       const std::string& label) {
+std::vector<Point> read_points(const OGRSimpleCurve& curve, const std::string& label) {
     const int count = curve.getNumPoints();
-    if (count == 0) return kEmptyPart;
-    if (map.vertices.size() + count > std::numeric_limits<std::uint32_t>::max() - 1) {
-        throw InputError(label + ": more than 4 billion vertices in one map");
-    }
     std::vector<Point> points(count);
     for (int i = 0; i < count; ++i) {
         points[i] = {curve.getX(i), curve.getY(i)};
@@ -131,24 +133,59 @@ std::uint32_t add_part(OgrLines::Layer& layer, const OGRSimpleCurve& curve, map:
                              std::to_string(points[i].x) + ", " + std::to_string(points[i].y) + ")");
         }
     }
-    if (layer.summary.has_z || layer.summary.has_m) {
-        for (int i = 0; i < count; ++i) {
-            layer.z.push_back(curve.Is3D() ? curve.getZ(i) : 0.0);
-            layer.m.push_back(curve.IsMeasured() ? curve.getM(i) : 0.0);
-        }
+    return points;
+}
+
+void append_zm(const OGRSimpleCurve& curve, std::vector<double>& z, std::vector<double>& m) {
+    for (int i = 0; i < curve.getNumPoints(); ++i) {
+        z.push_back(curve.Is3D() ? curve.getZ(i) : 0.0);
+        m.push_back(curve.IsMeasured() ? curve.getM(i) : 0.0);
     }
-    return map.add_chain(points);
+}
+
+std::uint32_t add_line(OgrLayer::Layer& layer, const OGRSimpleCurve& curve, map::MapData& map, const std::string& label) {
+    if (curve.getNumPoints() == 0) return kEmptyPart;
+    if (map.vertices.size() + curve.getNumPoints() > std::numeric_limits<std::uint32_t>::max() / 2) {
+        throw InputError(label + ": more than 2 billion vertices in one map");
+    }
+    const std::uint32_t chain = map.add_chain(read_points(curve, label));
+    if (layer.carries_zm()) append_zm(curve, layer.z, layer.m);
+    return chain;
+}
+
+void add_polygon(OgrLayer::Layer& layer, const OGRPolygon& polygon, const std::string& label) {
+    std::vector<const OGRLinearRing*> rings;
+    for (const OGRLinearRing* ring : polygon) {
+        if (!ring->IsEmpty()) rings.push_back(ring);
+    }
+    layer.items.push_back(static_cast<std::uint32_t>(rings.size()));
+    for (const OGRLinearRing* ring : rings) {
+        layer.items.push_back(layer.coverage.add_ring(read_points(*ring, label)));
+        if (layer.carries_zm()) append_zm(*ring, layer.ring_z, layer.ring_m);
+    }
+}
+
+void set_point(OGRSimpleCurve& line, int i, Point p, bool with_z, bool with_m, double z, double m) {
+    if (with_z && with_m) {
+        line.setPoint(i, p.x, p.y, z, m);
+    } else if (with_z) {
+        line.setPoint(i, p.x, p.y, z);
+    } else if (with_m) {
+        line.setPointM(i, p.x, p.y, m);
+    } else {
+        line.setPoint(i, p.x, p.y);
+    }
 }
 
 }  // namespace
 
-OgrLines::OgrLines(std::unique_ptr<Layer> layer) : layer_(std::move(layer)) {}
-OgrLines::OgrLines(OgrLines&&) noexcept = default;
-OgrLines::~OgrLines() = default;
+OgrLayer::OgrLayer(std::unique_ptr<Layer> layer) : layer_(std::move(layer)) {}
+OgrLayer::OgrLayer(OgrLayer&&) noexcept = default;
+OgrLayer::~OgrLayer() = default;
 
-const LayerSummary& OgrLines::summary() const { return layer_->summary; }
+const LayerSummary& OgrLayer::summary() const { return layer_->summary; }
 
-OgrLines OgrLines::read(const std::string& path, const std::string& layer_name, map::MapData& map) {
+OgrLayer OgrLayer::read(const std::string& path, const std::string& layer_name, map::MapData& map) {
     DatasetPtr dataset = open_vector(path);
     OGRLayer& source = pick_layer(*dataset, path, layer_name);
     auto layer = std::make_unique<Layer>();
@@ -164,14 +201,13 @@ OgrLines OgrLines::read(const std::string& path, const std::string& layer_name, 
 
     QuietGdal quiet;
     source.ResetReading();
-    std::uint64_t lines = 0;
+    std::uint64_t simplifiable = 0;
     while (OGRFeatureUniquePtr feature{source.GetNextFeature()}) {
         const std::string label = feature_label(path, source, feature->GetFID());
         Layer::Shape shape;
-        shape.first_part = static_cast<std::uint32_t>(layer->parts.size());
+        shape.first = static_cast<std::uint32_t>(layer->items.size());
         OGRGeometry* geometry = feature->GetGeometryRef();
         if (geometry != nullptr) {
-            shape.null = false;
             shape.type = geometry->getGeometryType();
             const bool z = geometry->Is3D(), m = geometry->IsMeasured();
             if ((z && !layer->summary.has_z) || (m && !layer->summary.has_m)) {
@@ -180,26 +216,61 @@ OgrLines OgrLines::read(const std::string& path, const std::string& layer_name, 
                 layer->summary.has_m = layer->summary.has_m || m;
                 layer->z.resize(map.vertices.size(), 0.0);
                 layer->m.resize(map.vertices.size(), 0.0);
+                layer->ring_z.resize(layer->coverage.point_count(), 0.0);
+                layer->ring_m.resize(layer->coverage.point_count(), 0.0);
             }
             switch (wkbFlatten(shape.type)) {
                 case wkbLineString:
-                    layer->parts.push_back(add_part(*layer, *geometry->toLineString(), map, label));
+                    shape.kind = Layer::Kind::lines;
+                    layer->items.push_back(add_line(*layer, *geometry->toLineString(), map, label));
                     break;
                 case wkbMultiLineString:
+                    shape.kind = Layer::Kind::lines;
                     for (const OGRLineString* part : *geometry->toMultiLineString()) {
-                        layer->parts.push_back(add_part(*layer, *part, map, label));
+                        layer->items.push_back(add_line(*layer, *part, map, label));
                     }
                     break;
+                case wkbPolygon:
+                    shape.kind = Layer::Kind::polygons;
+                    add_polygon(*layer, *geometry->toPolygon(), label);
+                    break;
+                case wkbMultiPolygon:
+                    shape.kind = Layer::Kind::polygons;
+                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) add_polygon(*layer, *polygon, label);
+                    break;
+                case wkbPoint:
+                case wkbMultiPoint: {
+                    // Points among lines: written back untouched, kept on their side as control points.
+                    shape.kind = Layer::Kind::untouched;
+                    shape.first = static_cast<std::uint32_t>(layer->untouched.size());
+                    auto add = [&](const OGRPoint& point) {
+                        if (point.IsEmpty()) return;
+                        const Point p{point.getX(), point.getY()};
+                        if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(label + ": point has a non-finite coordinate");
+                        map.control_points.push_back(p);
+                    };
+                    if (wkbFlatten(shape.type) == wkbPoint) {
+                        add(*geometry->toPoint());
+                    } else {
+                        for (const OGRPoint* point : *geometry->toMultiPoint()) add(*point);
+                    }
+                    layer->untouched.emplace_back(geometry->clone());
+                    ++layer->summary.untouched_points;
+                    break;
+                }
                 default:
                     throw InputError(label + ": geometry is " + OGRGeometryTypeToName(shape.type) +
-                                     "; toposimp map simplifies LineString and MultiLineString layers");
+                                     "; toposimp map simplifies (Multi)LineString and (Multi)Polygon features" +
+                                     (OGR_GT_IsNonLinear(shape.type) ? " (linearize curves first: ogr2ogr -nlt CONVERT_TO_LINEAR)" : ""));
             }
+            if (shape.kind != Layer::Kind::untouched) shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
+            if (shape.kind == Layer::Kind::untouched) shape.count = 1;
         }
-        shape.part_count = static_cast<std::uint32_t>(layer->parts.size()) - shape.first_part;
-        if (is_empty(geometry)) {
+        if (geometry == nullptr || geometry->IsEmpty()) {
             ++layer->summary.empty_geometries;
-        } else {
-            ++lines;
+        } else if (shape.kind != Layer::Kind::untouched) {
+            ++simplifiable;
+            if (shape.kind == Layer::Kind::polygons) ++layer->summary.polygon_features;
         }
         feature->SetGeometryDirectly(nullptr);
         layer->shapes.push_back(shape);
@@ -209,54 +280,94 @@ OgrLines OgrLines::read(const std::string& path, const std::string& layer_name, 
         throw InputError("error reading '" + path + "', layer '" + layer->summary.layer + "'" + last_gdal_error());
     }
     layer->summary.features = layer->features.size();
-    if (lines == 0) {
-        throw InputError("'" + path + "', layer '" + layer->summary.layer + "' has no line geometry (" +
+    if (simplifiable == 0) {
+        throw InputError("'" + path + "', layer '" + layer->summary.layer + "' has no line or polygon geometry (" +
                          OGRGeometryTypeToName(layer->geometry_type) + ", " +
                          std::to_string(layer->summary.features) + " features)");
     }
-    return OgrLines(std::move(layer));
+    // Polygon rings become arcs: one chain per border, shared by the polygons on both sides.
+    const std::size_t before = map.vertices.size();
+    layer->coverage.build(map);
+    if (layer->carries_zm()) {
+        layer->z.resize(map.vertices.size(), 0.0);
+        layer->m.resize(map.vertices.size(), 0.0);
+        for (std::size_t v = before; v < map.vertices.size(); ++v) {
+            const std::uint32_t origin = layer->coverage.source_of(static_cast<std::uint32_t>(v));
+            layer->z[v] = layer->ring_z[origin];
+            layer->m[v] = layer->ring_m[origin];
+        }
+    }
+    layer->summary.arcs = layer->coverage.arc_count();
+    layer->summary.shared_arcs = layer->coverage.shared_arc_count();
+    layer->summary.degenerate_rings = layer->coverage.degenerate_ring_count();
+    return OgrLayer(std::move(layer));
 }
 
-std::unique_ptr<OGRGeometry> OgrLines::Layer::build_geometry(std::size_t index, const map::MapData& map,
+std::unique_ptr<OGRGeometry> OgrLayer::Layer::build_geometry(std::size_t index, const map::MapData& map,
                                                              const std::vector<std::uint8_t>& kept) const {
     const Shape& shape = shapes[index];
-    if (shape.null) return nullptr;
     const bool with_z = OGR_GT_HasZ(shape.type), with_m = OGR_GT_HasM(shape.type);
-    auto make_line = [&](std::uint32_t chain_index) {
-        auto line = std::make_unique<OGRLineString>();
-        if (with_z) line->set3D(TRUE);
-        if (with_m) line->setMeasured(TRUE);
-        if (chain_index == kEmptyPart) return line;
-        const map::Chain& chain = map.chains[chain_index];
-        int count = 0;
-        for (std::uint32_t v = chain.first; v <= chain.last; ++v) count += kept[v] ? 1 : 0;
-        line->setNumPoints(count, FALSE);
-        int i = 0;
-        for (std::uint32_t v = chain.first; v <= chain.last; ++v) {
-            if (!kept[v]) continue;
-            const Point p = map.vertices[v];
-            if (with_z && with_m) {
-                line->setPoint(i, p.x, p.y, z[v], m[v]);
-            } else if (with_z) {
-                line->setPoint(i, p.x, p.y, z[v]);
-            } else if (with_m) {
-                line->setPointM(i, p.x, p.y, m[v]);
-            } else {
-                line->setPoint(i, p.x, p.y);
-            }
-            ++i;
-        }
-        return line;
+    auto zm_flags = [&](OGRGeometry& geometry) {
+        if (with_z) geometry.set3D(TRUE);
+        if (with_m) geometry.setMeasured(TRUE);
     };
-    if (wkbFlatten(shape.type) == wkbLineString) {
-        if (shape.part_count == 0) return make_line(kEmptyPart);
-        return make_line(parts[shape.first_part]);
+    auto fill = [&](OGRSimpleCurve& curve, const std::vector<std::uint32_t>& vertices) {
+        curve.setNumPoints(static_cast<int>(vertices.size()), FALSE);
+        for (std::size_t i = 0; i < vertices.size(); ++i) {
+            const std::uint32_t v = vertices[i];
+            set_point(curve, static_cast<int>(i), map.vertices[v], with_z, with_m, with_z ? z[v] : 0.0, with_m ? m[v] : 0.0);
+        }
+    };
+    switch (shape.kind) {
+        case Kind::null: return nullptr;
+        case Kind::untouched: return std::unique_ptr<OGRGeometry>(untouched[shape.first]->clone());
+        case Kind::lines: {
+            auto make_line = [&](std::uint32_t chain_index) {
+                auto line = std::make_unique<OGRLineString>();
+                zm_flags(*line);
+                if (chain_index == kEmptyPart) return line;
+                std::vector<std::uint32_t> vertices;
+                for (std::uint32_t v = map.chains[chain_index].first; v <= map.chains[chain_index].last; ++v) {
+                    if (kept[v]) vertices.push_back(v);
+                }
+                fill(*line, vertices);
+                return line;
+            };
+            if (wkbFlatten(shape.type) == wkbLineString) return make_line(shape.count ? items[shape.first] : kEmptyPart);
+            auto multi = std::make_unique<OGRMultiLineString>();
+            zm_flags(*multi);
+            for (std::uint32_t k = 0; k < shape.count; ++k) multi->addGeometryDirectly(make_line(items[shape.first + k]).release());
+            return multi;
+        }
+        case Kind::polygons: {
+            std::uint32_t k = shape.first;
+            auto make_polygon = [&]() {
+                auto polygon = std::make_unique<OGRPolygon>();
+                zm_flags(*polygon);
+                const std::uint32_t rings = items[k++];
+                for (std::uint32_t r = 0; r < rings; ++r) {
+                    auto ring = std::make_unique<OGRLinearRing>();
+                    zm_flags(*ring);
+                    fill(*ring, coverage.ring_vertices(items[k++], kept));
+                    polygon->addRingDirectly(ring.release());
+                }
+                return polygon;
+            };
+            if (wkbFlatten(shape.type) == wkbPolygon) {
+                if (shape.count == 0) {
+                    auto empty = std::make_unique<OGRPolygon>();
+                    zm_flags(*empty);
+                    return empty;
+                }
+                return make_polygon();
+            }
+            auto multi = std::make_unique<OGRMultiPolygon>();
+            zm_flags(*multi);
+            while (k < shape.first + shape.count) multi->addGeometryDirectly(make_polygon().release());
+            return multi;
+        }
     }
-    auto multi = std::make_unique<OGRMultiLineString>();
-    for (std::uint32_t k = 0; k < shape.part_count; ++k) multi->addGeometryDirectly(make_line(parts[shape.first_part + k]).release());
-    if (with_z) multi->set3D(TRUE);
-    if (with_m) multi->setMeasured(TRUE);
-    return multi;
+    return nullptr;
 }
 
 namespace {
@@ -298,40 +409,72 @@ GDALDriver* choose_driver(const WriteOptions& options) {
     return driver;
 }
 
-// Do two geometries hold the same coordinates, bit for bit (LineString ≡ one-part MultiLineString)?
-bool same_coordinates(const OGRGeometry* expected, const OGRGeometry* actual, std::string& difference) {
-    auto parts = [](const OGRGeometry* g) {
-        std::vector<const OGRLineString*> list;
-        if (g == nullptr || g->IsEmpty()) return list;
-        if (wkbFlatten(g->getGeometryType()) == wkbLineString) {
-            list.push_back(g->toLineString());
-        } else if (wkbFlatten(g->getGeometryType()) == wkbMultiLineString) {
-            for (const OGRLineString* part : *g->toMultiLineString()) {
-                if (!part->IsEmpty()) list.push_back(part);
+// The point sequences of a geometry: line parts, polygon rings (all of them, in order), points.
+void collect_parts(const OGRGeometry* geometry, std::vector<const OGRSimpleCurve*>& parts,
+                   std::vector<const OGRPoint*>& points) {
+    if (geometry == nullptr || geometry->IsEmpty()) return;
+    switch (wkbFlatten(geometry->getGeometryType())) {
+        case wkbLineString: parts.push_back(geometry->toLineString()); break;
+        case wkbPolygon:
+            for (const OGRLinearRing* ring : *geometry->toPolygon()) {
+                if (!ring->IsEmpty()) parts.push_back(ring);
             }
-        }
-        return list;
-    };
-    const auto want = parts(expected), got = parts(actual);
-    if (want.size() != got.size()) {
+            break;
+        case wkbPoint: points.push_back(geometry->toPoint()); break;
+        case wkbMultiLineString:
+        case wkbMultiPolygon:
+        case wkbMultiPoint:
+        case wkbGeometryCollection:
+            for (const OGRGeometry* member : *geometry->toGeometryCollection()) collect_parts(member, parts, points);
+            break;
+        default: break;
+    }
+}
+
+// Do two geometries hold the same coordinates, bit for bit? A LineString equals a one-part
+// MultiLineString, and a ring may come back reversed (Shapefile writes rings in its own
+// orientation); nothing else may differ.
+bool same_coordinates(const OGRGeometry* expected, const OGRGeometry* actual, std::string& difference) {
+    std::vector<const OGRSimpleCurve*> want, got;
+    std::vector<const OGRPoint*> want_points, got_points;
+    collect_parts(expected, want, want_points);
+    collect_parts(actual, got, got_points);
+    if (want.size() != got.size() || want_points.size() != got_points.size()) {
         difference = std::to_string(want.size()) + " parts became " + std::to_string(got.size());
         return false;
     }
-    for (std::size_t k = 0; k < want.size(); ++k) {
-        if (want[k]->getNumPoints() != got[k]->getNumPoints()) {
-            difference = "part " + std::to_string(k) + " has " + std::to_string(got[k]->getNumPoints()) +
-                         " vertices, not " + std::to_string(want[k]->getNumPoints());
+    for (std::size_t k = 0; k < want_points.size(); ++k) {
+        if (!(want_points[k]->getX() == got_points[k]->getX()) || !(want_points[k]->getY() == got_points[k]->getY())) {
+            difference = "point " + std::to_string(k) + " moved";
             return false;
         }
-        for (int i = 0; i < want[k]->getNumPoints(); ++i) {
-            const bool z_differs = want[k]->Is3D() && got[k]->Is3D() && !(want[k]->getZ(i) == got[k]->getZ(i));
-            if (!(want[k]->getX(i) == got[k]->getX(i)) || !(want[k]->getY(i) == got[k]->getY(i)) || z_differs) {
-                char text[160];
-                std::snprintf(text, sizeof text, "vertex %d: (%.17g, %.17g) was written as (%.17g, %.17g)", i,
-                              want[k]->getX(i), want[k]->getY(i), got[k]->getX(i), got[k]->getY(i));
-                difference = text;
-                return false;
+    }
+    for (std::size_t k = 0; k < want.size(); ++k) {
+        const int n = want[k]->getNumPoints();
+        if (n != got[k]->getNumPoints()) {
+            difference = "part " + std::to_string(k) + " has " + std::to_string(got[k]->getNumPoints()) +
+                         " vertices, not " + std::to_string(n);
+            return false;
+        }
+        auto matches = [&](bool reversed, int& bad) {
+            for (int i = 0; i < n; ++i) {
+                const int j = reversed ? n - 1 - i : i;
+                const bool z_differs = want[k]->Is3D() && got[k]->Is3D() && !(want[k]->getZ(i) == got[k]->getZ(j));
+                if (!(want[k]->getX(i) == got[k]->getX(j)) || !(want[k]->getY(i) == got[k]->getY(j)) || z_differs) {
+                    bad = i;
+                    return false;
+                }
             }
+            return true;
+        };
+        int bad = 0, ignored = 0;
+        const bool ring = wkbFlatten(want[k]->getGeometryType()) == wkbLineString && want[k]->get_IsClosed();
+        if (!matches(false, bad) && !(ring && matches(true, ignored))) {
+            char text[200];
+            std::snprintf(text, sizeof text, "part %zu, vertex %d: (%.17g, %.17g) was written as (%.17g, %.17g)", k, bad,
+                          want[k]->getX(bad), want[k]->getY(bad), got[k]->getX(bad), got[k]->getY(bad));
+            difference = text;
+            return false;
         }
     }
     return true;
@@ -339,7 +482,7 @@ bool same_coordinates(const OGRGeometry* expected, const OGRGeometry* actual, st
 
 }  // namespace
 
-std::vector<std::string> OgrLines::write(const WriteOptions& options, const map::MapData& map,
+std::vector<std::string> OgrLayer::write(const WriteOptions& options, const map::MapData& map,
                                          const std::vector<std::uint8_t>& kept) const {
     const Layer& layer = *layer_;
     std::vector<std::string> warnings;
