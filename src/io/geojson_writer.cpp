@@ -156,18 +156,43 @@ struct CoordinateWriter {
         out += '[';
         for (int i = 0; i < curve.getNumPoints(); ++i) {
             if (i) out += ',';
-            out += '[';
-            append_number(out, curve.getX(i));
-            out += ',';
-            append_number(out, curve.getY(i));
-            if (curve.Is3D()) {
-                out += ',';
-                append_number(out, curve.getZ(i));
-            }
-            out += ']';
+            position(curve.getX(i), curve.getY(i), curve, curve.Is3D() ? curve.getZ(i) : 0.0);
         }
         out += ']';
-        dropped_m = dropped_m || curve.IsMeasured();
+    }
+
+    void position(double x, double y, const OGRGeometry& owner, double z) {
+        out += '[';
+        append_number(out, x);
+        out += ',';
+        append_number(out, y);
+        if (owner.Is3D()) {
+            out += ',';
+            append_number(out, z);
+        }
+        out += ']';
+        dropped_m = dropped_m || owner.IsMeasured();
+    }
+
+    void polygon(const OGRPolygon& shape) {
+        out += '[';
+        bool first = true;
+        for (const OGRLinearRing* ring : shape) {
+            if (!first) out += ',';
+            first = false;
+            line(*ring);
+        }
+        out += ']';
+    }
+
+    template <class Collection, class Write>
+    void members(const Collection& collection, Write&& write) {
+        out += '[';
+        for (int i = 0; i < collection.getNumGeometries(); ++i) {
+            if (i) out += ',';
+            write(*collection.getGeometryRef(i));
+        }
+        out += ']';
     }
 
     void geometry(const OGRGeometry* geometry) {
@@ -175,21 +200,38 @@ struct CoordinateWriter {
             out += "null";
             return;
         }
-        switch (wkbFlatten(geometry->getGeometryType())) {
+        const OGRwkbGeometryType type = wkbFlatten(geometry->getGeometryType());
+        switch (type) {
+            case wkbPoint: {
+                out += R"({"type":"Point","coordinates":)";
+                const OGRPoint& point = *geometry->toPoint();
+                if (point.IsEmpty()) {
+                    out += "[]";
+                } else {
+                    position(point.getX(), point.getY(), point, point.getZ());
+                }
+                break;
+            }
+            case wkbMultiPoint:
+                out += R"({"type":"MultiPoint","coordinates":)";
+                members(*geometry->toMultiPoint(), [&](const OGRPoint& p) { position(p.getX(), p.getY(), p, p.getZ()); });
+                break;
             case wkbLineString:
                 out += R"({"type":"LineString","coordinates":)";
                 line(*geometry->toLineString());
                 break;
-            case wkbMultiLineString: {
-                out += R"({"type":"MultiLineString","coordinates":[)";
-                const OGRMultiLineString* multi = geometry->toMultiLineString();
-                for (int i = 0; i < multi->getNumGeometries(); ++i) {
-                    if (i) out += ',';
-                    line(*multi->getGeometryRef(i));
-                }
-                out += ']';
+            case wkbMultiLineString:
+                out += R"({"type":"MultiLineString","coordinates":)";
+                members(*geometry->toMultiLineString(), [&](const OGRLineString& part) { line(part); });
                 break;
-            }
+            case wkbPolygon:
+                out += R"({"type":"Polygon","coordinates":)";
+                polygon(*geometry->toPolygon());
+                break;
+            case wkbMultiPolygon:
+                out += R"({"type":"MultiPolygon","coordinates":)";
+                members(*geometry->toMultiPolygon(), [&](const OGRPolygon& part) { polygon(part); });
+                break;
             default:
                 throw OutputError(std::string("GeoJSON writer: unsupported geometry type ") +
                                   OGRGeometryTypeToName(geometry->getGeometryType()));

@@ -512,6 +512,10 @@ std::vector<std::string> OgrLayer::write(const WriteOptions& options, const map:
         CPLStringList dataset_options, layer_options;
         for (const auto& option : options.dataset_options) dataset_options.AddString(option.c_str());
         for (const auto& option : options.layer_options) layer_options.AddString(option.c_str());
+        // FlatGeobuf's spatial index sorts the features; keep the input order unless asked.
+        if (driver_name == "FlatGeobuf" && layer_options.FetchNameValue("SPATIAL_INDEX") == nullptr) {
+            layer_options.SetNameValue("SPATIAL_INDEX", "NO");
+        }
         // CSV writes WKT: ask for 17 significant digits (the read-back below checks the result).
         CPLConfigOptionSetter precision("OGR_WKT_PRECISION", "17", true);
         DatasetPtr dataset(driver->Create(output.staging_path().c_str(), 0, 0, 0, GDT_Unknown, dataset_options.List()));

@@ -115,9 +115,19 @@ inline ReadLayer read_layer(const std::string& path, int index = 0) {
                 }
                 read.coordinates.push_back(values);
             };
-            if (wkbFlatten(read.type) == wkbLineString) add(*geometry->toLineString());
-            if (wkbFlatten(read.type) == wkbMultiLineString) {
-                for (const OGRLineString* part : *geometry->toMultiLineString()) add(*part);
+            auto add_polygon = [&](const OGRPolygon& polygon) {
+                for (const OGRLinearRing* ring : polygon) add(*ring);
+            };
+            switch (wkbFlatten(read.type)) {
+                case wkbLineString: add(*geometry->toLineString()); break;
+                case wkbMultiLineString:
+                    for (const OGRLineString* part : *geometry->toMultiLineString()) add(*part);
+                    break;
+                case wkbPolygon: add_polygon(*geometry->toPolygon()); break;
+                case wkbMultiPolygon:
+                    for (const OGRPolygon* part : *geometry->toMultiPolygon()) add_polygon(*part);
+                    break;
+                default: break;
             }
         }
         result.features.push_back(read);

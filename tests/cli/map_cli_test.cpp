@@ -113,6 +113,47 @@ TEST_P(ExactFormats, WriteCoordinatesBitForBit) {
     EXPECT_FALSE(written.srs_wkt.empty()) << "CRS kept";
 }
 
+// Polygons with holes, and multipolygons: every ring keeps only vertices of its input ring (it
+// may start at a node, and Shapefile may reverse it), holes stay holes, shared borders shared.
+TEST_P(ExactFormats, WritePolygonsBitForBit) {
+    const auto dir = fresh_dir(std::string("polygons-") + GetParam());
+    const std::string input = (dir / "in.gpkg").string();
+    write_layer(input, "GPKG", wkbMultiPolygon,
+                {{"MULTIPOLYGON (((0 0, 10 0, 10.1 5, 10 10, 0 10, 0 0), (2 2, 2 3, 2.5 3.1, 3 3, 3 2, 2 2)), "
+                  "((20 0, 30 0, 30 10, 20 10, 20.1 5.0000000000000009, 20 0)))", "islands"},
+                 {"MULTIPOLYGON (((10 0, 15 0, 15 10, 10 10, 10.1 5, 10 0)))", "neighbour"}});
+    const std::string out = (dir / (std::string("out.") + GetParam())).string();
+    const CliResult result = run_cli({"map", input, "--max", "-o", out});
+    ASSERT_EQ(result.code, 0) << result.err;
+    const ReadLayer original = read_layer(input), written = read_layer(out);
+    ASSERT_EQ(written.features.size(), 2u);
+    for (std::size_t i = 0; i < 2; ++i) {
+        EXPECT_EQ(written.features[i].name, original.features[i].name);
+        ASSERT_EQ(written.features[i].coordinates.size(), original.features[i].coordinates.size()) << GetParam();
+        for (std::size_t r = 0; r < original.features[i].coordinates.size(); ++r) {
+            const auto& in = original.features[i].coordinates[r];
+            const auto& out_ring = written.features[i].coordinates[r];
+            EXPECT_GE(out_ring.size(), 8u) << "a ring keeps 3 corners and closes";
+            // Rings may start at a node, so compare as sets of vertices.
+            for (std::size_t k = 0; k < out_ring.size(); k += 2) {
+                bool found = false;
+                for (std::size_t j = 0; j < in.size(); j += 2) found = found || (in[j] == out_ring[k] && in[j + 1] == out_ring[k + 1]);
+                EXPECT_TRUE(found) << GetParam() << " feature " << i << " ring " << r << ": vertex not from the input";
+            }
+        }
+    }
+    // The border x = 10 with its wiggle (10.1, 5) is shared: both features keep it or neither does.
+    auto has_wiggle = [](const ReadFeature& feature) {
+        for (const auto& ring : feature.coordinates) {
+            for (std::size_t k = 0; k < ring.size(); k += 2) {
+                if (ring[k] == 10.1 && ring[k + 1] == 5) return true;
+            }
+        }
+        return false;
+    };
+    EXPECT_EQ(has_wiggle(written.features[0]), has_wiggle(written.features[1])) << GetParam();
+}
+
 INSTANTIATE_TEST_SUITE_P(Drivers, ExactFormats, ::testing::Values("gpkg", "shp", "fgb", "geojson"));
 
 TEST(MapCli, RefusesATextDriverThatRoundsCoordinates) {
