@@ -197,6 +197,17 @@ int run_map(const MapOptions& options, Context& context) {
             if (summary.empty_geometries > 0) {
                 log->warn("{} features with an empty or NULL geometry are written unchanged", summary.empty_geometries);
             }
+            if (summary.degenerate_rings > 0) {
+                log->warn("{} polygon rings with fewer than 3 corners or no area are written unchanged", summary.degenerate_rings);
+            }
+            if (summary.untouched_points > 0) {
+                log->info("{} point features are written unchanged and kept on their side of every line",
+                          summary.untouched_points);
+            }
+            if (summary.polygon_features > 0) {
+                log->debug("{} polygon features: {} arcs, {} of them shared", summary.polygon_features, summary.arcs,
+                           summary.shared_arcs);
+            }
         }
         time.read = seconds_since(start);
         log->debug("{} chains, {} vertices, {} control points", map.chains.size(), map.vertices.size(),

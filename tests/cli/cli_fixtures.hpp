@@ -5,6 +5,7 @@
 #include "core/geometry.hpp"
 
 #include <gdal_priv.h>
+#include <gtest/gtest.h>
 #include <ogrsf_frmts.h>
 
 #include <filesystem>
@@ -29,9 +30,16 @@ inline CliResult run_cli(const std::vector<std::string>& args) {
     return {code, out.str(), err.str()};
 }
 
-// A fresh, empty folder for one test.
+// A fresh, empty folder for one test (named after the test too: ctest runs tests in parallel).
 inline std::filesystem::path fresh_dir(const std::string& name) {
-    const auto dir = std::filesystem::temp_directory_path() / ("toposimp-test-" + name);
+    std::string unique = name;
+    if (const auto* info = ::testing::UnitTest::GetInstance()->current_test_info()) {
+        unique += std::string("-") + info->test_suite_name() + "-" + info->name();
+    }
+    for (char& c : unique) {
+        if (c == '/') c = '_';
+    }
+    const auto dir = std::filesystem::temp_directory_path() / ("toposimp-test-" + unique);
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;
