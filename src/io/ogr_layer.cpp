@@ -512,6 +512,17 @@ std::vector<std::string> OgrLayer::write(const WriteOptions& options, const map:
         CPLStringList dataset_options, layer_options;
         for (const auto& option : options.dataset_options) dataset_options.AddString(option.c_str());
         for (const auto& option : options.layer_options) layer_options.AddString(option.c_str());
+        // CSV drops geometries unless asked to write them as WKT.
+        if (driver_name == "CSV" && layer_options.FetchNameValue("GEOMETRY") == nullptr) {
+            layer_options.SetNameValue("GEOMETRY", "AS_WKT");
+        }
+        // Databases with an FID column (GPKG, SQLite): keep the source's FID column name, and
+        // never collide with an attribute field of that name (GML inputs have a string 'fid').
+        if ((driver_name == "GPKG" || driver_name == "SQLite") && layer_options.FetchNameValue("FID") == nullptr) {
+            std::string fid = layer.fid_column.empty() ? "fid" : layer.fid_column;
+            while (layer.definition->GetFieldIndex(fid.c_str()) >= 0) fid += "_";
+            layer_options.SetNameValue("FID", fid.c_str());
+        }
         // FlatGeobuf's spatial index sorts the features; keep the input order unless asked.
         if (driver_name == "FlatGeobuf" && layer_options.FetchNameValue("SPATIAL_INDEX") == nullptr) {
             layer_options.SetNameValue("SPATIAL_INDEX", "NO");
