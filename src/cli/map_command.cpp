@@ -1,6 +1,7 @@
 #include "cli/map_command.hpp"
 
 #include "cli/logging.hpp"
+#include "cli/progress.hpp"
 #include "core/map/simplify.hpp"
 #include "io/errors.hpp"
 #include "io/giscup.hpp"
@@ -180,7 +181,10 @@ int run_map(const MapOptions& options, Context& context) {
 
     const auto start = Clock::now();
     Timings time;
+    Progress progress(context.err, context.err_is_terminal && !options.quiet);
+    simplify_options.progress = [&progress](double done) { progress.update(done); };
     try {
+        progress.phase("reading " + options.input);
         // read → simplify → write; the engine builds chains, indexes and ranks inside simplify().
         map::MapData map;
         std::optional<io::OgrLayer> layer;
@@ -213,11 +217,13 @@ int run_map(const MapOptions& options, Context& context) {
         log->debug("{} chains, {} vertices, {} control points", map.chains.size(), map.vertices.size(),
                    map.control_points.size());
 
+        progress.phase("simplifying");
         const auto simplify_start = Clock::now();
         const map::SimplifyResult result = map::simplify(map, simplify_options);
         time.simplify = seconds_since(simplify_start);
         const map::SimplifyStats& stats = result.stats;
 
+        progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
         if (options.giscup) {
             io::OutputFile output(options.output, options.overwrite, &context.out);
@@ -241,6 +247,7 @@ int run_map(const MapOptions& options, Context& context) {
         }
         time.write = seconds_since(write_start);
         time.total = seconds_since(start);
+        progress.done();
 
         if (!stats.target_reached) {
             log->warn("target not reached: removed {} of the {} vertices asked for; no more can go without changing topology",
@@ -265,8 +272,10 @@ int run_map(const MapOptions& options, Context& context) {
         }
         return kOk;
     } catch (const io::InputError& error) {
+        progress.done();
         log->error("{}", error.what());
     } catch (const io::OutputError& error) {
+        progress.done();
         log->error("{}", error.what());
     } catch (const std::bad_alloc&) {
         log->error("out of memory");

@@ -253,3 +253,30 @@ TEST(MapCli, WritesToStdoutForPipelines) {
 
 }  // namespace
 }  // namespace toposimp::testing
+
+namespace toposimp::testing {
+namespace {
+
+CliResult run_cli_on_terminal(const std::vector<std::string>& args) {
+    std::ostringstream out, err;
+    cli::Context context{out, err, true};
+    const int code = cli::run(args, context);
+    return {code, out.str(), err.str()};
+}
+
+TEST(MapCli, ProgressOnATerminalOnly) {
+    const auto dir = fresh_dir("progress");
+    const CliResult terminal = run_cli_on_terminal({"map", testdata("nh_borders.gpkg"), "--max", "-o", (dir / "a.gpkg").string()});
+    ASSERT_EQ(terminal.code, 0);
+    EXPECT_NE(terminal.err.find("\r\033[Ktoposimp: simplifying"), std::string::npos) << terminal.err;
+    EXPECT_NE(terminal.err.find("\r\033[Ktoposimp: writing"), std::string::npos);
+    EXPECT_NE(terminal.err.find("info: 992 -> "), std::string::npos) << "summary line on a terminal";
+    const CliResult quiet = run_cli_on_terminal({"map", testdata("nh_borders.gpkg"), "--max", "-q", "-o", (dir / "b.gpkg").string()});
+    EXPECT_EQ(quiet.err, "");
+    const CliResult pipe = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-o", (dir / "c.gpkg").string()});
+    EXPECT_EQ(pipe.err.find('\r'), std::string::npos);
+    EXPECT_EQ(pipe.err, "") << "silent in pipes";
+}
+
+}  // namespace
+}  // namespace toposimp::testing

@@ -15,6 +15,7 @@ public:
     explicit IndexedHeap(std::size_t capacity) : key_(capacity, 0.0), position_(capacity, kAbsent) {}
 
     bool empty() const { return heap_.empty(); }
+    std::size_t size() const { return heap_.size(); }
     double top_key() const { return key_[heap_.front()]; }
 
     // Inserts id, or moves it to its new key if it is already queued.

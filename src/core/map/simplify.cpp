@@ -177,6 +177,7 @@ private:
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
             if (is_interior(v) && !pinned_[v]) heap_.set(v, area_of(v));
         }
+        queued_at_start_ = heap_.size();
     }
 
     // Remove vertices smallest effective area first until the stop criterion holds. A vertex
@@ -186,8 +187,14 @@ private:
         const std::uint64_t goal = removal_goal(options_.stop, vertex_count_);
         const bool by_area = options_.stop.target == Target::max_area;
         stats_.removal_goal = by_area || options_.stop.target == Target::max ? 0 : goal;
+        // Work estimate for progress: the removals asked for, or every queued vertex.
+        const double work = static_cast<double>(std::min<std::uint64_t>(goal, heap_size_at_start()));
+        std::uint64_t pops = 0;
         while (!heap_.empty() && stats_.removed < goal) {
             if (by_area && heap_.top_key() > options_.stop.value) break;
+            if (options_.progress && (++pops & 0x3fff) == 0 && work > 0) {
+                options_.progress(std::min(1.0, static_cast<double>(stats_.removed) / work));
+            }
             const std::uint32_t v = heap_.pop();
             std::uint32_t blocker = kNone;
             switch (judge(v, blocker)) {
@@ -202,6 +209,8 @@ private:
         }
         if (!by_area && options_.stop.target != Target::max) stats_.target_reached = stats_.removed >= goal;
     }
+
+    std::uint64_t heap_size_at_start() const { return queued_at_start_; }
 
     Verdict judge(std::uint32_t v, std::uint32_t& blocker) {
         const std::uint32_t p = prev_[v], n = next_[v];
@@ -350,6 +359,7 @@ private:
     IndexedHeap heap_;
     std::vector<std::uint32_t> blocked_head_, blocked_on_, blocked_prev_, blocked_next_;
     SimplifyStats stats_;
+    std::uint64_t queued_at_start_ = 0;
 };
 
 }  // namespace

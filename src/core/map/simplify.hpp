@@ -20,6 +20,7 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,8 @@ struct StopCriterion {
 struct SimplifyOptions {
     StopCriterion stop;
     exact::Arithmetic arithmetic = exact::Arithmetic::exact;
+    // Called now and then with the share of the work done (0…1); may be empty. Only reports.
+    std::function<void(double done)> progress;
 };
 
 struct SimplifyStats {
