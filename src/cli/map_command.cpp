@@ -5,7 +5,7 @@
 #include "core/map/simplify.hpp"
 #include "io/errors.hpp"
 #include "io/giscup.hpp"
-#include "io/ogr_layer.hpp"
+#include "io/ogr_dataset.hpp"
 #include "io/output_file.hpp"
 
 #include <cpl_conv.h>
@@ -32,7 +32,8 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
     map->add_option("-o,--output", options.output, "Output file (format from the extension or -f); /vsistdout/ for stdout")
         ->required();
     map->add_option("-p,--points", options.points, "Control points: FILE or FILE:LAYER (Point/MultiPoint)");
-    map->add_option("-l,--layer", options.layer, "Input layer name (default: the first layer)");
+    map->add_option("-l,--layer", options.layers, "Input layer (repeatable; default: every layer, simplified together)")
+        ->allow_extra_args(false);
     map->add_option("-f,--format", options.format, "Output OGR driver, e.g. GPKG, 'ESRI Shapefile', FlatGeobuf, GeoJSON");
     map->add_option("--nln", options.layer_name, "Output layer name (GDAL's -nln; default: the input layer's)");
     map->add_option("--lco", options.layer_options, "Layer creation option KEY=VALUE (GDAL's -lco; repeatable)")
@@ -154,6 +155,24 @@ void print_json(std::ostream& out, const MapOptions& options, const map::StopCri
         << ",\"total\":" << time.total << "}}\n";
 }
 
+void log_input(spdlog::logger& log, const std::string& input, const io::DatasetSummary& summary) {
+    for (const io::LayerSummary& layer : summary.layers) {
+        log.debug("read {} ({}), layer '{}': {} features ({} lines, {} polygons){}{}", input, summary.driver, layer.layer,
+                  layer.features, layer.line_features, layer.polygon_features, layer.has_z ? ", Z kept" : "",
+                  layer.has_m ? ", M kept" : "");
+    }
+    if (const auto empty = summary.sum(&io::LayerSummary::empty_geometries); empty > 0) {
+        log.warn("{} features with an empty or NULL geometry are written unchanged", empty);
+    }
+    if (summary.degenerate_rings > 0) {
+        log.warn("{} polygon rings with fewer than 3 corners or no area are written unchanged", summary.degenerate_rings);
+    }
+    if (const auto points = summary.sum(&io::LayerSummary::untouched_points); points > 0) {
+        log.debug("{} point features are written unchanged and kept on their side of every line", points);
+    }
+    if (summary.arcs > 0) log.debug("polygon rings: {} arcs, {} of them shared", summary.arcs, summary.shared_arcs);
+}
+
 exact::Arithmetic arithmetic_of(const std::string& name) {
     if (name == "rational") return exact::Arithmetic::rational;
     if (name == "float") return exact::Arithmetic::floating;
@@ -187,31 +206,18 @@ int run_map(const MapOptions& options, Context& context) {
         progress.phase("reading " + options.input);
         // read → simplify → write; the engine builds chains, indexes and ranks inside simplify().
         map::MapData map;
-        std::optional<io::OgrLayer> layer;
+        std::optional<io::OgrDataset> dataset;
         io::GiscupLines giscup_lines;
         if (options.giscup) {
             giscup_lines = io::read_giscup_lines(options.input, map);
             if (!options.points.empty()) map.control_points = io::read_giscup_points(options.points);
         } else {
-            layer.emplace(io::OgrLayer::read(options.input, options.layer, map));
-            if (!options.points.empty()) map.control_points = io::read_control_points(options.points);
-            const io::LayerSummary& summary = layer->summary();
-            log->debug("read {} ({}), layer '{}': {} features{}{}", options.input, summary.driver, summary.layer,
-                       summary.features, summary.has_z ? ", Z kept" : "", summary.has_m ? ", M kept" : "");
-            if (summary.empty_geometries > 0) {
-                log->warn("{} features with an empty or NULL geometry are written unchanged", summary.empty_geometries);
+            dataset.emplace(io::OgrDataset::read(options.input, options.layers, map));
+            if (!options.points.empty()) {
+                const std::vector<Point> points = io::read_control_points(options.points);
+                map.control_points.insert(map.control_points.end(), points.begin(), points.end());
             }
-            if (summary.degenerate_rings > 0) {
-                log->warn("{} polygon rings with fewer than 3 corners or no area are written unchanged", summary.degenerate_rings);
-            }
-            if (summary.untouched_points > 0) {
-                log->info("{} point features are written unchanged and kept on their side of every line",
-                          summary.untouched_points);
-            }
-            if (summary.polygon_features > 0) {
-                log->debug("{} polygon features: {} arcs, {} of them shared", summary.polygon_features, summary.arcs,
-                           summary.shared_arcs);
-            }
+            log_input(*log, options.input, dataset->summary());
         }
         time.read = seconds_since(start);
         log->debug("{} chains, {} vertices, {} control points", map.chains.size(), map.vertices.size(),
@@ -243,7 +249,7 @@ int run_map(const MapOptions& options, Context& context) {
             write.dataset_options = options.dataset_options;
             write.overwrite = options.overwrite;
             write.stdout_stream = &context.out;
-            for (const std::string& warning : layer->write(write, map, result.kept)) log->warn("{}", warning);
+            for (const std::string& warning : dataset->write(write, map, result.kept)) log->warn("{}", warning);
         }
         time.write = seconds_since(write_start);
         time.total = seconds_since(start);
@@ -268,7 +274,7 @@ int run_map(const MapOptions& options, Context& context) {
         if (options.json) {
             const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
             print_json(output_is_stdout ? context.err : context.out, options, *stop, stats, time,
-                       layer ? layer->summary().features : map.chains.size());
+                       dataset ? dataset->summary().features() : map.chains.size());
         }
         return kOk;
     } catch (const io::InputError& error) {

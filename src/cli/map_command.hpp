@@ -15,7 +15,7 @@ struct MapOptions {
     std::string input;
     std::string output;
     std::string points;
-    std::string layer;
+    std::vector<std::string> layers;
     std::string format;
     std::string layer_name;
     std::vector<std::string> layer_options;

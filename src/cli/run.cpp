@@ -1,7 +1,7 @@
 #include "cli/cli.hpp"
 
 #include "cli/map_command.hpp"
-#include "io/ogr_layer.hpp"
+#include "io/ogr_dataset.hpp"
 
 #include <CLI/CLI.hpp>
 #include <gmp.h>

@@ -101,7 +101,7 @@ TEST(MapBadInput, OutputFolderMissingOrFormatUnknown) {
 
 TEST(MapBadInput, ShapefileCannotGoToStdout) {
     const auto dir = fresh_dir("bad-stdout");
-    const auto result = run_cli({"map", testdata("nh_borders.gpkg"), "-f", "ESRI Shapefile", "-o", "/vsistdout/"});
+    const auto result = run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "-f", "ESRI Shapefile", "-o", "/vsistdout/"});
     expect_clean_failure(result, dir, "cannot go to stdout", {});
     EXPECT_TRUE(result.out.empty());
 }

@@ -21,7 +21,7 @@ std::size_t vertex_count(const ReadLayer& layer) {
 TEST(Formats, CsvWithWktInAndOut) {
     const auto dir = fresh_dir("csv");
     const std::string csv = (dir / "borders.csv").string();
-    const CliResult first = run_cli({"map", testdata("nh_borders.gpkg"), "--keep", "50%", "-o", csv});
+    const CliResult first = run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--keep", "50%", "-o", csv});
     ASSERT_EQ(first.code, 0) << first.err;
     const ReadLayer written = read_layer(csv);
     ASSERT_EQ(written.features.size(), 27u);
@@ -60,7 +60,7 @@ TEST(Formats, GmlInButNotOut) {
 TEST(Formats, ShellPipelineThroughStdinAndStdout) {
     const auto dir = fresh_dir("pipeline");
     const std::string geojson = (dir / "in.geojson").string();
-    ASSERT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "--keep", "100%", "-o", geojson}).code, 0);
+    ASSERT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--keep", "100%", "-o", geojson}).code, 0);
     const std::string out = (dir / "out.geojson").string();
     const std::string command = "cat '" + geojson + "' | '" + TOPOSIMP_BINARY +
                                 "' map /vsistdin/ -f GeoJSON -o /vsistdout/ --keep 20% --json 2>'" + (dir / "err.txt").string() +

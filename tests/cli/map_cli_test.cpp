@@ -206,11 +206,11 @@ TEST(MapCli, MultiLineStringsAndEmptyGeometriesSurvive) {
 TEST(MapCli, OverwriteIsExplicit) {
     const auto dir = fresh_dir("overwrite");
     const std::string out = (dir / "out.shp").string();
-    ASSERT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-o", out}).code, 0);
-    const CliResult again = run_cli({"map", testdata("nh_borders.gpkg"), "--keep", "50%", "-o", out});
+    ASSERT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--max", "-o", out}).code, 0);
+    const CliResult again = run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--keep", "50%", "-o", out});
     EXPECT_EQ(again.code, 2);
     EXPECT_NE(again.err.find("--overwrite"), std::string::npos);
-    ASSERT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "--keep", "50%", "-o", out, "--overwrite"}).code, 0);
+    ASSERT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--keep", "50%", "-o", out, "--overwrite"}).code, 0);
     std::size_t vertices = 0;
     for (const auto& feature : read_layer(out).features) vertices += feature.coordinates[0].size() / 2;
     EXPECT_EQ(vertices, 496u);
@@ -220,7 +220,7 @@ TEST(MapCli, OverwriteIsExplicit) {
 TEST(MapCli, GdalStyleLayerOptions) {
     const auto dir = fresh_dir("nln");
     const std::string out = (dir / "out.gpkg").string();
-    const CliResult result = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-o", out, "-nln", "generalised",
+    const CliResult result = run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--max", "-o", out, "-nln", "generalised",
                                       "-lco", "DESCRIPTION=simplified borders"});
     ASSERT_EQ(result.code, 0) << result.err;
     EXPECT_EQ(read_layer(out).name, "generalised");
@@ -244,7 +244,7 @@ namespace toposimp::testing {
 namespace {
 
 TEST(MapCli, WritesToStdoutForPipelines) {
-    const CliResult result = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-f", "GeoJSON", "-o", "/vsistdout/", "--json"});
+    const CliResult result = run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--max", "-f", "GeoJSON", "-o", "/vsistdout/", "--json"});
     ASSERT_EQ(result.code, 0) << result.err;
     EXPECT_EQ(result.out.rfind("{\n\"type\":\"FeatureCollection\"", 0), 0u) << result.out.substr(0, 80);
     EXPECT_NE(result.out.find("\"name\":\"border 1\""), std::string::npos);
@@ -276,6 +276,76 @@ TEST(MapCli, ProgressOnATerminalOnly) {
     const CliResult pipe = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-o", (dir / "c.gpkg").string()});
     EXPECT_EQ(pipe.err.find('\r'), std::string::npos);
     EXPECT_EQ(pipe.err, "") << "silent in pipes";
+}
+
+}  // namespace
+}  // namespace toposimp::testing
+
+namespace toposimp::testing {
+namespace {
+
+// Without -l every layer is read: the points layer is written back unchanged and keeps its
+// points on their side of the borders, exactly as --points would.
+TEST(MapCli, AllLayersOfAGeoPackageTogether) {
+    const auto dir = fresh_dir("all-layers");
+    const std::string together = (dir / "together.gpkg").string(), separate = (dir / "separate.gpkg").string();
+    const CliResult all = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-o", together, "--json"});
+    ASSERT_EQ(all.code, 0) << all.err;
+    EXPECT_NE(all.out.find("\"control_points\":26"), std::string::npos) << all.out;
+    const CliResult one = run_cli({"map", testdata("nh_borders.gpkg"), "-l", "borders", "--points",
+                                   testdata("nh_borders.gpkg") + ":places", "--max", "-o", separate});
+    ASSERT_EQ(one.code, 0) << one.err;
+    EXPECT_EQ(read_layer(together, 0).features.size(), 27u);
+    EXPECT_EQ(read_layer(together, 1).name, "places");
+    EXPECT_EQ(read_layer(together, 1).features.size(), 26u);
+    const auto a = read_layer(together, 0), b = read_layer(separate, 0);
+    for (std::size_t i = 0; i < a.features.size(); ++i) EXPECT_EQ(a.features[i].coordinates, b.features[i].coordinates);
+    // A one-layer format cannot take both.
+    const CliResult shp = run_cli({"map", testdata("nh_borders.gpkg"), "--max", "-o", (dir / "x.shp").string()});
+    EXPECT_EQ(shp.code, 2);
+    EXPECT_NE(shp.err.find("pick one with -l"), std::string::npos) << shp.err;
+}
+
+// Two polygon layers whose borders coincide (states and the countries they make up) share arcs:
+// simplified together, a country border and the state borders on it stay identical.
+TEST(MapCli, LayersShareBordersWithEachOther) {
+    const auto dir = fresh_dir("shared-layers");
+    const std::string input = (dir / "in.gpkg").string();
+    write_layer(input, "GPKG", wkbPolygon,
+                {{"POLYGON ((0 0, 1 0.1, 2 0, 2 1, 2.1 2, 2 3, 1 3.1, 0 3, 0.1 2, 0 1, 0 0))", "country"}}, "countries");
+    {
+        GDALDatasetUniquePtr dataset(GDALDataset::Open(input.c_str(), GDAL_OF_VECTOR | GDAL_OF_UPDATE));
+        OGRLayer* states = dataset->CreateLayer("states", nullptr, wkbPolygon, nullptr);
+        OGRFieldDefn name_field("name", OFTString);
+        ASSERT_EQ(states->CreateField(&name_field), OGRERR_NONE);
+        for (const char* wkt : {"POLYGON ((0 0, 1 0.1, 2 0, 2 1, 1 1.4, 0 1, 0 0))",
+                                "POLYGON ((0 1, 1 1.4, 2 1, 2.1 2, 2 3, 1 3.1, 0 3, 0.1 2, 0 1))"}) {
+            OGRFeature feature(states->GetLayerDefn());
+            OGRGeometry* geometry = nullptr;
+            OGRGeometryFactory::createFromWkt(wkt, nullptr, &geometry);
+            feature.SetGeometryDirectly(geometry);
+            ASSERT_EQ(states->CreateFeature(&feature), OGRERR_NONE);
+        }
+    }
+    const std::string out = (dir / "out.gpkg").string();
+    const CliResult result = run_cli({"map", input, "--max", "-o", out});
+    ASSERT_EQ(result.code, 0) << result.err;
+    const auto country = read_layer(out, 0).features.at(0).coordinates.at(0);
+    const auto states = read_layer(out, 1);
+    // Every vertex of the country outline is a vertex of some state, and vice versa for the
+    // states' outer vertices: the outlines coincide.
+    auto contains = [](const std::vector<double>& ring, double x, double y) {
+        for (std::size_t k = 0; k + 1 < ring.size(); k += 2) {
+            if (ring[k] == x && ring[k + 1] == y) return true;
+        }
+        return false;
+    };
+    for (std::size_t k = 0; k + 1 < country.size(); k += 2) {
+        const bool in_a_state = contains(states.features[0].coordinates[0], country[k], country[k + 1]) ||
+                                contains(states.features[1].coordinates[0], country[k], country[k + 1]);
+        EXPECT_TRUE(in_a_state) << country[k] << " " << country[k + 1];
+    }
+    EXPECT_LT(country.size(), 22u) << "the outline was simplified";
 }
 
 }  // namespace

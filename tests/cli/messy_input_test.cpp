@@ -26,7 +26,7 @@ protected:
         dir_ = fresh_dir("messy");
         std::ofstream(dir_ / "messy.geojson") << kMessy;
         const std::string out = (dir_ / "out.gpkg").string();
-        result_ = run_cli({"map", (dir_ / "messy.geojson").string(), "--max", "-o", out});
+        result_ = run_cli({"map", (dir_ / "messy.geojson").string(), "--max", "-v", "-o", out});
         ASSERT_EQ(result_.code, 0) << result_.err;
         layer_ = read_layer(out);
         ASSERT_EQ(layer_.features.size(), 7u);

@@ -1,123 +1,83 @@
-#include "io/ogr_layer.hpp"
+#include "io/ogr_dataset.hpp"
 
+#include "core/map/coverage.hpp"
 #include "io/errors.hpp"
+#include "io/gdal_support.hpp"
 #include "io/geojson_writer.hpp"
 #include "io/output_file.hpp"
-#include "core/map/coverage.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
-#include <gdal_priv.h>
-#include <ogrsf_frmts.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
-#include <mutex>
-#include <optional>
 
 namespace toposimp::io {
 namespace {
 
 constexpr std::uint32_t kEmptyPart = std::numeric_limits<std::uint32_t>::max();
 
-void register_drivers() {
-    static std::once_flag once;
-    std::call_once(once, [] { GDALAllRegister(); });
-}
-
-// Silences GDAL's own printing for a scope; its messages are read with last_gdal_error().
-class QuietGdal {
-public:
-    QuietGdal() {
-        CPLPushErrorHandler(CPLQuietErrorHandler);
-        CPLErrorReset();
-    }
-    ~QuietGdal() { CPLPopErrorHandler(); }
-};
-
-std::string last_gdal_error() {
-    const char* message = CPLGetLastErrorMsg();
-    return message && *message ? std::string(": ") + message : std::string();
-}
-
-struct DatasetCloser {
-    void operator()(GDALDataset* dataset) const { GDALClose(dataset); }
-};
-using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
-
-DatasetPtr open_vector(const std::string& path) {
-    register_drivers();
-    QuietGdal quiet;
-    auto* dataset = static_cast<GDALDataset*>(
-        GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
-    if (dataset == nullptr) {
-        std::error_code error;
-        if (path.rfind("/vsi", 0) != 0 && !std::filesystem::exists(path, error)) {
-            throw InputError("cannot open '" + path + "': no such file");
-        }
-        throw InputError("cannot open '" + path + "' as a vector dataset" + last_gdal_error());
-    }
-    return DatasetPtr(dataset);
-}
-
-std::string layer_names(GDALDataset& dataset) {
-    std::string names;
-    for (int i = 0; i < dataset.GetLayerCount(); ++i) {
-        names += (i ? ", " : "") + std::string(dataset.GetLayer(i)->GetName());
-    }
-    return names.empty() ? "none" : names;
-}
-
-OGRLayer& pick_layer(GDALDataset& dataset, const std::string& path, const std::string& name) {
-    if (dataset.GetLayerCount() == 0) throw InputError("'" + path + "' has no vector layer");
-    if (name.empty()) return *dataset.GetLayer(0);
-    OGRLayer* layer = dataset.GetLayerByName(name.c_str());
-    if (layer == nullptr) {
-        throw InputError("'" + path + "' has no layer '" + name + "' (layers: " + layer_names(dataset) + ")");
-    }
-    return *layer;
-}
-
-std::string feature_label(const std::string& path, OGRLayer& layer, GIntBig fid) {
-    return "'" + path + "', layer '" + std::string(layer.GetName()) + "', feature " + std::to_string(fid);
-}
-
-
 }  // namespace
 
-struct OgrLayer::Layer {
-    // What a feature's geometry became: chains (lines), coverage rings (polygons), or an
-    // untouched copy (points, which also serve as obstacles).
-    enum class Kind : std::uint8_t { null, lines, polygons, untouched };
-    struct Shape {
-        OGRwkbGeometryType type = wkbUnknown;  // the feature's own type, with Z/M flags
-        Kind kind = Kind::null;
-        std::uint32_t first = 0;  // lines: into items (chain per part); polygons: into items
-        std::uint32_t count = 0;  //   (ring count, then ring ids, per polygon); untouched: into untouched
+std::uint64_t DatasetSummary::sum(std::uint64_t LayerSummary::*field) const {
+    std::uint64_t total = 0;
+    for (const LayerSummary& layer : layers) total += layer.*field;
+    return total;
+}
+
+std::uint64_t DatasetSummary::features() const { return sum(&LayerSummary::features); }
+
+struct OgrDataset::Data {
+    struct Layer {
+        // What a feature's geometry became: chains (lines), coverage rings (polygons), or an
+        // untouched copy (points, which also serve as obstacles).
+        enum class Kind : std::uint8_t { null, lines, polygons, untouched };
+        struct Shape {
+            OGRwkbGeometryType type = wkbUnknown;  // the feature's own type, with Z/M flags
+            Kind kind = Kind::null;
+            std::uint32_t first = 0;  // lines: into items (chain per part); polygons: into items
+            std::uint32_t count = 0;  //   (ring count, then ring ids, per polygon); untouched: into untouched
+        };
+
+        std::string name;
+        std::string fid_column;
+        OGRwkbGeometryType geometry_type = wkbUnknown;
+        std::unique_ptr<OGRSpatialReference> srs;
+        OGRFeatureDefn* definition = nullptr;       // reference-counted
+        std::vector<OGRFeatureUniquePtr> features;  // attributes only: geometries are in the map
+        std::vector<Shape> shapes;
+        std::vector<std::uint32_t> items;
+        std::vector<std::unique_ptr<OGRGeometry>> untouched;
+
+        Layer() = default;
+        Layer(const Layer&) = delete;
+        Layer& operator=(const Layer&) = delete;
+        ~Layer() {
+            if (definition) definition->Release();
+        }
     };
 
-    LayerSummary summary;
-    std::string fid_column;
-    OGRwkbGeometryType geometry_type = wkbUnknown;
-    std::unique_ptr<OGRSpatialReference> srs;
-    OGRFeatureDefn* definition = nullptr;  // reference-counted
-    std::vector<OGRFeatureUniquePtr> features;  // attributes only: geometries are in the map
-    std::vector<Shape> shapes;
-    std::vector<std::uint32_t> items;
-    std::vector<std::unique_ptr<OGRGeometry>> untouched;
-    map::Coverage coverage;
-    std::vector<double> z, m;            // per map vertex, when the layer has Z / M
+    DatasetSummary summary;
+    std::vector<std::unique_ptr<Layer>> layers;
+    map::Coverage coverage;              // rings of every layer: borders shared across layers too
+    bool carries_zm = false;             // some layer has Z or M
+    std::vector<double> z, m;            // per map vertex, when carries_zm
     std::vector<double> ring_z, ring_m;  // per coverage ring point, until the coverage is built
 
-    ~Layer() {
-        if (definition) definition->Release();
+    void start_carrying_zm(const map::MapData& map) {
+        if (carries_zm) return;
+        carries_zm = true;
+        z.assign(map.vertices.size(), 0.0);
+        m.assign(map.vertices.size(), 0.0);
+        ring_z.assign(coverage.point_count(), 0.0);
+        ring_m.assign(coverage.point_count(), 0.0);
     }
 
-    bool carries_zm() const { return summary.has_z || summary.has_m; }
+    void read_layer(const std::string& path, OGRLayer& source, map::MapData& map);
 
-    std::unique_ptr<OGRGeometry> build_geometry(std::size_t index, const map::MapData& map,
+    std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
                                                 const std::vector<std::uint8_t>& kept) const;
 };
 
@@ -143,25 +103,27 @@ void append_zm(const OGRSimpleCurve& curve, std::vector<double>& z, std::vector<
     }
 }
 
-std::uint32_t add_line(OgrLayer::Layer& layer, const OGRSimpleCurve& curve, map::MapData& map, const std::string& label) {
+std::uint32_t add_line(OgrDataset::Data& data, OgrDataset::Data::Layer& layer, const OGRSimpleCurve& curve, map::MapData& map,
+                       const std::string& label) {
     if (curve.getNumPoints() == 0) return kEmptyPart;
     if (map.vertices.size() + curve.getNumPoints() > std::numeric_limits<std::uint32_t>::max() / 2) {
         throw InputError(label + ": more than 2 billion vertices in one map");
     }
     const std::uint32_t chain = map.add_chain(read_points(curve, label));
-    if (layer.carries_zm()) append_zm(curve, layer.z, layer.m);
+    (void)layer;
+    if (data.carries_zm) append_zm(curve, data.z, data.m);
     return chain;
 }
 
-void add_polygon(OgrLayer::Layer& layer, const OGRPolygon& polygon, const std::string& label) {
+void add_polygon(OgrDataset::Data& data, OgrDataset::Data::Layer& layer, const OGRPolygon& polygon, const std::string& label) {
     std::vector<const OGRLinearRing*> rings;
     for (const OGRLinearRing* ring : polygon) {
         if (!ring->IsEmpty()) rings.push_back(ring);
     }
     layer.items.push_back(static_cast<std::uint32_t>(rings.size()));
     for (const OGRLinearRing* ring : rings) {
-        layer.items.push_back(layer.coverage.add_ring(read_points(*ring, label)));
-        if (layer.carries_zm()) append_zm(*ring, layer.ring_z, layer.ring_m);
+        layer.items.push_back(data.coverage.add_ring(read_points(*ring, label)));
+        if (data.carries_zm) append_zm(*ring, data.ring_z, data.ring_m);
     }
 }
 
@@ -179,29 +141,22 @@ void set_point(OGRSimpleCurve& line, int i, Point p, bool with_z, bool with_m, d
 
 }  // namespace
 
-OgrLayer::OgrLayer(std::unique_ptr<Layer> layer) : layer_(std::move(layer)) {}
-OgrLayer::OgrLayer(OgrLayer&&) noexcept = default;
-OgrLayer::~OgrLayer() = default;
-
-const LayerSummary& OgrLayer::summary() const { return layer_->summary; }
-
-OgrLayer OgrLayer::read(const std::string& path, const std::string& layer_name, map::MapData& map) {
-    DatasetPtr dataset = open_vector(path);
-    OGRLayer& source = pick_layer(*dataset, path, layer_name);
+void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map::MapData& map) {
     auto layer = std::make_unique<Layer>();
-    layer->summary.driver = dataset->GetDriver() ? dataset->GetDriver()->GetDescription() : "";
-    layer->summary.layer = source.GetName();
+    LayerSummary summary_of_layer;
+    summary_of_layer.layer = source.GetName();
+    layer->name = source.GetName();
     layer->fid_column = source.GetFIDColumn();
     layer->geometry_type = source.GetGeomType();
-    layer->summary.has_z = OGR_GT_HasZ(layer->geometry_type);
-    layer->summary.has_m = OGR_GT_HasM(layer->geometry_type);
+    summary_of_layer.has_z = OGR_GT_HasZ(layer->geometry_type);
+    summary_of_layer.has_m = OGR_GT_HasM(layer->geometry_type);
+    if (summary_of_layer.has_z || summary_of_layer.has_m) start_carrying_zm(map);
     if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
     layer->definition = source.GetLayerDefn();
     layer->definition->Reference();
 
     QuietGdal quiet;
     source.ResetReading();
-    std::uint64_t simplifiable = 0;
     while (OGRFeatureUniquePtr feature{source.GetNextFeature()}) {
         const std::string label = feature_label(path, source, feature->GetFID());
         Layer::Shape shape;
@@ -209,40 +164,37 @@ OgrLayer OgrLayer::read(const std::string& path, const std::string& layer_name, 
         OGRGeometry* geometry = feature->GetGeometryRef();
         if (geometry != nullptr) {
             shape.type = geometry->getGeometryType();
-            const bool z = geometry->Is3D(), m = geometry->IsMeasured();
-            if ((z && !layer->summary.has_z) || (m && !layer->summary.has_m)) {
-                // A layer declared 2D holding 3D features: keep their Z/M too.
-                layer->summary.has_z = layer->summary.has_z || z;
-                layer->summary.has_m = layer->summary.has_m || m;
-                layer->z.resize(map.vertices.size(), 0.0);
-                layer->m.resize(map.vertices.size(), 0.0);
-                layer->ring_z.resize(layer->coverage.point_count(), 0.0);
-                layer->ring_m.resize(layer->coverage.point_count(), 0.0);
+            if (geometry->Is3D() || geometry->IsMeasured()) {
+                // A layer declared 2D may hold 3D features: keep their Z/M too.
+                summary_of_layer.has_z = summary_of_layer.has_z || geometry->Is3D();
+                summary_of_layer.has_m = summary_of_layer.has_m || geometry->IsMeasured();
+                start_carrying_zm(map);
             }
             switch (wkbFlatten(shape.type)) {
                 case wkbLineString:
                     shape.kind = Layer::Kind::lines;
-                    layer->items.push_back(add_line(*layer, *geometry->toLineString(), map, label));
+                    layer->items.push_back(add_line(*this, *layer, *geometry->toLineString(), map, label));
                     break;
                 case wkbMultiLineString:
                     shape.kind = Layer::Kind::lines;
                     for (const OGRLineString* part : *geometry->toMultiLineString()) {
-                        layer->items.push_back(add_line(*layer, *part, map, label));
+                        layer->items.push_back(add_line(*this, *layer, *part, map, label));
                     }
                     break;
                 case wkbPolygon:
                     shape.kind = Layer::Kind::polygons;
-                    add_polygon(*layer, *geometry->toPolygon(), label);
+                    add_polygon(*this, *layer, *geometry->toPolygon(), label);
                     break;
                 case wkbMultiPolygon:
                     shape.kind = Layer::Kind::polygons;
-                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) add_polygon(*layer, *polygon, label);
+                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) add_polygon(*this, *layer, *polygon, label);
                     break;
                 case wkbPoint:
                 case wkbMultiPoint: {
                     // Points among lines: written back untouched, kept on their side as control points.
                     shape.kind = Layer::Kind::untouched;
                     shape.first = static_cast<std::uint32_t>(layer->untouched.size());
+                    shape.count = 1;
                     auto add = [&](const OGRPoint& point) {
                         if (point.IsEmpty()) return;
                         const Point p{point.getX(), point.getY()};
@@ -255,7 +207,7 @@ OgrLayer OgrLayer::read(const std::string& path, const std::string& layer_name, 
                         for (const OGRPoint* point : *geometry->toMultiPoint()) add(*point);
                     }
                     layer->untouched.emplace_back(geometry->clone());
-                    ++layer->summary.untouched_points;
+                    ++summary_of_layer.untouched_points;
                     break;
                 }
                 default:
@@ -264,48 +216,73 @@ OgrLayer OgrLayer::read(const std::string& path, const std::string& layer_name, 
                                      (OGR_GT_IsNonLinear(shape.type) ? " (linearize curves first: ogr2ogr -nlt CONVERT_TO_LINEAR)" : ""));
             }
             if (shape.kind != Layer::Kind::untouched) shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
-            if (shape.kind == Layer::Kind::untouched) shape.count = 1;
         }
         if (geometry == nullptr || geometry->IsEmpty()) {
-            ++layer->summary.empty_geometries;
-        } else if (shape.kind != Layer::Kind::untouched) {
-            ++simplifiable;
-            if (shape.kind == Layer::Kind::polygons) ++layer->summary.polygon_features;
+            ++summary_of_layer.empty_geometries;
+        } else if (shape.kind == Layer::Kind::polygons) {
+            ++summary_of_layer.polygon_features;
+        } else if (shape.kind == Layer::Kind::lines) {
+            ++summary_of_layer.line_features;
         }
         feature->SetGeometryDirectly(nullptr);
         layer->shapes.push_back(shape);
         layer->features.push_back(std::move(feature));
     }
     if (CPLGetLastErrorType() >= CE_Failure) {
-        throw InputError("error reading '" + path + "', layer '" + layer->summary.layer + "'" + last_gdal_error());
+        throw InputError("error reading '" + path + "', layer '" + layer->name + "'" + last_gdal_error());
     }
-    layer->summary.features = layer->features.size();
-    if (simplifiable == 0) {
-        throw InputError("'" + path + "', layer '" + layer->summary.layer + "' has no line or polygon geometry (" +
-                         OGRGeometryTypeToName(layer->geometry_type) + ", " +
-                         std::to_string(layer->summary.features) + " features)");
+    summary_of_layer.features = layer->features.size();
+    summary.layers.push_back(summary_of_layer);
+    layers.push_back(std::move(layer));
+}
+
+OgrDataset::OgrDataset(std::unique_ptr<Data> data) : data_(std::move(data)) {}
+OgrDataset::OgrDataset(OgrDataset&&) noexcept = default;
+OgrDataset::~OgrDataset() = default;
+
+const DatasetSummary& OgrDataset::summary() const { return data_->summary; }
+
+OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map) {
+    DatasetPtr dataset = open_vector(path);
+    auto data = std::make_unique<Data>();
+    data->summary.driver = dataset->GetDriver() ? dataset->GetDriver()->GetDescription() : "";
+    if (dataset->GetLayerCount() == 0) throw InputError("'" + path + "' has no vector layer");
+    if (layer_names_wanted.empty()) {
+        for (int i = 0; i < dataset->GetLayerCount(); ++i) data->read_layer(path, *dataset->GetLayer(i), map);
+    } else {
+        for (const std::string& name : layer_names_wanted) data->read_layer(path, pick_layer(*dataset, path, name), map);
+    }
+    if (data->summary.sum(&LayerSummary::line_features) + data->summary.sum(&LayerSummary::polygon_features) == 0) {
+        std::string what;
+        for (const auto& layer : data->layers) {
+            what += (what.empty() ? "" : "; ") + std::string("layer '") + layer->name + "': " +
+                    OGRGeometryTypeToName(layer->geometry_type) + ", " + std::to_string(layer->features.size()) + " features";
+        }
+        throw InputError("'" + path + "' has no line or polygon geometry (" + what + ")");
     }
     // Polygon rings become arcs: one chain per border, shared by the polygons on both sides.
     const std::size_t before = map.vertices.size();
-    layer->coverage.build(map);
-    if (layer->carries_zm()) {
-        layer->z.resize(map.vertices.size(), 0.0);
-        layer->m.resize(map.vertices.size(), 0.0);
+    data->coverage.build(map);
+    if (data->carries_zm) {
+        data->z.resize(map.vertices.size(), 0.0);
+        data->m.resize(map.vertices.size(), 0.0);
         for (std::size_t v = before; v < map.vertices.size(); ++v) {
-            const std::uint32_t origin = layer->coverage.source_of(static_cast<std::uint32_t>(v));
-            layer->z[v] = layer->ring_z[origin];
-            layer->m[v] = layer->ring_m[origin];
+            const std::uint32_t origin = data->coverage.source_of(static_cast<std::uint32_t>(v));
+            data->z[v] = data->ring_z[origin];
+            data->m[v] = data->ring_m[origin];
         }
     }
-    layer->summary.arcs = layer->coverage.arc_count();
-    layer->summary.shared_arcs = layer->coverage.shared_arc_count();
-    layer->summary.degenerate_rings = layer->coverage.degenerate_ring_count();
-    return OgrLayer(std::move(layer));
+    data->summary.arcs = data->coverage.arc_count();
+    data->summary.shared_arcs = data->coverage.shared_arc_count();
+    data->summary.degenerate_rings = data->coverage.degenerate_ring_count();
+    return OgrDataset(std::move(data));
 }
 
-std::unique_ptr<OGRGeometry> OgrLayer::Layer::build_geometry(std::size_t index, const map::MapData& map,
-                                                             const std::vector<std::uint8_t>& kept) const {
-    const Shape& shape = shapes[index];
+std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
+                                                              const std::vector<std::uint8_t>& kept) const {
+    using Kind = Layer::Kind;
+    const Layer::Shape& shape = layer.shapes[index];
+    const std::vector<std::uint32_t>& items = layer.items;
     const bool with_z = OGR_GT_HasZ(shape.type), with_m = OGR_GT_HasM(shape.type);
     auto zm_flags = [&](OGRGeometry& geometry) {
         if (with_z) geometry.set3D(TRUE);
@@ -320,7 +297,7 @@ std::unique_ptr<OGRGeometry> OgrLayer::Layer::build_geometry(std::size_t index, 
     };
     switch (shape.kind) {
         case Kind::null: return nullptr;
-        case Kind::untouched: return std::unique_ptr<OGRGeometry>(untouched[shape.first]->clone());
+        case Kind::untouched: return std::unique_ptr<OGRGeometry>(layer.untouched[shape.first]->clone());
         case Kind::lines: {
             auto make_line = [&](std::uint32_t chain_index) {
                 auto line = std::make_unique<OGRLineString>();
@@ -480,85 +457,108 @@ bool same_coordinates(const OGRGeometry* expected, const OGRGeometry* actual, st
     return true;
 }
 
+// Layer creation options toposimp adds unless the user set them.
+CPLStringList layer_options_for(const std::string& driver_name, const std::vector<std::string>& given,
+                                const OgrDataset::Data::Layer& layer) {
+    CPLStringList options;
+    for (const auto& option : given) options.AddString(option.c_str());
+    // CSV drops geometries unless asked to write them as WKT.
+    if (driver_name == "CSV" && options.FetchNameValue("GEOMETRY") == nullptr) options.SetNameValue("GEOMETRY", "AS_WKT");
+    // Databases with an FID column (GPKG, SQLite): keep the source's FID column name, and never
+    // collide with an attribute field of that name (GML inputs have a string 'fid').
+    if ((driver_name == "GPKG" || driver_name == "SQLite") && options.FetchNameValue("FID") == nullptr) {
+        std::string fid = layer.fid_column.empty() ? "fid" : layer.fid_column;
+        while (layer.definition->GetFieldIndex(fid.c_str()) >= 0) fid += "_";
+        options.SetNameValue("FID", fid.c_str());
+    }
+    // FlatGeobuf's spatial index sorts the features; keep the input order unless asked.
+    if (driver_name == "FlatGeobuf" && options.FetchNameValue("SPATIAL_INDEX") == nullptr) {
+        options.SetNameValue("SPATIAL_INDEX", "NO");
+    }
+    return options;
+}
+
+bool holds_several_layers(const std::string& driver_name) {
+    return driver_name == "GPKG" || driver_name == "SQLite" || driver_name == "OpenFileGDB" || driver_name == "FileGDB";
+}
+
 }  // namespace
 
-std::vector<std::string> OgrLayer::write(const WriteOptions& options, const map::MapData& map,
-                                         const std::vector<std::uint8_t>& kept) const {
-    const Layer& layer = *layer_;
+std::vector<std::string> OgrDataset::write(const WriteOptions& options, const map::MapData& map,
+                                           const std::vector<std::uint8_t>& kept) const {
+    const Data& data = *data_;
     std::vector<std::string> warnings;
     GDALDriver* driver = choose_driver(options);
     const std::string driver_name = driver->GetDescription();
+    const std::size_t layer_count = data.layers.size();
+    if (layer_count > 1 && !holds_several_layers(driver_name)) {
+        std::string names;
+        for (const auto& layer : data.layers) names += (names.empty() ? "" : ", ") + layer->name;
+        throw OutputError("a " + driver_name + " file holds one layer and the input has " + std::to_string(layer_count) +
+                          " (" + names + "): pick one with -l, or write a GeoPackage");
+    }
+    if (!options.layer_name.empty() && layer_count > 1) throw OutputError("-nln names one layer, and there are " + std::to_string(layer_count));
     OutputFile output(options.path, options.overwrite, options.stdout_stream);
     if (output.to_stdout() && (driver_name == "ESRI Shapefile" || driver_name == "MapInfo File")) {
         throw OutputError("a " + driver_name + " is several files and cannot go to stdout; use -f GeoJSON, FlatGeobuf or GPKG");
     }
-    const std::string layer_name = options.layer_name.empty() ? layer.summary.layer : options.layer_name;
+    auto output_name = [&](const Data::Layer& layer) { return options.layer_name.empty() ? layer.name : options.layer_name; };
 
     if (driver_name == "GeoJSON") {
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
             warnings.push_back("-lco/-dsco are ignored for GeoJSON: toposimp writes GeoJSON itself to keep coordinates exact");
         }
+        const Data::Layer& layer = *data.layers.front();
         GeoJsonLayer json;
-        json.name = layer_name;
+        json.name = output_name(layer);
         json.srs = layer.srs.get();
         json.definition = layer.definition;
         json.feature_count = layer.features.size();
         json.feature = [&](std::size_t i) { return layer.features[i].get(); };
-        json.geometry = [&](std::size_t i) { return layer.build_geometry(i, map, kept); };
+        json.geometry = [&](std::size_t i) { return data.build_geometry(layer, i, map, kept); };
         auto more = write_geojson(output.staging_path(), json);
         warnings.insert(warnings.end(), more.begin(), more.end());
     } else {
         QuietGdal quiet;
-        CPLStringList dataset_options, layer_options;
+        CPLStringList dataset_options;
         for (const auto& option : options.dataset_options) dataset_options.AddString(option.c_str());
-        for (const auto& option : options.layer_options) layer_options.AddString(option.c_str());
-        // CSV drops geometries unless asked to write them as WKT.
-        if (driver_name == "CSV" && layer_options.FetchNameValue("GEOMETRY") == nullptr) {
-            layer_options.SetNameValue("GEOMETRY", "AS_WKT");
-        }
-        // Databases with an FID column (GPKG, SQLite): keep the source's FID column name, and
-        // never collide with an attribute field of that name (GML inputs have a string 'fid').
-        if ((driver_name == "GPKG" || driver_name == "SQLite") && layer_options.FetchNameValue("FID") == nullptr) {
-            std::string fid = layer.fid_column.empty() ? "fid" : layer.fid_column;
-            while (layer.definition->GetFieldIndex(fid.c_str()) >= 0) fid += "_";
-            layer_options.SetNameValue("FID", fid.c_str());
-        }
-        // FlatGeobuf's spatial index sorts the features; keep the input order unless asked.
-        if (driver_name == "FlatGeobuf" && layer_options.FetchNameValue("SPATIAL_INDEX") == nullptr) {
-            layer_options.SetNameValue("SPATIAL_INDEX", "NO");
-        }
         // CSV writes WKT: ask for 17 significant digits (the read-back below checks the result).
         CPLConfigOptionSetter precision("OGR_WKT_PRECISION", "17", true);
         DatasetPtr dataset(driver->Create(output.staging_path().c_str(), 0, 0, 0, GDT_Unknown, dataset_options.List()));
         if (!dataset) throw OutputError("cannot create '" + options.path + "' (" + driver_name + ")" + last_gdal_error());
-        OGRLayer* target = dataset->CreateLayer(layer_name.c_str(), layer.srs.get(), layer.geometry_type, layer_options.List());
-        if (target == nullptr) throw OutputError("cannot create layer '" + layer_name + "' in '" + options.path + "'" + last_gdal_error());
-        for (int i = 0; i < layer.definition->GetFieldCount(); ++i) {
-            if (target->CreateField(layer.definition->GetFieldDefn(i), TRUE) != OGRERR_NONE) {
-                throw OutputError("cannot create field '" + std::string(layer.definition->GetFieldDefn(i)->GetNameRef()) +
-                                  "' in '" + options.path + "'" + last_gdal_error());
+        for (const auto& layer_pointer : data.layers) {
+            const Data::Layer& layer = *layer_pointer;
+            const std::string name = output_name(layer);
+            CPLStringList layer_options = layer_options_for(driver_name, options.layer_options, layer);
+            OGRLayer* target = dataset->CreateLayer(name.c_str(), layer.srs.get(), layer.geometry_type, layer_options.List());
+            if (target == nullptr) throw OutputError("cannot create layer '" + name + "' in '" + options.path + "'" + last_gdal_error());
+            for (int i = 0; i < layer.definition->GetFieldCount(); ++i) {
+                if (target->CreateField(layer.definition->GetFieldDefn(i), TRUE) != OGRERR_NONE) {
+                    throw OutputError("cannot create field '" + std::string(layer.definition->GetFieldDefn(i)->GetNameRef()) +
+                                      "' in '" + options.path + "'" + last_gdal_error());
+                }
             }
-        }
-        if (target->GetLayerDefn()->GetFieldCount() != layer.definition->GetFieldCount()) {
-            throw OutputError("'" + options.path + "' (" + driver_name + ") could not keep all " +
-                              std::to_string(layer.definition->GetFieldCount()) + " fields");
-        }
-        std::vector<int> field_map(layer.definition->GetFieldCount());
-        for (std::size_t i = 0; i < field_map.size(); ++i) field_map[i] = static_cast<int>(i);
-        const bool keep_fids = !layer.fid_column.empty();
-        const bool transaction = dataset->StartTransaction() == OGRERR_NONE;
-        for (std::size_t i = 0; i < layer.features.size(); ++i) {
-            OGRFeature feature(target->GetLayerDefn());
-            feature.SetFrom(layer.features[i].get(), field_map.data(), TRUE);
-            if (keep_fids) feature.SetFID(layer.features[i]->GetFID());
-            feature.SetGeometryDirectly(layer.build_geometry(i, map, kept).release());
-            if (target->CreateFeature(&feature) != OGRERR_NONE) {
-                throw OutputError("cannot write feature " + std::to_string(layer.features[i]->GetFID()) + " to '" +
-                                  options.path + "'" + last_gdal_error());
+            if (target->GetLayerDefn()->GetFieldCount() != layer.definition->GetFieldCount()) {
+                throw OutputError("'" + options.path + "' (" + driver_name + ") could not keep all " +
+                                  std::to_string(layer.definition->GetFieldCount()) + " fields of layer '" + name + "'");
             }
-        }
-        if (transaction && dataset->CommitTransaction() != OGRERR_NONE) {
-            throw OutputError("cannot commit '" + options.path + "'" + last_gdal_error());
+            std::vector<int> field_map(layer.definition->GetFieldCount());
+            for (std::size_t i = 0; i < field_map.size(); ++i) field_map[i] = static_cast<int>(i);
+            const bool keep_fids = !layer.fid_column.empty();
+            const bool transaction = dataset->StartTransaction() == OGRERR_NONE;
+            for (std::size_t i = 0; i < layer.features.size(); ++i) {
+                OGRFeature feature(target->GetLayerDefn());
+                feature.SetFrom(layer.features[i].get(), field_map.data(), TRUE);
+                if (keep_fids) feature.SetFID(layer.features[i]->GetFID());
+                feature.SetGeometryDirectly(data.build_geometry(layer, i, map, kept).release());
+                if (target->CreateFeature(&feature) != OGRERR_NONE) {
+                    throw OutputError("cannot write feature " + std::to_string(layer.features[i]->GetFID()) + " of layer '" +
+                                      name + "' to '" + options.path + "'" + last_gdal_error());
+                }
+            }
+            if (transaction && dataset->CommitTransaction() != OGRERR_NONE) {
+                throw OutputError("cannot commit '" + options.path + "'" + last_gdal_error());
+            }
         }
         dataset.reset();
         if (CPLGetLastErrorType() >= CE_Failure) throw OutputError("error writing '" + options.path + "'" + last_gdal_error());
@@ -567,25 +567,30 @@ std::vector<std::string> OgrLayer::write(const WriteOptions& options, const map:
     // Read the file back: coordinates must have survived bit for bit, features all there.
     {
         DatasetPtr written = open_vector(output.staging_path());
-        OGRLayer* check = written->GetLayerByName(layer_name.c_str());
-        if (check == nullptr && written->GetLayerCount() == 1) check = written->GetLayer(0);
-        if (check == nullptr) throw OutputError("'" + options.path + "': written layer '" + layer_name + "' cannot be read back");
         QuietGdal quiet;
-        std::size_t i = 0;
-        for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
-            if (i >= layer.features.size()) break;
-            std::string difference;
-            const auto expected = layer.build_geometry(i, map, kept);
-            if (!same_coordinates(expected.get(), feature->GetGeometryRef(), difference)) {
-                throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
-                                  "' (feature " + std::to_string(layer.features[i]->GetFID()) + ", " + difference +
-                                  "); toposimp never rounds coordinates: write GeoPackage (.gpkg), FlatGeobuf (.fgb), "
-                                  "Shapefile (.shp) or GeoJSON (.geojson) instead");
+        for (const auto& layer_pointer : data.layers) {
+            const Data::Layer& layer = *layer_pointer;
+            const std::string name = output_name(layer);
+            OGRLayer* check = written->GetLayerByName(name.c_str());
+            if (check == nullptr && written->GetLayerCount() == 1) check = written->GetLayer(0);
+            if (check == nullptr) throw OutputError("'" + options.path + "': written layer '" + name + "' cannot be read back");
+            std::size_t i = 0;
+            for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
+                if (i >= layer.features.size()) break;
+                std::string difference;
+                const auto expected = data.build_geometry(layer, i, map, kept);
+                if (!same_coordinates(expected.get(), feature->GetGeometryRef(), difference)) {
+                    throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
+                                      "' (layer '" + name + "', feature " + std::to_string(layer.features[i]->GetFID()) + ", " +
+                                      difference +
+                                      "); toposimp never rounds coordinates: write GeoPackage (.gpkg), FlatGeobuf (.fgb), "
+                                      "Shapefile (.shp) or GeoJSON (.geojson) instead");
+                }
             }
-        }
-        if (i != layer.features.size()) {
-            throw OutputError("'" + options.path + "' holds " + std::to_string(i) + " features after writing, not " +
-                              std::to_string(layer.features.size()));
+            if (i != layer.features.size()) {
+                throw OutputError("'" + options.path + "' holds " + std::to_string(i) + " features in layer '" + name +
+                                  "' after writing, not " + std::to_string(layer.features.size()));
+            }
         }
     }
     output.commit([driver](const std::string& existing) {
