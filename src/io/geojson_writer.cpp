@@ -1,6 +1,7 @@
 #include "io/geojson_writer.hpp"
 
 #include "io/errors.hpp"
+#include "io/field_text.hpp"
 #include "io/number_format.hpp"
 
 #include <cmath>
@@ -40,52 +41,6 @@ void append_real(std::string& out, double value) {
     }
 }
 
-void append_two_digits(std::string& out, int value) {
-    out += static_cast<char>('0' + value / 10);
-    out += static_cast<char>('0' + value % 10);
-}
-
-void append_date_time(std::string& out, const OGRFeature& feature, int field, OGRFieldType type) {
-    int year = 0, month = 0, day = 0, hour = 0, minute = 0, zone = 0;
-    float second = 0;
-    feature.GetFieldAsDateTime(field, &year, &month, &day, &hour, &minute, &second, &zone);
-    std::string text;
-    if (type != OFTTime) {
-        char date[16];
-        std::snprintf(date, sizeof date, "%04d-", year);
-        text += date;
-        append_two_digits(text, month);
-        text += '-';
-        append_two_digits(text, day);
-    }
-    if (type != OFTDate) {
-        if (type == OFTDateTime) text += 'T';
-        append_two_digits(text, hour);
-        text += ':';
-        append_two_digits(text, minute);
-        text += ':';
-        const int whole = static_cast<int>(second);
-        append_two_digits(text, whole);
-        const int millis = static_cast<int>(std::lround((second - static_cast<float>(whole)) * 1000.0));
-        if (millis > 0 && millis < 1000) {
-            char fraction[16];
-            std::snprintf(fraction, sizeof fraction, ".%03d", millis);
-            text += fraction;
-        }
-        // GDAL time zone flag: 100 = UTC, each step is 15 minutes; 0/1 = unknown/local.
-        if (zone == 100) {
-            text += 'Z';
-        } else if (zone > 1) {
-            const int offset = (zone - 100) * 15;
-            text += offset < 0 ? '-' : '+';
-            append_two_digits(text, std::abs(offset) / 60);
-            text += ':';
-            append_two_digits(text, std::abs(offset) % 60);
-        }
-    }
-    append_string(out, text.c_str());
-}
-
 void append_property(std::string& out, const OGRFeature& feature, int field) {
     const OGRFieldDefn* definition = feature.GetFieldDefnRef(field);
     const OGRFieldType type = definition->GetType();
@@ -103,7 +58,7 @@ void append_property(std::string& out, const OGRFeature& feature, int field) {
         case OFTReal: append_real(out, feature.GetFieldAsDouble(field)); return;
         case OFTDate:
         case OFTTime:
-        case OFTDateTime: append_date_time(out, feature, field, type); return;
+        case OFTDateTime: append_string(out, iso_date_time(feature, field, type).c_str()); return;
         case OFTIntegerList: {
             const int* values = feature.GetFieldAsIntegerList(field, &count);
             out += '[';
@@ -257,7 +212,7 @@ void append_crs(std::string& out, const OGRSpatialReference* srs, std::vector<st
 
 }  // namespace
 
-std::vector<std::string> write_geojson(const std::string& path, const GeoJsonLayer& layer) {
+std::vector<std::string> write_geojson(const std::string& path, const LayerSource& layer) {
     std::vector<std::string> warnings;
     std::ofstream file(path, std::ios::binary);
     if (!file) throw OutputError("cannot create '" + path + "'");

@@ -504,19 +504,23 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     }
     auto output_name = [&](const Data::Layer& layer) { return options.layer_name.empty() ? layer.name : options.layer_name; };
 
+    auto source_of = [&](const Data::Layer& layer) {
+        LayerSource source;
+        source.name = output_name(layer);
+        source.srs = layer.srs.get();
+        source.definition = layer.definition;
+        source.geometry_type = layer.geometry_type;
+        source.feature_count = layer.features.size();
+        source.feature = [&layer](std::size_t i) { return layer.features[i].get(); };
+        source.geometry = [&data, &layer, &map, &kept](std::size_t i) { return data.build_geometry(layer, i, map, kept); };
+        return source;
+    };
     if (driver_name == "GeoJSON") {
+        // GDAL 3.6's GeoJSON writer rounds coordinates: toposimp writes GeoJSON itself.
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
-            warnings.push_back("-lco/-dsco are ignored for GeoJSON: toposimp writes GeoJSON itself to keep coordinates exact");
+            warnings.push_back("-lco/-dsco are ignored for GeoJSON: toposimp writes it itself to keep coordinates exact");
         }
-        const Data::Layer& layer = *data.layers.front();
-        GeoJsonLayer json;
-        json.name = output_name(layer);
-        json.srs = layer.srs.get();
-        json.definition = layer.definition;
-        json.feature_count = layer.features.size();
-        json.feature = [&](std::size_t i) { return layer.features[i].get(); };
-        json.geometry = [&](std::size_t i) { return data.build_geometry(layer, i, map, kept); };
-        auto more = write_geojson(output.staging_path(), json);
+        auto more = write_geojson(output.staging_path(), source_of(*data.layers.front()));
         warnings.insert(warnings.end(), more.begin(), more.end());
     } else {
         QuietGdal quiet;
