@@ -14,7 +14,6 @@ struct LayerSource {
     std::string name;
     const OGRSpatialReference* srs = nullptr;  // may be null
     const OGRFeatureDefn* definition = nullptr;
-    OGRwkbGeometryType geometry_type = wkbUnknown;
     std::size_t feature_count = 0;
     // Feature i (attributes only) and its geometry (may be null).
     std::function<const OGRFeature*(std::size_t)> feature;

@@ -509,7 +509,6 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         source.name = output_name(layer);
         source.srs = layer.srs.get();
         source.definition = layer.definition;
-        source.geometry_type = layer.geometry_type;
         source.feature_count = layer.features.size();
         source.feature = [&layer](std::size_t i) { return layer.features[i].get(); };
         source.geometry = [&data, &layer, &map, &kept](std::size_t i) { return data.build_geometry(layer, i, map, kept); };

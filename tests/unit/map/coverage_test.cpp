@@ -86,6 +86,26 @@ TEST(Coverage, DegenerateRingsComeBackAsTheyWere) {
     EXPECT_EQ(points_of(map, coverage.ring_vertices(1, result.kept)).size(), dot.size());
 }
 
+// Neighbours that share a border geometrically but not vertex for vertex: the T-contact and the
+// overlapping edges are kept as they are, so no gap or overlap can open.
+TEST(Coverage, BorderWithoutSharedVerticesIsKept) {
+    Coverage coverage;
+    coverage.add_ring(std::vector<Point>{{0, 0}, {0.5, -0.1}, {1, 0}, {1, 1}, {0.5, 1.1}, {0, 1}, {0, 0}});
+    coverage.add_ring(std::vector<Point>{{1, 0}, {2, 0}, {2, 1}, {1, 1}, {1, 0.5}, {1, 0}});  // (1, 0.5) lies on the left square's edge
+    MapData map;
+    coverage.build(map);
+    const SimplifyResult result = simplify_max(map);
+    EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+    const auto left = points_of(map, coverage.ring_vertices(0, result.kept));
+    const auto right = points_of(map, coverage.ring_vertices(1, result.kept));
+    auto has = [](const std::vector<Point>& ring, Point p) {
+        return std::any_of(ring.begin(), ring.end(), [&](Point q) { return same_location(p, q); });
+    };
+    EXPECT_TRUE(has(left, {1, 0}) && has(left, {1, 1})) << "the left square's border edge stays";
+    EXPECT_TRUE(has(right, {1, 0.5})) << "the T-contact stays";
+    EXPECT_GT(result.stats.pinned_by_crossing, 0u);
+}
+
 TEST(Coverage, DuplicateVerticesDoNotSplitArcs) {
     Coverage coverage;
     coverage.add_ring(std::vector<Point>{{0, 0}, {1, 0}, {1, 0}, {1, 1}, {0, 1}, {0, 0}});
