@@ -1,5 +1,6 @@
 #include "cli/map_command.hpp"
 
+#include "cli/check_command.hpp"
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
 #include "core/map/simplify.hpp"
@@ -27,7 +28,7 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
         "no control point (exact predicates), so no new crossing or touching appears and no control point changes\n"
         "side; crossings in the input are kept as they are. Output vertices are a subset of the input's,\n"
         "coordinates untouched, each line keeping its first and last vertex.\n"
-        "Exit status: 0 ok, 2 usage or input error.");
+        "Exit status: 0 ok, 1 --validate found a violation (no output written), 2 usage or input error.");
     map->add_option("input", options.input, "Input line layer (any OGR source; with --giscup, a GIS Cup lines file)")->required();
     map->add_option("-o,--output", options.output, "Output file (format from the extension or -f); /vsistdout/ for stdout")
         ->required();
@@ -64,6 +65,8 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
     map->add_flag("--giscup", options.giscup, "Input, --points and output are GIS Cup 2014 text files");
     map->add_flag("--json", options.json, "Print a JSON summary on stdout (on stderr when the output is stdout)");
     map->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
+    map->add_flag("--validate", options.validate,
+                  "Run `toposimp check` on the output before moving it into place; exit 1 and no output if it finds anything");
     map->add_flag("-q,--quiet", options.quiet, "Print errors only");
     map->add_flag("-v,--verbose", options.verbosity, "More detail (repeat for more)");
     return map;
@@ -72,6 +75,11 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// --validate found something: no output, exit status 1.
+struct ValidationFailed {
+    std::size_t violations;
+};
 
 double seconds_since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
@@ -194,6 +202,10 @@ int run_map(const MapOptions& options, Context& context) {
     map::SimplifyOptions simplify_options;
     simplify_options.stop = *stop;
     simplify_options.arithmetic = arithmetic_of(options.arithmetic);
+    if (options.validate && options.giscup) {
+        log->error("--validate reads the output with GDAL; GIS Cup text is not a GDAL format");
+        return kUsageError;
+    }
     if (simplify_options.arithmetic == exact::Arithmetic::floating) {
         log->warn("--arithmetic float uses naive double predicates: the output may break topology");
     }
@@ -249,6 +261,23 @@ int run_map(const MapOptions& options, Context& context) {
             write.dataset_options = options.dataset_options;
             write.overwrite = options.overwrite;
             write.stdout_stream = &context.out;
+            if (options.validate) {
+                write.before_commit = [&](const std::string& written) {
+                    progress.phase("validating");
+                    validate::CheckOptions check;
+                    check.original = options.input;
+                    check.simplified = written;
+                    check.points = options.points;
+                    check.layers = options.layers;
+                    const validate::CheckReport report = validate::check(check);
+                    if (!report.clean()) {
+                        progress.done();
+                        print_table(context.err, report);
+                        throw ValidationFailed(report.violations.size());
+                    }
+                    log->debug("validation: clean ({} features, {} control points)", report.features, report.control_points);
+                };
+            }
             for (const std::string& warning : dataset->write(write, map, result.kept)) log->warn("{}", warning);
         }
         time.write = seconds_since(write_start);
@@ -283,6 +312,9 @@ int run_map(const MapOptions& options, Context& context) {
     } catch (const io::OutputError& error) {
         progress.done();
         log->error("{}", error.what());
+    } catch (const ValidationFailed& failed) {
+        log->error("--validate found {} violation(s); no output written", failed.violations);
+        return kTopologyFailure;
     } catch (const std::bad_alloc&) {
         log->error("out of memory");
     }

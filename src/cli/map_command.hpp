@@ -30,6 +30,7 @@ struct MapOptions {
     bool giscup = false;
     bool json = false;
     bool overwrite = false;
+    bool validate = false;
     bool quiet = false;
     int verbosity = 0;
 };

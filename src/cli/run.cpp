@@ -1,5 +1,6 @@
 #include "cli/cli.hpp"
 
+#include "cli/check_command.hpp"
 #include "cli/map_command.hpp"
 #include "io/ogr_dataset.hpp"
 
@@ -39,27 +40,35 @@ int run(const std::vector<std::string>& args, Context& context) {
                "Exit status: 0 ok, 1 topology or validation failure, 2 usage or input error.");
     MapOptions map_options;
     CLI::App* map = add_map_command(app, map_options);
+    CheckCommandOptions check_options;
+    CLI::App* check = add_check_command(app, check_options);
+    auto chosen = [&]() -> CLI::App* {
+        if (app.got_subcommand(map)) return map;
+        if (app.got_subcommand(check)) return check;
+        return nullptr;
+    };
 
     std::vector<std::string> reversed = gdal_style_to_cli11(args);
     std::reverse(reversed.begin(), reversed.end());
     try {
         app.parse(reversed);
     } catch (const CLI::CallForHelp&) {
-        context.out << (app.got_subcommand(map) ? map->help() : app.help());
+        context.out << (chosen() ? chosen()->help() : app.help());
         return kOk;
     } catch (const CLI::CallForVersion&) {
         context.out << app.version() << '\n';
         return kOk;
     } catch (const CLI::ParseError& error) {
         if (error.get_exit_code() == 0) {
-            context.out << (app.got_subcommand(map) ? map->help() : app.help());
+            context.out << (chosen() ? chosen()->help() : app.help());
             return kOk;
         }
         context.err << "toposimp: error: " << error.what() << "\n";
-        context.err << "Run 'toposimp " << (app.got_subcommand(map) ? "map " : "") << "--help' for usage.\n";
+        context.err << "Run 'toposimp " << (chosen() ? chosen()->get_name() + " " : "") << "--help' for usage.\n";
         return kUsageError;
     }
     if (app.got_subcommand(map)) return run_map(map_options, context);
+    if (app.got_subcommand(check)) return run_check(check_options, context);
     context.err << app.help();
     return kUsageError;
 }

@@ -596,6 +596,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             }
         }
     }
+    if (options.before_commit) options.before_commit(output.staging_path());
     output.commit([driver](const std::string& existing) {
         QuietGdal quiet;
         driver->Delete(existing.c_str());

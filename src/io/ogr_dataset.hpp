@@ -7,6 +7,7 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <string>
@@ -45,6 +46,9 @@ struct WriteOptions {
     std::vector<std::string> dataset_options;  // -dsco KEY=VALUE
     bool overwrite = false;
     std::ostream* stdout_stream = nullptr;     // where /vsistdout/ output goes
+    // Called with the written (and verified) file before it is moved into place; throwing
+    // from it leaves no output.
+    std::function<void(const std::string& written)> before_commit;
 };
 
 class OgrDataset {

@@ -67,4 +67,9 @@ bool improper_contact(Point p, Point q, Point r, Point s, Arithmetic arithmetic,
     return false;
 }
 
+bool proper_crossing(Point p, Point q, Point r, Point s, Arithmetic arithmetic, PredicateStats& stats) {
+    const Orienter orient{arithmetic, stats};
+    return orient(p, q, r) * orient(p, q, s) < 0 && orient(r, s, p) * orient(r, s, q) < 0;
+}
+
 }  // namespace toposimp::exact

@@ -10,4 +10,8 @@ namespace toposimp::exact {
 // overlap — a contact a planar map does not have. Segments may be degenerate (p = q).
 bool improper_contact(Point p, Point q, Point r, Point s, Arithmetic arithmetic, PredicateStats& stats);
 
+// Do the interiors of pq and rs cross at a single point (each pair of ends strictly on
+// opposite sides of the other segment's line)?
+bool proper_crossing(Point p, Point q, Point r, Point s, Arithmetic arithmetic, PredicateStats& stats);
+
 }  // namespace toposimp::exact

@@ -81,14 +81,14 @@ private:
 
 }  // namespace
 
-std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
-                                                 exact::PredicateStats& stats) {
-    std::vector<std::uint8_t> improper(map.vertices.size(), 0);
+std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
+                                                  exact::PredicateStats& stats) {
+    std::vector<SegmentContact> contacts;
     std::vector<std::uint32_t> segments;  // each named by its first vertex
     for (const Chain& chain : map.chains) {
         for (std::uint32_t v = chain.first; v < chain.last; ++v) segments.push_back(v);
     }
-    if (segments.size() < 2) return improper;
+    if (segments.size() < 2) return contacts;
     const SegmentGrid grid(map, segments);
     for (std::size_t cell = 0; cell < grid.cell_count(); ++cell) {
         grid.for_each_in_cell(cell, [&](std::size_t k, std::uint32_t s) {
@@ -100,13 +100,29 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 const double x = std::max(sb.min_x, tb.min_x), y = std::max(sb.min_y, tb.min_y);
                 if (x > std::min(sb.max_x, tb.max_x) || y > std::min(sb.max_y, tb.max_y)) continue;
                 if (grid.cell_of(x, y) != cell) continue;
-                if (improper[s] && improper[t]) continue;
-                if (exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1],
-                                            arithmetic, stats)) {
-                    improper[s] = improper[t] = 1;
+                const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
+                if (!exact::improper_contact(p, q, r, u, arithmetic, stats)) continue;
+                ContactKind kind = ContactKind::touching;
+                if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
+                    kind = ContactKind::identical;
+                } else if (exact::proper_crossing(p, q, r, u, arithmetic, stats)) {
+                    kind = ContactKind::crossing;
                 }
+                contacts.push_back({std::min(s, t), std::max(s, t), kind});
             }
         });
+    }
+    std::sort(contacts.begin(), contacts.end(), [](const SegmentContact& a, const SegmentContact& b) {
+        return a.s < b.s || (a.s == b.s && a.t < b.t);
+    });
+    return contacts;
+}
+
+std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
+                                                 exact::PredicateStats& stats) {
+    std::vector<std::uint8_t> improper(map.vertices.size(), 0);
+    for (const SegmentContact& contact : find_segment_contacts(map, arithmetic, stats)) {
+        improper[contact.s] = improper[contact.t] = 1;
     }
     return improper;
 }

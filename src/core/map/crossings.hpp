@@ -18,9 +18,27 @@
 
 namespace toposimp::map {
 
+// How two segments of a map meet, beyond sharing an end location.
+enum class ContactKind : std::uint8_t {
+    crossing,   // proper crossing: interiors cross at one point
+    touching,   // an end inside the other segment, or a partial collinear overlap
+    identical,  // the same two end locations (a shared border, or two coincident lines)
+};
+
+// A contact between segments s and t, each named by its first vertex (the segment runs to the
+// next vertex of its chain), s < t.
+struct SegmentContact {
+    std::uint32_t s, t;
+    ContactKind kind;
+};
+
+// Every pair of segments of the map that meets other than at a shared end location, decided
+// exactly; candidate pairs come from a uniform grid over segment boxes, each tested once.
+std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
+                                                  exact::PredicateStats& stats);
+
 // Per vertex v: 1 if the segment from v to the next vertex of its chain meets another segment of
-// the map improperly. Found with a uniform grid over segment boxes; each candidate pair is tested
-// once, exactly.
+// the map improperly (any contact above).
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
                                                  exact::PredicateStats& stats);
 

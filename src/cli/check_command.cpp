@@ -1,0 +1,149 @@
+#include "cli/check_command.hpp"
+
+#include "cli/logging.hpp"
+#include "io/errors.hpp"
+#include "io/number_format.hpp"
+#include "io/output_file.hpp"
+
+#include <fstream>
+#include <iomanip>
+#include <ostream>
+
+namespace toposimp::cli {
+
+CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
+    CLI::App* check = app.add_subcommand("check", "Compare an original with a simplified dataset and report what was broken");
+    std::string kinds = "Violations reported:\n";
+    for (const auto& [kind, meaning] : validate::kinds()) kinds += "  " + kind + ": " + meaning + "\n";
+    check->footer(kinds +
+                  "GEOS checks polygon validity; contacts, sides and containment are decided with exact predicates.\n"
+                  "Exit status: 0 clean, 1 violations found, 2 usage or input error.");
+    check->add_option("original", options.check.original, "The dataset before simplification (any OGR source)")->required();
+    check->add_option("simplified", options.check.simplified, "The simplified dataset (by any tool)")->required();
+    check->add_option("-p,--points", options.check.points, "Control points: FILE or FILE:LAYER");
+    check->add_option("--key", options.check.key, "Match features by this field (default: by order)");
+    check->add_option("-l,--layer", options.check.layers, "Layer to compare (repeatable; default: every layer)")
+        ->allow_extra_args(false);
+    check->add_flag("--json", options.json, "Print the report as JSON instead of a table");
+    check->add_option("--geojson-errors", options.geojson_errors,
+                      "Also write each violation as a GeoJSON point with its kind and detail (for QGIS)");
+    check->add_flag("-q,--quiet", options.quiet, "Print nothing; the exit status tells");
+    check->add_flag("-v,--verbose", options.verbosity, "More detail");
+    return check;
+}
+
+namespace {
+
+std::string json_text(const std::string& text) {
+    std::string out = "\"";
+    for (const char c : text) {
+        if (c == '"' || c == '\\') {
+            out += '\\';
+            out += c;
+        } else if (static_cast<unsigned char>(c) < 0x20) {
+            char escaped[8];
+            std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
+            out += escaped;
+        } else {
+            out += c;
+        }
+    }
+    return out + "\"";
+}
+
+std::string number(double value) {
+    std::string out;
+    if (std::isfinite(value)) {
+        io::append_number(out, value);
+    } else {
+        out = "null";
+    }
+    return out;
+}
+
+}  // namespace
+
+void print_table(std::ostream& out, const validate::CheckReport& report) {
+    out << report.features << " features compared, " << report.control_points << " control points: ";
+    if (report.clean()) {
+        out << "clean\n";
+    } else {
+        out << report.violations.size() << " violation(s)\n";
+        out << std::left << std::setw(24) << "kind" << std::setw(14) << "layer" << std::setw(10) << "feature" << std::setw(10)
+            << "other" << std::setw(44) << "where (x y)" << "detail [decided by]\n";
+        for (const validate::Violation& v : report.violations) {
+            out << std::setw(24) << v.kind << std::setw(14) << v.layer << std::setw(10) << v.feature << std::setw(10) << v.other
+                << std::setw(44) << (number(v.x) + " " + number(v.y)) << v.detail << " [" << v.decided_by << "]\n";
+        }
+        out << "counts:";
+        for (const auto& [kind, count] : report.counts()) {
+            if (count > 0) out << ' ' << kind << '=' << count;
+        }
+        out << '\n';
+    }
+    if (report.invalid_in_original > 0) {
+        out << report.invalid_in_original << " polygons were already invalid in the original (not counted)\n";
+    }
+}
+
+void print_json(std::ostream& out, const validate::CheckReport& report) {
+    out << "{\"command\":\"check\",\"clean\":" << (report.clean() ? "true" : "false") << ",\"features\":" << report.features
+        << ",\"control_points\":" << report.control_points << ",\"invalid_in_original\":" << report.invalid_in_original
+        << ",\"counts\":{";
+    bool first = true;
+    for (const auto& [kind, count] : report.counts()) {
+        out << (first ? "" : ",") << json_text(kind) << ':' << count;
+        first = false;
+    }
+    out << "},\"violations\":[";
+    for (std::size_t i = 0; i < report.violations.size(); ++i) {
+        const validate::Violation& v = report.violations[i];
+        out << (i ? "," : "") << "{\"kind\":" << json_text(v.kind) << ",\"layer\":" << json_text(v.layer)
+            << ",\"feature\":" << json_text(v.feature) << ",\"other\":" << json_text(v.other) << ",\"x\":" << number(v.x)
+            << ",\"y\":" << number(v.y) << ",\"detail\":" << json_text(v.detail) << ",\"decided_by\":" << json_text(v.decided_by)
+            << '}';
+    }
+    out << "]}\n";
+}
+
+std::string violations_geojson(const validate::CheckReport& report) {
+    std::string out = "{\"type\":\"FeatureCollection\",\"name\":\"violations\",\"features\":[\n";
+    for (std::size_t i = 0; i < report.violations.size(); ++i) {
+        const validate::Violation& v = report.violations[i];
+        out += i ? ",\n" : "";
+        out += "{\"type\":\"Feature\",\"properties\":{\"kind\":" + json_text(v.kind) + ",\"layer\":" + json_text(v.layer) +
+               ",\"feature\":" + json_text(v.feature) + ",\"other\":" + json_text(v.other) + ",\"detail\":" + json_text(v.detail) +
+               ",\"decided_by\":" + json_text(v.decided_by) + "},\"geometry\":{\"type\":\"Point\",\"coordinates\":[" +
+               number(v.x) + "," + number(v.y) + "]}}";
+    }
+    return out + "\n]}\n";
+}
+
+int run_check(const CheckCommandOptions& options, Context& context) {
+    auto log = make_logger(context.err, options.verbosity, options.quiet);
+    try {
+        const validate::CheckReport report = validate::check(options.check);
+        if (!options.geojson_errors.empty()) {
+            io::OutputFile output(options.geojson_errors, true, &context.out);
+            {
+                std::ofstream file(output.staging_path(), std::ios::binary);
+                file << violations_geojson(report);
+                if (!file) throw io::OutputError("error writing '" + options.geojson_errors + "'");
+            }
+            output.commit();
+        }
+        if (options.json) {
+            print_json(context.out, report);
+        } else if (!options.quiet) {
+            print_table(context.out, report);
+        }
+        return report.clean() ? kOk : kTopologyFailure;
+    } catch (const io::InputError& error) {
+        log->error("{}", error.what());
+    } catch (const io::OutputError& error) {
+        log->error("{}", error.what());
+    }
+    return kUsageError;
+}
+
+}  // namespace toposimp::cli

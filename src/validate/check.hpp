@@ -1,0 +1,51 @@
+// `toposimp check`: compares an original dataset with a simplified one — made by any tool — and
+// reports what the simplification broke. The only part of toposimp that uses GEOS.
+//
+// Who decides: GEOS checks polygon validity (IsValidOp: reason and location) and computes where
+// two segments meet; every yes/no question about contacts, sides and containment is decided by
+// the exact predicates of src/core (a float filter, GMP when it cannot decide), so no answer
+// depends on rounding. Each violation says which one decided.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace toposimp::validate {
+
+struct CheckOptions {
+    std::string original;
+    std::string simplified;
+    std::string points;              // control points: FILE or FILE:LAYER; empty: none
+    std::string key;                 // match features by this field; empty: by order
+    std::vector<std::string> layers; // layers to compare; empty: every layer of the original
+};
+
+struct Violation {
+    std::string kind;        // see kinds() for the list
+    std::string layer;
+    std::string feature;     // key value, or feature index
+    std::string other;       // the other feature (contacts), or empty
+    double x = 0, y = 0;     // where
+    std::string detail;
+    std::string decided_by;  // "exact" or "GEOS"
+};
+
+struct CheckReport {
+    std::vector<Violation> violations;
+    std::uint64_t features = 0;
+    std::uint64_t control_points = 0;
+    std::uint64_t invalid_in_original = 0;  // invalid polygons already invalid before: not counted
+
+    bool clean() const { return violations.empty(); }
+    std::map<std::string, std::uint64_t> counts() const;
+};
+
+// Every kind of violation, in report order, with what it means.
+const std::vector<std::pair<std::string, std::string>>& kinds();
+
+// Throws io::InputError for unreadable or mismatched input.
+CheckReport check(const CheckOptions& options);
+
+}  // namespace toposimp::validate
