@@ -49,9 +49,14 @@ PointGrid::PointGrid(std::span<const Point> points, double points_per_cell) {
         ++cell_start_[cell + 1];
     }
     for (std::size_t c = 0; c < cell_count; ++c) cell_start_[c + 1] += cell_start_[c];
-    ids_.resize(points.size());
+    entries_.resize(points.size());
+    slot_.resize(points.size());
     std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < points.size(); ++i) ids_[fill[cell_of_point[i]]++] = static_cast<std::uint32_t>(i);
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const std::uint32_t slot = fill[cell_of_point[i]]++;
+        entries_[slot] = {points[i], static_cast<std::uint32_t>(i)};
+        slot_[i] = slot;
+    }
 }
 
 }  // namespace toposimp::map

@@ -1,5 +1,5 @@
-// A uniform grid over points (dissertation §2.3.1): each cell lists the ids of the points in it,
-// stored compactly (counting sort into one array, no per-cell allocation).
+// A uniform grid over points (dissertation §2.3.1): each cell lists the points in it (id and
+// coordinates), stored compactly (counting sort into one array, no per-cell allocation).
 //
 // Cell lookup is a monotone function of each coordinate, so every point inside a query box is
 // in one of the cells the box's corners map to: the grid never misses a point, whatever the
@@ -16,27 +16,38 @@ namespace toposimp::map {
 
 class PointGrid {
 public:
+    static constexpr std::uint32_t kRemoved = 0xffffffffu;
+
     // Indexes points[0..n); about `points_per_cell` points share a cell on average.
     PointGrid(std::span<const Point> points, double points_per_cell = 2.0);
 
-    // Calls visit(id) for each point id in the cells overlapping `box` (a superset of the points
-    // inside it) until visit returns true; returns whether it did.
+    // Calls visit(id, point) for each point still in the cells overlapping `box` (a superset of
+    // the points inside it) until visit returns true; returns whether it did. Coordinates are
+    // stored in cell order, so a query reads memory sequentially.
     template <class Visit>
     bool any_in_cells(const Box& box, Visit&& visit) const {
         const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
         const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
         for (std::uint32_t y = y0; y <= y1; ++y) {
             const std::size_t row_start = std::size_t{y} * columns_;
-            for (std::size_t cell = row_start + x0; cell <= row_start + x1; ++cell) {
-                for (std::uint32_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) {
-                    if (visit(ids_[k])) return true;
-                }
+            const Entry* entry = entries_.data() + cell_start_[row_start + x0];
+            const Entry* end = entries_.data() + cell_start_[row_start + x1 + 1];
+            for (; entry != end; ++entry) {
+                if (entry->id != kRemoved && visit(entry->id, entry->point)) return true;
             }
         }
         return false;
     }
 
+    // Takes point `id` out of the grid.
+    void remove(std::uint32_t id) { entries_[slot_[id]].id = kRemoved; }
+
 private:
+    struct Entry {
+        Point point;
+        std::uint32_t id;
+    };
+
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;
         if (!(t >= 0.0)) t = 0.0;  // also catches NaN from 0·∞ in a zero-width grid
@@ -48,8 +59,9 @@ private:
 
     double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
     std::uint32_t columns_ = 1, rows_ = 1;
-    std::vector<std::uint32_t> cell_start_;
-    std::vector<std::uint32_t> ids_;
+    std::vector<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
+    std::vector<Entry> entries_;
+    std::vector<std::uint32_t> slot_;        // per id: its entry
 };
 
 }  // namespace toposimp::map

@@ -109,10 +109,11 @@ private:
 
     // One grid over vertices and control points: ids [0, n) are vertices, [n, n+m) control points.
     void index_points() {
-        points_.reserve(map_.vertices.size() + map_.control_points.size());
-        points_.insert(points_.end(), map_.vertices.begin(), map_.vertices.end());
-        points_.insert(points_.end(), map_.control_points.begin(), map_.control_points.end());
-        grid_.emplace(points_);
+        std::vector<Point> points;
+        points.reserve(map_.vertices.size() + map_.control_points.size());
+        points.insert(points.end(), map_.vertices.begin(), map_.vertices.end());
+        points.insert(points.end(), map_.control_points.begin(), map_.control_points.end());
+        grid_.emplace(points);
     }
 
     // A location held by two or more vertices (a node, a ring's closing vertex, a duplicate, a
@@ -219,10 +220,8 @@ private:
 
         const Box box = triangle_box(a, b, c);
         std::optional<exact::ClosedTriangle> triangle;  // prepared at the first candidate point
-        const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id) {
-            if (id == v || (id < vertex_count_ && !alive_[id])) return false;
-            const Point q = points_[id];
-            if (!box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
+        const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
+            if (id == v || !box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats_.predicates);
             if (!triangle->contains(q)) return false;
             blocker = id;
@@ -299,6 +298,7 @@ private:
         add_segment(p, n);
         if (distinct_[chain] != 0 && !same_location(b, a) && !same_location(b, c)) --distinct_[chain];
         alive_[v] = 0;
+        grid_->remove(v);
         next_[p] = n;
         prev_[n] = p;
         ++stats_.removed;
@@ -353,7 +353,6 @@ private:
     std::vector<std::uint8_t> alive_, shared_, pinned_;
     std::vector<std::uint32_t> distinct_;    // per closed chain: distinct live locations; 0 if open
     std::vector<std::int8_t> orientation_;   // per chain: input ring orientation, 2 = unknown
-    std::vector<Point> points_;              // vertices then control points, as indexed
     std::optional<PointGrid> grid_;
     std::unordered_map<SegmentKey, std::uint32_t, SegmentKeyHash> segments_;
     IndexedHeap heap_;

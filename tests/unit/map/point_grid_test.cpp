@@ -10,7 +10,7 @@ namespace {
 
 std::set<std::uint32_t> in_cells(const PointGrid& grid, const Box& box) {
     std::set<std::uint32_t> ids;
-    grid.any_in_cells(box, [&](std::uint32_t id) {
+    grid.any_in_cells(box, [&](std::uint32_t id, Point) {
         ids.insert(id);
         return false;
     });
@@ -49,6 +49,14 @@ TEST(PointGrid, HandlesDegenerateAndExtremeExtents) {
     const double big = 1.7e308;
     expect_no_point_missed({{-big, -big}, {big, big}, {0, 0}, {1e-300, 1e-300}}, {0, 0, 1e-300, 1e-300});
     expect_no_point_missed({{-big, 0}, {big, 0}, {0, 0}}, {-big, 0, big, 0});
+}
+
+TEST(PointGrid, RemovedPointsAreNotVisited) {
+    const std::vector<Point> points{{0, 0}, {1, 1}, {2, 2}};
+    PointGrid grid(points);
+    grid.remove(1);
+    const auto found = in_cells(grid, {0, 0, 2, 2});
+    EXPECT_EQ(found, (std::set<std::uint32_t>{0, 2}));
 }
 
 }  // namespace
