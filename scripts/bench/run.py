@@ -1,0 +1,167 @@
+#!/usr/bin/env python3
+"""toposimp against its peers on the same data, on the same machine, in the same run.
+
+For each dataset and target (--keep 50% and --max) it times toposimp (exact, float, rational),
+mapshaper (-simplify visvalingam, at the fraction toposimp kept) and ogr2ogr -simplify (GEOS
+TopologyPreservingSimplifier, tolerance searched to the same fraction) with /usr/bin/time over
+several runs, checks every output with `toposimp check` against the same control points, and
+writes BENCHMARKS.md (medians and ratios). Data: scripts/bench/fetch-data.sh.
+
+  scripts/bench/run.py [--data DIR] [--runs N] [--datasets td1,td2,ne,gshhg] [--out BENCHMARKS.md]
+"""
+import argparse
+import json
+import os
+import platform
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+REPO = os.path.dirname(os.path.dirname(HERE))
+
+DATASETS = {
+    'td1': dict(lines='td1_lines.shp', points='td1_points.shp', title='GIS Cup 2014 td1 (NH county borders)'),
+    'td2': dict(lines='td2_lines.shp', points='td2_points.shp', title='GIS Cup 2014 td2 (MA county borders)'),
+    'ne': dict(lines='ne_states.shp', points='cities.shp', title='Natural Earth states/provinces (polygons) + GeoNames cities'),
+    'gshhg': dict(lines='gshhg.shp', points='gshhg_points.gpkg',
+                  title='GSHHG full-resolution shorelines, level 1 + 10 M control points'),
+}
+
+
+def timed(command, runs):
+    """Runs `command` `runs` times; returns medians of wall and CPU seconds and the peak RSS."""
+    walls, cpus, rss = [], [], 0
+    for _ in range(runs):
+        with tempfile.NamedTemporaryFile('r') as out:
+            result = subprocess.run(['/usr/bin/time', '-o', out.name, '-f', '%e %U %S %M'] + command,
+                                    stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+            if result.returncode not in (0, 1):
+                raise RuntimeError('%s failed:\n%s' % (' '.join(command), result.stderr[-2000:]))
+            wall, user, system, kb = out.read().split()[-4:]
+        walls.append(float(wall))
+        cpus.append(float(user) + float(system))
+        rss = max(rss, int(kb))
+    return statistics.median(walls), statistics.median(cpus), rss / 1024.0
+
+
+def vertex_count(path):
+    layer = os.path.splitext(os.path.basename(path))[0]
+    out = subprocess.run(['ogrinfo', '-q', '-dialect', 'SQLite', '-sql',
+                          'SELECT SUM(ST_NPoints(geometry)) AS n FROM "%s"' % layer, path],
+                         capture_output=True, text=True).stdout
+    for line in out.splitlines():
+        if '=' in line:
+            return int(line.split('=')[1])
+    raise RuntimeError('cannot count vertices of ' + path)
+
+
+def check(binary, original, simplified, points):
+    result = subprocess.run([binary, 'check', original, simplified, '-p', points, '--json'], capture_output=True, text=True)
+    if result.returncode == 2:
+        return 'error: ' + result.stderr.strip()[:200]
+    report = json.loads(result.stdout)
+    total = sum(report['counts'].values())
+    worst = sorted(((n, k) for k, n in report['counts'].items() if n), reverse=True)[:3]
+    return '%d' % total + (' (%s)' % ', '.join('%s %d' % (k, n) for n, k in worst) if worst else '')
+
+
+def remove_shapefile(path):
+    base = os.path.splitext(path)[0]
+    for ext in ('.shp', '.shx', '.dbf', '.prj', '.cpg'):
+        if os.path.exists(base + ext):
+            os.remove(base + ext)
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('--data', default=os.environ.get('TOPOSIMP_BENCH_DATA', os.path.join(REPO, 'build', 'bench-data')))
+    parser.add_argument('--binary', default=os.path.join(REPO, 'build', 'release', 'toposimp'))
+    parser.add_argument('--runs', type=int, default=3)
+    parser.add_argument('--datasets', default='td1,td2,ne,gshhg')
+    parser.add_argument('--out', default=os.path.join(REPO, 'BENCHMARKS.md'))
+    args = parser.parse_args()
+    data = os.path.abspath(args.data)
+    mapshaper = os.path.join(data, 'node_modules', '.bin', 'mapshaper')
+    work = tempfile.mkdtemp(prefix='toposimp-bench-')
+    sections = []
+    for name in args.datasets.split(','):
+        spec = DATASETS[name]
+        lines, points = os.path.join(data, spec['lines']), os.path.join(data, spec['points'])
+        total = vertex_count(lines)
+        runs = args.runs if total < 2_000_000 else 1
+        rows = []
+        for target in ('50%', 'max'):
+            def out(tag):
+                return os.path.join(work, '%s_%s_%s.shp' % (name, target.strip('%'), tag))
+            flag = ['--keep', target] if target != 'max' else ['--max']
+            ours = out('toposimp')
+            results = {}
+            for mode in ('exact', 'float', 'rational'):
+                if mode == 'rational' and total > 500_000:
+                    continue  # ten times slower: shown on the smaller sets only
+                path = out('toposimp_' + mode)
+                command = [args.binary, 'map', lines, '-p', points, *flag, '--arithmetic', mode, '-o', path, '--overwrite', '-q']
+                results['toposimp ' + mode] = (path, timed(command, runs))
+            shutil.copy(results['toposimp exact'][0], ours)
+            for ext in ('.shx', '.dbf', '.prj'):
+                base = os.path.splitext(results['toposimp exact'][0])[0]
+                if os.path.exists(base + ext):
+                    shutil.copy(base + ext, os.path.splitext(ours)[0] + ext)
+            kept = vertex_count(ours)
+            share = kept / total
+            # mapshaper: same share of vertices (its percentage counts removable vertices; close enough, counts shown).
+            path = out('mapshaper')
+            command = [mapshaper, '-i', lines, '-simplify', 'visvalingam', 'keep-shapes', '%.4f%%' % (100 * share), '-o', path, 'force']
+            results['mapshaper'] = (path, timed(command, runs))
+            # ogr2ogr -simplify: tolerance searched (bisection on a log scale) to keep about as many vertices.
+            lo, hi = 1e-9, 1e6
+            best = None
+            for _ in range(14 if total < 2_000_000 else 7):
+                tolerance = (lo * hi) ** 0.5
+                path = out('ogr2ogr')
+                remove_shapefile(path)
+                subprocess.run(['ogr2ogr', path, lines, '-simplify', '%g' % tolerance], check=True, capture_output=True)
+                n = vertex_count(path)
+                if best is None or abs(n - kept) < abs(best[1] - kept):
+                    best = (tolerance, n)
+                if n > kept:
+                    lo = tolerance
+                else:
+                    hi = tolerance
+            path = out('ogr2ogr')
+            remove_shapefile(path)
+            command = ['ogr2ogr', path, lines, '-simplify', '%g' % best[0]]
+            results['ogr2ogr -simplify %g' % best[0]] = (path, timed(command, runs))
+            base_wall = results['toposimp exact'][1][0]
+            for tool, (path, (wall, cpu, rss)) in results.items():
+                rows.append('| %s | %s | %d (%.1f%%) | %.2f | %.2f | %.0f | %.2f | %s |' % (
+                    target, tool, vertex_count(path), 100.0 * vertex_count(path) / total, wall, cpu, rss,
+                    wall / base_wall if base_wall else 0, check(args.binary, lines, path, points)))
+        sections.append('### %s\n\n`%s` (%d vertices), control points `%s`; %d run(s) per measurement.\n\n'
+                        '| target | tool | vertices kept | wall s (median) | CPU s | peak RSS MB | wall / toposimp exact | `toposimp check` violations |\n'
+                        '|---|---|---|---|---|---|---|---|\n%s\n' % (spec['title'], spec['lines'], total, spec['points'], runs, '\n'.join(rows)))
+        print('done: ' + name, file=sys.stderr)
+    cpu = next((l.split(':', 1)[1].strip() for l in open('/proc/cpuinfo') if l.startswith('model name')), platform.processor())
+    memory = next((l.split()[1] for l in open('/proc/meminfo') if l.startswith('MemTotal')), '?')
+    versions = [subprocess.run([args.binary, '--version'], capture_output=True, text=True).stdout.strip(),
+                'mapshaper ' + subprocess.run([mapshaper, '-v'], capture_output=True, text=True).stdout.strip(),
+                subprocess.run(['ogr2ogr', '--version'], capture_output=True, text=True).stdout.strip()]
+    with open(args.out, 'w') as f:
+        f.write('# Benchmarks\n\nGenerated by `scripts/bench/run.py %s` on %s — do not edit by hand.\n\n'
+                'Machine: %s, %d cores, %.0f GiB. %s.\n\n'
+                'toposimp is single-threaded so far (issue 5): the thread columns of the dissertation\'s '
+                'Table 3.2 are not reproduced yet. Vertices are counted in the written features (a border '
+                'shared by two polygons counts twice). Every output is checked against the input and the '
+                'same control points with `toposimp check` (exact).\n\n%s' % (
+                    ' '.join(sys.argv[1:]), time.strftime('%Y-%m-%d'), cpu, os.cpu_count(), int(memory) / 1048576,
+                    '; '.join(versions), '\n'.join(sections)))
+    shutil.rmtree(work)
+    print('wrote ' + args.out, file=sys.stderr)
+
+
+if __name__ == '__main__':
+    main()
