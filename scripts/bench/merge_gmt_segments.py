@@ -2,7 +2,8 @@
 """Joins GMT multisegment text (gmt coast -M: pieces cut at GSHHG's bin edges) back into lines.
 
 Pieces that meet end to end at exactly the same coordinate text are joined; closed results are
-rings. Writes CSV with a WKT column (coordinates copied as text, so nothing is rounded)."""
+rings. Writes GeoJSON (coordinates copied as text, so nothing is rounded; a CSV row would be too
+long for GDAL's CSV reader: Eurasia alone is over a million vertices)."""
 import sys
 from collections import defaultdict
 
@@ -63,9 +64,11 @@ def main():
     pieces = read_pieces(sys.argv[1])
     lines = merge(pieces)
     with open(sys.argv[2], 'w') as out:
-        out.write('id,WKT\n')
+        out.write('{"type":"FeatureCollection","name":"gshhg","features":[\n')
         for i, line in enumerate(lines):
-            out.write('%d,"LINESTRING (%s)"\n' % (i, ', '.join('%s %s' % p for p in line)))
+            out.write('%s{"type":"Feature","properties":{"id":%d},"geometry":{"type":"LineString","coordinates":[%s]}}\n' % (
+                ',' if i else '', i, ','.join('[%s,%s]' % p for p in line)))
+        out.write(']}\n')
     print('%d pieces -> %d lines, %d vertices' % (len(pieces), len(lines), sum(len(l) for l in lines)), file=sys.stderr)
 
 

@@ -206,6 +206,10 @@ int run_map(const MapOptions& options, Context& context) {
         log->error("--validate reads the output with GDAL; GIS Cup text is not a GDAL format");
         return kUsageError;
     }
+    if (options.validate && options.input.rfind("/vsistdin", 0) == 0) {
+        log->error("--validate reads the input a second time, which standard input cannot give; save it to a file first");
+        return kUsageError;
+    }
     if (simplify_options.arithmetic == exact::Arithmetic::floating) {
         log->warn("--arithmetic float uses naive double predicates: the output may break topology");
     }

@@ -272,6 +272,9 @@ TEST(CheckCli, MapValidateRefusesToWriteABrokenResult) {
     const std::string safe = (dir / "safe.gpkg").string();
     EXPECT_EQ(run_cli({"map", input, "-p", points, "--max", "--validate", "-o", safe}).code, 0);
     EXPECT_TRUE(std::filesystem::exists(safe));
+    const CliResult from_stdin = run_cli({"map", "/vsistdin/", "--validate", "-f", "GPKG", "-o", (dir / "x.gpkg").string()});
+    EXPECT_EQ(from_stdin.code, 2);
+    EXPECT_NE(from_stdin.err.find("standard input"), std::string::npos) << from_stdin.err;
 }
 
 }  // namespace
