@@ -2,7 +2,7 @@
 
 #include "cli/logging.hpp"
 #include "io/errors.hpp"
-#include "io/number_format.hpp"
+#include "io/json_text.hpp"
 #include "io/output_file.hpp"
 
 #include <fstream>
@@ -32,37 +32,6 @@ CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
     return check;
 }
 
-namespace {
-
-std::string json_text(const std::string& text) {
-    std::string out = "\"";
-    for (const char c : text) {
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += c;
-        } else if (static_cast<unsigned char>(c) < 0x20) {
-            char escaped[8];
-            std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
-            out += escaped;
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
-
-std::string number(double value) {
-    std::string out;
-    if (std::isfinite(value)) {
-        io::append_number(out, value);
-    } else {
-        out = "null";
-    }
-    return out;
-}
-
-}  // namespace
-
 void print_table(std::ostream& out, const validate::CheckReport& report) {
     out << report.features << " features compared, " << report.control_points << " control points: ";
     if (report.clean()) {
@@ -73,7 +42,7 @@ void print_table(std::ostream& out, const validate::CheckReport& report) {
             << "other" << std::setw(44) << "where (x y)" << "detail [decided by]\n";
         for (const validate::Violation& v : report.violations) {
             out << std::setw(24) << v.kind << std::setw(14) << v.layer << std::setw(10) << v.feature << std::setw(10) << v.other
-                << std::setw(44) << (number(v.x) + " " + number(v.y)) << v.detail << " [" << v.decided_by << "]\n";
+                << std::setw(44) << (io::json_number(v.x) + " " + io::json_number(v.y)) << v.detail << " [" << v.decided_by << "]\n";
         }
         out << "counts:";
         for (const auto& [kind, count] : report.counts()) {
@@ -92,15 +61,15 @@ void print_json(std::ostream& out, const validate::CheckReport& report) {
         << ",\"counts\":{";
     bool first = true;
     for (const auto& [kind, count] : report.counts()) {
-        out << (first ? "" : ",") << json_text(kind) << ':' << count;
+        out << (first ? "" : ",") << io::json_string(kind) << ':' << count;
         first = false;
     }
     out << "},\"violations\":[";
     for (std::size_t i = 0; i < report.violations.size(); ++i) {
         const validate::Violation& v = report.violations[i];
-        out << (i ? "," : "") << "{\"kind\":" << json_text(v.kind) << ",\"layer\":" << json_text(v.layer)
-            << ",\"feature\":" << json_text(v.feature) << ",\"other\":" << json_text(v.other) << ",\"x\":" << number(v.x)
-            << ",\"y\":" << number(v.y) << ",\"detail\":" << json_text(v.detail) << ",\"decided_by\":" << json_text(v.decided_by)
+        out << (i ? "," : "") << "{\"kind\":" << io::json_string(v.kind) << ",\"layer\":" << io::json_string(v.layer)
+            << ",\"feature\":" << io::json_string(v.feature) << ",\"other\":" << io::json_string(v.other) << ",\"x\":" << io::json_number(v.x)
+            << ",\"y\":" << io::json_number(v.y) << ",\"detail\":" << io::json_string(v.detail) << ",\"decided_by\":" << io::json_string(v.decided_by)
             << '}';
     }
     out << "]}\n";
@@ -111,10 +80,10 @@ std::string violations_geojson(const validate::CheckReport& report) {
     for (std::size_t i = 0; i < report.violations.size(); ++i) {
         const validate::Violation& v = report.violations[i];
         out += i ? ",\n" : "";
-        out += "{\"type\":\"Feature\",\"properties\":{\"kind\":" + json_text(v.kind) + ",\"layer\":" + json_text(v.layer) +
-               ",\"feature\":" + json_text(v.feature) + ",\"other\":" + json_text(v.other) + ",\"detail\":" + json_text(v.detail) +
-               ",\"decided_by\":" + json_text(v.decided_by) + "},\"geometry\":{\"type\":\"Point\",\"coordinates\":[" +
-               number(v.x) + "," + number(v.y) + "]}}";
+        out += "{\"type\":\"Feature\",\"properties\":{\"kind\":" + io::json_string(v.kind) + ",\"layer\":" + io::json_string(v.layer) +
+               ",\"feature\":" + io::json_string(v.feature) + ",\"other\":" + io::json_string(v.other) + ",\"detail\":" + io::json_string(v.detail) +
+               ",\"decided_by\":" + io::json_string(v.decided_by) + "},\"geometry\":{\"type\":\"Point\",\"coordinates\":[" +
+               io::json_number(v.x) + "," + io::json_number(v.y) + "]}}";
     }
     return out + "\n]}\n";
 }

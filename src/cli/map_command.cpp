@@ -6,6 +6,7 @@
 #include "core/map/simplify.hpp"
 #include "io/errors.hpp"
 #include "io/giscup.hpp"
+#include "io/json_text.hpp"
 #include "io/ogr_dataset.hpp"
 #include "io/output_file.hpp"
 
@@ -127,37 +128,20 @@ std::string describe(const map::StopCriterion& stop) {
     return text.str();
 }
 
-std::string json_string(const std::string& text) {
-    std::string out = "\"";
-    for (char c : text) {
-        if (c == '"' || c == '\\') {
-            out += '\\';
-            out += c;
-        } else if (static_cast<unsigned char>(c) < 0x20) {
-            char escaped[8];
-            std::snprintf(escaped, sizeof escaped, "\\u%04x", c);
-            out += escaped;
-        } else {
-            out += c;
-        }
-    }
-    return out + "\"";
-}
-
 struct Timings {
     double read = 0, simplify = 0, write = 0, total = 0;
 };
 
 void print_json(std::ostream& out, const MapOptions& options, const map::StopCriterion& stop,
                 const map::SimplifyStats& stats, const Timings& time, std::uint64_t features) {
-    out << "{\"command\":\"map\",\"input\":" << json_string(options.input) << ",\"output\":" << json_string(options.output)
+    out << "{\"command\":\"map\",\"input\":" << io::json_string(options.input) << ",\"output\":" << io::json_string(options.output)
         << ",\"features\":" << features << ",\"vertices_in\":" << stats.vertices_in
         << ",\"vertices_out\":" << stats.vertices_out << ",\"removed\":" << stats.removed
-        << ",\"control_points\":" << stats.control_points << ",\"target\":{\"criterion\":" << json_string(describe(stop))
+        << ",\"control_points\":" << stats.control_points << ",\"target\":{\"criterion\":" << io::json_string(describe(stop))
         << ",\"removal_goal\":" << stats.removal_goal << ",\"reached\":" << (stats.target_reached ? "true" : "false")
         << "},\"blocked\":{\"total\":" << stats.blocked() << ",\"point_in_triangle\":" << stats.blocked_by_point
         << ",\"ring\":" << stats.blocked_by_ring << ",\"coincident_segment\":" << stats.blocked_by_coincidence
-        << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
+        << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << io::json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
         << stats.predicates.filter_decided << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
         << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
         << ",\"total\":" << time.total << "}}\n";

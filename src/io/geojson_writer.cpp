@@ -2,6 +2,7 @@
 
 #include "io/errors.hpp"
 #include "io/field_text.hpp"
+#include "io/json_text.hpp"
 #include "io/number_format.hpp"
 
 #include <cmath>
@@ -10,36 +11,6 @@
 
 namespace toposimp::io {
 namespace {
-
-void append_string(std::string& out, const char* text) {
-    out += '"';
-    for (const unsigned char* c = reinterpret_cast<const unsigned char*>(text); *c; ++c) {
-        switch (*c) {
-            case '"': out += "\\\""; break;
-            case '\\': out += "\\\\"; break;
-            case '\n': out += "\\n"; break;
-            case '\r': out += "\\r"; break;
-            case '\t': out += "\\t"; break;
-            default:
-                if (*c < 0x20) {
-                    char escaped[8];
-                    std::snprintf(escaped, sizeof escaped, "\\u%04x", *c);
-                    out += escaped;
-                } else {
-                    out += static_cast<char>(*c);
-                }
-        }
-    }
-    out += '"';
-}
-
-void append_real(std::string& out, double value) {
-    if (std::isfinite(value)) {
-        append_number(out, value);
-    } else {
-        out += "null";  // JSON has no NaN or infinity
-    }
-}
 
 void append_property(std::string& out, const OGRFeature& feature, int field) {
     const OGRFieldDefn* definition = feature.GetFieldDefnRef(field);
@@ -55,10 +26,10 @@ void append_property(std::string& out, const OGRFeature& feature, int field) {
             }
             return;
         case OFTInteger64: out += std::to_string(feature.GetFieldAsInteger64(field)); return;
-        case OFTReal: append_real(out, feature.GetFieldAsDouble(field)); return;
+        case OFTReal: append_json_number(out, feature.GetFieldAsDouble(field)); return;
         case OFTDate:
         case OFTTime:
-        case OFTDateTime: append_string(out, iso_date_time(feature, field, type).c_str()); return;
+        case OFTDateTime: append_json_string(out, iso_date_time(feature, field, type)); return;
         case OFTIntegerList: {
             const int* values = feature.GetFieldAsIntegerList(field, &count);
             out += '[';
@@ -84,7 +55,7 @@ void append_property(std::string& out, const OGRFeature& feature, int field) {
             out += '[';
             for (int i = 0; i < count; ++i) {
                 if (i) out += ',';
-                append_real(out, values[i]);
+                append_json_number(out, values[i]);
             }
             out += ']';
             return;
@@ -94,12 +65,12 @@ void append_property(std::string& out, const OGRFeature& feature, int field) {
             out += '[';
             for (int i = 0; values && values[i]; ++i) {
                 if (i) out += ',';
-                append_string(out, values[i]);
+                append_json_string(out, values[i]);
             }
             out += ']';
             return;
         }
-        default: append_string(out, feature.GetFieldAsString(field)); return;
+        default: append_json_string(out, feature.GetFieldAsString(field)); return;
     }
 }
 
@@ -203,7 +174,7 @@ void append_crs(std::string& out, const OGRSpatialReference* srs, std::vector<st
         std::string name = std::string("urn:ogc:def:crs:") + authority + "::" + code;
         if (std::string(authority) == "EPSG" && std::string(code) == "4326") name = "urn:ogc:def:crs:OGC:1.3:CRS84";
         out += R"("crs":{"type":"name","properties":{"name":)";
-        append_string(out, name.c_str());
+        append_json_string(out, name.c_str());
         out += "}},\n";
     } else {
         warnings.push_back("the layer's CRS has no authority code and cannot be written to GeoJSON; it is left out");
@@ -217,7 +188,7 @@ std::vector<std::string> write_geojson(const std::string& path, const LayerSourc
     std::ofstream file(path, std::ios::binary);
     if (!file) throw OutputError("cannot create '" + path + "'");
     std::string out = "{\n\"type\":\"FeatureCollection\",\n\"name\":";
-    append_string(out, layer.name.c_str());
+    append_json_string(out, layer.name.c_str());
     out += ",\n";
     append_crs(out, layer.srs, warnings);
     out += "\"features\":[\n";
@@ -230,7 +201,7 @@ std::vector<std::string> write_geojson(const std::string& path, const LayerSourc
             if (!feature.IsFieldSet(field)) continue;
             if (!first) out += ',';
             first = false;
-            append_string(out, layer.definition->GetFieldDefn(field)->GetNameRef());
+            append_json_string(out, layer.definition->GetFieldDefn(field)->GetNameRef());
             out += ':';
             if (feature.IsFieldNull(field)) {
                 out += "null";

@@ -3,6 +3,7 @@
 #include "core/exact/point_in_ring.hpp"
 #include "core/exact/predicates.hpp"
 #include "core/map/crossings.hpp"
+#include "core/map/point_grid.hpp"
 #include "io/errors.hpp"
 #include "io/gdal_support.hpp"
 #include "io/ogr_dataset.hpp"
@@ -443,9 +444,33 @@ CheckReport check(const CheckOptions& options) {
                 }
             }
         }
+        // Candidate polygons per point from a uniform grid over their boxes.
+        std::vector<std::size_t> polygons;
+        Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};
+        for (std::size_t m = 0; m < matched.size(); ++m) {
+            if (matched[m].original->type != Feature::Type::polygons || !(boxes[m].min_x <= boxes[m].max_x)) continue;
+            polygons.push_back(m);
+            extent = {std::min(extent.min_x, boxes[m].min_x), std::min(extent.min_y, boxes[m].min_y),
+                      std::max(extent.max_x, boxes[m].max_x), std::max(extent.max_y, boxes[m].max_y)};
+        }
+        const std::size_t side = std::clamp<std::size_t>(static_cast<std::size_t>(std::sqrt(static_cast<double>(polygons.size()))), 1, 1024);
+        auto cell = [&](double value, double lo, double hi) {
+            const double t = hi > lo ? (value - lo) / (hi - lo) * static_cast<double>(side) : 0.0;
+            return std::min(side - 1, static_cast<std::size_t>(std::max(0.0, t)));
+        };
+        std::vector<std::vector<std::size_t>> cells(side * side);
+        for (const std::size_t m : polygons) {
+            for (std::size_t y = cell(boxes[m].min_y, extent.min_y, extent.max_y); y <= cell(boxes[m].max_y, extent.min_y, extent.max_y); ++y) {
+                for (std::size_t x = cell(boxes[m].min_x, extent.min_x, extent.max_x); x <= cell(boxes[m].max_x, extent.min_x, extent.max_x); ++x) {
+                    cells[y * side + x].push_back(m);
+                }
+            }
+        }
         for (const Point p : points) {
-            for (std::size_t m = 0; m < matched.size(); ++m) {
-                if (matched[m].original->type != Feature::Type::polygons || !box_contains(boxes[m], p)) continue;
+            if (polygons.empty()) break;
+            if (!box_contains(extent, p)) continue;
+            for (const std::size_t m : cells[cell(p.y, extent.min_y, extent.max_y) * side + cell(p.x, extent.min_x, extent.max_x)]) {
+                if (!box_contains(boxes[m], p)) continue;
                 const int before = locate(*matched[m].original, p);
                 const int after = matched[m].simplified ? locate(*matched[m].simplified, p) : 0;
                 if (before != after) {
@@ -456,7 +481,7 @@ CheckReport check(const CheckOptions& options) {
             }
         }
         // Lines: a removed stretch a…b sweeps the detour a…b + segment b→a; no point may be in it.
-        std::sort(points.begin(), points.end(), [](Point a, Point b) { return a.x < b.x; });
+        const map::PointGrid grid(points);
         for (std::size_t m = 0; m < matched.size(); ++m) {
             const Feature& before = *matched[m].original;
             if (before.type != Feature::Type::lines) continue;
@@ -467,15 +492,15 @@ CheckReport check(const CheckOptions& options) {
                     const std::span<const Point> detour(before.parts[k].data() + at[i], at[i + 1] - at[i] + 1);
                     Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
                     for (const Point q : detour) box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
-                    auto it = std::lower_bound(points.begin(), points.end(), box.min_x, [](Point a, double x) { return a.x < x; });
-                    for (; it != points.end() && it->x <= box.max_x; ++it) {
-                        if (!box_contains(box, *it) || same_location(*it, detour.front()) || same_location(*it, detour.back())) continue;
-                        if (exact::locate_in_ring(detour, *it, stats) != exact::RingLocation::outside) {
-                            violation("point_changed_side", original[matched[m].layer].name, before.key, *it,
+                    grid.any_in_cells(box, [&](std::uint32_t, Point q) {
+                        if (!box_contains(box, q) || same_location(q, detour.front()) || same_location(q, detour.back())) return false;
+                        if (exact::locate_in_ring(detour, q, stats) != exact::RingLocation::outside) {
+                            violation("point_changed_side", original[matched[m].layer].name, before.key, q,
                                       "swept by the segment replacing vertices " + std::to_string(at[i]) + "…" +
                                           std::to_string(at[i + 1]) + " of line " + std::to_string(k));
                         }
-                    }
+                        return false;
+                    });
                 }
             }
         }
