@@ -59,8 +59,12 @@ def vertex_count(path):
     raise RuntimeError('cannot count vertices of ' + path)
 
 
-def check(binary, original, simplified, points):
-    result = subprocess.run([binary, 'check', original, simplified, '-p', points, '--json'], capture_output=True, text=True)
+def check(binary, original, simplified, points, limit=180):
+    try:
+        result = subprocess.run([binary, 'check', original, simplified, '-p', points, '--json'], capture_output=True,
+                                text=True, timeout=limit)
+    except subprocess.TimeoutExpired:
+        return 'not finished in %d s' % limit
     if result.returncode == 2:
         return 'error: ' + result.stderr.strip()[:200]
     report = json.loads(result.stdout)

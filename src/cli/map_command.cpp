@@ -14,6 +14,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <optional>
 #include <ostream>
@@ -128,6 +129,16 @@ std::string describe(const map::StopCriterion& stop) {
     return text.str();
 }
 
+// Peak resident memory of this process so far, in MiB (Linux /proc; 0 where unknown).
+double peak_memory_mib() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("VmHWM:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+    }
+    return 0.0;
+}
+
 struct Timings {
     double read = 0, simplify = 0, write = 0, total = 0;
 };
@@ -144,7 +155,7 @@ void print_json(std::ostream& out, const MapOptions& options, const map::StopCri
         << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << io::json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
         << stats.predicates.filter_decided << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
         << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
-        << ",\"total\":" << time.total << "}}\n";
+        << ",\"total\":" << time.total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";
 }
 
 void log_input(spdlog::logger& log, const std::string& input, const io::DatasetSummary& summary) {
@@ -278,6 +289,9 @@ int run_map(const MapOptions& options, Context& context) {
         }
         log->debug("predicates: {} decided by the float filter, {} by GMP", stats.predicates.filter_decided,
                    stats.predicates.gmp_fallbacks);
+        const double memory = peak_memory_mib();
+        log->debug("peak memory {:.0f} MiB: {:.0f} bytes per vertex and control point", memory,
+                   memory * 1048576.0 / static_cast<double>(std::max<std::size_t>(1, map.vertices.size() + map.control_points.size())));
         log->debug("refused removals: {} point in triangle, {} ring, {} coincident segment", stats.blocked_by_point,
                    stats.blocked_by_ring, stats.blocked_by_coincidence);
         if (stats.pinned_by_crossing > 0) {

@@ -61,6 +61,7 @@ TEST(MapCli, SimplifiesGeoPackageKeepingAttributesCrsAndOrder) {
     EXPECT_NE(result.out.find("\"vertices_in\":992"), std::string::npos) << result.out;
     EXPECT_NE(result.out.find("\"vertices_out\":199"), std::string::npos) << result.out;  // ceil(0.2 · 992)
     EXPECT_NE(result.out.find("\"control_points\":26"), std::string::npos);
+    EXPECT_NE(result.out.find("\"peak_memory_mib\":"), std::string::npos);
 
     GDALAllRegister();
     GDALDatasetUniquePtr source(GDALDataset::Open(testdata("nh_borders.gpkg").c_str(), GDAL_OF_VECTOR));
