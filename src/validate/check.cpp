@@ -390,20 +390,21 @@ CheckReport check(const CheckOptions& options) {
             for (std::size_t kind = 0; kind < 3; ++kind) {
                 const std::uint32_t here = contacts.count[kind];
                 const std::uint32_t there = other == others.end() ? 0 : other->second.count[kind];
-                const auto where = location(after_side ? after_lines : before_lines, contacts.first[kind]);
+                // Where: computed only for a pair that is reported.
+                const auto where = [&] { return location(after_side ? after_lines : before_lines, contacts.first[kind]); };
                 const std::string counts = std::to_string(after_side ? there : here) + " before, " +
                                            std::to_string(after_side ? here : there) + " after";
                 if (kind == static_cast<std::size_t>(map::ContactKind::identical)) {
                     // Shared segments: only appearing (coincidence) or vanishing (border split) matters.
                     if (here > 0 && there == 0) {
                         violation(after_side ? "new_coincidence" : "border_no_longer_shared", layer_of(pair.first),
-                                  name_of(pair.first), where, counts + " shared segments", "exact", name_of(pair.second));
+                                  name_of(pair.first), where(), counts + " shared segments", "exact", name_of(pair.second));
                     }
                 } else if (here > there) {
                     const bool crossing = kind == static_cast<std::size_t>(map::ContactKind::crossing);
                     const std::string what = after_side ? (crossing ? "new_crossing" : "new_touching")
                                                         : (crossing ? "lost_crossing" : "lost_touching");
-                    violation(what, layer_of(pair.first), name_of(pair.first), where, counts, "exact", name_of(pair.second));
+                    violation(what, layer_of(pair.first), name_of(pair.first), where(), counts, "exact", name_of(pair.second));
                 }
             }
         }
