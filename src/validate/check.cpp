@@ -15,6 +15,7 @@
 #include <array>
 #include <cmath>
 #include <optional>
+#include <tuple>
 #include <unordered_map>
 
 namespace toposimp::validate {
@@ -507,11 +508,13 @@ CheckReport check(const CheckOptions& options) {
         }
     }
 
-    // Report order: by kind as listed, then layer and feature.
+    // Report order: by kind as listed, then layer, feature, other feature and place — a total
+    // order, so the report does not depend on hash-map iteration.
     std::map<std::string, std::size_t> rank;
     for (std::size_t i = 0; i < kinds().size(); ++i) rank[kinds()[i].first] = i;
-    std::stable_sort(report.violations.begin(), report.violations.end(), [&](const Violation& a, const Violation& b) {
-        return rank[a.kind] < rank[b.kind];
+    std::sort(report.violations.begin(), report.violations.end(), [&](const Violation& a, const Violation& b) {
+        return std::tie(rank[a.kind], a.layer, a.feature, a.other, a.x, a.y, a.detail) <
+               std::tie(rank[b.kind], b.layer, b.feature, b.other, b.x, b.y, b.detail);
     });
     return report;
 }
