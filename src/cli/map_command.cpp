@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <future>
 #include <optional>
 #include <ostream>
 #include <sstream>
@@ -64,6 +65,9 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
                     "exact (default: float filter, GMP fallback), rational (all GMP, as EPLSimp), "
                     "float (naive doubles as TopoVW: UNSAFE, for experiments only)")
         ->check(CLI::IsMember({"exact", "rational", "float"}));
+    map->add_option("-j,--threads", options.threads,
+                    "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
+        ->check(CLI::NonNegativeNumber);
     map->add_flag("--giscup", options.giscup, "Input, --points and output are GIS Cup 2014 text files");
     map->add_flag("--json", options.json, "Print a JSON summary on stdout (on stderr when the output is stdout)");
     map->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
@@ -152,7 +156,10 @@ void print_json(std::ostream& out, const MapOptions& options, const map::StopCri
         << ",\"removal_goal\":" << stats.removal_goal << ",\"reached\":" << (stats.target_reached ? "true" : "false")
         << "},\"blocked\":{\"total\":" << stats.blocked() << ",\"point_in_triangle\":" << stats.blocked_by_point
         << ",\"ring\":" << stats.blocked_by_ring << ",\"coincident_segment\":" << stats.blocked_by_coincidence
-        << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << io::json_string(options.arithmetic) << ",\"predicates\":{\"filter_decided\":"
+        << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << io::json_string(options.arithmetic)
+        << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
+        << "},\"engine_seconds\":{\"index\":" << stats.seconds_index << ",\"crossings\":" << stats.seconds_crossings
+        << ",\"sweep\":" << stats.seconds_sweep << "},\"predicates\":{\"filter_decided\":"
         << stats.predicates.filter_decided << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
         << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
         << ",\"total\":" << time.total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";
@@ -197,6 +204,7 @@ int run_map(const MapOptions& options, Context& context) {
     map::SimplifyOptions simplify_options;
     simplify_options.stop = *stop;
     simplify_options.arithmetic = arithmetic_of(options.arithmetic);
+    simplify_options.threads = options.threads;
     if (options.validate && options.giscup) {
         log->error("--validate reads the output with GDAL; GIS Cup text is not a GDAL format");
         return kUsageError;
@@ -223,10 +231,24 @@ int run_map(const MapOptions& options, Context& context) {
             giscup_lines = io::read_giscup_lines(options.input, map);
             if (!options.points.empty()) map.control_points = io::read_giscup_points(options.points);
         } else {
-            dataset.emplace(io::OgrDataset::read(options.input, options.layers, map));
+            // The control points file is read on a second thread while the map is read here.
+            std::future<std::vector<Point>> points;
             if (!options.points.empty()) {
-                const std::vector<Point> points = io::read_control_points(options.points);
-                map.control_points.insert(map.control_points.end(), points.begin(), points.end());
+                points = std::async(std::launch::async, [&options] { return io::read_control_points(options.points); });
+            }
+            try {
+                dataset.emplace(io::OgrDataset::read(options.input, options.layers, map));
+            } catch (...) {
+                if (points.valid()) points.wait();
+                throw;
+            }
+            if (points.valid()) {
+                std::vector<Point> read = points.get();
+                if (map.control_points.empty()) {
+                    map.control_points = std::move(read);
+                } else {
+                    map.control_points.insert(map.control_points.end(), read.begin(), read.end());
+                }
             }
             log_input(*log, options.input, dataset->summary());
         }

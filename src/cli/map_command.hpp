@@ -27,6 +27,7 @@ struct MapOptions {
     double max_area = -1;
     bool max = false;
     std::string arithmetic = "exact";
+    int threads = 0;  // 0: all cores (or OMP_NUM_THREADS)
     bool giscup = false;
     bool json = false;
     bool overwrite = false;

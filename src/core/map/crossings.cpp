@@ -90,28 +90,50 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
     }
     if (segments.size() < 2) return contacts;
     const SegmentGrid grid(map, segments);
-    for (std::size_t cell = 0; cell < grid.cell_count(); ++cell) {
-        grid.for_each_in_cell(cell, [&](std::size_t k, std::uint32_t s) {
-            const Box sb = grid.box_of(s);
-            for (std::size_t j = k + 1; j < grid.cell_end(cell); ++j) {
-                const std::uint32_t t = grid.entry(j);
-                const Box tb = grid.box_of(t);
-                // Test each pair once: in the cell holding the low corner of the boxes' overlap.
-                const double x = std::max(sb.min_x, tb.min_x), y = std::max(sb.min_y, tb.min_y);
-                if (x > std::min(sb.max_x, tb.max_x) || y > std::min(sb.max_y, tb.max_y)) continue;
-                if (grid.cell_of(x, y) != cell) continue;
-                const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
-                if (!exact::improper_contact(p, q, r, u, arithmetic, stats)) continue;
-                ContactKind kind = ContactKind::touching;
-                if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
-                    kind = ContactKind::identical;
-                } else if (exact::proper_crossing(p, q, r, u, arithmetic, stats)) {
-                    kind = ContactKind::crossing;
+    const auto cells = static_cast<std::ptrdiff_t>(grid.cell_count());
+#pragma omp parallel if (segments.size() >= 1 << 14)
+    {
+        std::vector<SegmentContact> found;
+        exact::PredicateStats counted;
+        std::vector<std::pair<Box, std::uint32_t>> here;  // the cell's segments by left edge
+#pragma omp for schedule(dynamic, 256) nowait
+        for (std::ptrdiff_t cell = 0; cell < cells; ++cell) {
+            here.clear();
+            grid.for_each_in_cell(static_cast<std::size_t>(cell), [&](std::size_t, std::uint32_t s) {
+                here.emplace_back(grid.box_of(s), s);
+            });
+            if (here.size() < 2) continue;
+            std::sort(here.begin(), here.end(), [](const auto& a, const auto& b) {
+                return a.first.min_x < b.first.min_x || (a.first.min_x == b.first.min_x && a.second < b.second);
+            });
+            for (std::size_t i = 0; i < here.size(); ++i) {
+                const auto& [sb, s] = here[i];
+                // Only boxes starting before this one ends can overlap it in x.
+                for (std::size_t j = i + 1; j < here.size() && here[j].first.min_x <= sb.max_x; ++j) {
+                    const auto& [tb, t] = here[j];
+                    // Test each pair once: in the cell holding the low corner of the boxes' overlap.
+                    const double x = std::max(sb.min_x, tb.min_x), y = std::max(sb.min_y, tb.min_y);
+                    if (x > std::min(sb.max_x, tb.max_x) || y > std::min(sb.max_y, tb.max_y)) continue;
+                    if (grid.cell_of(x, y) != static_cast<std::size_t>(cell)) continue;
+                    const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
+                    if (!exact::improper_contact(p, q, r, u, arithmetic, counted)) continue;
+                    ContactKind kind = ContactKind::touching;
+                    if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
+                        kind = ContactKind::identical;
+                    } else if (exact::proper_crossing(p, q, r, u, arithmetic, counted)) {
+                        kind = ContactKind::crossing;
+                    }
+                    found.push_back({std::min(s, t), std::max(s, t), kind});
                 }
-                contacts.push_back({std::min(s, t), std::max(s, t), kind});
             }
-        });
+        }
+#pragma omp critical(toposimp_segment_contacts)
+        {
+            contacts.insert(contacts.end(), found.begin(), found.end());
+            stats += counted;
+        }
     }
+    // Sorted, so the result does not depend on which thread found what.
     std::sort(contacts.begin(), contacts.end(), [](const SegmentContact& a, const SegmentContact& b) {
         return a.s < b.s || (a.s == b.s && a.t < b.t);
     });

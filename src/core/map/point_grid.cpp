@@ -5,22 +5,26 @@
 
 namespace toposimp::map {
 
-PointGrid::PointGrid(std::span<const Point> points, double points_per_cell) {
-    if (points.empty()) {
+PointGrid::PointGrid(std::span<const Point> removable, std::span<const Point> fixed, double points_per_cell) {
+    const std::size_t r = removable.size(), n = r + fixed.size();
+    auto point = [&](std::size_t i) { return i < r ? removable[i] : fixed[i - r]; };
+    if (n == 0) {
         cell_start_.assign(2, 0);
         return;
     }
-    Box bounds{points[0].x, points[0].y, points[0].x, points[0].y};
-    for (const Point& p : points) {
-        bounds.min_x = std::min(bounds.min_x, p.x);
-        bounds.min_y = std::min(bounds.min_y, p.y);
-        bounds.max_x = std::max(bounds.max_x, p.x);
-        bounds.max_y = std::max(bounds.max_y, p.y);
+    double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+#pragma omp parallel for reduction(min : min_x, min_y) reduction(max : max_x, max_y) schedule(static) if (n >= 1 << 14)
+    for (std::size_t i = 0; i < n; ++i) {
+        const Point p = point(i);
+        min_x = std::min(min_x, p.x);
+        min_y = std::min(min_y, p.y);
+        max_x = std::max(max_x, p.x);
+        max_y = std::max(max_y, p.y);
     }
-    const double width = bounds.max_x - bounds.min_x;
-    const double height = bounds.max_y - bounds.min_y;
+    const double width = max_x - min_x;
+    const double height = max_y - min_y;
     // Square-ish cells, total count ≈ n / points_per_cell, each side capped to keep indices small.
-    const double cells = std::max(1.0, static_cast<double>(points.size()) / points_per_cell);
+    const double cells = std::max(1.0, static_cast<double>(n) / points_per_cell);
     double columns = 1, rows = 1;
     if (width > 0 && height > 0 && std::isfinite(width / height)) {
         const double aspect = width / height;
@@ -34,28 +38,31 @@ PointGrid::PointGrid(std::span<const Point> points, double points_per_cell) {
     constexpr double kMaxSide = 1 << 15;
     columns_ = static_cast<std::uint32_t>(std::clamp(std::floor(columns), 1.0, kMaxSide));
     rows_ = static_cast<std::uint32_t>(std::clamp(std::floor(rows), 1.0, kMaxSide));
-    origin_x_ = bounds.min_x;
-    origin_y_ = bounds.min_y;
+    origin_x_ = min_x;
+    origin_y_ = min_y;
     // A width that overflows to infinity gives scale 0: one column, still correct.
     scale_x_ = width > 0 ? columns_ / width : 0.0;
     scale_y_ = height > 0 ? rows_ / height : 0.0;
 
     const std::size_t cell_count = std::size_t{columns_} * rows_;
-    std::vector<std::uint32_t> cell_of_point(points.size());
-    cell_start_.assign(cell_count + 1, 0);
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        const std::uint32_t cell = row(points[i].y) * columns_ + column(points[i].x);
-        cell_of_point[i] = cell;
-        ++cell_start_[cell + 1];
+    std::vector<std::uint32_t> cell_of_point(n);
+#pragma omp parallel for schedule(static) if (n >= 1 << 14)
+    for (std::size_t i = 0; i < n; ++i) {
+        const Point p = point(i);
+        cell_of_point[i] = row(p.y) * columns_ + column(p.x);
     }
+    cell_start_.assign(cell_count + 1, 0);
+    for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_point[i] + 1];
     for (std::size_t c = 0; c < cell_count; ++c) cell_start_[c + 1] += cell_start_[c];
-    entries_.resize(points.size());
-    slot_.resize(points.size());
+    points_.resize(n);
+    ids_.resize(n);
+    slot_.resize(r);
     std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < points.size(); ++i) {
+    for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t slot = fill[cell_of_point[i]]++;
-        entries_[slot] = {points[i], static_cast<std::uint32_t>(i)};
-        slot_[i] = slot;
+        points_[slot] = point(i);
+        ids_[slot] = static_cast<std::uint32_t>(i);
+        if (i < r) slot_[i] = slot;
     }
 }
 

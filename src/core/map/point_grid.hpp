@@ -4,6 +4,8 @@
 // Cell lookup is a monotone function of each coordinate, so every point inside a query box is
 // in one of the cells the box's corners map to: the grid never misses a point, whatever the
 // rounding in the cell computation. Exactness of the final answer is the caller's predicate.
+// Monotonicity also makes the set of locations mapping to a block of cells convex (a product of
+// two intervals), which the parallel simplifier relies on.
 #pragma once
 
 #include "core/geometry.hpp"
@@ -18,8 +20,10 @@ class PointGrid {
 public:
     static constexpr std::uint32_t kRemoved = 0xffffffffu;
 
-    // Indexes points[0..n); about `points_per_cell` points share a cell on average.
-    PointGrid(std::span<const Point> points, double points_per_cell = 2.0);
+    // Indexes `removable` as ids [0, r) and `fixed` as ids [r, r + f); only removable points can
+    // be taken out again. About `points_per_cell` points share a cell on average.
+    explicit PointGrid(std::span<const Point> removable, std::span<const Point> fixed = {},
+                       double points_per_cell = 2.0);
 
     // Calls visit(id, point) for each point still in the cells overlapping `box` (a superset of
     // the points inside it) until visit returns true; returns whether it did. Coordinates are
@@ -30,38 +34,46 @@ public:
         const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
         for (std::uint32_t y = y0; y <= y1; ++y) {
             const std::size_t row_start = std::size_t{y} * columns_;
-            const Entry* entry = entries_.data() + cell_start_[row_start + x0];
-            const Entry* end = entries_.data() + cell_start_[row_start + x1 + 1];
-            for (; entry != end; ++entry) {
-                if (entry->id != kRemoved && visit(entry->id, entry->point)) return true;
+            const std::size_t end = cell_start_[row_start + x1 + 1];
+            for (std::size_t k = cell_start_[row_start + x0]; k != end; ++k) {
+                if (ids_[k] != kRemoved && visit(ids_[k], points_[k])) return true;
             }
         }
         return false;
     }
 
-    // Takes point `id` out of the grid.
-    void remove(std::uint32_t id) { entries_[slot_[id]].id = kRemoved; }
+    // Takes removable point `id` out of the grid.
+    void remove(std::uint32_t id) { ids_[slot_[id]] = kRemoved; }
+
+    std::uint32_t columns() const { return columns_; }
+    std::uint32_t rows() const { return rows_; }
+    std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
+    std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
+
+    // The ids and points of cell (column x, row y), in id order (removed ones included as kRemoved).
+    std::span<const std::uint32_t> cell_ids(std::uint32_t x, std::uint32_t y) const {
+        const std::size_t cell = std::size_t{y} * columns_ + x;
+        return {ids_.data() + cell_start_[cell], ids_.data() + cell_start_[cell + 1]};
+    }
+    std::span<const Point> cell_points(std::uint32_t x, std::uint32_t y) const {
+        const std::size_t cell = std::size_t{y} * columns_ + x;
+        return {points_.data() + cell_start_[cell], points_.data() + cell_start_[cell + 1]};
+    }
 
 private:
-    struct Entry {
-        Point point;
-        std::uint32_t id;
-    };
-
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;
         if (!(t >= 0.0)) t = 0.0;  // also catches NaN from 0·∞ in a zero-width grid
         if (t >= static_cast<double>(count)) return count - 1;
         return static_cast<std::uint32_t>(t);
     }
-    std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
-    std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
 
     double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
     std::uint32_t columns_ = 1, rows_ = 1;
     std::vector<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
-    std::vector<Entry> entries_;
-    std::vector<std::uint32_t> slot_;        // per id: its entry
+    std::vector<Point> points_;            // in cell order
+    std::vector<std::uint32_t> ids_;       // parallel to points_
+    std::vector<std::uint32_t> slot_;      // per removable id: its entry
 };
 
 }  // namespace toposimp::map

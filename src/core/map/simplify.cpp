@@ -1,17 +1,20 @@
 #include "core/map/simplify.hpp"
 
 #include "core/map/crossings.hpp"
-#include "core/map/indexed_heap.hpp"
 #include "core/map/location_key.hpp"
 #include "core/map/point_grid.hpp"
 
 #include <gmpxx.h>
+#include <omp.h>
 
 #include <algorithm>
+#include <atomic>
+#include <bit>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <unordered_map>
+#include <span>
 
 namespace toposimp::map {
 
@@ -35,25 +38,73 @@ namespace {
 
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 
-// An undirected segment between two locations.
-struct SegmentKey {
-    LocationKey lo, hi;
-    SegmentKey(Point a, Point b) : lo(a), hi(b) {
-        if (hi < lo) std::swap(lo, hi);
-    }
-    friend bool operator==(const SegmentKey&, const SegmentKey&) = default;
+// Level-0 blocks are at least 2^kMinShift × 2^kMinShift point-grid cells and at most
+// kMaxBlocksPerSide blocks span the grid (the dissertation started from 256² cells).
+constexpr unsigned kMinShift = 3;
+constexpr std::uint32_t kMaxBlocksPerSide = 256;
+
+// whole_level_ of an open chain.
+constexpr std::uint8_t kOpen = 0xff;
+
+// Below this many items a loop runs on one thread: waking the others would cost more (and
+// spinning threads hurt when several toposimp runs share the cores).
+constexpr std::size_t kParallelMin = 1 << 14;
+
+// What a vertex is doing. Only `queued` vertices are candidates for removal.
+enum class State : std::uint8_t {
+    fixed,    // a chain end or a pinned vertex: never removed
+    queued,   // a candidate
+    waiting,  // refused because a vertex lies in its triangle; queued again when that one goes
+    refused,  // refused otherwise; queued again when its triangle changes
+    removed,
 };
 
-struct SegmentKeyHash {
-    std::size_t operator()(const SegmentKey& k) const { return hash_words({k.lo.x, k.lo.y, k.hi.x, k.hi.y}); }
+// A vertex with its effective area; ordered by area, ties by id: a total order, so the order
+// in which a queue hands out vertices depends only on which vertices it holds.
+struct Ranked {
+    double key;
+    std::uint32_t id;
 };
+
+bool operator<(Ranked a, Ranked b) { return a.key < b.key || (a.key == b.key && a.id < b.id); }
 
 double effective_area(Point a, Point b, Point c) {
-    // Ranking only (Visvalingam–Whyatt); no topological decision depends on this value.
-    return 0.5 * std::fabs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+    // Ranking only (Visvalingam–Whyatt); no topological decision depends on this value. NaN
+    // (from overflowing coordinates) ranks last, so the order stays total.
+    const double area = 0.5 * std::fabs((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+    return area >= 0.0 ? area : std::numeric_limits<double>::infinity();
 }
 
-enum class Verdict { remove, blocked_by_point, blocked_by_ring, blocked_by_coincidence };
+using Clock = std::chrono::steady_clock;
+
+// Seconds since `start`, which moves on to now.
+double lap(Clock::time_point& start) {
+    const Clock::time_point now = Clock::now();
+    const double seconds = std::chrono::duration<double>(now - start).count();
+    start = now;
+    return seconds;
+}
+
+enum class Verdict { remove, blocked_by_point, blocked_by_ring, blocked_by_coincidence, later };
+
+// What one thread accumulates while it works through blocks.
+struct Worker {
+    std::vector<Ranked> queue;                       // the block's queue: a binary min-heap
+    std::vector<std::vector<std::uint32_t>> later;   // per level: vertices to queue there
+    SimplifyStats stats;
+    std::uint64_t reported = 0;  // removals already added to the progress count
+
+    void push(Ranked entry) {
+        queue.push_back(entry);
+        std::push_heap(queue.begin(), queue.end(), [](Ranked a, Ranked b) { return b < a; });
+    }
+    Ranked pop() {
+        std::pop_heap(queue.begin(), queue.end(), [](Ranked a, Ranked b) { return b < a; });
+        const Ranked top = queue.back();
+        queue.pop_back();
+        return top;
+    }
+};
 
 class Simplifier {
 public:
@@ -61,36 +112,95 @@ public:
         : map_(map),
           options_(options),
           vertex_count_(static_cast<std::uint32_t>(map.vertices.size())),
-          heap_(map.vertices.size()) {}
+          threads_(options.threads > 0 ? options.threads : omp_get_max_threads()) {}
 
     SimplifyResult run() {
-        build_chains();
+        auto start = Clock::now();
         index_points();
-        find_shared_locations();
+        set_up_levels();
+        build_chains();
+        link_locations();
+        stats_.seconds_index = lap(start);
         pin_crossings();
-        rank_vertices();
+        stats_.seconds_crossings = lap(start);
         simplify_vertices();
+        stats_.seconds_sweep = lap(start);
         return finish();
     }
 
 private:
-    // Linked lists over the vertices, ring bookkeeping and the current segments at shared
-    // locations.
+    // ---- set-up --------------------------------------------------------------------------
+
+    // One grid over vertices (ids [0, n), removable) and control points (ids [n, n+m)).
+    void index_points() { grid_.emplace(map_.vertices, map_.control_points); }
+
+    // Blocks of 2^shift_ × 2^shift_ grid cells form level 0; level l groups 2^l × 2^l of them.
+    void set_up_levels() {
+        const std::uint32_t side = std::max(grid_->columns(), grid_->rows());
+        shift_ = kMinShift;
+        while (((side - 1) >> shift_) >= kMaxBlocksPerSide) ++shift_;
+        block_columns_ = ((grid_->columns() - 1) >> shift_) + 1;
+        block_rows_ = ((grid_->rows() - 1) >> shift_) + 1;
+        levels_ = static_cast<unsigned>(std::max(std::bit_width(block_columns_ - 1), std::bit_width(block_rows_ - 1))) + 1;
+        stats_.levels = levels_;
+    }
+
+    std::uint32_t block_column(Point p) const { return grid_->column(p.x) >> shift_; }
+    std::uint32_t block_row(Point p) const { return grid_->row(p.y) >> shift_; }
+
+    // The finest level at which two locations fall in one block.
+    unsigned shared_level(Point a, Point b) const {
+        return static_cast<unsigned>(std::max(std::bit_width(block_column(a) ^ block_column(b)),
+                                              std::bit_width(block_row(a) ^ block_row(b))));
+    }
+
+    // The level an interior vertex is removable at, given its current neighbours. Removals at a
+    // level only bring in neighbours from the same block, so it never drops below the level
+    // being processed once reached, and a vertex above it stays above it.
+    unsigned level_of(std::uint32_t v) const {
+        const Point b = map_.vertices[v];
+        return std::max(shared_level(b, map_.vertices[prev_[v]]), shared_level(b, map_.vertices[next_[v]]));
+    }
+
+    std::uint32_t block_at(Point p, unsigned level) const {
+        const std::uint32_t columns = ((block_columns_ - 1) >> level) + 1;
+        return (block_row(p) >> level) * columns + (block_column(p) >> level);
+    }
+
+    std::uint32_t blocks_at(unsigned level) const {
+        return (((block_columns_ - 1) >> level) + 1) * (((block_rows_ - 1) >> level) + 1);
+    }
+
+    // Linked lists over the vertices and ring bookkeeping: distinct locations, and the level
+    // from which the whole ring lies in one block.
     void build_chains() {
         prev_.assign(vertex_count_, kNone);
         next_.assign(vertex_count_, kNone);
-        alive_.assign(vertex_count_, 1);
         chain_of_.assign(vertex_count_, 0);
-        distinct_.assign(map_.chains.size(), 0);
-        orientation_.assign(map_.chains.size(), 2);  // 2: not computed yet
-        for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
+        const auto chains = static_cast<std::uint32_t>(map_.chains.size());
+        distinct_.assign(chains, 0);
+        orientation_.assign(chains, 2);  // 2: not computed yet
+        whole_level_.assign(chains, kOpen);
+        ring_clear_.assign(chains, 0);
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= kParallelMin)
+        for (std::uint32_t c = 0; c < chains; ++c) {
             const Chain& chain = map_.chains[c];
+            std::uint32_t min_column = kNone, max_column = 0, min_row = kNone, max_row = 0;
             for (std::uint32_t v = chain.first; v <= chain.last; ++v) {
                 chain_of_[v] = c;
                 if (v > chain.first) prev_[v] = v - 1;
                 if (v < chain.last) next_[v] = v + 1;
+                const std::uint32_t column = block_column(map_.vertices[v]), row = block_row(map_.vertices[v]);
+                min_column = std::min(min_column, column);
+                max_column = std::max(max_column, column);
+                min_row = std::min(min_row, row);
+                max_row = std::max(max_row, row);
             }
-            if (is_closed(c)) distinct_[c] = count_distinct_locations(chain);
+            if (is_closed(c)) {
+                distinct_[c] = count_distinct_locations(chain);
+                whole_level_[c] = static_cast<std::uint8_t>(
+                    std::max(std::bit_width(min_column ^ max_column), std::bit_width(min_row ^ max_row)));
+            }
         }
     }
 
@@ -107,153 +217,261 @@ private:
         return static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
     }
 
-    // One grid over vertices and control points: ids [0, n) are vertices, [n, n+m) control points.
-    void index_points() {
-        std::vector<Point> points;
-        points.reserve(map_.vertices.size() + map_.control_points.size());
-        points.insert(points.end(), map_.vertices.begin(), map_.vertices.end());
-        points.insert(points.end(), map_.control_points.begin(), map_.control_points.end());
-        grid_.emplace(points);
-    }
-
-    // A location held by two or more vertices (a node, a ring's closing vertex, a duplicate, a
-    // touch): only segments ending at such locations can ever coincide with another segment.
-    void find_shared_locations() {
-        shared_.assign(vertex_count_, 0);
-        std::vector<std::uint32_t> order(vertex_count_);
-        for (std::uint32_t v = 0; v < vertex_count_; ++v) order[v] = v;
-        std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-            const LocationKey ka(map_.vertices[a]), kb(map_.vertices[b]);
-            return ka < kb || (ka == kb && a < b);
-        });
-        for (std::size_t i = 1; i < order.size(); ++i) {
-            if (same_location(map_.vertices[order[i - 1]], map_.vertices[order[i]])) {
-                shared_[order[i - 1]] = shared_[order[i]] = 1;
+    // Vertices at one location form a circular list (twin_), found cell by cell in the grid:
+    // only segments ending at a location held by two or more vertices (a node, a ring's closing
+    // vertex, a duplicate, a touch) can ever coincide with another segment.
+    void link_locations() {
+        twin_.resize(vertex_count_);
+        const std::uint32_t columns = grid_->columns(), rows = grid_->rows();
+#pragma omp parallel num_threads(threads_) if (vertex_count_ >= kParallelMin)
+        {
+            std::vector<std::pair<LocationKey, std::uint32_t>> here;
+#pragma omp for schedule(dynamic, 16)
+            for (std::uint32_t y = 0; y < rows; ++y) {
+                for (std::uint32_t x = 0; x < columns; ++x) {
+                    const auto ids = grid_->cell_ids(x, y);
+                    const auto points = grid_->cell_points(x, y);
+                    here.clear();
+                    for (std::size_t k = 0; k < ids.size(); ++k) {
+                        if (ids[k] < vertex_count_) here.emplace_back(LocationKey(points[k]), ids[k]);
+                    }
+                    std::sort(here.begin(), here.end());
+                    for (std::size_t i = 0; i < here.size();) {
+                        std::size_t j = i + 1;
+                        while (j < here.size() && here[j].first == here[i].first) ++j;
+                        for (std::size_t k = i; k < j; ++k) twin_[here[k].second] = here[k + 1 < j ? k + 1 : i].second;
+                        i = j;
+                    }
+                }
             }
         }
-        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (next_[v] != kNone) add_segment(v, next_[v]);
-        }
     }
 
-    bool tracks_segment(std::uint32_t u, std::uint32_t w) const {
-        return (shared_[u] || shared_[w]) && !same_location(map_.vertices[u], map_.vertices[w]);
-    }
-
-    void add_segment(std::uint32_t u, std::uint32_t w) {
-        if (tracks_segment(u, w)) ++segments_[SegmentKey(map_.vertices[u], map_.vertices[w])];
-    }
-
-    void drop_segment(std::uint32_t u, std::uint32_t w) {
-        if (!tracks_segment(u, w)) return;
-        const auto it = segments_.find(SegmentKey(map_.vertices[u], map_.vertices[w]));
-        if (--it->second == 0) segments_.erase(it);
-    }
+    bool is_shared(std::uint32_t v) const { return twin_[v] != v; }
 
     // Vertices at either end of a segment that crosses or touches another one improperly in the
     // input are never removed (see crossings.hpp for why that is enough); nor are frozen chains'.
     void pin_crossings() {
         const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates);
-        pinned_.assign(vertex_count_, 0);
+        state_.assign(vertex_count_, State::fixed);
+        std::uint64_t pinned_count = 0;
+#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : pinned_count) if (vertex_count_ >= kParallelMin)
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (improper[v]) pinned_[v] = pinned_[next_[v]] = 1;
-            if (map_.is_frozen(chain_of_[v])) pinned_[v] = 1;
+            if (prev_[v] == kNone || next_[v] == kNone) continue;
+            const bool pinned = improper[v] || improper[prev_[v]] || map_.is_frozen(chain_of_[v]);
+            if (pinned) {
+                ++pinned_count;
+            } else {
+                state_[v] = State::queued;
+            }
         }
-        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (pinned_[v] && is_interior(v)) ++stats_.pinned_by_crossing;
-        }
+        stats_.pinned_by_crossing = pinned_count;
+        blocked_head_.assign(vertex_count_, kNone);
+        blocked_on_.assign(vertex_count_, kNone);
+        blocked_prev_.assign(vertex_count_, kNone);
+        blocked_next_.assign(vertex_count_, kNone);
     }
-
-    bool is_interior(std::uint32_t v) const { return prev_[v] != kNone && next_[v] != kNone; }
 
     double area_of(std::uint32_t v) const {
         return effective_area(map_.vertices[prev_[v]], map_.vertices[v], map_.vertices[next_[v]]);
     }
 
-    void rank_vertices() {
-        blocked_head_.assign(vertex_count_, kNone);
-        blocked_on_.assign(vertex_count_, kNone);
-        blocked_prev_.assign(vertex_count_, kNone);
-        blocked_next_.assign(vertex_count_, kNone);
-        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (is_interior(v) && !pinned_[v]) heap_.set(v, area_of(v));
-        }
-        queued_at_start_ = heap_.size();
-    }
+    // ---- the sweep -----------------------------------------------------------------------
 
-    // Remove vertices smallest effective area first until the stop criterion holds. A vertex
-    // refused because some vertex lies in its triangle waits on that vertex: when it goes, the
-    // refused one is queued again. Any vertex whose triangle changes is re-ranked.
     void simplify_vertices() {
         const std::uint64_t goal = removal_goal(options_.stop, vertex_count_);
-        const bool by_area = options_.stop.target == Target::max_area;
-        stats_.removal_goal = by_area || options_.stop.target == Target::max ? 0 : goal;
-        // Work estimate for progress: the removals asked for, or every queued vertex.
-        const double work = static_cast<double>(std::min<std::uint64_t>(goal, heap_size_at_start()));
-        std::uint64_t pops = 0;
-        while (!heap_.empty() && stats_.removed < goal) {
-            if (by_area && heap_.top_key() > options_.stop.value) break;
-            if (options_.progress && (++pops & 0x3fff) == 0 && work > 0) {
-                options_.progress(std::min(1.0, static_cast<double>(stats_.removed) / work));
-            }
-            const std::uint32_t v = heap_.pop();
-            std::uint32_t blocker = kNone;
-            switch (judge(v, blocker)) {
-                case Verdict::remove: remove(v); break;
-                case Verdict::blocked_by_point:
-                    ++stats_.blocked_by_point;
-                    if (blocker < vertex_count_) wait_on(v, blocker);
-                    break;
-                case Verdict::blocked_by_ring: ++stats_.blocked_by_ring; break;
-                case Verdict::blocked_by_coincidence: ++stats_.blocked_by_coincidence; break;
-            }
+        const Target target = options_.stop.target;
+        marked_.assign(vertex_count_, 0);
+        later_.assign(levels_ + 1, {});
+        if (target == Target::max || target == Target::max_area) {
+            use_marks_ = false;
+            bound_ = {target == Target::max ? std::numeric_limits<double>::infinity() : options_.stop.value, kNone};
+            work_ = static_cast<double>(vertex_count_);
+            schedule_queued();
+            sweep();
+            return;
         }
-        if (!by_area && options_.stop.target != Target::max) stats_.target_reached = stats_.removed >= goal;
+        stats_.removal_goal = goal;
+        work_ = static_cast<double>(goal);
+        use_marks_ = true;
+        while (stats_.removed < goal && mark_smallest(goal - stats_.removed)) {
+            ++stats_.rounds;
+            schedule_queued();
+            sweep();
+        }
+        stats_.target_reached = stats_.removed >= goal;
     }
 
-    std::uint64_t heap_size_at_start() const { return queued_at_start_; }
+    // Marks the `budget` queued vertices of smallest area (all if fewer) and sets the round's
+    // threshold to the largest of them. Returns false if nothing is queued.
+    bool mark_smallest(std::uint64_t budget) {
+        std::vector<Ranked>& pool = pool_;  // kept between rounds: no fresh pages each time
+        pool.clear();
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            marked_[v] = 0;
+            if (state_[v] == State::queued) pool.push_back({area_of(v), v});
+        }
+        if (pool.empty()) return false;
+        if (budget < pool.size()) {
+            std::nth_element(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(budget - 1), pool.end());
+            pool.resize(budget);
+        }
+        bound_ = *std::max_element(pool.begin(), pool.end());
+        for (const Ranked& entry : pool) marked_[entry.id] = 1;
+        return true;
+    }
 
-    Verdict judge(std::uint32_t v, std::uint32_t& blocker) {
+    // Puts every queued (and, in rounds, marked) vertex on its level's list.
+    void schedule_queued() {
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            if (state_[v] == State::queued && (!use_marks_ || marked_[v])) later_[level_of(v)].push_back(v);
+        }
+    }
+
+    void sweep() {
+        for (unsigned level = 0; level < levels_; ++level) process_level(level);
+    }
+
+    void process_level(unsigned level) {
+        decide_split_rings(level);
+        // The candidates of this level, grouped by block (counting sort).
+        std::vector<std::uint32_t>& candidates = later_[level];
+        const std::uint32_t blocks = blocks_at(level);
+        std::vector<std::uint32_t>& start = start_;
+        std::vector<std::uint32_t>& block_of = block_of_;
+        start.assign(std::size_t{blocks} + 1, 0);
+        block_of.resize(candidates.size());
+        std::size_t kept = 0;
+        for (const std::uint32_t v : candidates) {
+            if (state_[v] != State::queued || level_of(v) > level) continue;  // else on a later list
+            candidates[kept] = v;
+            block_of[kept] = block_at(map_.vertices[v], level);
+            ++start[block_of[kept] + 1];
+            ++kept;
+        }
+        for (std::uint32_t b = 0; b < blocks; ++b) start[b + 1] += start[b];
+        std::vector<std::uint32_t>& grouped = grouped_;
+        grouped.resize(kept);
+        {
+            std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+            for (std::size_t i = 0; i < kept; ++i) grouped[fill[block_of[i]]++] = candidates[i];
+        }
+        candidates.clear();
+        std::vector<std::uint32_t> busy;  // blocks with candidates
+        for (std::uint32_t b = 0; b < blocks; ++b) {
+            if (start[b + 1] > start[b]) busy.push_back(b);
+        }
+
+        std::vector<Worker> workers(static_cast<std::size_t>(threads_));
+        for (Worker& worker : workers) worker.later.assign(levels_ + 1, {});
+        const auto busy_count = static_cast<std::ptrdiff_t>(busy.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads_) if (kept >= kParallelMin && busy.size() > 1)
+        for (std::ptrdiff_t i = 0; i < busy_count; ++i) {
+            const std::uint32_t b = busy[static_cast<std::size_t>(i)];
+            Worker& worker = workers[static_cast<std::size_t>(omp_get_thread_num())];
+            process_block(level, {grouped.data() + start[b], grouped.data() + start[b + 1]}, worker);
+        }
+        for (Worker& worker : workers) {
+            for (unsigned l = level + 1; l < levels_; ++l) {
+                later_[l].insert(later_[l].end(), worker.later[l].begin(), worker.later[l].end());
+            }
+            add(stats_, worker.stats);
+        }
+        progress_.store(0, std::memory_order_relaxed);
+        report_progress();
+    }
+
+    // For each ring not within one block at this level: can its fixed vertices alone keep it
+    // at 4 or more distinct locations? Then the ring rule cannot bite here.
+    void decide_split_rings(unsigned level) {
+        const auto chains = static_cast<std::uint32_t>(map_.chains.size());
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= kParallelMin)
+        for (std::uint32_t c = 0; c < chains; ++c) {
+            if (whole_level_[c] == kOpen || whole_level_[c] <= level) continue;
+            Point found[4];
+            int count = 0;
+            for (std::uint32_t u = map_.chains[c].first; u != kNone && count < 4; u = next_[u]) {
+                const bool fixed = state_[u] == State::fixed || level_of(u) > level;
+                if (!fixed) continue;
+                const Point q = map_.vertices[u];
+                bool seen = false;
+                for (int k = 0; k < count; ++k) seen = seen || same_location(found[k], q);
+                if (!seen) found[count++] = q;
+            }
+            ring_clear_[c] = count >= 4;
+        }
+    }
+
+    // One block: remove its queued vertices smallest area first, up to the round's threshold.
+    void process_block(unsigned level, std::span<const std::uint32_t> candidates, Worker& worker) {
+        worker.queue.clear();
+        for (const std::uint32_t v : candidates) worker.queue.push_back({area_of(v), v});
+        std::make_heap(worker.queue.begin(), worker.queue.end(), [](Ranked a, Ranked b) { return b < a; });
+        std::uint64_t pops = 0;
+        while (!worker.queue.empty() && !(bound_ < worker.queue.front())) {
+            const Ranked top = worker.pop();
+            const std::uint32_t v = top.id;
+            // Stale entries: the vertex went, waits, or was queued again with another area.
+            if (state_[v] != State::queued || area_of(v) != top.key) continue;
+            if ((++pops & 0xfff) == 0) {
+                progress_.fetch_add(worker.stats.removed - worker.reported, std::memory_order_relaxed);
+                worker.reported = worker.stats.removed;
+                report_progress();
+            }
+            std::uint32_t blocker = kNone;
+            switch (judge(v, level, blocker, worker.stats)) {
+                case Verdict::remove: remove(v, level, worker); break;
+                case Verdict::blocked_by_point:
+                    ++worker.stats.blocked_by_point;
+                    if (blocker < vertex_count_) {
+                        wait_on(v, blocker);
+                    } else {
+                        state_[v] = State::refused;
+                    }
+                    break;
+                case Verdict::blocked_by_ring:
+                    ++worker.stats.blocked_by_ring;
+                    state_[v] = State::refused;
+                    break;
+                case Verdict::blocked_by_coincidence:
+                    ++worker.stats.blocked_by_coincidence;
+                    state_[v] = State::refused;
+                    break;
+                case Verdict::later: worker.later[level + 1].push_back(v); break;
+            }
+        }
+        worker.queue.clear();
+    }
+
+    Verdict judge(std::uint32_t v, unsigned level, std::uint32_t& blocker, SimplifyStats& stats) {
         const std::uint32_t p = prev_[v], n = next_[v];
         const Point a = map_.vertices[p], b = map_.vertices[v], c = map_.vertices[n];
-        if (!keeps_ring_valid(v, a, b, c)) return Verdict::blocked_by_ring;
+        if (const auto ring = ring_verdict(v, level, a, b, c, stats); ring != Verdict::remove) return ring;
 
         const Box box = triangle_box(a, b, c);
         std::optional<exact::ClosedTriangle> triangle;  // prepared at the first candidate point
         const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
             if (id == v || !box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
-            if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats_.predicates);
+            if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
             if (!triangle->contains(q)) return false;
             blocker = id;
             return true;
         });
         if (hit) return Verdict::blocked_by_point;
 
-        if (tracks_segment(p, n) && coincides_with_other_segment(p, v, n)) return Verdict::blocked_by_coincidence;
+        if (coincides_with_other_segment(p, v, n)) return Verdict::blocked_by_coincidence;
         return Verdict::remove;
-    }
-
-    // Rule 3: would the new segment p–n lie on another live segment with the same end locations?
-    // v's own segments p–v and v–n disappear with it and do not count (they can have the same
-    // locations when v duplicates a neighbour).
-    bool coincides_with_other_segment(std::uint32_t p, std::uint32_t v, std::uint32_t n) const {
-        const SegmentKey key(map_.vertices[p], map_.vertices[n]);
-        const auto it = segments_.find(key);
-        if (it == segments_.end()) return false;
-        std::uint32_t own = 0;
-        if (tracks_segment(p, v) && SegmentKey(map_.vertices[p], map_.vertices[v]) == key) ++own;
-        if (tracks_segment(v, n) && SegmentKey(map_.vertices[v], map_.vertices[n]) == key) ++own;
-        return it->second > own;
     }
 
     // Rule 2: a closed chain keeps ≥ 3 distinct locations, and its last triangle keeps the
     // input ring's orientation (so non-zero area).
-    bool keeps_ring_valid(std::uint32_t v, Point a, Point b, Point c) {
+    Verdict ring_verdict(std::uint32_t v, unsigned level, Point a, Point b, Point c, SimplifyStats& stats) {
         const std::uint32_t chain = chain_of_[v];
-        if (distinct_[chain] == 0) return true;  // open chain
-        if (same_location(b, a) || same_location(b, c)) return true;  // a duplicate: no location lost
-        if (distinct_[chain] <= 3) return false;
-        if (distinct_[chain] > 4) return true;
+        if (whole_level_[chain] == kOpen) return Verdict::remove;  // open chain
+        if (same_location(b, a) || same_location(b, c)) return Verdict::remove;  // a duplicate: no location lost
+        if (whole_level_[chain] > level) return ring_clear_[chain] ? Verdict::remove : Verdict::later;
+        if (distinct_[chain] <= 3) return Verdict::blocked_by_ring;
+        if (distinct_[chain] > 4) return Verdict::remove;
         Point corners[3];
         int found = 0;
         for (std::uint32_t u = map_.chains[chain].first; u != kNone && found < 3; u = next_[u]) {
@@ -263,11 +481,11 @@ private:
             for (int k = 0; k < found; ++k) seen = seen || same_location(corners[k], q);
             if (!seen) corners[found++] = q;
         }
-        if (found < 3) return false;
+        if (found < 3) return Verdict::blocked_by_ring;
         const int turn = options_.arithmetic == exact::Arithmetic::floating
                              ? orient_float(corners[0], corners[1], corners[2])
-                             : exact::orient2d(corners[0], corners[1], corners[2], stats_.predicates);
-        return turn != 0 && turn == ring_orientation(chain);
+                             : exact::orient2d(corners[0], corners[1], corners[2], stats.predicates);
+        return turn != 0 && turn == ring_orientation(chain) ? Verdict::remove : Verdict::blocked_by_ring;
     }
 
     static int orient_float(Point a, Point b, Point c) {
@@ -276,7 +494,7 @@ private:
     }
 
     // Sign of the input ring's signed area, exactly (computed once, only for rings that get
-    // down to their last triangle).
+    // down to their last triangle, by the one thread that owns the whole ring).
     int ring_orientation(std::uint32_t chain) {
         if (orientation_[chain] != 2) return orientation_[chain];
         const Chain& range = map_.chains[chain];
@@ -289,29 +507,67 @@ private:
         return orientation_[chain];
     }
 
-    void remove(std::uint32_t v) {
+    // Rule 3: would the new segment p–n lie on another live segment with the same end locations?
+    // Every such segment has a live vertex at p's location, so p's location list finds them all.
+    // v's own segments p–v and v–n disappear with it and do not count (they can have the same
+    // locations when v duplicates a neighbour).
+    bool coincides_with_other_segment(std::uint32_t p, std::uint32_t v, std::uint32_t n) const {
+        const Point from = map_.vertices[p], to = map_.vertices[n];
+        if ((!is_shared(p) && !is_shared(n)) || same_location(from, to)) return false;
+        std::uint32_t u = p;
+        do {
+            if (state_[u] != State::removed) {
+                for (const std::uint32_t w : {prev_[u], next_[u]}) {
+                    if (w == kNone || !same_location(map_.vertices[w], to)) continue;
+                    const bool own = (u == p && w == v) || (u == v && (w == p || w == n));
+                    if (!own) return true;
+                }
+            }
+            u = twin_[u];
+        } while (u != p);
+        return false;
+    }
+
+    void remove(std::uint32_t v, unsigned level, Worker& worker) {
         const std::uint32_t p = prev_[v], n = next_[v];
         const std::uint32_t chain = chain_of_[v];
         const Point a = map_.vertices[p], b = map_.vertices[v], c = map_.vertices[n];
-        drop_segment(p, v);
-        drop_segment(v, n);
-        add_segment(p, n);
-        if (distinct_[chain] != 0 && !same_location(b, a) && !same_location(b, c)) --distinct_[chain];
-        alive_[v] = 0;
+        if (whole_level_[chain] != kOpen && !same_location(b, a) && !same_location(b, c)) {
+            if (whole_level_[chain] > level) {
+                // A split ring: other blocks may count down too; only the total matters later.
+                std::atomic_ref<std::uint32_t>(distinct_[chain]).fetch_sub(1, std::memory_order_relaxed);
+            } else {
+                --distinct_[chain];
+            }
+        }
+        state_[v] = State::removed;
         grid_->remove(v);
         next_[p] = n;
         prev_[n] = p;
-        ++stats_.removed;
-        release_waiting_on(v);
-        for (const std::uint32_t u : {p, n}) {
-            if (!is_interior(u) || pinned_[u]) continue;
-            stop_waiting(u);
-            heap_.set(u, area_of(u));
+        ++worker.stats.removed;
+        release_waiting_on(v, level, worker);
+        requeue(p, level, worker);
+        requeue(n, level, worker);
+    }
+
+    // A vertex whose triangle changed (or whose blocker went) is a candidate again: in this
+    // block's queue if it belongs to this level or a finer one, else on its level's list.
+    void requeue(std::uint32_t u, unsigned level, Worker& worker) {
+        if (state_[u] == State::fixed || state_[u] == State::removed) return;
+        if (state_[u] == State::waiting) stop_waiting(u);
+        state_[u] = State::queued;
+        if (use_marks_ && !marked_[u]) return;  // not this round's
+        const unsigned at = level_of(u);
+        if (at <= level) {
+            worker.push({area_of(u), u});
+        } else {
+            worker.later[at].push_back(u);
         }
     }
 
     // Lists of vertices refused because of one blocking vertex (doubly linked, intrusive).
     void wait_on(std::uint32_t v, std::uint32_t blocker) {
+        state_[v] = State::waiting;
         blocked_on_[v] = blocker;
         blocked_prev_[v] = kNone;
         blocked_next_[v] = blocked_head_[blocker];
@@ -321,7 +577,6 @@ private:
 
     void stop_waiting(std::uint32_t v) {
         const std::uint32_t blocker = blocked_on_[v];
-        if (blocker == kNone) return;
         if (blocked_prev_[v] != kNone) {
             blocked_next_[blocked_prev_[v]] = blocked_next_[v];
         } else {
@@ -329,36 +584,61 @@ private:
         }
         if (blocked_next_[v] != kNone) blocked_prev_[blocked_next_[v]] = blocked_prev_[v];
         blocked_on_[v] = kNone;
+        state_[v] = State::queued;
     }
 
-    void release_waiting_on(std::uint32_t blocker) {
-        while (blocked_head_[blocker] != kNone) {
-            const std::uint32_t w = blocked_head_[blocker];
-            stop_waiting(w);
-            heap_.set(w, area_of(w));
-        }
+    void release_waiting_on(std::uint32_t blocker, unsigned level, Worker& worker) {
+        while (blocked_head_[blocker] != kNone) requeue(blocked_head_[blocker], level, worker);
+    }
+
+    static void add(SimplifyStats& total, const SimplifyStats& part) {
+        total.removed += part.removed;
+        total.blocked_by_point += part.blocked_by_point;
+        total.blocked_by_ring += part.blocked_by_ring;
+        total.blocked_by_coincidence += part.blocked_by_coincidence;
+        total.predicates += part.predicates;
+    }
+
+    // Progress comes from the first thread only, as a share of the removals asked for.
+    void report_progress() {
+        if (!options_.progress || omp_get_thread_num() != 0 || work_ <= 0) return;
+        const double done = static_cast<double>(stats_.removed + progress_.load(std::memory_order_relaxed));
+        options_.progress(std::min(1.0, done / work_));
     }
 
     SimplifyResult finish() {
         stats_.vertices_in = vertex_count_;
         stats_.vertices_out = vertex_count_ - stats_.removed;
         stats_.control_points = map_.control_points.size();
-        return {std::move(alive_), stats_};
+        stats_.threads = threads_;
+        std::vector<std::uint8_t> kept(vertex_count_);
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) kept[v] = state_[v] != State::removed;
+        return {std::move(kept), stats_};
     }
 
     const MapData& map_;
     const SimplifyOptions& options_;
     const std::uint32_t vertex_count_;
-    std::vector<std::uint32_t> prev_, next_, chain_of_;
-    std::vector<std::uint8_t> alive_, shared_, pinned_;
+    const int threads_;
+    std::optional<PointGrid> grid_;
+    unsigned shift_ = kMinShift, levels_ = 1;
+    std::uint32_t block_columns_ = 1, block_rows_ = 1;
+    std::vector<std::uint32_t> prev_, next_, chain_of_, twin_;
+    std::vector<State> state_;
+    std::vector<std::uint8_t> marked_;       // count targets: this round's budget
     std::vector<std::uint32_t> distinct_;    // per closed chain: distinct live locations; 0 if open
     std::vector<std::int8_t> orientation_;   // per chain: input ring orientation, 2 = unknown
-    std::optional<PointGrid> grid_;
-    std::unordered_map<SegmentKey, std::uint32_t, SegmentKeyHash> segments_;
-    IndexedHeap heap_;
+    std::vector<std::uint8_t> whole_level_;  // per chain: first level where the ring is in one block; kOpen
+    std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
     std::vector<std::uint32_t> blocked_head_, blocked_on_, blocked_prev_, blocked_next_;
+    std::vector<std::vector<std::uint32_t>> later_;  // per level: vertices to queue there
+    std::vector<Ranked> pool_;                                // scratch, reused between rounds
+    std::vector<std::uint32_t> start_, block_of_, grouped_;  // scratch, reused between levels
+    bool use_marks_ = false;
+    Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
+    double work_ = 0;
+    std::atomic<std::uint64_t> progress_{0};  // removals in this level so far, roughly
     SimplifyStats stats_;
-    std::uint64_t queued_at_start_ = 0;
 };
 
 }  // namespace

@@ -1,7 +1,7 @@
 // EPLSimp / TopoVW map simplification (dissertation chapters 2–3).
 //
-// Interior vertices are ranked by Visvalingam–Whyatt effective area in one priority queue and
-// removed smallest first, but a vertex v with chain neighbours a, c is removed only when
+// Interior vertices are ranked by Visvalingam–Whyatt effective area and removed smallest first,
+// but a vertex v with chain neighbours a, c is removed only when
 //   1. the closed triangle (a, v, c) holds no other live vertex and no control point, except
 //      points at the very locations of a and c (they stay where they are; see 3 for the one
 //      way such a point could still matter);
@@ -14,6 +14,24 @@
 // contact between segments, crossings of the input kept as they are, no control point changes
 // side (the detour a…c swept by the removals is a union of such empty triangles). Predicates
 // are exact unless Arithmetic::floating is asked for.
+//
+// Parallel, and the same result for any number of threads (dissertation §3.5, Algorithm 3,
+// refined from chains to vertices): the point grid's cells are grouped into blocks, level 0
+// the finest, each level's blocks 2×2 of the level below, up to one block. A vertex belongs to
+// the finest level at which it and both its neighbours lie in one block; its triangle then lies
+// in that block (a block's locations form a convex set), and so does every point the rules
+// consult. Levels are processed finest first; the blocks of a level are independent and run in
+// parallel, each with its own queue, so the order of removals inside a block, and so the result,
+// never depends on the threads. Rings split over several blocks are handled without shared
+// state: a split ring whose fixed vertices (those not removable at this level) hold at least 4
+// distinct locations can never reach the ring rule's limit here; any other waits for a coarser
+// level, where it is whole.
+//
+// Stopping: --max and an area bound sweep the levels once. Count targets run rounds: each takes
+// the `missing` smallest current areas as its budget (a threshold plus a mark on exactly those
+// vertices) and lets every block remove marked vertices up to the threshold; a round never
+// removes more than it marked, and the next round starts from what is left. So the count lands
+// exactly on the target when the target can be reached at all.
 #pragma once
 
 #include "core/exact/predicates.hpp"
@@ -43,6 +61,9 @@ struct StopCriterion {
 struct SimplifyOptions {
     StopCriterion stop;
     exact::Arithmetic arithmetic = exact::Arithmetic::exact;
+    // Threads to use; 0 = OpenMP's default (all cores unless OMP_NUM_THREADS says otherwise).
+    // The result does not depend on it.
+    int threads = 0;
     // Called now and then with the share of the work done (0…1); may be empty. Only reports.
     std::function<void(double done)> progress;
 };
@@ -58,6 +79,13 @@ struct SimplifyStats {
     std::uint64_t blocked_by_ring = 0;       // refused: a ring would lose area or orientation
     std::uint64_t blocked_by_coincidence = 0;  // refused: two segments would coincide
     std::uint64_t pinned_by_crossing = 0;    // interior vertices kept: ends of crossing segments
+    std::uint32_t rounds = 0;                // count targets: rounds of parallel sweeps
+    std::uint32_t levels = 0;                // levels of the block grid
+    int threads = 1;                         // threads used
+    // Wall time of the phases (dissertation Table 3.1: initialize = index + crossings).
+    double seconds_index = 0;      // point grid, chains, shared locations
+    double seconds_crossings = 0;  // improper contacts of the input
+    double seconds_sweep = 0;      // removing vertices
     exact::PredicateStats predicates;
 
     std::uint64_t blocked() const { return blocked_by_point + blocked_by_ring + blocked_by_coincidence; }
