@@ -111,6 +111,83 @@ TEST(RandomMapsWithCrossings, KeepEveryCrossingAndAddNone) {
     EXPECT_GT(crossing_maps, 80) << "most maps should have crossings";
 }
 
+// The output never depends on the number of threads: every loop forced parallel (threshold 0)
+// on 2, 3, 4 and 7 threads gives the 1-thread result, for every stopping rule.
+TEST(RandomMapsParallel, SameOutputForAnyThreadCount) {
+    const std::vector<map::StopCriterion> stops{{map::Target::max, 0},
+                                                {map::Target::keep_fraction, 0.5},
+                                                {map::Target::keep_fraction, 0.1},
+                                                {map::Target::remove_points, 37},
+                                                {map::Target::max_area, 1e-3}};
+    int compared = 0;
+    for (const Setting& setting : settings()) {
+        for (std::uint64_t seed = 0; seed < 12; ++seed) {
+            std::mt19937_64 rng(seed * 31337 + 3);
+            testing::RandomMapOptions map_options = setting.map;
+            map_options.roads = static_cast<int>(seed % 3);  // some maps with crossings
+            const map::MapData input = testing::random_planar_map(rng, map_options);
+            for (const map::StopCriterion& stop : stops) {
+                map::SimplifyOptions options;
+                options.stop = stop;
+                options.parallel_threshold = 0;
+                options.threads = 1;
+                const map::SimplifyResult serial = map::simplify(input, options);
+                for (const int threads : {2, 3, 4, 7}) {
+                    options.threads = threads;
+                    const map::SimplifyResult parallel = map::simplify(input, options);
+                    ASSERT_EQ(parallel.kept, serial.kept) << setting.name << " seed " << seed << ", " << threads << " threads";
+                    ASSERT_EQ(parallel.stats.blocked(), serial.stats.blocked());
+                    ASSERT_EQ(parallel.stats.rounds, serial.stats.rounds);
+                    ++compared;
+                }
+            }
+        }
+    }
+    EXPECT_EQ(compared, 5 * 12 * 5 * 4);
+}
+
+// Count targets land exactly on the target whenever they say they reached it, and they reach
+// it on almost every map (they stop short only when no vertex can go any more).
+TEST(RandomMapsParallel, CountTargetsLandExactly) {
+    int reached = 0, runs = 0;
+    for (const Setting& setting : settings()) {
+        for (std::uint64_t seed = 0; seed < 20; ++seed) {
+            std::mt19937_64 rng(seed * 65537 + 11);
+            const map::MapData input = testing::random_planar_map(rng, setting.map);
+            for (const map::StopCriterion stop : {map::StopCriterion{map::Target::keep_fraction, 0.5},
+                                                  map::StopCriterion{map::Target::keep_points, 60},
+                                                  map::StopCriterion{map::Target::remove_points, 25}}) {
+                map::SimplifyOptions options;
+                options.stop = stop;
+                options.parallel_threshold = 0;
+                const map::SimplifyResult result = map::simplify(input, options);
+                const std::uint64_t goal = map::removal_goal(stop, input.vertices.size());
+                ++runs;
+                if (result.stats.target_reached) {
+                    ++reached;
+                    ASSERT_EQ(result.stats.removed, goal) << setting.name << " seed " << seed;
+                } else {
+                    ASSERT_LT(result.stats.removed, goal);
+                    // Stopped short: then not one more vertex can go.
+                    map::MapData rest;
+                    rest.control_points = input.control_points;
+                    for (const map::Chain& chain : input.chains) {
+                        std::vector<Point> kept;
+                        for (std::uint32_t v = chain.first; v <= chain.last; ++v) {
+                            if (result.kept[v]) kept.push_back(input.vertices[v]);
+                        }
+                        rest.add_chain(kept);
+                    }
+                    map::SimplifyOptions more;
+                    more.stop = {map::Target::remove_points, 1};
+                    EXPECT_EQ(map::simplify(rest, more).stats.removed, 0u) << setting.name << " seed " << seed;
+                }
+            }
+        }
+    }
+    EXPECT_GT(reached, runs * 3 / 4);
+}
+
 // Repeated runs give the same output (no dependence on addresses or hash order).
 TEST(RandomMapsModes, Deterministic) {
     std::mt19937_64 rng(99);

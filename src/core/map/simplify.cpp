@@ -46,9 +46,6 @@ constexpr std::uint32_t kMaxBlocksPerSide = 256;
 // whole_level_ of an open chain.
 constexpr std::uint8_t kOpen = 0xff;
 
-// Below this many items a loop runs on one thread: waking the others would cost more (and
-// spinning threads hurt when several toposimp runs share the cores).
-constexpr std::size_t kParallelMin = 1 << 14;
 
 // What a vertex is doing. Only `queued` vertices are candidates for removal.
 enum class State : std::uint8_t {
@@ -112,7 +109,8 @@ public:
         : map_(map),
           options_(options),
           vertex_count_(static_cast<std::uint32_t>(map.vertices.size())),
-          threads_(options.threads > 0 ? options.threads : omp_get_max_threads()) {}
+          threads_(options.threads > 0 ? options.threads : omp_get_max_threads()),
+          parallel_min_(options.parallel_threshold) {}
 
     SimplifyResult run() {
         auto start = Clock::now();
@@ -182,7 +180,7 @@ private:
         orientation_.assign(chains, 2);  // 2: not computed yet
         whole_level_.assign(chains, kOpen);
         ring_clear_.assign(chains, 0);
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= kParallelMin)
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= parallel_min_)
         for (std::uint32_t c = 0; c < chains; ++c) {
             const Chain& chain = map_.chains[c];
             std::uint32_t min_column = kNone, max_column = 0, min_row = kNone, max_row = 0;
@@ -223,7 +221,7 @@ private:
     void link_locations() {
         twin_.resize(vertex_count_);
         const std::uint32_t columns = grid_->columns(), rows = grid_->rows();
-#pragma omp parallel num_threads(threads_) if (vertex_count_ >= kParallelMin)
+#pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
         {
             std::vector<std::pair<LocationKey, std::uint32_t>> here;
 #pragma omp for schedule(dynamic, 16)
@@ -255,7 +253,7 @@ private:
         const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates);
         state_.assign(vertex_count_, State::fixed);
         std::uint64_t pinned_count = 0;
-#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : pinned_count) if (vertex_count_ >= kParallelMin)
+#pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : pinned_count) if (vertex_count_ >= parallel_min_)
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
             if (prev_[v] == kNone || next_[v] == kNone) continue;
             const bool pinned = improper[v] || improper[prev_[v]] || map_.is_frozen(chain_of_[v]);
@@ -365,7 +363,7 @@ private:
         std::vector<Worker> workers(static_cast<std::size_t>(threads_));
         for (Worker& worker : workers) worker.later.assign(levels_ + 1, {});
         const auto busy_count = static_cast<std::ptrdiff_t>(busy.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads_) if (kept >= kParallelMin && busy.size() > 1)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads_) if (kept >= parallel_min_ && busy.size() > 1)
         for (std::ptrdiff_t i = 0; i < busy_count; ++i) {
             const std::uint32_t b = busy[static_cast<std::size_t>(i)];
             Worker& worker = workers[static_cast<std::size_t>(omp_get_thread_num())];
@@ -385,7 +383,7 @@ private:
     // at 4 or more distinct locations? Then the ring rule cannot bite here.
     void decide_split_rings(unsigned level) {
         const auto chains = static_cast<std::uint32_t>(map_.chains.size());
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= kParallelMin)
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= parallel_min_)
         for (std::uint32_t c = 0; c < chains; ++c) {
             if (whole_level_[c] == kOpen || whole_level_[c] <= level) continue;
             Point found[4];
@@ -620,6 +618,7 @@ private:
     const SimplifyOptions& options_;
     const std::uint32_t vertex_count_;
     const int threads_;
+    const std::size_t parallel_min_;  // below this many items a loop runs on one thread
     std::optional<PointGrid> grid_;
     unsigned shift_ = kMinShift, levels_ = 1;
     std::uint32_t block_columns_ = 1, block_rows_ = 1;

@@ -64,6 +64,9 @@ struct SimplifyOptions {
     // Threads to use; 0 = OpenMP's default (all cores unless OMP_NUM_THREADS says otherwise).
     // The result does not depend on it.
     int threads = 0;
+    // Loops over fewer items than this run on one thread (waking threads costs more). Tests set
+    // it to 0 to run every loop in parallel on small maps.
+    std::size_t parallel_threshold = 1 << 14;
     // Called now and then with the share of the work done (0…1); may be empty. Only reports.
     std::function<void(double done)> progress;
 };
