@@ -20,6 +20,7 @@
 #include <optional>
 #include <ostream>
 #include <sstream>
+#include <thread>
 
 namespace toposimp::cli {
 
@@ -234,7 +235,8 @@ int run_map(const MapOptions& options, Context& context) {
             // The control points file is read on a second thread while the map is read here.
             std::future<std::vector<Point>> points;
             if (!options.points.empty()) {
-                points = std::async(std::launch::async, [&options] { return io::read_control_points(options.points); });
+                const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads) : std::thread::hardware_concurrency();
+                points = std::async(std::launch::async, [&options, threads] { return io::read_control_points(options.points, threads); });
             }
             try {
                 dataset.emplace(io::OgrDataset::read(options.input, options.layers, map));

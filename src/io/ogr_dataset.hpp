@@ -75,8 +75,9 @@ private:
     std::unique_ptr<Data> data_;
 };
 
-// Reads control points from "path" or "path:layer" (Point or MultiPoint features).
-std::vector<Point> read_control_points(const std::string& spec);
+// Reads control points from "path" or "path:layer" (Point or MultiPoint features), a big
+// GeoPackage on up to `threads` connections at once.
+std::vector<Point> read_control_points(const std::string& spec, unsigned threads = 1);
 
 // The GDAL release this was built against and runs with, for --version.
 std::string gdal_version();

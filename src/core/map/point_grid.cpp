@@ -62,7 +62,30 @@ PointGrid::PointGrid(std::span<const Point> removable, std::span<const Point> fi
         const std::uint32_t slot = fill[cell_of_point[i]]++;
         points_[slot] = point(i);
         ids_[slot] = static_cast<std::uint32_t>(i);
-        if (i < r) slot_[i] = slot;
+    }
+    // Sort each cell by x (ties by id), which sorts each row of cells by x.
+    const auto cell_total = static_cast<std::ptrdiff_t>(cell_count);
+#pragma omp parallel if (n >= 1 << 14)
+    {
+        std::vector<std::pair<Point, std::uint32_t>> cell;
+#pragma omp for schedule(dynamic, 4096)
+        for (std::ptrdiff_t c = 0; c < cell_total; ++c) {
+            const std::uint32_t begin = cell_start_[static_cast<std::size_t>(c)], end = cell_start_[static_cast<std::size_t>(c) + 1];
+            if (end - begin < 2) continue;
+            cell.clear();
+            for (std::uint32_t k = begin; k < end; ++k) cell.emplace_back(points_[k], ids_[k]);
+            std::sort(cell.begin(), cell.end(), [](const auto& a, const auto& b) {
+                return a.first.x < b.first.x || (a.first.x == b.first.x && a.second < b.second);
+            });
+            for (std::uint32_t k = begin; k < end; ++k) {
+                points_[k] = cell[k - begin].first;
+                ids_[k] = cell[k - begin].second;
+            }
+        }
+    }
+#pragma omp parallel for schedule(static) if (n >= 1 << 14)
+    for (std::size_t k = 0; k < n; ++k) {
+        if (ids_[k] < r) slot_[ids_[k]] = static_cast<std::uint32_t>(k);
     }
 }
 

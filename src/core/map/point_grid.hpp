@@ -10,6 +10,7 @@
 
 #include "core/geometry.hpp"
 
+#include <algorithm>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -25,18 +26,28 @@ public:
     explicit PointGrid(std::span<const Point> removable, std::span<const Point> fixed = {},
                        double points_per_cell = 2.0);
 
-    // Calls visit(id, point) for each point still in the cells overlapping `box` (a superset of
-    // the points inside it) until visit returns true; returns whether it did. Coordinates are
-    // stored in cell order, so a query reads memory sequentially.
+    // Calls visit(id, point) for each point still in the grid whose x lies in the box's x range,
+    // within the rows of cells the box overlaps (a superset of the points inside it), until visit
+    // returns true; returns whether it did. Each cell's points are sorted by x, so a row of cells
+    // is sorted by x: a query binary-searches its x range and reads memory sequentially.
     template <class Visit>
     bool any_in_cells(const Box& box, Visit&& visit) const {
         const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
         const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
         for (std::uint32_t y = y0; y <= y1; ++y) {
             const std::size_t row_start = std::size_t{y} * columns_;
-            const std::size_t end = cell_start_[row_start + x1 + 1];
-            for (std::size_t k = cell_start_[row_start + x0]; k != end; ++k) {
-                if (ids_[k] != kRemoved && visit(ids_[k], points_[k])) return true;
+            const Point* first = points_.data() + cell_start_[row_start + x0];
+            const Point* last = points_.data() + cell_start_[row_start + x1 + 1];
+            // Few points per cell on average: a short linear skip beats a binary search.
+            const Point* p = first;
+            if (last - first > 16) {
+                p = std::partition_point(first, last, [&](const Point& q) { return q.x < box.min_x; });
+            } else {
+                while (p != last && p->x < box.min_x) ++p;
+            }
+            for (; p != last && p->x <= box.max_x; ++p) {
+                const std::uint32_t id = ids_[static_cast<std::size_t>(p - points_.data())];
+                if (id != kRemoved && visit(id, *p)) return true;
             }
         }
         return false;
@@ -50,7 +61,7 @@ public:
     std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
     std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
 
-    // The ids and points of cell (column x, row y), in id order (removed ones included as kRemoved).
+    // The ids and points of cell (column x, row y), sorted by x (removed ones included as kRemoved).
     std::span<const std::uint32_t> cell_ids(std::uint32_t x, std::uint32_t y) const {
         const std::size_t cell = std::size_t{y} * columns_ + x;
         return {ids_.data() + cell_start_[cell], ids_.data() + cell_start_[cell + 1]};

@@ -146,23 +146,20 @@ private:
     std::uint32_t block_column(Point p) const { return grid_->column(p.x) >> shift_; }
     std::uint32_t block_row(Point p) const { return grid_->row(p.y) >> shift_; }
 
-    // The finest level at which two locations fall in one block.
-    unsigned shared_level(Point a, Point b) const {
-        return static_cast<unsigned>(std::max(std::bit_width(block_column(a) ^ block_column(b)),
-                                              std::bit_width(block_row(a) ^ block_row(b))));
+    // The finest level at which two vertices fall in one block.
+    unsigned shared_level(std::uint32_t u, std::uint32_t w) const {
+        const std::uint32_t a = block_xy_[u], b = block_xy_[w];
+        return static_cast<unsigned>(std::max(std::bit_width((a ^ b) >> 16), std::bit_width((a ^ b) & 0xffffu)));
     }
 
     // The level an interior vertex is removable at, given its current neighbours. Removals at a
-    // level only bring in neighbours from the same block, so it never drops below the level
-    // being processed once reached, and a vertex above it stays above it.
-    unsigned level_of(std::uint32_t v) const {
-        const Point b = map_.vertices[v];
-        return std::max(shared_level(b, map_.vertices[prev_[v]]), shared_level(b, map_.vertices[next_[v]]));
-    }
+    // level only bring in neighbours from the same block: a vertex removable at the level being
+    // processed stays so, and one above it stays above it (it may drop below it).
+    unsigned level_of(std::uint32_t v) const { return std::max(shared_level(v, prev_[v]), shared_level(v, next_[v])); }
 
-    std::uint32_t block_at(Point p, unsigned level) const {
+    std::uint32_t block_at(std::uint32_t v, unsigned level) const {
         const std::uint32_t columns = ((block_columns_ - 1) >> level) + 1;
-        return (block_row(p) >> level) * columns + (block_column(p) >> level);
+        return ((block_xy_[v] & 0xffffu) >> level) * columns + ((block_xy_[v] >> 16) >> level);
     }
 
     std::uint32_t blocks_at(unsigned level) const {
@@ -175,6 +172,7 @@ private:
         prev_.assign(vertex_count_, kNone);
         next_.assign(vertex_count_, kNone);
         chain_of_.assign(vertex_count_, 0);
+        block_xy_.resize(vertex_count_);
         const auto chains = static_cast<std::uint32_t>(map_.chains.size());
         distinct_.assign(chains, 0);
         orientation_.assign(chains, 2);  // 2: not computed yet
@@ -189,6 +187,7 @@ private:
                 if (v > chain.first) prev_[v] = v - 1;
                 if (v < chain.last) next_[v] = v + 1;
                 const std::uint32_t column = block_column(map_.vertices[v]), row = block_row(map_.vertices[v]);
+                block_xy_[v] = column << 16 | row;
                 min_column = std::min(min_column, column);
                 max_column = std::max(max_column, column);
                 min_row = std::min(min_row, row);
@@ -343,7 +342,7 @@ private:
         for (const std::uint32_t v : candidates) {
             if (state_[v] != State::queued || level_of(v) > level) continue;  // else on a later list
             candidates[kept] = v;
-            block_of[kept] = block_at(map_.vertices[v], level);
+            block_of[kept] = block_at(v, level);
             ++start[block_of[kept] + 1];
             ++kept;
         }
@@ -623,6 +622,7 @@ private:
     unsigned shift_ = kMinShift, levels_ = 1;
     std::uint32_t block_columns_ = 1, block_rows_ = 1;
     std::vector<std::uint32_t> prev_, next_, chain_of_, twin_;
+    std::vector<std::uint32_t> block_xy_;  // per vertex: level-0 block, column << 16 | row
     std::vector<State> state_;
     std::vector<std::uint8_t> marked_;       // count targets: this round's budget
     std::vector<std::uint32_t> distinct_;    // per closed chain: distinct live locations; 0 if open
