@@ -6,6 +6,7 @@
 
 #include <gmpxx.h>
 #include <omp.h>
+#include <parallel/algorithm>
 
 #include <algorithm>
 #include <atomic>
@@ -304,24 +305,53 @@ private:
     bool mark_smallest(std::uint64_t budget) {
         std::vector<Ranked>& pool = pool_;  // kept between rounds: no fresh pages each time
         pool.clear();
-        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            marked_[v] = 0;
-            if (state_[v] == State::queued) pool.push_back({area_of(v), v});
+        pool.reserve(vertex_count_);
+        // Each thread scans one contiguous range of ids; joined in thread order, the pool is in
+        // id order whatever the number of threads.
+        std::vector<std::vector<Ranked>> parts(static_cast<std::size_t>(threads_));
+#pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
+        {
+            std::vector<Ranked>& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+            for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+                marked_[v] = 0;
+                if (state_[v] == State::queued) part.push_back({area_of(v), v});
+            }
         }
+        for (const auto& part : parts) pool.insert(pool.end(), part.begin(), part.end());
         if (pool.empty()) return false;
         if (budget < pool.size()) {
-            std::nth_element(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(budget - 1), pool.end());
+            // The budget smallest form one set under the total order, whoever finds them.
+            if (threads_ > 1 && pool.size() >= parallel_min_) {
+                __gnu_parallel::nth_element(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(budget - 1), pool.end());
+            } else {
+                std::nth_element(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(budget - 1), pool.end());
+            }
             pool.resize(budget);
         }
         bound_ = *std::max_element(pool.begin(), pool.end());
-        for (const Ranked& entry : pool) marked_[entry.id] = 1;
+        const auto marked = static_cast<std::ptrdiff_t>(pool.size());
+#pragma omp parallel for schedule(static) num_threads(threads_) if (pool.size() >= parallel_min_)
+        for (std::ptrdiff_t i = 0; i < marked; ++i) marked_[pool[static_cast<std::size_t>(i)].id] = 1;
         return true;
     }
 
-    // Puts every queued (and, in rounds, marked) vertex on its level's list.
+    // Puts every queued (and, in rounds, marked) vertex on its level's list, in id order.
     void schedule_queued() {
-        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (state_[v] == State::queued && (!use_marks_ || marked_[v])) later_[level_of(v)].push_back(v);
+        std::vector<std::vector<std::vector<std::uint32_t>>> parts(static_cast<std::size_t>(threads_),
+                                                                   std::vector<std::vector<std::uint32_t>>(levels_));
+#pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
+        {
+            auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+            for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+                if (state_[v] == State::queued && (!use_marks_ || marked_[v])) part[level_of(v)].push_back(v);
+            }
+        }
+        for (const auto& part : parts) {
+            for (unsigned level = 0; level < levels_; ++level) {
+                later_[level].insert(later_[level].end(), part[level].begin(), part[level].end());
+            }
         }
     }
 
