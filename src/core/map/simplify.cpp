@@ -546,7 +546,7 @@ private:
             if (state_[u] != State::removed) {
                 for (const std::uint32_t w : {prev_[u], next_[u]}) {
                     if (w == kNone || !same_location(map_.vertices[w], to)) continue;
-                    const bool own = (u == p && w == v) || (u == v && (w == p || w == n));
+                    const bool own = (u == p && w == v) || (u == v && w == n);  // p–v or v–n
                     if (!own) return true;
                 }
             }
