@@ -32,3 +32,47 @@ inline bool box_contains(const Box& box, Point p) {
 }
 
 }  // namespace toposimp
+
+namespace toposimp {
+
+// A mesh vertex position. Coordinates are read as doubles and moved only by a collapse, which
+// places the merged vertex at a double position checked afterwards with exact predicates.
+struct Point3 {
+    double x;
+    double y;
+    double z;
+
+    double operator[](int axis) const { return axis == 0 ? x : (axis == 1 ? y : z); }
+};
+
+inline bool same_location(Point3 a, Point3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
+
+// The plane projection that drops one axis: 0 drops x, 1 drops y, 2 drops z (the map plane).
+inline Point drop_axis(Point3 p, int axis) {
+    return axis == 0 ? Point{p.y, p.z} : (axis == 1 ? Point{p.z, p.x} : Point{p.x, p.y});
+}
+
+struct Box3 {
+    Point3 lo;
+    Point3 hi;
+
+    void add(Point3 p) {
+        lo = {p.x < lo.x ? p.x : lo.x, p.y < lo.y ? p.y : lo.y, p.z < lo.z ? p.z : lo.z};
+        hi = {p.x > hi.x ? p.x : hi.x, p.y > hi.y ? p.y : hi.y, p.z > hi.z ? p.z : hi.z};
+    }
+    bool overlaps(const Box3& other) const {
+        return lo.x <= other.hi.x && other.lo.x <= hi.x && lo.y <= other.hi.y && other.lo.y <= hi.y &&
+               lo.z <= other.hi.z && other.lo.z <= hi.z;
+    }
+};
+
+inline Box3 point_box(Point3 p) { return {p, p}; }
+
+inline Box3 triangle_box(Point3 a, Point3 b, Point3 c) {
+    Box3 box = point_box(a);
+    box.add(b);
+    box.add(c);
+    return box;
+}
+
+}  // namespace toposimp

@@ -1,0 +1,279 @@
+#include "core/exact/predicates3d.hpp"
+
+#include <gmpxx.h>
+
+#include <cmath>
+
+namespace toposimp::exact {
+namespace {
+
+constexpr double kUnitRoundoff = 0x1p-53;
+
+// A double with a bound on its distance to the exact value of the expression it stands for.
+struct Bounded {
+    double value;
+    double error = 0.0;
+
+    Bounded(double v) : value(v) {}  // NOLINT: inputs are exact
+    Bounded(double v, double e) : value(v), error(e) {}
+};
+
+// A non-zero error bound is never let below kErrorFloor: terms of the bound that underflow lose
+// up to 2^-1074 each, and this floor covers them (values that small go to GMP instead).
+// A zero bound stays zero only while every step was exact.
+constexpr double kErrorFloor = 0x1p-960;
+
+Bounded settle(double v, double e, bool exact) {
+    if (!exact && !(e >= kErrorFloor)) e = kErrorFloor;
+    return {v, e};
+}
+
+Bounded operator+(Bounded a, Bounded b) {
+    const double v = a.value + b.value;
+    const double e = a.error + b.error + kUnitRoundoff * std::fabs(v);
+    return settle(v, e, e == 0.0);
+}
+
+Bounded operator-(Bounded a, Bounded b) {
+    const double v = a.value - b.value;
+    const double e = a.error + b.error + kUnitRoundoff * std::fabs(v);
+    return settle(v, e, e == 0.0);
+}
+
+Bounded operator*(Bounded a, Bounded b) {
+    const double v = a.value * b.value;
+    const double e = std::fabs(a.value) * b.error + std::fabs(b.value) * a.error + a.error * b.error + kUnitRoundoff * std::fabs(v);
+    // Exact only if no error came in and the product neither rounded (kU·|v| = 0 means v = 0,
+    // and then a factor was 0 or it underflowed) nor underflowed.
+    const bool underflow = v == 0.0 ? (a.value != 0.0 && b.value != 0.0) : std::fabs(v) < 0x1p-1021;
+    return settle(v, e, e == 0.0 && !underflow && a.error == 0.0 && b.error == 0.0);
+}
+
+// The certified sign, or 2 when the bound cannot decide. The bound itself was computed with
+// rounding (at most a few dozen operations, each off by a factor ≤ 1 + u): widened by 2^-40.
+int certified_sign(Bounded x) {
+    if (!std::isfinite(x.value) || !std::isfinite(x.error)) return 2;
+    if (x.error == 0.0) return (x.value > 0) - (x.value < 0);  // every step was exact
+    const double bound = x.error * (1.0 + 0x1p-40);
+    if (x.value > bound) return 1;
+    if (-x.value > bound) return -1;
+    return 2;
+}
+
+int sign_of(const mpq_class& x) { return sgn(x); }
+
+template <class T>
+T orient3d_expr(Point3 a, Point3 b, Point3 c, Point3 d) {
+    const T bx = T(b.x) - T(a.x), by = T(b.y) - T(a.y), bz = T(b.z) - T(a.z);
+    const T cx = T(c.x) - T(a.x), cy = T(c.y) - T(a.y), cz = T(c.z) - T(a.z);
+    const T dx = T(d.x) - T(a.x), dy = T(d.y) - T(a.y), dz = T(d.z) - T(a.z);
+    const T nx = by * cz - bz * cy, ny = bz * cx - bx * cz, nz = bx * cy - by * cx;
+    return nx * dx + ny * dy + nz * dz;
+}
+
+template <class T>
+T normal_dot_expr(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f) {
+    const T bx = T(b.x) - T(a.x), by = T(b.y) - T(a.y), bz = T(b.z) - T(a.z);
+    const T cx = T(c.x) - T(a.x), cy = T(c.y) - T(a.y), cz = T(c.z) - T(a.z);
+    const T ex = T(e.x) - T(d.x), ey = T(e.y) - T(d.y), ez = T(e.z) - T(d.z);
+    const T fx = T(f.x) - T(d.x), fy = T(f.y) - T(d.y), fz = T(f.z) - T(d.z);
+    const T n1x = by * cz - bz * cy, n1y = bz * cx - bx * cz, n1z = bx * cy - by * cx;
+    const T n2x = ey * fz - ez * fy, n2y = ez * fx - ex * fz, n2z = ex * fy - ey * fx;
+    return n1x * n2x + n1y * n2y + n1z * n2z;
+}
+
+int orient2(Point a, Point b, Point c, PredicateStats& stats) { return orient2d(a, b, c, stats); }
+
+bool in_segment_box(Point x, Point a, Point b) {
+    return x.x >= std::fmin(a.x, b.x) && x.x <= std::fmax(a.x, b.x) && x.y >= std::fmin(a.y, b.y) &&
+           x.y <= std::fmax(a.y, b.y);
+}
+
+bool on_closed_segment(Point x, Point a, Point b, PredicateStats& stats) {
+    if (same_location(a, b)) return same_location(x, a);
+    return in_segment_box(x, a, b) && orient2(a, b, x, stats) == 0;
+}
+
+// Closed segments in the plane, any degeneracy.
+bool segments_meet_2d(Point p, Point q, Point r, Point s, PredicateStats& stats) {
+    if (std::fmax(p.x, q.x) < std::fmin(r.x, s.x) || std::fmax(r.x, s.x) < std::fmin(p.x, q.x) ||
+        std::fmax(p.y, q.y) < std::fmin(r.y, s.y) || std::fmax(r.y, s.y) < std::fmin(p.y, q.y)) {
+        return false;
+    }
+    if (same_location(p, q)) return on_closed_segment(p, r, s, stats);
+    if (same_location(r, s)) return on_closed_segment(r, p, q, stats);
+    const int o1 = orient2(p, q, r, stats), o2 = orient2(p, q, s, stats);
+    if (o1 * o2 > 0) return false;
+    const int o3 = orient2(r, s, p, stats), o4 = orient2(r, s, q, stats);
+    if (o3 * o4 > 0) return false;
+    // Not separated by either line. If all four are collinear, overlapping boxes of collinear
+    // segments mean overlapping intervals; otherwise the segments cross or touch.
+    return true;
+}
+
+bool segment_meets_triangle_2d(Point p, Point q, Point a, Point b, Point c, PredicateStats& stats) {
+    if (in_closed_triangle(a, b, c, p, Arithmetic::exact, stats)) return true;
+    if (in_closed_triangle(a, b, c, q, Arithmetic::exact, stats)) return true;
+    return segments_meet_2d(p, q, a, b, stats) || segments_meet_2d(p, q, b, c, stats) ||
+           segments_meet_2d(p, q, c, a, stats);
+}
+
+Box3 segment_box(Point3 p, Point3 q) {
+    Box3 box = point_box(p);
+    box.add(q);
+    return box;
+}
+
+// Closed segments in space, any degeneracy: they can only meet if the four points are coplanar,
+// and then they meet iff their projections meet in all three coordinate planes (one of the
+// projections is one-to-one on their common plane, and a projection cannot separate sets that meet).
+bool segments_meet_3d(Point3 p, Point3 q, Point3 r, Point3 s, PredicateStats& stats) {
+    if (!segment_box(p, q).overlaps(segment_box(r, s))) return false;
+    if (orient3d(p, q, r, s, stats) != 0) return false;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (!segments_meet_2d(drop_axis(p, axis), drop_axis(q, axis), drop_axis(r, axis), drop_axis(s, axis), stats)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The projection (axis dropped) in which a non-degenerate triangle keeps its area, and its
+// orientation there. Returns axis -1 for a degenerate triangle.
+std::pair<int, int> area_axis(const Triangle3& t, PredicateStats& stats) {
+    for (int axis = 2; axis >= 0; --axis) {
+        const int turn = orient_projected(t[0], t[1], t[2], axis, stats);
+        if (turn != 0) return {axis, turn};
+    }
+    return {-1, 0};
+}
+
+// Does the half-open segment (s, x] enter the closed, non-degenerate triangle t, which has its
+// corner `at` at s? Only if x lies in t's plane, inside the angle of t at s.
+bool enters(Point3 s, Point3 x, const Triangle3& t, int at, PredicateStats& stats) {
+    if (orient3d(t[0], t[1], t[2], x, stats) != 0) return false;
+    const auto [axis, turn] = area_axis(t, stats);
+    const Point ps = drop_axis(s, axis), px = drop_axis(x, axis);
+    const Point pa = drop_axis(t[(at + 1) % 3], axis), pb = drop_axis(t[(at + 2) % 3], axis);
+    return orient2(ps, pa, px, stats) * turn >= 0 && orient2(ps, pb, px, stats) * turn <= 0;
+}
+
+}  // namespace
+
+int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) { return sign_of(orient3d_expr<mpq_class>(a, b, c, d)); }
+
+int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
+    const int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d));
+    if (sign != 2) {
+        ++stats.filter_decided;
+        return sign;
+    }
+    ++stats.gmp_fallbacks;
+    return orient3d_gmp(a, b, c, d);
+}
+
+int orient3d_float(Point3 a, Point3 b, Point3 c, Point3 d) {
+    const double det = orient3d_expr<double>(a, b, c, d);
+    return (det > 0) - (det < 0);
+}
+
+int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, PredicateStats& stats) {
+    const int sign = certified_sign(normal_dot_expr<Bounded>(a, b, c, d, e, f));
+    if (sign != 2) {
+        ++stats.filter_decided;
+        return sign;
+    }
+    ++stats.gmp_fallbacks;
+    return sign_of(normal_dot_expr<mpq_class>(a, b, c, d, e, f));
+}
+
+int orient_projected(Point3 a, Point3 b, Point3 c, int axis, PredicateStats& stats) {
+    return orient2(drop_axis(a, axis), drop_axis(b, axis), drop_axis(c, axis), stats);
+}
+
+bool degenerate(const Triangle3& t, PredicateStats& stats) { return area_axis(t, stats).first < 0; }
+
+bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateStats& stats) {
+    if (!segment_box(p, q).overlaps(triangle_box(t[0], t[1], t[2]))) return false;
+    if (degenerate(t, stats)) {
+        // A segment or a point: the union of its three sides.
+        return segments_meet_3d(p, q, t[0], t[1], stats) || segments_meet_3d(p, q, t[1], t[2], stats) ||
+               segments_meet_3d(p, q, t[2], t[0], stats);
+    }
+    const int sp = orient3d(t[0], t[1], t[2], p, stats);
+    const int sq = orient3d(t[0], t[1], t[2], q, stats);
+    if (sp * sq > 0) return false;
+    if (sp == 0 && sq == 0) {
+        // All five points coplanar. Some coordinate projection is one-to-one
+        // on their common plane or line, and none can separate sets that meet: the sets meet
+        // iff their projections meet in all three.
+        for (int axis = 0; axis < 3; ++axis) {
+            if (!segment_meets_triangle_2d(drop_axis(p, axis), drop_axis(q, axis), drop_axis(t[0], axis),
+                                           drop_axis(t[1], axis), drop_axis(t[2], axis), stats)) {
+                return false;
+            }
+        }
+        return true;
+    }
+    // The line pq meets t's plane in one point (t is not degenerate, p ≠ q); it lies in the
+    // closed triangle iff the line passes no edge on the outer side.
+    const int s1 = orient3d(p, q, t[0], t[1], stats);
+    const int s2 = orient3d(p, q, t[1], t[2], stats);
+    const int s3 = orient3d(p, q, t[2], t[0], stats);
+    const bool positive = s1 > 0 || s2 > 0 || s3 > 0;
+    const bool negative = s1 < 0 || s2 < 0 || s3 < 0;
+    return !(positive && negative);
+}
+
+bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
+    if (!triangle_box(t[0], t[1], t[2]).overlaps(triangle_box(u[0], u[1], u[2]))) return false;
+    // Closed triangles meet iff an edge of one meets the other: the boundary of their
+    // intersection (a point, segment or convex polygon) lies on their edges.
+    for (int i = 0; i < 3; ++i) {
+        if (segment_meets_triangle(t[i], t[(i + 1) % 3], u, stats)) return true;
+    }
+    for (int i = 0; i < 3; ++i) {
+        if (segment_meets_triangle(u[i], u[(i + 1) % 3], t, stats)) return true;
+    }
+    return false;
+}
+
+bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stats) {
+    if (!triangle_box(f[0], f[1], f[2]).overlaps(triangle_box(g[0], g[1], g[2]))) return false;
+    int shared = 0;
+    int f_at[3], g_at[3];
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            if (same_location(f[i], g[j])) {
+                f_at[shared] = i;
+                g_at[shared] = j;
+                ++shared;
+                break;
+            }
+        }
+    }
+    if (shared == 0) return triangles_meet(f, g, stats);
+    if (shared == 3 || degenerate(g, stats)) return true;
+    if (shared == 1) {
+        // Meeting beyond the shared corner s means an edge opposite s meets the other face, or
+        // an edge leaving s runs into the other face's angle at s (coplanar faces).
+        const int i = f_at[0], j = g_at[0];
+        const Point3 s = f[i];
+        if (segment_meets_triangle(f[(i + 1) % 3], f[(i + 2) % 3], g, stats)) return true;
+        if (segment_meets_triangle(g[(j + 1) % 3], g[(j + 2) % 3], f, stats)) return true;
+        if (enters(s, f[(i + 1) % 3], g, j, stats) || enters(s, f[(i + 2) % 3], g, j, stats)) return true;
+        return enters(s, g[(j + 1) % 3], f, i, stats) || enters(s, g[(j + 2) % 3], f, i, stats);
+    }
+    // Two shared corners s, t: non-coplanar faces meet exactly along st; coplanar ones overlap
+    // iff their third corners lie on the same side of st.
+    const int x_at = 3 - f_at[0] - f_at[1], y_at = 3 - g_at[0] - g_at[1];
+    const Point3 s = f[f_at[0]], t = f[f_at[1]], x = f[x_at], y = g[y_at];
+    if (orient3d(s, t, x, y, stats) != 0) return false;
+    const auto [axis, turn] = area_axis(f, stats);
+    (void)turn;
+    const int side_x = orient2(drop_axis(s, axis), drop_axis(t, axis), drop_axis(x, axis), stats);
+    const int side_y = orient2(drop_axis(s, axis), drop_axis(t, axis), drop_axis(y, axis), stats);
+    return side_x * side_y > 0;
+}
+
+}  // namespace toposimp::exact

@@ -1,0 +1,54 @@
+// Exact predicates on 3D points for mesh simplification.
+//
+// Each predicate is the sign of a polynomial in the input doubles. It is evaluated once in
+// double precision with a running forward error bound (every operation carries |error| ≤ e,
+// grown by the unit roundoff per operation — the "dynamic filter" of Burnikel, Funke and Seel,
+// "Exact geometric computation using cascading", 2001); only when |value| does not exceed the
+// bound is the same polynomial evaluated with GMP rationals, which is exact. No epsilon anywhere:
+// a sign is either certified or recomputed exactly.
+//
+// Contacts between closed triangles are decided from these signs alone (segment–triangle tests,
+// with every degenerate and coplanar case reduced to exact 2D tests in coordinate projections).
+#pragma once
+
+#include "core/exact/predicates.hpp"
+#include "core/geometry.hpp"
+
+#include <array>
+
+namespace toposimp::exact {
+
+using Triangle3 = std::array<Point3, 3>;
+
+// Sign of ((b − a) × (c − a)) · (d − a): > 0 when d lies on the side the normal of the
+// counter-clockwise triangle abc points to, 0 when the four points are coplanar.
+int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats);
+int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d);
+// The same determinant in plain doubles (unsafe; for tests that show what it gets wrong).
+int orient3d_float(Point3 a, Point3 b, Point3 c, Point3 d);
+
+// Sign of ((b − a) × (c − a)) · ((e − d) × (f − d)): do the normals of abc and def point the
+// same way (> 0), opposite ways (< 0), or is one triangle degenerate or are they orthogonal (0)?
+int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, PredicateStats& stats);
+
+// Orientation of the triangle projected by dropping `axis` (see drop_axis): the sign of the
+// normal's `axis` component.
+int orient_projected(Point3 a, Point3 b, Point3 c, int axis, PredicateStats& stats);
+
+// Are a, b, c collinear or coincident (a zero normal)?
+bool degenerate(const Triangle3& t, PredicateStats& stats);
+
+// Do the closed segment pq and the closed triangle abc share a point? Any degeneracy allowed.
+bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateStats& stats);
+
+// Do two closed triangles share a point? Any degeneracy allowed.
+bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats);
+
+// May two faces of one surface sit side by side? `f` must be non-degenerate. They may share
+// corners (compared by location) and meet exactly there: at one shared corner, or along the
+// segment between two. Any other contact — a crossing, a touch, a coplanar overlap, a third
+// shared corner (a duplicate face) — is a conflict. A degenerate `g` that shares a corner is
+// reported as a conflict too (the caller refuses rather than reasons about it).
+bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stats);
+
+}  // namespace toposimp::exact

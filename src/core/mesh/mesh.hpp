@@ -1,0 +1,37 @@
+// An indexed triangle mesh: positions and corner indices, nothing per element on the heap.
+#pragma once
+
+#include "core/geometry.hpp"
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+namespace toposimp::mesh {
+
+using Face = std::array<std::uint32_t, 3>;
+
+struct Mesh {
+    std::vector<Point3> points;
+    std::vector<Face> faces;
+};
+
+// An edge shared by more than two faces: the surface is not a manifold there.
+struct NonManifoldEdge {
+    std::uint32_t a;
+    std::uint32_t b;
+    std::vector<std::uint32_t> faces;  // the first few faces on it
+};
+
+// The first non-manifold edge in vertex order, if any.
+std::optional<NonManifoldEdge> find_non_manifold_edge(const Mesh& mesh);
+
+// Faces that repeat a corner index (a, a, b): they have no area and no place in a surface.
+std::size_t count_repeated_corner_faces(const Mesh& mesh);
+
+// Drops faces that repeat a corner index and vertices no face uses; keeps the order of the rest.
+// Returns how many faces were dropped.
+std::size_t drop_unused(Mesh& mesh);
+
+}  // namespace toposimp::mesh

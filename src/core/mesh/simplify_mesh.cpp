@@ -1,0 +1,741 @@
+#include "core/mesh/simplify_mesh.hpp"
+
+#include "core/exact/predicates3d.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+namespace toposimp::mesh {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
+
+// Vertex flags.
+constexpr std::uint8_t kBoundary = 1;  // on an edge with one face
+constexpr std::uint8_t kLocked = 2;    // never moves, never removed
+constexpr std::uint8_t kDead = 4;      // merged into another vertex
+constexpr std::uint8_t kInside = 8;    // this level: it and all its neighbours lie in its block
+
+// A symmetric 4×4 quadric (Garland & Heckbert 1997) plus the area it was built from.
+struct Quadric {
+    double xx = 0, xy = 0, xz = 0, xw = 0, yy = 0, yz = 0, yw = 0, zz = 0, zw = 0, ww = 0, area = 0;
+
+    void add_plane(double a, double b, double c, double d, double weight) {
+        xx += weight * a * a, xy += weight * a * b, xz += weight * a * c, xw += weight * a * d;
+        yy += weight * b * b, yz += weight * b * c, yw += weight * b * d;
+        zz += weight * c * c, zw += weight * c * d, ww += weight * d * d;
+    }
+    Quadric& operator+=(const Quadric& q) {
+        xx += q.xx, xy += q.xy, xz += q.xz, xw += q.xw, yy += q.yy, yz += q.yz, yw += q.yw;
+        zz += q.zz, zw += q.zw, ww += q.ww, area += q.area;
+        return *this;
+    }
+    double operator()(Point3 p) const {
+        const double x = p.x, y = p.y, z = p.z;
+        return x * (xx * x + 2 * (xy * y + xz * z + xw)) + y * (yy * y + 2 * (yz * z + yw)) + z * (zz * z + 2 * zw) + ww;
+    }
+};
+
+Quadric operator+(Quadric a, const Quadric& b) { return a += b; }
+
+Point3 minus(Point3 a, Point3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+Point3 cross(Point3 a, Point3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double dot(Point3 a, Point3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+double norm(Point3 a) { return std::sqrt(dot(a, a)); }
+
+// The uniform grid: cells of one size, grouped 2^shift per side into level-0 blocks; a level-l
+// block is 2^l level-0 blocks per side. Cell coordinates are a monotone function of each
+// coordinate, so the points of a block form a box (convex).
+struct Grid {
+    Point3 origin{};
+    double inverse_size = 1.0;
+    std::uint32_t cells[3] = {1, 1, 1};
+    int shift = 0;
+
+    std::uint32_t cell(double value, double origin_value, int axis) const {
+        const double c = std::floor((value - origin_value) * inverse_size);
+        if (!(c > 0)) return 0;
+        return c >= cells[axis] - 1.0 ? cells[axis] - 1 : static_cast<std::uint32_t>(c);
+    }
+    std::uint64_t cell_key(Point3 p) const {
+        return pack(cell(p.x, origin.x, 0), cell(p.y, origin.y, 1), cell(p.z, origin.z, 2));
+    }
+    static std::uint64_t pack(std::uint64_t x, std::uint64_t y, std::uint64_t z) { return x << 42 | y << 21 | z; }
+    static std::uint32_t unpack(std::uint64_t key, int axis) {
+        return static_cast<std::uint32_t>(key >> (42 - 21 * axis)) & 0x1fffff;
+    }
+    // The key of the block holding a cell at `level`.
+    std::uint64_t block_of(std::uint64_t cell_key, int level) const {
+        const int s = shift + level;
+        return pack(unpack(cell_key, 0) >> s, unpack(cell_key, 1) >> s, unpack(cell_key, 2) >> s);
+    }
+    int top_level() const {
+        int level = 0;
+        while (((cells[0] - 1) >> (shift + level)) > 0 || ((cells[1] - 1) >> (shift + level)) > 0 ||
+               ((cells[2] - 1) >> (shift + level)) > 0) {
+            ++level;
+        }
+        return level;
+    }
+};
+
+struct Candidate {
+    double cost;
+    std::uint32_t a, b;  // a < b
+    std::uint32_t stamp_a, stamp_b;
+};
+
+// Heap order: the smallest (cost, a, b) on top.
+bool later(const Candidate& x, const Candidate& y) {
+    if (x.cost != y.cost) return x.cost > y.cost;
+    if (x.a != y.a) return x.a > y.a;
+    return x.b > y.b;
+}
+
+struct Placement {
+    Point3 p;
+    double cost;
+};
+
+// What one block did.
+struct BlockResult {
+    MeshStats stats;
+    std::uint64_t faces_removed = 0;
+};
+
+class Simplifier {
+public:
+    Simplifier(Mesh& mesh, const MeshOptions& options) : mesh_(mesh), options_(options) {}
+
+    MeshStats run();
+
+private:
+    void build_topology();
+    void build_quadrics();
+    void choose_grid();
+    void check_terrain();
+    void build_face_index();
+    BlockResult process_block(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t budget,
+                              std::uint64_t block);
+
+    // Live faces around v, unlinking dead corners from v's list as it goes.
+    void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
+    bool try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
+                      std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay);
+    bool place(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, Placement& out) const;
+    bool in_block(Point3 p, int level, std::uint64_t block) const {
+        return grid_.block_of(grid_.cell_key(p), level) == block;
+    }
+    exact::Triangle3 triangle(const Face& f) const { return {pos_[f[0]], pos_[f[1]], pos_[f[2]]}; }
+    Box3 face_box(std::uint32_t f) const {
+        const Face& c = face_[f];
+        return triangle_box(pos_[c[0]], pos_[c[1]], pos_[c[2]]);
+    }
+    template <class Visit>
+    void for_cells(const Box3& box, Visit visit) const;
+    void query(const Box3& box, const std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
+               std::vector<std::uint32_t>& out) const;
+    void collect_edges(std::uint32_t v, bool only_larger, int level, std::uint64_t block, std::vector<Candidate>& out,
+                       std::vector<std::uint32_t>& scratch);
+    double error_of(const Placement& placement, std::uint32_t a, std::uint32_t b) const;
+
+    Mesh& mesh_;
+    const MeshOptions& options_;
+    bool use_index_ = false;
+    bool terrain_ = false;
+    int terrain_turn_ = 0;  // the map-plane orientation all terrain faces share
+    Grid grid_;
+
+    std::vector<Point3>& pos_ = mesh_.points;
+    std::vector<Face>& face_ = mesh_.faces;
+    std::vector<std::uint8_t> alive_;
+    std::vector<std::uint32_t> next_;  // per corner: the next corner of the same vertex
+    std::vector<std::uint32_t> head_;  // per vertex: its first corner
+    std::vector<std::uint8_t> flags_;
+    std::vector<std::uint32_t> stamp_;
+    std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
+    std::vector<Quadric> quadric_;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> index_;  // (cell, face), sorted
+    std::uint64_t live_faces_ = 0;
+};
+
+void Simplifier::build_topology() {
+    const std::size_t n = pos_.size(), m = face_.size();
+    alive_.assign(m, 1);
+    next_.assign(3 * m, kNone);
+    head_.assign(n, kNone);
+    flags_.assign(n, 0);
+    stamp_.assign(n, 0);
+    for (std::size_t f = m; f-- > 0;) {
+        for (int k = 2; k >= 0; --k) {
+            const std::uint32_t v = face_[f][k];
+            const auto corner = static_cast<std::uint32_t>(3 * f + k);
+            next_[corner] = head_[v];
+            head_[v] = corner;
+        }
+    }
+    live_faces_ = m;
+}
+
+void Simplifier::build_quadrics() {
+    const auto n = static_cast<std::int64_t>(pos_.size());
+    quadric_.assign(pos_.size(), Quadric{});
+    // Each vertex sums the planes of its faces in list order: deterministic for any thread count.
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < n; ++v) {
+        Quadric q;
+        for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
+            const Face& f = face_[c / 3];
+            const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+            const double length = norm(normal);
+            if (!(length > 0)) continue;
+            const Point3 unit{normal.x / length, normal.y / length, normal.z / length};
+            const double area = 0.5 * length;
+            q.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[f[0]]), area);
+            q.area += area;
+        }
+        quadric_[v] = q;
+    }
+    // Border edges: one face. Mark their ends; unless locked, hold them near the border with a
+    // plane through the edge perpendicular to its face, weighted heavily (Garland & Heckbert §6).
+    struct Half {
+        std::uint32_t lo, hi, face;
+    };
+    std::vector<Half> halves;
+    halves.reserve(face_.size() * 3);
+    for (std::uint32_t f = 0; f < face_.size(); ++f) {
+        for (int k = 0; k < 3; ++k) {
+            const std::uint32_t a = face_[f][k], b = face_[f][(k + 1) % 3];
+            halves.push_back({std::min(a, b), std::max(a, b), f});
+        }
+    }
+    std::sort(halves.begin(), halves.end(), [](const Half& x, const Half& y) {
+        return x.lo != y.lo ? x.lo < y.lo : (x.hi != y.hi ? x.hi < y.hi : x.face < y.face);
+    });
+    for (std::size_t i = 0; i < halves.size();) {
+        std::size_t j = i + 1;
+        while (j < halves.size() && halves[j].lo == halves[i].lo && halves[j].hi == halves[i].hi) ++j;
+        if (j - i == 1) {
+            const Half& h = halves[i];
+            flags_[h.lo] |= kBoundary;
+            flags_[h.hi] |= kBoundary;
+            if (options_.lock_boundary) {
+                flags_[h.lo] |= kLocked;
+                flags_[h.hi] |= kLocked;
+            } else {
+                const Face& f = face_[h.face];
+                const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+                const Point3 edge = minus(pos_[h.hi], pos_[h.lo]);
+                const Point3 side = cross(edge, normal);
+                const double length = norm(side);
+                if (length > 0) {
+                    const Point3 unit{side.x / length, side.y / length, side.z / length};
+                    const double weight = 1000.0 * dot(edge, edge);
+                    Quadric q;
+                    q.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[h.lo]), weight);
+                    quadric_[h.lo] += q;
+                    quadric_[h.hi] += q;
+                }
+            }
+        }
+        i = j;
+    }
+}
+
+void Simplifier::choose_grid() {
+    Box3 box = point_box(pos_.empty() ? Point3{0, 0, 0} : pos_[0]);
+    for (const Point3& p : pos_) box.add(p);
+    double edges = 0;
+    std::size_t count = 0;
+    for (const Face& f : face_) {
+        for (int k = 0; k < 3; ++k) edges += norm(minus(pos_[f[k]], pos_[f[(k + 1) % 3]]));
+        count += 3;
+    }
+    double size = count > 0 ? 1.5 * edges / static_cast<double>(count) : 1.0;
+    const double extent[3] = {box.hi.x - box.lo.x, box.hi.y - box.lo.y, box.hi.z - box.lo.z};
+    const double largest = std::max({extent[0], extent[1], extent[2]});
+    if (!(size > 0) || !std::isfinite(size)) size = largest > 0 ? largest : 1.0;
+    // At most 2^20 cells per side (keys pack 21 bits per axis).
+    if (largest / size > 1048575.0) size = largest / 1048575.0;
+    grid_.origin = box.lo;
+    grid_.inverse_size = 1.0 / size;
+    for (int axis = 0; axis < 3; ++axis) {
+        grid_.cells[axis] = static_cast<std::uint32_t>(std::min(1048576.0, std::floor(extent[axis] / size) + 1));
+    }
+    // Level-0 blocks: the fewest cells per block side (a power of two) that leaves at most 512
+    // blocks (the dissertation's best grid resolution). Never a function of the thread count:
+    // the result must not depend on it.
+    const double most_blocks = 512.0;
+    grid_.shift = 0;
+    for (;;) {
+        double blocks = 1;
+        for (int axis = 0; axis < 3; ++axis) blocks *= static_cast<double>(((grid_.cells[axis] - 1) >> grid_.shift) + 1);
+        if (blocks <= most_blocks) break;
+        ++grid_.shift;
+    }
+    cell_.resize(pos_.size());
+    for (std::size_t v = 0; v < pos_.size(); ++v) cell_[v] = grid_.cell_key(pos_[v]);
+}
+
+void Simplifier::check_terrain() {
+    terrain_ = false;
+    if (!options_.terrain) return;
+    exact::PredicateStats stats;
+    int turn = 0;
+    for (const Face& f : face_) {
+        const int t = exact::orient_projected(pos_[f[0]], pos_[f[1]], pos_[f[2]], 2, stats);
+        if (t == 0 || (turn != 0 && t != turn)) return;  // not a planar triangulation: 3D tests
+        turn = t;
+    }
+    terrain_ = true;
+    terrain_turn_ = turn;
+}
+
+template <class Visit>
+void Simplifier::for_cells(const Box3& box, Visit visit) const {
+    const std::uint64_t lo = grid_.cell_key(box.lo), hi = grid_.cell_key(box.hi);
+    for (std::uint32_t x = Grid::unpack(lo, 0); x <= Grid::unpack(hi, 0); ++x) {
+        for (std::uint32_t y = Grid::unpack(lo, 1); y <= Grid::unpack(hi, 1); ++y) {
+            for (std::uint32_t z = Grid::unpack(lo, 2); z <= Grid::unpack(hi, 2); ++z) visit(Grid::pack(x, y, z));
+        }
+    }
+}
+
+void Simplifier::build_face_index() {
+    index_.clear();
+    if (!use_index_) return;
+    const auto m = static_cast<std::int64_t>(face_.size());
+    std::vector<std::vector<std::pair<std::uint64_t, std::uint32_t>>> parts(static_cast<std::size_t>(omp_get_max_threads()));
+#pragma omp parallel
+    {
+        auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+        for (std::int64_t f = 0; f < m; ++f) {
+            if (!alive_[f]) continue;
+            for_cells(face_box(static_cast<std::uint32_t>(f)),
+                      [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
+        }
+    }
+    for (auto& part : parts) index_.insert(index_.end(), part.begin(), part.end());
+    std::sort(index_.begin(), index_.end());
+}
+
+void Simplifier::query(const Box3& box, const std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
+                       std::vector<std::uint32_t>& out) const {
+    out.clear();
+    for_cells(box, [&](std::uint64_t key) {
+        auto it = std::lower_bound(index_.begin(), index_.end(), std::pair<std::uint64_t, std::uint32_t>{key, 0});
+        for (; it != index_.end() && it->first == key; ++it) out.push_back(it->second);
+        if (auto found = overlay.find(key); found != overlay.end()) {
+            out.insert(out.end(), found->second.begin(), found->second.end());
+        }
+    });
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+}
+
+void Simplifier::faces_of(std::uint32_t v, std::vector<std::uint32_t>& out) {
+    out.clear();
+    std::uint32_t* link = &head_[v];
+    while (*link != kNone) {
+        const std::uint32_t c = *link;
+        if (!alive_[c / 3]) {
+            *link = next_[c];  // unlink the dead corner
+            continue;
+        }
+        out.push_back(c / 3);
+        link = &next_[c];
+    }
+}
+
+bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, Placement& out) const {
+    const bool locked_a = (flags_[a] & kLocked) != 0, locked_b = (flags_[b] & kLocked) != 0;
+    if (locked_a && locked_b) return false;
+    const Quadric q = quadric_[a] + quadric_[b];
+    if (locked_a || locked_b) {
+        out.p = locked_a ? pos_[a] : pos_[b];
+        out.cost = q(out.p);
+        return true;
+    }
+    // Optimal placement: solve the 3×3 system ∇(vᵀQv) = 0 by Cramer's rule when it is well
+    // conditioned and its solution stays near the edge and inside the block.
+    const double m00 = q.xx, m01 = q.xy, m02 = q.xz, m11 = q.yy, m12 = q.yz, m22 = q.zz;
+    const double r0 = -q.xw, r1 = -q.yw, r2 = -q.zw;
+    const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22, c02 = m01 * m12 - m02 * m11;
+    const double det = m00 * c00 + m01 * c01 + m02 * c02;
+    const double scale = std::max({std::fabs(m00), std::fabs(m11), std::fabs(m22)});
+    const Point3 pa = pos_[a], pb = pos_[b];
+    if (std::fabs(det) > 1e-10 * scale * scale * scale && std::isfinite(det)) {
+        const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
+        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det, (c01 * r0 + c11 * r1 + c12 * r2) / det,
+                       (c02 * r0 + c12 * r1 + c22 * r2) / det};
+        const double reach = norm(minus(pb, pa));
+        const bool near = std::fabs(p.x - 0.5 * (pa.x + pb.x)) <= reach && std::fabs(p.y - 0.5 * (pa.y + pb.y)) <= reach &&
+                          std::fabs(p.z - 0.5 * (pa.z + pb.z)) <= reach;
+        if (near && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && in_block(p, level, block)) {
+            out = {p, q(p)};
+            return true;
+        }
+    }
+    // Otherwise the best of the two ends and the midpoint.
+    out = {pa, q(pa)};
+    const double cost_b = q(pb);
+    if (cost_b < out.cost) out = {pb, cost_b};
+    const Point3 mid{0.5 * (pa.x + pb.x), 0.5 * (pa.y + pb.y), 0.5 * (pa.z + pb.z)};
+    const double cost_mid = q(mid);
+    if (cost_mid < out.cost && in_block(mid, level, block)) out = {mid, cost_mid};
+    return true;
+}
+
+double Simplifier::error_of(const Placement& placement, std::uint32_t a, std::uint32_t b) const {
+    const double area = quadric_[a].area + quadric_[b].area;
+    return area > 0 ? std::sqrt(std::max(placement.cost, 0.0) / area) : 0.0;
+}
+
+void Simplifier::collect_edges(std::uint32_t v, bool only_larger, int level, std::uint64_t block,
+                               std::vector<Candidate>& out, std::vector<std::uint32_t>& scratch) {
+    // Neighbours of v (it is inside: they all lie in its block).
+    thread_local std::vector<std::uint32_t> around;
+    around.clear();
+    faces_of(v, scratch);
+    for (std::uint32_t f : scratch) {
+        for (std::uint32_t w : face_[f]) {
+            if (w != v && (!only_larger || w > v)) around.push_back(w);
+        }
+    }
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
+    for (std::uint32_t w : around) {
+        if ((flags_[w] & kInside) == 0) continue;
+        const std::uint32_t a = std::min(v, w), b = std::max(v, w);
+        Placement placement;
+        if (!place(a, b, level, block, placement)) continue;
+        out.push_back({placement.cost, a, b, stamp_[a], stamp_[b]});
+    }
+}
+
+BlockResult Simplifier::process_block(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t budget,
+                                      std::uint64_t block) {
+    BlockResult result;
+    std::vector<std::uint32_t> scratch;
+    // Which vertices have their whole star in the block (fixed for the level: a collapse only
+    // merges two inside vertices, so no neighbour outside the block appears or disappears).
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::uint32_t v = vertices[i];
+        faces_of(v, scratch);
+        bool inside = true;
+        for (std::uint32_t f : scratch) {
+            for (std::uint32_t w : face_[f]) inside = inside && grid_.block_of(cell_[w], level) == block;
+        }
+        flags_[v] = static_cast<std::uint8_t>(inside ? flags_[v] | kInside : flags_[v] & ~kInside);
+    }
+    std::vector<Candidate> heap;
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::uint32_t v = vertices[i];
+        if ((flags_[v] & kInside) != 0) collect_edges(v, true, level, block, heap, scratch);
+    }
+    std::make_heap(heap.begin(), heap.end(), later);
+    std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> overlay;
+    std::vector<Candidate> fresh;
+    while (!heap.empty() && result.faces_removed < budget) {
+        std::pop_heap(heap.begin(), heap.end(), later);
+        const Candidate c = heap.back();
+        heap.pop_back();
+        if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
+        if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b) continue;
+        if (!try_collapse(c.a, c.b, level, block, result, overlay)) continue;
+        fresh.clear();
+        collect_edges(c.a, false, level, block, fresh, scratch);
+        for (const Candidate& e : fresh) {
+            heap.push_back(e);
+            std::push_heap(heap.begin(), heap.end(), later);
+        }
+    }
+    return result;
+}
+
+bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
+                              std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay) {
+    MeshStats& stats = result.stats;
+    Placement placement;
+    if (!place(a, b, level, block, placement)) {
+        ++stats.refused_boundary;
+        return false;
+    }
+    const double error = error_of(placement, a, b);
+    if (options_.target == MeshTarget::max_error && error > options_.value) return false;
+    thread_local std::vector<std::uint32_t> fa, fb, shared, na, nb, common, opposite, star, found;
+    faces_of(a, fa);
+    faces_of(b, fb);
+    shared.clear();
+    for (std::uint32_t f : fa) {
+        const Face& c = face_[f];
+        if (c[0] == b || c[1] == b || c[2] == b) shared.push_back(f);
+    }
+    if (shared.empty()) return false;  // no longer an edge
+    // Link condition (Dey et al. 1999): the common neighbours of a and b are exactly the corners
+    // opposite the edge; a border vertex pair joined through the interior would pinch.
+    auto neighbours = [&](const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) {
+        out.clear();
+        for (std::uint32_t f : faces) {
+            for (std::uint32_t w : face_[f]) {
+                if (w != v) out.push_back(w);
+            }
+        }
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+    };
+    neighbours(fa, a, na);
+    neighbours(fb, b, nb);
+    common.clear();
+    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
+    common.erase(std::remove(common.begin(), common.end(), a), common.end());
+    common.erase(std::remove(common.begin(), common.end(), b), common.end());
+    opposite.clear();
+    for (std::uint32_t f : shared) {
+        for (std::uint32_t w : face_[f]) {
+            if (w != a && w != b) opposite.push_back(w);
+        }
+    }
+    std::sort(opposite.begin(), opposite.end());
+    if (common != opposite) {
+        ++stats.refused_link;
+        return false;
+    }
+    const bool border_edge = shared.size() == 1;
+    if ((flags_[a] & kBoundary) && (flags_[b] & kBoundary) && !border_edge) {
+        ++stats.refused_boundary;
+        return false;
+    }
+    // star: every face that changes (has a or b but not both).
+    star.clear();
+    for (std::uint32_t f : fa) {
+        if (std::find(shared.begin(), shared.end(), f) == shared.end()) star.push_back(f);
+    }
+    const std::size_t from_a = star.size();
+    for (std::uint32_t f : fb) {
+        if (std::find(shared.begin(), shared.end(), f) == shared.end()) star.push_back(f);
+    }
+    if (star.empty()) {
+        ++stats.refused_link;  // the component would vanish
+        return false;
+    }
+    exact::PredicateStats& predicates = stats.predicates;
+    thread_local std::vector<exact::Triangle3> fresh;
+    fresh.clear();
+    Box3 reach = point_box(placement.p);
+    for (std::size_t i = 0; i < star.size(); ++i) {
+        const Face& c = face_[star[i]];
+        exact::Triangle3 before = triangle(c), after = before;
+        for (int k = 0; k < 3; ++k) {
+            if (c[k] == a || c[k] == b) after[k] = placement.p;
+        }
+        if (exact::degenerate(after, predicates)) {
+            ++stats.refused_degenerate;
+            return false;
+        }
+        if (terrain_) {
+            if (exact::orient_projected(after[0], after[1], after[2], 2, predicates) != terrain_turn_) {
+                ++stats.refused_flip;
+                return false;
+            }
+        } else if (exact::normal_dot_sign(before[0], before[1], before[2], after[0], after[1], after[2], predicates) <= 0) {
+            ++stats.refused_flip;
+            return false;
+        }
+        if (i >= from_a) {
+            // A face (b, x, y) becomes (a, x, y): refuse if a already has a face on x and y.
+            std::uint32_t x = kNone, y = kNone;
+            for (std::uint32_t w : c) {
+                if (w != b) (x == kNone ? x : y) = w;
+            }
+            for (std::uint32_t f : fa) {
+                const Face& d = face_[f];
+                const bool has_x = d[0] == x || d[1] == x || d[2] == x, has_y = d[0] == y || d[1] == y || d[2] == y;
+                if (has_x && has_y) {
+                    ++stats.refused_degenerate;
+                    return false;
+                }
+            }
+        }
+        for (const Point3& corner : after) reach.add(corner);
+        fresh.push_back(after);
+    }
+    // Contacts. In a terrain with a locked border the planar argument suffices; a collapse that
+    // moves a border vertex of a terrain is checked in the map plane (faces flattened to z = 0).
+    const bool moves_border = ((flags_[a] | flags_[b]) & kBoundary) != 0 && !options_.lock_boundary;
+    const bool flatten = terrain_ && moves_border;
+    if (!terrain_ || flatten) {
+        auto flat = [&](exact::Triangle3 t) {
+            if (flatten) {
+                for (Point3& p : t) p.z = 0;
+            }
+            return t;
+        };
+        Box3 box = reach;
+        if (flatten) {
+            box.lo.z = grid_.origin.z;
+            box.hi.z = std::numeric_limits<double>::infinity();
+        }
+        query(box, overlay, found);
+        std::sort(fa.begin(), fa.end());
+        std::sort(fb.begin(), fb.end());
+        for (std::uint32_t g : found) {
+            if (!alive_[g] || std::binary_search(fa.begin(), fa.end(), g) || std::binary_search(fb.begin(), fb.end(), g)) {
+                continue;
+            }
+            const exact::Triangle3 other = flat(triangle(face_[g]));
+            const Box3 other_box = triangle_box(other[0], other[1], other[2]);
+            for (const exact::Triangle3& t : fresh) {
+                const exact::Triangle3 mine = flat(t);
+                if (!triangle_box(mine[0], mine[1], mine[2]).overlaps(other_box)) continue;
+                if (exact::faces_conflict(mine, other, predicates)) {
+                    ++stats.refused_intersection;
+                    return false;
+                }
+            }
+        }
+        for (std::size_t i = 0; i < fresh.size(); ++i) {
+            for (std::size_t j = i + 1; j < fresh.size(); ++j) {
+                if (exact::faces_conflict(flat(fresh[i]), flat(fresh[j]), predicates)) {
+                    ++stats.refused_intersection;
+                    return false;
+                }
+            }
+        }
+    }
+    // Apply: b merges into a at the placement.
+    for (std::uint32_t f : shared) alive_[f] = 0;
+    std::uint32_t* tail = &head_[a];
+    while (*tail != kNone) tail = &next_[*tail];
+    for (std::uint32_t c = head_[b]; c != kNone; c = next_[c]) {
+        if (alive_[c / 3]) face_[c / 3][c % 3] = a;
+    }
+    *tail = head_[b];
+    head_[b] = kNone;
+    pos_[a] = placement.p;
+    cell_[a] = grid_.cell_key(placement.p);
+    quadric_[a] += quadric_[b];
+    flags_[a] = static_cast<std::uint8_t>(flags_[a] | (flags_[b] & (kBoundary | kLocked)));
+    flags_[b] = static_cast<std::uint8_t>(flags_[b] | kDead);
+    ++stamp_[a];
+    if (use_index_) {
+        for (std::uint32_t f : star) {
+            for_cells(face_box(f), [&](std::uint64_t key) { overlay[key].push_back(f); });
+        }
+    }
+    ++stats.collapses;
+    stats.max_error = std::max(stats.max_error, error);
+    result.faces_removed += shared.size();
+    return true;
+}
+
+MeshStats Simplifier::run() {
+    const auto start = Clock::now();
+    MeshStats stats;
+    drop_unused(mesh_);
+    stats.vertices_in = pos_.size();
+    stats.faces_in = face_.size();
+    int threads = options_.threads > 0 ? options_.threads : omp_get_max_threads();
+    if (face_.size() < options_.parallel_threshold) threads = 1;
+    stats.threads = threads;
+    std::uint64_t target = 0;
+    if (options_.target == MeshTarget::keep_fraction) {
+        target = static_cast<std::uint64_t>(std::llround(options_.value * static_cast<double>(face_.size())));
+    } else if (options_.target == MeshTarget::keep_faces) {
+        target = static_cast<std::uint64_t>(std::max(0.0, options_.value));
+    }
+    stats.target_faces = target;
+    const int saved_threads = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    build_topology();
+    build_quadrics();
+    choose_grid();
+    check_terrain();
+    use_index_ = !terrain_ || !options_.lock_boundary;
+    stats.seconds_setup = std::chrono::duration<double>(Clock::now() - start).count();
+    const auto sweep = Clock::now();
+
+    const bool by_count = options_.target != MeshTarget::max_error;
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
+    const int top = grid_.top_level();
+    for (int level = 0; level <= top; ++level) {
+        if (by_count && live_faces_ <= target) break;
+        ++stats.levels;
+        build_face_index();
+        order.clear();
+        for (std::uint32_t v = 0; v < pos_.size(); ++v) {
+            if ((flags_[v] & kDead) == 0) order.emplace_back(grid_.block_of(cell_[v], level), v);
+        }
+        std::sort(order.begin(), order.end());
+        std::vector<std::uint32_t> vertices(order.size());
+        struct Block {
+            std::uint64_t key;
+            std::size_t first, count;
+            std::uint64_t budget;
+        };
+        std::vector<Block> blocks;
+        for (std::size_t i = 0; i < order.size();) {
+            std::size_t j = i;
+            while (j < order.size() && order[j].first == order[i].first) {
+                vertices[j] = order[j].second;
+                ++j;
+            }
+            blocks.push_back({order[i].first, i, j - i, 0});
+            i = j;
+        }
+        // Count targets: each block removes its share of what is left, in proportion to its vertices.
+        const std::uint64_t left = by_count ? live_faces_ - target : std::numeric_limits<std::uint64_t>::max();
+        for (Block& block : blocks) {
+            block.budget = !by_count ? left
+                           : level == top ? left
+                                          : static_cast<std::uint64_t>(static_cast<long double>(left) * block.count /
+                                                                       static_cast<long double>(order.size()));
+        }
+        std::vector<BlockResult> results(blocks.size());
+        const auto block_count = static_cast<std::int64_t>(blocks.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+        for (std::int64_t i = 0; i < block_count; ++i) {
+            const Block& block = blocks[static_cast<std::size_t>(i)];
+            results[static_cast<std::size_t>(i)] =
+                process_block(level, vertices.data() + block.first, block.count, block.budget, block.key);
+        }
+        for (const BlockResult& r : results) {
+            const MeshStats& s = r.stats;
+            stats.collapses += s.collapses;
+            stats.refused_link += s.refused_link;
+            stats.refused_boundary += s.refused_boundary;
+            stats.refused_flip += s.refused_flip;
+            stats.refused_degenerate += s.refused_degenerate;
+            stats.refused_intersection += s.refused_intersection;
+            stats.max_error = std::max(stats.max_error, s.max_error);
+            stats.predicates += s.predicates;
+            live_faces_ -= r.faces_removed;
+        }
+    }
+    omp_set_num_threads(saved_threads);
+    stats.target_reached = by_count ? live_faces_ <= target : true;
+    // Compact: surviving faces and vertices in input order.
+    std::size_t kept = 0;
+    for (std::size_t f = 0; f < face_.size(); ++f) {
+        if (alive_[f]) face_[kept++] = face_[f];
+    }
+    face_.resize(kept);
+    drop_unused(mesh_);
+    stats.vertices_out = pos_.size();
+    stats.faces_out = face_.size();
+    stats.seconds_collapse = std::chrono::duration<double>(Clock::now() - sweep).count();
+    return stats;
+}
+
+}  // namespace
+
+MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options) { return Simplifier(mesh, options).run(); }
+
+}  // namespace toposimp::mesh

@@ -1,0 +1,71 @@
+// UGSimp: parallel quadric-error edge collapse that never creates a self-intersection, a
+// flipped face or a non-manifold edge (dissertation chapter 4, extended).
+//
+// The mesh is overlaid with a 3D uniform grid whose cells are grouped into blocks; a level's
+// blocks are simplified in parallel, each with its own binary heap of edges ranked by the
+// Garland–Heckbert quadric error. An edge is a candidate in a block only when both ends and all
+// their neighbours lie in the block, and the merged vertex is placed inside the block too: every
+// face a collapse changes, and every face it is tested against that another thread could change,
+// then lie in separate blocks. When a level has done what it can, blocks are merged 2×2×2 and
+// the next level runs, up to one block. Every collapse is checked before it is made, with exact
+// predicates (float filter, GMP fallback): link condition, no face flipped (normal reversed, or
+// for terrain, orientation in the map plane changed), no degenerate or duplicate face, and no
+// contact between a new face and any other face except along the corners they share.
+#pragma once
+
+#include "core/exact/predicates.hpp"
+#include "core/mesh/mesh.hpp"
+
+#include <cstddef>
+#include <cstdint>
+
+namespace toposimp::mesh {
+
+enum class MeshTarget {
+    keep_fraction,  // keep this share of the faces
+    keep_faces,     // keep this many faces
+    max_error,      // collapse while the quadric error (a distance, map units) stays at most this
+};
+
+struct MeshOptions {
+    MeshTarget target = MeshTarget::keep_fraction;
+    double value = 0.1;
+    // Border vertices (on an edge with one face) never move and are never removed.
+    bool lock_boundary = false;
+    // The faces triangulate the map plane (a terrain TIN, z = height): a collapse must keep every
+    // face's orientation in the x–y plane. The surface then stays a height field over a valid
+    // planar triangulation, which cannot self-intersect, so no 3D intersection search is needed.
+    bool terrain = false;
+    int threads = 0;  // 0: OpenMP's default
+    // Meshes with fewer faces run on one thread (results are identical either way).
+    std::size_t parallel_threshold = std::size_t{1} << 14;
+};
+
+struct MeshStats {
+    std::uint64_t vertices_in = 0, vertices_out = 0;
+    std::uint64_t faces_in = 0, faces_out = 0;
+    std::uint64_t target_faces = 0;  // count targets only
+    bool target_reached = false;
+    std::uint64_t collapses = 0;
+    // Collapses refused, by reason.
+    std::uint64_t refused_link = 0;          // link condition: would make a non-manifold edge or vertex
+    std::uint64_t refused_boundary = 0;      // would pinch a border or move a locked vertex
+    std::uint64_t refused_flip = 0;          // a face would turn over (3D normal, or map-plane fold)
+    std::uint64_t refused_degenerate = 0;    // a face would lose its area or duplicate another
+    std::uint64_t refused_intersection = 0;  // a new face would touch or cross another face
+    std::uint64_t refused() const {
+        return refused_link + refused_boundary + refused_flip + refused_degenerate + refused_intersection;
+    }
+    double max_error = 0.0;  // largest quadric error (distance) of a collapse made
+    int levels = 0;
+    int threads = 1;
+    double seconds_setup = 0.0, seconds_collapse = 0.0;
+    exact::PredicateStats predicates;
+};
+
+// Simplifies `mesh` in place. The input must have no non-manifold edge (find_non_manifold_edge)
+// and no face repeating a corner (drop_unused); vertices that no face uses are dropped. The
+// result keeps the surviving vertices in input order and the surviving faces in input order.
+MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options);
+
+}  // namespace toposimp::mesh

@@ -1,0 +1,118 @@
+// 3D predicates on near-degenerate input: the filter agrees with GMP everywhere, and plain
+// doubles get some of these cases wrong.
+#include "core/exact/predicates3d.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace toposimp::exact {
+namespace {
+
+Point3 up(Point3 p, int ulps) {
+    for (int k = 0; k < std::abs(ulps); ++k) p.z = std::nextafter(p.z, ulps > 0 ? INFINITY : -INFINITY);
+    return p;
+}
+
+TEST(Orient3d, SignsOfSimpleCases) {
+    PredicateStats stats;
+    const Point3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+    EXPECT_EQ(orient3d(a, b, c, {0, 0, 1}, stats), 1);
+    EXPECT_EQ(orient3d(a, b, c, {0, 0, -1}, stats), -1);
+    EXPECT_EQ(orient3d(a, b, c, {5, 7, 0}, stats), 0);
+    EXPECT_EQ(orient3d(a, b, c, {0, 0, 0x1p-1074}, stats), 1);  // the smallest subnormal above
+}
+
+TEST(Orient3d, FilterAgreesWithGmpNearPlanesWhereDoublesFail) {
+    // Points on (or one ulp off) the plane through three points with large, mixed coordinates.
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> coordinate(-1e6, 1e6);
+    PredicateStats stats;
+    int float_wrong = 0, cases = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const Point3 a{coordinate(random), coordinate(random), coordinate(random)};
+        const Point3 b{coordinate(random), coordinate(random), coordinate(random)};
+        const Point3 c{coordinate(random), coordinate(random), coordinate(random)};
+        // d on the segment between a and b, rounded: within an ulp or so of abc's plane.
+        const double t = std::uniform_real_distribution<double>(0, 1)(random);
+        Point3 d{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z)};
+        d = up(d, static_cast<int>(trial % 3) - 1);
+        const int truth = orient3d_gmp(a, b, c, d);
+        EXPECT_EQ(orient3d(a, b, c, d, stats), truth);
+        if (orient3d_float(a, b, c, d) != truth) ++float_wrong;
+        ++cases;
+    }
+    EXPECT_GT(float_wrong, 0) << "plain doubles should get some of " << cases << " cases wrong";
+    EXPECT_GT(stats.gmp_fallbacks, 0u);
+}
+
+TEST(Orient3d, HugeAndTinyCoordinates) {
+    PredicateStats stats;
+    for (double scale : {0x1p-1000, 0x1p-500, 1.0, 0x1p500, 0x1p900}) {
+        const Point3 a{0, 0, 0}, b{scale, 0, 0}, c{0, scale, 0};
+        const Point3 above{scale / 3, scale / 3, std::nextafter(0.0, 1.0)};
+        EXPECT_EQ(orient3d(a, b, c, above, stats), orient3d_gmp(a, b, c, above)) << scale;
+        EXPECT_EQ(orient3d(a, b, c, above, stats), 1) << scale;
+        const Point3 on{scale / 4, scale / 2, 0};
+        EXPECT_EQ(orient3d(a, b, c, on, stats), 0) << scale;
+    }
+}
+
+TEST(NormalDot, OppositeAndDegenerate) {
+    PredicateStats stats;
+    const Point3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};
+    EXPECT_EQ(normal_dot_sign(a, b, c, a, b, c, stats), 1);
+    EXPECT_EQ(normal_dot_sign(a, b, c, a, c, b, stats), -1);
+    EXPECT_EQ(normal_dot_sign(a, b, c, a, b, {2, 0, 0}, stats), 0);  // collinear
+    // A triangle tilted by one ulp against a vertical one: orthogonal in exact arithmetic?
+    const Point3 v1{0, 0, 0}, v2{1, 0, 0}, v3{0, 0, 1};
+    EXPECT_EQ(normal_dot_sign(a, b, c, v1, v2, v3, stats), 0);
+    EXPECT_EQ(normal_dot_sign(a, b, c, v1, v2, {0, 0x1p-60, 1}, stats), 1);
+}
+
+TEST(SegmentTriangle, TouchesAndMisses) {
+    PredicateStats stats;
+    const Triangle3 t{Point3{0, 0, 0}, Point3{4, 0, 0}, Point3{0, 4, 0}};
+    EXPECT_TRUE(segment_meets_triangle({1, 1, -1}, {1, 1, 1}, t, stats));    // pierces
+    EXPECT_TRUE(segment_meets_triangle({2, 2, -1}, {2, 2, 1}, t, stats));    // through the hypotenuse
+    EXPECT_TRUE(segment_meets_triangle({1, 1, 0}, {1, 1, 5}, t, stats));     // endpoint on the face
+    EXPECT_TRUE(segment_meets_triangle({0, 0, 1}, {0, 0, -1}, t, stats));    // through a corner
+    EXPECT_FALSE(segment_meets_triangle({1, 1, 0x1p-1000}, {1, 1, 5}, t, stats));  // just above
+    EXPECT_TRUE(segment_meets_triangle({-1, 1, 0}, {1, 1, 0}, t, stats));    // coplanar, crosses an edge
+    EXPECT_FALSE(segment_meets_triangle({-1, 1, 0}, {-0.5, 1, 0}, t, stats));  // coplanar, outside
+    EXPECT_TRUE(segment_meets_triangle({-1, 0, 0}, {5, 0, 0}, t, stats));    // along an edge
+    // Just beyond the hypotenuse x + y = 4 by the smallest step in x.
+    const double x = std::nextafter(2.0, 3.0);
+    EXPECT_FALSE(segment_meets_triangle({x, 2, -1}, {x, 2, 1}, t, stats));
+    // Degenerate triangle (a segment) crossed by a segment.
+    const Triangle3 flat{Point3{0, 0, 0}, Point3{2, 2, 2}, Point3{1, 1, 1}};
+    EXPECT_TRUE(segment_meets_triangle({0, 2, 1}, {2, 0, 1}, flat, stats));
+    EXPECT_FALSE(segment_meets_triangle({0, 2, 1.5}, {2, 0, 1.5}, flat, stats));
+}
+
+TEST(FacesConflict, SharedCornersAndEdges) {
+    PredicateStats stats;
+    const Point3 s{0, 0, 0}, a{1, 0, 0}, b{0, 1, 0};
+    const Triangle3 f{s, a, b};
+    // Share the corner s, other face below the plane: fine.
+    EXPECT_FALSE(faces_conflict(f, {s, Point3{-1, 0, -1}, Point3{0, -1, -1}}, stats));
+    // Share s, coplanar, in the opposite quadrant: fine; overlapping angle: conflict.
+    EXPECT_FALSE(faces_conflict(f, {s, Point3{-1, 0, 0}, Point3{0, -1, 0}}, stats));
+    EXPECT_TRUE(faces_conflict(f, {s, Point3{1, 1, 0}, Point3{2, 1, 0}}, stats));
+    // Share s, non-coplanar, but the other face pierces f: conflict.
+    EXPECT_TRUE(faces_conflict(f, {s, Point3{0.5, 0.2, 1}, Point3{0.2, 0.5, -1}}, stats));
+    // Share an edge: a hinge is fine, a coplanar fold-over is a conflict.
+    EXPECT_FALSE(faces_conflict(f, {a, b, Point3{1, 1, 0}}, stats));
+    EXPECT_FALSE(faces_conflict(f, {a, b, Point3{0.2, 0.2, 1}}, stats));
+    EXPECT_TRUE(faces_conflict(f, {a, b, Point3{0.2, 0.2, 0}}, stats));
+    // The fold one ulp out of the plane is a legitimate (very sharp) hinge.
+    EXPECT_FALSE(faces_conflict(f, {a, b, Point3{0.2, 0.2, 0x1p-1074}}, stats));
+    // Same three corners: a duplicate.
+    EXPECT_TRUE(faces_conflict(f, {b, s, a}, stats));
+    // No shared corner, touching at a point: conflict.
+    EXPECT_TRUE(faces_conflict(f, {Point3{0.25, 0.25, 0}, Point3{1, 1, 1}, Point3{0, 1, 1}}, stats));
+}
+
+}  // namespace
+}  // namespace toposimp::exact
