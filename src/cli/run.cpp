@@ -2,6 +2,7 @@
 
 #include "cli/check_command.hpp"
 #include "cli/map_command.hpp"
+#include "cli/mesh_command.hpp"
 #include "io/ogr_dataset.hpp"
 
 #include <CLI/CLI.hpp>
@@ -40,10 +41,13 @@ int run(const std::vector<std::string>& args, Context& context) {
                "Exit status: 0 ok, 1 topology or validation failure, 2 usage or input error.");
     MapOptions map_options;
     CLI::App* map = add_map_command(app, map_options);
+    MeshCommandOptions mesh_options;
+    CLI::App* mesh = add_mesh_command(app, mesh_options);
     CheckCommandOptions check_options;
     CLI::App* check = add_check_command(app, check_options);
     auto chosen = [&]() -> CLI::App* {
         if (app.got_subcommand(map)) return map;
+        if (app.got_subcommand(mesh)) return mesh;
         if (app.got_subcommand(check)) return check;
         return nullptr;
     };
@@ -68,6 +72,7 @@ int run(const std::vector<std::string>& args, Context& context) {
         return kUsageError;
     }
     if (app.got_subcommand(map)) return run_map(map_options, context);
+    if (app.got_subcommand(mesh)) return run_mesh(mesh_options, context);
     if (app.got_subcommand(check)) return run_check(check_options, context);
     context.err << app.help();
     return kUsageError;

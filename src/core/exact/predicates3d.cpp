@@ -163,6 +163,29 @@ bool enters(Point3 s, Point3 x, const Triangle3& t, int at, PredicateStats& stat
 int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) { return sign_of(orient3d_expr<mpq_class>(a, b, c, d)); }
 
 int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
+    // Shewchuk's semi-static filter first (orient3dfast with the bound (7 + 56ε)ε·permanent);
+    // his determinant det[a−d; b−d; c−d] is the negative of ours.
+    const double adx = a.x - d.x, bdx = b.x - d.x, cdx = c.x - d.x;
+    const double ady = a.y - d.y, bdy = b.y - d.y, cdy = c.y - d.y;
+    const double adz = a.z - d.z, bdz = b.z - d.z, cdz = c.z - d.z;
+    const double bdxcdy = bdx * cdy, cdxbdy = cdx * bdy;
+    const double cdxady = cdx * ady, adxcdy = adx * cdy;
+    const double adxbdy = adx * bdy, bdxady = bdx * ady;
+    const double det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady);
+    const double permanent = (std::fabs(bdxcdy) + std::fabs(cdxbdy)) * std::fabs(adz) +
+                             (std::fabs(cdxady) + std::fabs(adxcdy)) * std::fabs(bdz) +
+                             (std::fabs(adxbdy) + std::fabs(bdxady)) * std::fabs(cdz);
+    if (permanent >= 0x1p-800 && permanent <= 0x1p1000) {
+        const double bound = (7.0 + 56.0 * kUnitRoundoff) * kUnitRoundoff * permanent;
+        if (det > bound) {
+            ++stats.filter_decided;
+            return -1;
+        }
+        if (-det > bound) {
+            ++stats.filter_decided;
+            return 1;
+        }
+    }
     const int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d));
     if (sign != 2) {
         ++stats.filter_decided;
@@ -227,6 +250,13 @@ bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateSta
 
 bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
     if (!triangle_box(t[0], t[1], t[2]).overlaps(triangle_box(u[0], u[1], u[2]))) return false;
+    // One strictly on one side of the other's plane: apart (the usual quick rejection).
+    auto apart = [&](const Triangle3& a, const Triangle3& b) {
+        const int s0 = orient3d(a[0], a[1], a[2], b[0], stats);
+        if (s0 == 0) return false;
+        return orient3d(a[0], a[1], a[2], b[1], stats) == s0 && orient3d(a[0], a[1], a[2], b[2], stats) == s0;
+    };
+    if (apart(t, u) || apart(u, t)) return false;
     // Closed triangles meet iff an edge of one meets the other: the boundary of their
     // intersection (a point, segment or convex polygon) lies on their edges.
     for (int i = 0; i < 3; ++i) {
@@ -255,6 +285,13 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stat
     if (shared == 0) return triangles_meet(f, g, stats);
     if (shared == 3 || degenerate(g, stats)) return true;
     if (shared == 1) {
+        // Quick acceptance: the other two corners of one face strictly on one side of the
+        // other's plane — that face then meets the other's plane only at s.
+        const int i0 = f_at[0], j0 = g_at[0];
+        const int g1 = orient3d(f[0], f[1], f[2], g[(j0 + 1) % 3], stats);
+        if (g1 != 0 && orient3d(f[0], f[1], f[2], g[(j0 + 2) % 3], stats) == g1) return false;
+        const int f1 = orient3d(g[0], g[1], g[2], f[(i0 + 1) % 3], stats);
+        if (f1 != 0 && orient3d(g[0], g[1], g[2], f[(i0 + 2) % 3], stats) == f1) return false;
         // Meeting beyond the shared corner s means an edge opposite s meets the other face, or
         // an edge leaving s runs into the other face's angle at s (coplanar faces).
         const int i = f_at[0], j = g_at[0];

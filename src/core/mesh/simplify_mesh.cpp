@@ -139,7 +139,7 @@ private:
     }
     template <class Visit>
     void for_cells(const Box3& box, Visit visit) const;
-    void query(const Box3& box, const std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
+    void query(const Box3& box, std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
                std::vector<std::uint32_t>& out) const;
     void collect_edges(std::uint32_t v, bool only_larger, int level, std::uint64_t block, std::vector<Candidate>& out,
                        std::vector<std::uint32_t>& scratch);
@@ -162,6 +162,8 @@ private:
     std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
     std::vector<Quadric> quadric_;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> index_;  // (cell, face), sorted
+    Grid index_grid_;                                              // the index's cells (not the blocks')
+    std::vector<Box3> snapshot_;                                   // per face: its box when the index was built
     std::uint64_t live_faces_ = 0;
 };
 
@@ -299,7 +301,7 @@ void Simplifier::check_terrain() {
 
 template <class Visit>
 void Simplifier::for_cells(const Box3& box, Visit visit) const {
-    const std::uint64_t lo = grid_.cell_key(box.lo), hi = grid_.cell_key(box.hi);
+    const std::uint64_t lo = index_grid_.cell_key(box.lo), hi = index_grid_.cell_key(box.hi);
     for (std::uint32_t x = Grid::unpack(lo, 0); x <= Grid::unpack(hi, 0); ++x) {
         for (std::uint32_t y = Grid::unpack(lo, 1); y <= Grid::unpack(hi, 1); ++y) {
             for (std::uint32_t z = Grid::unpack(lo, 2); z <= Grid::unpack(hi, 2); ++z) visit(Grid::pack(x, y, z));
@@ -311,6 +313,32 @@ void Simplifier::build_face_index() {
     index_.clear();
     if (!use_index_) return;
     const auto m = static_cast<std::int64_t>(face_.size());
+    // The index has its own cells, about twice the current mean edge: stars grow as the mesh
+    // gets coarser, and a query should span few cells. Each face's box is kept as it is now;
+    // see query() for why that makes reading other blocks' faces unnecessary.
+    double edges = 0;
+    std::uint64_t count = 0;
+    Box3 all = point_box(grid_.origin);
+    for (std::int64_t f = 0; f < m; ++f) {
+        if (!alive_[f]) continue;
+        const Face& c = face_[f];
+        for (int k = 0; k < 3; ++k) {
+            edges += norm(minus(pos_[c[k]], pos_[c[(k + 1) % 3]]));
+            all.add(pos_[c[k]]);
+        }
+        count += 3;
+    }
+    const double largest = std::max({all.hi.x - all.lo.x, all.hi.y - all.lo.y, all.hi.z - all.lo.z});
+    double size = count > 0 ? 2.0 * edges / static_cast<double>(count) : 1.0;
+    if (!(size > 0) || !std::isfinite(size)) size = largest > 0 ? largest : 1.0;
+    if (largest / size > 1048575.0) size = largest / 1048575.0;
+    index_grid_.origin = all.lo;
+    index_grid_.inverse_size = 1.0 / size;
+    const double extent[3] = {all.hi.x - all.lo.x, all.hi.y - all.lo.y, all.hi.z - all.lo.z};
+    for (int axis = 0; axis < 3; ++axis) {
+        index_grid_.cells[axis] = static_cast<std::uint32_t>(std::min(1048576.0, std::floor(extent[axis] / size) + 1));
+    }
+    snapshot_.resize(face_.size());
     std::vector<std::vector<std::pair<std::uint64_t, std::uint32_t>>> parts(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel
     {
@@ -318,22 +346,50 @@ void Simplifier::build_face_index() {
 #pragma omp for schedule(static)
         for (std::int64_t f = 0; f < m; ++f) {
             if (!alive_[f]) continue;
-            for_cells(face_box(static_cast<std::uint32_t>(f)),
-                      [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
+            snapshot_[f] = face_box(static_cast<std::uint32_t>(f));
+            for_cells(snapshot_[f], [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
         }
     }
     for (auto& part : parts) index_.insert(index_.end(), part.begin(), part.end());
     std::sort(index_.begin(), index_.end());
 }
 
-void Simplifier::query(const Box3& box, const std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
+// Faces that may touch `box` (inside the calling block): from the level's index those whose box
+// at the start of the level overlaps it — a face another block changes lay, and lies, inside
+// that block, so its start box cannot overlap and it is never read — and the faces this block
+// changed, from its overlay.
+void Simplifier::query(const Box3& box, std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
                        std::vector<std::uint32_t>& out) const {
     out.clear();
     for_cells(box, [&](std::uint64_t key) {
         auto it = std::lower_bound(index_.begin(), index_.end(), std::pair<std::uint64_t, std::uint32_t>{key, 0});
-        for (; it != index_.end() && it->first == key; ++it) out.push_back(it->second);
-        if (auto found = overlay.find(key); found != overlay.end()) {
-            out.insert(out.end(), found->second.begin(), found->second.end());
+        for (; it != index_.end() && it->first == key; ++it) {
+            if (snapshot_[it->second].overlaps(box)) out.push_back(it->second);
+        }
+        auto found = overlay.find(key);
+        if (found == overlay.end()) return;
+        // This block's own faces: drop those that died or moved out of the cell, keep the rest
+        // that reach the box.
+        std::vector<std::uint32_t>& list = found->second;
+        for (std::size_t i = 0; i < list.size();) {
+            const std::uint32_t f = list[i];
+            bool keep = alive_[f] != 0;
+            Box3 now{};
+            if (keep) {
+                now = face_box(f);
+                const std::uint64_t lo = index_grid_.cell_key(now.lo), hi = index_grid_.cell_key(now.hi);
+                for (int axis = 0; axis < 3 && keep; ++axis) {
+                    const std::uint32_t c = Grid::unpack(key, axis);
+                    keep = Grid::unpack(lo, axis) <= c && c <= Grid::unpack(hi, axis);
+                }
+            }
+            if (!keep) {
+                list[i] = list.back();
+                list.pop_back();
+                continue;
+            }
+            if (now.overlaps(box)) out.push_back(f);
+            ++i;
         }
     });
     std::sort(out.begin(), out.end());
@@ -627,7 +683,10 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     ++stamp_[a];
     if (use_index_) {
         for (std::uint32_t f : star) {
-            for_cells(face_box(f), [&](std::uint64_t key) { overlay[key].push_back(f); });
+            for_cells(face_box(f), [&](std::uint64_t key) {
+                std::vector<std::uint32_t>& list = overlay[key];
+                if (std::find(list.begin(), list.end(), f) == list.end()) list.push_back(f);
+            });
         }
     }
     ++stats.collapses;

@@ -1,0 +1,228 @@
+#include "cli/mesh_command.hpp"
+
+#include "cli/logging.hpp"
+#include "core/mesh/distance.hpp"
+#include "core/mesh/simplify_mesh.hpp"
+#include "io/errors.hpp"
+#include "io/json_text.hpp"
+#include "io/mesh_io.hpp"
+#include "io/output_file.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <ostream>
+#include <sstream>
+
+namespace toposimp::cli {
+
+CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
+    CLI::App* mesh = app.add_subcommand("mesh", "Simplify a triangle mesh or terrain TIN without self-intersections");
+    mesh->footer(
+        "Stopping criteria (one; default --keep 10%): --keep, --keep-faces, --max-error.\n"
+        "Edges collapse in order of quadric error (Garland-Heckbert, optimal placement); a collapse is made only if\n"
+        "exact predicates show it keeps the surface manifold, turns no face over, and makes no face touch or cross\n"
+        "another. Formats: OBJ, PLY (ASCII or binary), OFF; normals, colours and texture coordinates are dropped.\n"
+        "Exit status: 0 ok, 2 usage or input error.");
+    mesh->add_option("input", options.input, "Input mesh: .obj, .ply or .off")->required();
+    mesh->add_option("-o,--output", options.output, "Output mesh: .obj, .ply or .off (or -f)")->required();
+    mesh->add_option("-f,--format", options.format, "Output format: obj, ply, off")
+        ->check(CLI::IsMember({"obj", "ply", "off"}, CLI::ignore_case));
+    auto* keep = mesh->add_option("--keep", options.keep, "Keep this share of the faces: 10% or 0.1 (default 10%)");
+    auto* keep_faces = mesh->add_option("--keep-faces", options.keep_faces, "Keep at most N faces")->check(CLI::NonNegativeNumber);
+    auto* max_error = mesh->add_option("--max-error", options.max_error,
+                                       "Collapse only while the quadric error (a distance, in the mesh's units) stays at most E")
+                          ->check(CLI::NonNegativeNumber);
+    keep->excludes(keep_faces)->excludes(max_error);
+    keep_faces->excludes(max_error);
+    mesh->add_flag("--lock-boundary", options.lock_boundary,
+                   "Keep every border vertex (on an edge with one face) where it is, so neighbouring tiles still match");
+    mesh->add_flag("--terrain", options.terrain,
+                   "The mesh is a TIN over the x-y plane (z = height): never fold a face over in the map plane");
+    mesh->add_flag("--triangulate", options.triangulate, "Split polygons with more than 3 corners into fans (else an error)");
+    mesh->add_flag("--ascii", options.ascii, "Write PLY as text (default: binary little endian, double coordinates)");
+    mesh->add_flag("--no-hausdorff", options.no_hausdorff, "Skip measuring the Hausdorff distance (saves time on big meshes)");
+    mesh->add_option("-j,--threads", options.threads,
+                     "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
+        ->check(CLI::NonNegativeNumber);
+    mesh->add_flag("--json", options.json, "Print a JSON summary on stdout");
+    mesh->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
+    mesh->add_flag("-q,--quiet", options.quiet, "Print errors only");
+    mesh->add_flag("-v,--verbose", options.verbosity, "More detail (repeat for more)");
+    return mesh;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+double peak_memory_mib() {
+    std::ifstream status("/proc/self/status");
+    std::string line;
+    while (std::getline(status, line)) {
+        if (line.rfind("VmHWM:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
+    }
+    return 0.0;
+}
+
+std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
+    mesh::MeshOptions target;
+    if (options.keep_faces >= 0) {
+        target.target = mesh::MeshTarget::keep_faces;
+        target.value = std::floor(options.keep_faces);
+    } else if (options.max_error >= 0) {
+        target.target = mesh::MeshTarget::max_error;
+        target.value = options.max_error;
+    } else if (!options.keep.empty()) {
+        std::string text = options.keep;
+        const bool percent = text.back() == '%';
+        if (percent) text.pop_back();
+        double value = 0;
+        std::istringstream parse(text);
+        if (!(parse >> value) || !parse.eof() || !std::isfinite(value) || value < 0) {
+            problem = "--keep takes a share such as 10% or 0.1, not '" + options.keep + "'";
+            return std::nullopt;
+        }
+        if (percent) value /= 100.0;
+        if (value > 1.0) {
+            problem = "--keep " + options.keep + " is more than all faces (did you mean " + options.keep + "%?)";
+            return std::nullopt;
+        }
+        target.value = value;
+    }
+    return target;
+}
+
+std::string describe(const mesh::MeshOptions& target) {
+    std::ostringstream text;
+    switch (target.target) {
+        case mesh::MeshTarget::keep_fraction: text << "keep " << target.value * 100 << "% of the faces"; break;
+        case mesh::MeshTarget::keep_faces: text << "keep " << target.value << " faces"; break;
+        case mesh::MeshTarget::max_error: text << "quadric error <= " << target.value; break;
+    }
+    return text.str();
+}
+
+}  // namespace
+
+int run_mesh(const MeshCommandOptions& options, Context& context) {
+    auto log = make_logger(context.err, options.verbosity, options.quiet);
+    std::string problem;
+    std::optional<mesh::MeshOptions> engine = mesh_target(options, problem);
+    if (!engine) {
+        log->error("{}", problem);
+        return kUsageError;
+    }
+    engine->lock_boundary = options.lock_boundary;
+    engine->terrain = options.terrain;
+    engine->threads = options.threads;
+    const auto start = Clock::now();
+    try {
+        io::MeshFormat format = options.format.empty() ? io::mesh_format_of(options.output) : io::MeshFormat::obj;
+        if (options.format == "ply" || options.format == "PLY") format = io::MeshFormat::ply;
+        if (options.format == "off" || options.format == "OFF") format = io::MeshFormat::off;
+        // Refuse an existing output before any work.
+        io::OutputFile output(options.output, options.overwrite, &context.out);
+
+        io::MeshReadOptions read_options;
+        read_options.triangulate = options.triangulate;
+        io::MeshReadReport report;
+        mesh::Mesh m = io::read_mesh(options.input, read_options, report);
+        const double seconds_read = seconds_since(start);
+        log->debug("read {} ({}{}): {} vertices, {} faces", options.input, io::to_string(report.format),
+                   report.encoding.empty() ? "" : " " + report.encoding, m.points.size(), m.faces.size());
+        for (const std::string& dropped : report.dropped) log->warn("{}: {} dropped (not carried to the simplified mesh)", options.input, dropped);
+        if (report.polygons_triangulated > 0) log->info("{} polygons split into triangle fans", report.polygons_triangulated);
+        if (report.ignored_elements > 0) log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
+        if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");
+        if (const auto edge = mesh::find_non_manifold_edge(m)) {
+            std::string faces;
+            for (std::uint32_t f : edge->faces) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
+            throw io::InputError(options.input + ": the edge between vertices " + std::to_string(edge->a) + " and " +
+                                 std::to_string(edge->b) + " (counted from 0) has more than two faces (" + faces +
+                                 ", ...): non-manifold meshes are not supported");
+        }
+        if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
+            log->warn("{} faces repeat a corner (no area) and are dropped", repeated);
+        }
+        const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : m;
+
+        const auto simplify_start = Clock::now();
+        const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
+        const double seconds_simplify = seconds_since(simplify_start);
+        if (options.terrain && stats.levels > 0 && !stats.target_reached) {
+            log->debug("target not reached");
+        }
+
+        const auto write_start = Clock::now();
+        io::write_mesh(m, output.staging_path(), format, options.ascii);
+        output.commit();
+        const double seconds_write = seconds_since(write_start);
+
+        std::optional<mesh::HausdorffDistance> distance;
+        double seconds_hausdorff = 0;
+        if (!options.no_hausdorff) {
+            const auto measure_start = Clock::now();
+            distance = mesh::hausdorff(original, m);
+            seconds_hausdorff = seconds_since(measure_start);
+        }
+        const double total = seconds_since(start);
+        if (!stats.target_reached) {
+            log->warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks",
+                      stats.faces_out, stats.target_faces);
+        }
+        log->debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection",
+                   stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
+                   stats.refused_intersection);
+        log->debug("predicates: {} decided by the float filter, {} by GMP; peak memory {:.0f} MiB",
+                   stats.predicates.filter_decided, stats.predicates.gmp_fallbacks, peak_memory_mib());
+        std::string summary = fmt::format("{} -> {} faces, {} -> {} vertices ({} collapses, {} refused), {}, {:.3f} s",
+                                          stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out,
+                                          stats.collapses, stats.refused(), describe(*engine), total);
+        if (distance) {
+            summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
+                                   distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
+        }
+        if (context.err_is_terminal || options.verbosity > 0) log->info("{}", summary);
+        if (options.json) {
+            std::ostream& out = context.out;
+            out << "{\"command\":\"mesh\",\"input\":" << io::json_string(options.input)
+                << ",\"output\":" << io::json_string(options.output) << ",\"vertices_in\":" << stats.vertices_in
+                << ",\"vertices_out\":" << stats.vertices_out << ",\"faces_in\":" << stats.faces_in
+                << ",\"faces_out\":" << stats.faces_out << ",\"collapses\":" << stats.collapses
+                << ",\"target\":{\"criterion\":" << io::json_string(describe(*engine))
+                << ",\"target_faces\":" << stats.target_faces << ",\"reached\":" << (stats.target_reached ? "true" : "false")
+                << "},\"refused\":{\"total\":" << stats.refused() << ",\"link\":" << stats.refused_link
+                << ",\"boundary\":" << stats.refused_boundary << ",\"flip\":" << stats.refused_flip
+                << ",\"degenerate\":" << stats.refused_degenerate << ",\"intersection\":" << stats.refused_intersection
+                << "},\"max_quadric_error\":" << stats.max_error << ",\"terrain\":" << (options.terrain ? "true" : "false")
+                << ",\"lock_boundary\":" << (options.lock_boundary ? "true" : "false");
+            if (distance) {
+                const double diagonal = distance->diagonal > 0 ? distance->diagonal : 1.0;
+                out << ",\"hausdorff\":{\"max\":" << distance->max() << ",\"max_fraction_of_diagonal\":" << distance->max() / diagonal
+                    << ",\"input_to_output\":{\"max\":" << distance->forward.max << ",\"mean\":" << distance->forward.mean
+                    << ",\"samples\":" << distance->forward.samples << "},\"output_to_input\":{\"max\":" << distance->backward.max
+                    << ",\"mean\":" << distance->backward.mean << ",\"samples\":" << distance->backward.samples
+                    << "},\"diagonal\":" << distance->diagonal << "}";
+            }
+            out << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels
+                << "},\"predicates\":{\"filter_decided\":" << stats.predicates.filter_decided
+                << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks << "},\"seconds\":{\"read\":" << seconds_read
+                << ",\"simplify\":" << seconds_simplify << ",\"write\":" << seconds_write << ",\"hausdorff\":" << seconds_hausdorff
+                << ",\"total\":" << total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";
+        }
+        return kOk;
+    } catch (const io::InputError& error) {
+        log->error("{}", error.what());
+    } catch (const io::OutputError& error) {
+        log->error("{}", error.what());
+    } catch (const std::bad_alloc&) {
+        log->error("out of memory");
+    }
+    return kUsageError;
+}
+
+}  // namespace toposimp::cli

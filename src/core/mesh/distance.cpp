@@ -1,0 +1,212 @@
+#include "core/mesh/distance.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+namespace toposimp::mesh {
+namespace {
+
+struct V {
+    double x, y, z;
+};
+V operator-(V a, V b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V operator+(V a, V b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V operator*(double s, V a) { return {s * a.x, s * a.y, s * a.z}; }
+double dot(V a, V b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V cross(V a, V b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+V v(Point3 p) { return {p.x, p.y, p.z}; }
+
+// Squared distance from p to triangle abc (closest point by Voronoi regions: Ericson,
+// Real-Time Collision Detection, §5.1.5).
+double distance2(V p, V a, V b, V c) {
+    const V ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    auto len2 = [](V x) { return dot(x, x); };
+    if (d1 <= 0 && d2 <= 0) return len2(ap);
+    const V bp = p - b;
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return len2(bp);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return len2(p - (a + (d1 / (d1 - d3)) * ab));
+    const V cp = p - c;
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return len2(cp);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return len2(p - (a + (d2 / (d2 - d6)) * ac));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return len2(p - (b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b)));
+    const double denominator = va + vb + vc;
+    if (!(denominator != 0)) return std::min({len2(ap), len2(bp), len2(cp)});
+    const double s = vb / denominator, t = vc / denominator;
+    return len2(p - (a + s * ab + t * ac));
+}
+
+// Faces of a mesh in a uniform grid, for nearest-face queries by growing shells of cells.
+class FaceGrid {
+public:
+    explicit FaceGrid(const Mesh& m) : mesh_(m) {
+        if (m.faces.empty()) return;
+        lo_ = hi_ = v(m.points[m.faces[0][0]]);
+        double edges = 0;
+        for (const Face& f : m.faces) {
+            for (int k = 0; k < 3; ++k) {
+                const V p = v(m.points[f[k]]);
+                lo_ = {std::min(lo_.x, p.x), std::min(lo_.y, p.y), std::min(lo_.z, p.z)};
+                hi_ = {std::max(hi_.x, p.x), std::max(hi_.y, p.y), std::max(hi_.z, p.z)};
+                const V e = p - v(m.points[f[(k + 1) % 3]]);
+                edges += std::sqrt(dot(e, e));
+            }
+        }
+        size_ = 2.0 * edges / (3.0 * static_cast<double>(m.faces.size()));
+        const double largest = std::max({hi_.x - lo_.x, hi_.y - lo_.y, hi_.z - lo_.z});
+        if (!(size_ > 0)) size_ = largest > 0 ? largest : 1.0;
+        // At most ~2^24 cells in all.
+        for (;;) {
+            for (int k = 0; k < 3; ++k) n_[k] = static_cast<std::int64_t>(extent(k) / size_) + 1;
+            if (static_cast<double>(n_[0]) * static_cast<double>(n_[1]) * static_cast<double>(n_[2]) <= 16777216.0) break;
+            size_ *= 1.5;
+        }
+        std::vector<std::pair<std::int64_t, std::uint32_t>> entries;
+        for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
+            std::int64_t lo[3], hi[3];
+            for (int k = 0; k < 3; ++k) {
+                double a = coordinate(m.points[m.faces[f][0]], k), b = a;
+                for (int c = 1; c < 3; ++c) {
+                    a = std::min(a, coordinate(m.points[m.faces[f][c]], k));
+                    b = std::max(b, coordinate(m.points[m.faces[f][c]], k));
+                }
+                lo[k] = cell(a, k);
+                hi[k] = cell(b, k);
+            }
+            for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z) entries.emplace_back(key(x, y, z), f);
+                }
+            }
+        }
+        std::sort(entries.begin(), entries.end());
+        keys_.resize(entries.size());
+        faces_.resize(entries.size());
+        for (std::size_t i = 0; i < entries.size(); ++i) keys_[i] = entries[i].first, faces_[i] = entries[i].second;
+    }
+
+    double nearest(V p) const {
+        double best = std::numeric_limits<double>::infinity();
+        if (mesh_.faces.empty()) return best;
+        const std::int64_t c[3] = {cell(p.x, 0), cell(p.y, 1), cell(p.z, 2)};
+        const std::int64_t most = std::max({n_[0], n_[1], n_[2]});
+        for (std::int64_t r = 0; r <= most; ++r) {
+            for (std::int64_t x = c[0] - r; x <= c[0] + r; ++x) {
+                for (std::int64_t y = c[1] - r; y <= c[1] + r; ++y) {
+                    for (std::int64_t z = c[2] - r; z <= c[2] + r; ++z) {
+                        const bool shell = std::max({std::llabs(x - c[0]), std::llabs(y - c[1]), std::llabs(z - c[2])}) == r;
+                        if (!shell || x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
+                        const std::int64_t k = key(x, y, z);
+                        for (auto it = std::lower_bound(keys_.begin(), keys_.end(), k); it != keys_.end() && *it == k; ++it) {
+                            const Face& f = mesh_.faces[faces_[static_cast<std::size_t>(it - keys_.begin())]];
+                            best = std::min(best, distance2(p, v(mesh_.points[f[0]]), v(mesh_.points[f[1]]), v(mesh_.points[f[2]])));
+                        }
+                    }
+                }
+            }
+            // Everything farther than r cells from p's cell is at least r·size away.
+            const double reach = static_cast<double>(r) * size_;
+            if (best <= reach * reach) break;
+        }
+        return std::sqrt(best);
+    }
+
+private:
+    static double coordinate(const Point3& p, int k) { return k == 0 ? p.x : (k == 1 ? p.y : p.z); }
+    double extent(int k) const { return k == 0 ? hi_.x - lo_.x : (k == 1 ? hi_.y - lo_.y : hi_.z - lo_.z); }
+    std::int64_t cell(double value, int k) const {
+        const double origin = k == 0 ? lo_.x : (k == 1 ? lo_.y : lo_.z);
+        const double c = std::floor((value - origin) / size_);
+        return static_cast<std::int64_t>(std::clamp(c, 0.0, static_cast<double>(n_[k] - 1)));
+    }
+    std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) const { return (x * n_[1] + y) * n_[2] + z; }
+
+    const Mesh& mesh_;
+    V lo_{0, 0, 0}, hi_{0, 0, 0};
+    double size_ = 1.0;
+    std::int64_t n_[3] = {1, 1, 1};
+    std::vector<std::int64_t> keys_;
+    std::vector<std::uint32_t> faces_;
+};
+
+std::vector<V> samples_of(const Mesh& m, std::size_t face_samples) {
+    std::vector<V> out;
+    for (const Point3& p : m.points) out.push_back(v(p));
+    double total = 0;
+    for (const Face& f : m.faces) {
+        const V n = cross(v(m.points[f[1]]) - v(m.points[f[0]]), v(m.points[f[2]]) - v(m.points[f[0]]));
+        total += std::sqrt(dot(n, n));
+    }
+    if (!(total > 0)) return out;
+    for (const Face& f : m.faces) {
+        const V a = v(m.points[f[0]]), b = v(m.points[f[1]]), c = v(m.points[f[2]]);
+        const V n = cross(b - a, c - a);
+        const double share = std::sqrt(dot(n, n)) / total * static_cast<double>(face_samples);
+        // A triangular lattice of r(r+1)/2 interior points, r from the face's share.
+        const int r = std::max(1, static_cast<int>(std::ceil((std::sqrt(8.0 * share + 1.0) - 1.0) / 2.0)));
+        for (int i = 0; i < r; ++i) {
+            for (int j = 0; i + j < r; ++j) {
+                const double s = (i + 1.0 / 3.0) / r, t = (j + 1.0 / 3.0) / r;
+                out.push_back(a + s * (b - a) + t * (c - a));
+            }
+        }
+    }
+    return out;
+}
+
+OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_samples) {
+    const FaceGrid grid(to);
+    const std::vector<V> samples = samples_of(from, face_samples);
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunks = (samples.size() + kChunk - 1) / kChunk;
+    std::vector<double> sums(chunks, 0.0), maxima(chunks, 0.0);
+    const auto count = static_cast<std::int64_t>(chunks);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::int64_t c = 0; c < count; ++c) {
+        const std::size_t first = static_cast<std::size_t>(c) * kChunk, last = std::min(samples.size(), first + kChunk);
+        double sum = 0, most = 0;
+        for (std::size_t i = first; i < last; ++i) {
+            const double d = grid.nearest(samples[i]);
+            sum += d;
+            most = std::max(most, d);
+        }
+        sums[static_cast<std::size_t>(c)] = sum;
+        maxima[static_cast<std::size_t>(c)] = most;
+    }
+    OneWayDistance result;
+    double sum = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+        sum += sums[c];
+        result.max = std::max(result.max, maxima[c]);
+    }
+    result.samples = samples.size();
+    result.mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
+    return result;
+}
+
+}  // namespace
+
+HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples) {
+    HausdorffDistance d;
+    d.forward = one_way(a, b, face_samples);
+    d.backward = one_way(b, a, face_samples);
+    if (!a.points.empty()) {
+        V lo = v(a.points[0]), hi = lo;
+        for (const Point3& p : a.points) {
+            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        }
+        d.diagonal = std::sqrt(dot(hi - lo, hi - lo));
+    }
+    return d;
+}
+
+}  // namespace toposimp::mesh

@@ -1,0 +1,27 @@
+// Sampled Hausdorff distance between two triangle meshes (a measurement, not a predicate: plain
+// doubles). Samples: every vertex, plus points spread over each face in proportion to its area.
+#pragma once
+
+#include "core/mesh/mesh.hpp"
+
+#include <cstddef>
+
+namespace toposimp::mesh {
+
+struct OneWayDistance {
+    double max = 0.0;   // largest distance from a sample of one mesh to the other mesh
+    double mean = 0.0;
+    std::size_t samples = 0;
+};
+
+struct HausdorffDistance {
+    OneWayDistance forward;   // from the first mesh to the second
+    OneWayDistance backward;  // from the second to the first
+    double diagonal = 0.0;    // of the first mesh's bounding box
+    double max() const { return forward.max > backward.max ? forward.max : backward.max; }
+};
+
+// `face_samples`: about how many points to spread over each mesh's faces (plus its vertices).
+HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000);
+
+}  // namespace toposimp::mesh
