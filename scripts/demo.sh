@@ -13,3 +13,6 @@ build/release/toposimp map testdata/nh_borders.gpkg --keep 10% -o out/nh_borders
 echo
 echo "demo: wrote out/nh_borders_10pct.gpkg:"
 ogrinfo -so -al out/nh_borders_10pct.gpkg | grep -E 'Layer name|Geometry:|Feature Count'
+echo
+echo "demo: toposimp mesh testdata/mesh/torus.off --keep 10% -o out/torus_10pct.ply"
+build/release/toposimp mesh testdata/mesh/torus.off --keep 10% -o out/torus_10pct.ply --overwrite --json -v

@@ -8,6 +8,7 @@
 #include "io/mesh_io.hpp"
 #include "io/output_file.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -166,7 +167,9 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         double seconds_hausdorff = 0;
         if (!options.no_hausdorff) {
             const auto measure_start = Clock::now();
-            distance = mesh::hausdorff(original, m);
+            // Four samples per input face, at least 50 000 and at most 400 000 per direction.
+            const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
+            distance = mesh::hausdorff(original, m, samples);
             seconds_hausdorff = seconds_since(measure_start);
         }
         const double total = seconds_since(start);

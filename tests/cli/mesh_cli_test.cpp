@@ -1,0 +1,155 @@
+// `toposimp mesh` end to end: formats, targets, JSON, and every kind of bad input (exit 2, a
+// message naming the file and the place, no output left behind).
+#include "cli/cli_fixtures.hpp"
+#include "core/mesh/mesh.hpp"
+#include "io/mesh_io.hpp"
+#include "support/mesh_checker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace toposimp::testing {
+namespace {
+
+void write_text(const std::filesystem::path& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary);
+    out << text;
+}
+
+mesh::Mesh read_back(const std::string& path) {
+    io::MeshReadReport report;
+    return io::read_mesh(path, {}, report);
+}
+
+TEST(MeshCli, SimplifiesTheSampleTorusCleanly) {
+    const auto dir = fresh_dir("mesh");
+    const std::string out = (dir / "torus.obj").string();
+    const CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("\"faces_in\":4800"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"faces_out\":480"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"hausdorff\""), std::string::npos);
+    const mesh::Mesh m = read_back(out);
+    EXPECT_EQ(m.faces.size(), 480u);
+    const MeshDefects defects = find_defects(m);
+    EXPECT_EQ(defects.total(), 0u) << defects.first;
+    // A torus stays a torus: V − E + F = 0.
+    EXPECT_EQ(static_cast<long>(m.points.size()) - static_cast<long>(m.faces.size()) / 2, 0);
+}
+
+TEST(MeshCli, TerrainWithLockedBorderKeepsItsBorderAndNeverFolds) {
+    const auto dir = fresh_dir("mesh");
+    const std::string out = (dir / "hills.ply").string();
+    const CliResult r =
+        run_cli({"mesh", testdata("mesh/hills.obj"), "-o", out, "--keep", "5%", "--terrain", "--lock-boundary", "--no-hausdorff"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const mesh::Mesh m = read_back(out);
+    EXPECT_EQ(count_map_plane_folds(m, 1), 0u);
+    std::size_t border = 0;
+    for (const Point3& p : m.points) border += p.x == 0 || p.y == 0 || p.x == 64 || p.y == 64;
+    EXPECT_EQ(border, 256u);
+    EXPECT_EQ(find_defects(m).total(), 0u);
+}
+
+TEST(MeshCli, EveryFormatRoundTripsExactly) {
+    const auto dir = fresh_dir("mesh");
+    const std::string first = (dir / "a.ply").string();
+    ASSERT_EQ(run_cli({"mesh", testdata("mesh/torus.off"), "-o", first, "--keep", "30%", "--no-hausdorff"}).code, 0);
+    const mesh::Mesh reference = read_back(first);
+    for (const std::string name : {"b.obj", "c.off", "d.ply"}) {
+        const std::string path = (dir / name).string();
+        // Keeping 100% writes the mesh unchanged in another format.
+        std::vector<std::string> args{"mesh", first, "-o", path, "--keep", "100%", "--no-hausdorff"};
+        if (name == "d.ply") args.push_back("--ascii");
+        const CliResult r = run_cli(args);
+        ASSERT_EQ(r.code, 0) << r.err;
+        const mesh::Mesh m = read_back(path);
+        ASSERT_EQ(m.faces, reference.faces) << name;
+        ASSERT_EQ(m.points.size(), reference.points.size());
+        for (std::size_t i = 0; i < m.points.size(); ++i) ASSERT_TRUE(same_location(m.points[i], reference.points[i])) << name;
+    }
+}
+
+TEST(MeshCli, ThreadCountDoesNotChangeTheFile) {
+    const auto dir = fresh_dir("mesh");
+    const std::string one = (dir / "one.ply").string(), two = (dir / "two.ply").string();
+    ASSERT_EQ(run_cli({"mesh", testdata("mesh/hills.obj"), "-o", one, "--keep", "10%", "-j", "1", "--no-hausdorff"}).code, 0);
+    ASSERT_EQ(run_cli({"mesh", testdata("mesh/hills.obj"), "-o", two, "--keep", "10%", "-j", "2", "--no-hausdorff"}).code, 0);
+    std::ifstream a(one, std::ios::binary), b(two, std::ios::binary);
+    const std::string x((std::istreambuf_iterator<char>(a)), {}), y((std::istreambuf_iterator<char>(b)), {});
+    EXPECT_EQ(x, y);
+}
+
+struct BadMesh {
+    const char* name;
+    const char* file;
+    const char* text;
+    const char* message;  // a part of the error
+};
+
+class MeshBadInput : public ::testing::TestWithParam<BadMesh> {};
+
+TEST_P(MeshBadInput, ExitsWithTwoAndAClearMessage) {
+    const BadMesh& bad = GetParam();
+    const auto dir = fresh_dir("mesh-bad");
+    const auto input = dir / bad.file;
+    write_text(input, bad.text);
+    const std::string out = (dir / "out.obj").string();
+    const CliResult r = run_cli({"mesh", input.string(), "-o", out});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find(bad.message), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(input.string()), std::string::npos) << "the message names the file: " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(out));
+    // Nothing else left in the folder (no staging files).
+    std::size_t files = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(dir)) files += entry.path() != input;
+    EXPECT_EQ(files, 0u);
+}
+
+const char kTetra[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
+
+INSTANTIATE_TEST_SUITE_P(
+    Kinds, MeshBadInput,
+    ::testing::Values(
+        BadMesh{"TruncatedOff", "t.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n", "truncated"},
+        BadMesh{"TruncatedPlyHeader", "t.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n", "no end_header"},
+        BadMesh{"TruncatedBinaryPly", "t.ply",
+                "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                "property float z\nend_header\n\x01\x02\x03",
+                "truncated binary PLY"},
+        BadMesh{"Quad", "q.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n", "--triangulate"},
+        BadMesh{"NanCoordinate", "n.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n", "non-finite"},
+        BadMesh{"IndexOutOfRange", "i.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "refers to vertex"},
+        BadMesh{"OffIndexOutOfRange", "i.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "refers to vertex"},
+        BadMesh{"NotANumber", "x.obj", "v 0 zero 0\n", "is not a number"},
+        BadMesh{"NonManifold", "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
+                "more than two faces"},
+        BadMesh{"NoFaces", "e.obj", kTetra, "no faces"},
+        BadMesh{"UnknownExtension", "u.stl", "solid x\n", "unknown mesh format"}),
+    [](const ::testing::TestParamInfo<BadMesh>& p) { return std::string(p.param.name); });
+
+TEST(MeshCli, PolygonsAreSplitOnlyWhenAsked) {
+    const auto dir = fresh_dir("mesh");
+    write_text(dir / "quad.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n");
+    const std::string out = (dir / "out.obj").string();
+    const CliResult r = run_cli({"mesh", (dir / "quad.obj").string(), "-o", out, "--triangulate", "--keep", "100%"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(read_back(out).faces.size(), 2u);
+}
+
+TEST(MeshCli, ExistingOutputIsKeptWithoutOverwrite) {
+    const auto dir = fresh_dir("mesh");
+    const auto out = dir / "out.obj";
+    write_text(out, "keep me");
+    const CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out.string()});
+    EXPECT_EQ(r.code, 2);
+    std::ifstream in(out);
+    std::string text;
+    std::getline(in, text);
+    EXPECT_EQ(text, "keep me");
+}
+
+}  // namespace
+}  // namespace toposimp::testing
