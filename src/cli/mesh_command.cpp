@@ -3,12 +3,14 @@
 #include "cli/logging.hpp"
 #include "core/mesh/distance.hpp"
 #include "core/mesh/simplify_mesh.hpp"
+#include "io/dem.hpp"
 #include "io/errors.hpp"
 #include "io/json_text.hpp"
 #include "io/mesh_io.hpp"
 #include "io/output_file.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -26,10 +28,14 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
         "exact predicates show it keeps the surface manifold, turns no face over, and makes no face touch or cross\n"
         "another. Formats: OBJ, PLY (ASCII or binary), OFF; normals, colours and texture coordinates are dropped.\n"
         "Exit status: 0 ok, 2 usage or input error.");
-    mesh->add_option("input", options.input, "Input mesh: .obj, .ply or .off")->required();
-    mesh->add_option("-o,--output", options.output, "Output mesh: .obj, .ply or .off (or -f)")->required();
-    mesh->add_option("-f,--format", options.format, "Output format: obj, ply, off")
-        ->check(CLI::IsMember({"obj", "ply", "off"}, CLI::ignore_case));
+    mesh->add_option("input", options.input, "Input mesh (.obj, .ply, .off) or a DEM raster (GeoTIFF or any GDAL raster)")
+        ->required();
+    mesh->add_option("-o,--output", options.output,
+                     "Output: a mesh (.obj, .ply, .off) or an OGR layer of triangles with Z (.gpkg, .shp, .fgb, ...)")
+        ->required();
+    mesh->add_option("-f,--format", options.format, "Output format: obj, ply, off, or an OGR driver name (GPKG, ...)");
+    mesh->add_option("--band", options.band, "DEM band to read (default 1)")->check(CLI::PositiveNumber);
+    mesh->add_option("--nln", options.layer_name, "Layer name for OGR output (default: tin)");
     auto* keep = mesh->add_option("--keep", options.keep, "Keep this share of the faces: 10% or 0.1 (default 10%)");
     auto* keep_faces = mesh->add_option("--keep-faces", options.keep_faces, "Keep at most N faces")->check(CLI::NonNegativeNumber);
     auto* max_error = mesh->add_option("--max-error", options.max_error,
@@ -39,6 +45,8 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     keep_faces->excludes(max_error);
     mesh->add_flag("--lock-boundary", options.lock_boundary,
                    "Keep every border vertex (on an edge with one face) where it is, so neighbouring tiles still match");
+    mesh->add_flag("--free-boundary", options.free_boundary,
+                   "For a DEM: let border vertices move (the default keeps them, as --lock-boundary)");
     mesh->add_flag("--terrain", options.terrain,
                    "The mesh is a TIN over the x-y plane (z = height): never fold a face over in the map plane");
     mesh->add_flag("--triangulate", options.triangulate, "Split polygons with more than 3 corners into fans (else an error)");
@@ -122,22 +130,52 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
     engine->threads = options.threads;
     const auto start = Clock::now();
     try {
-        io::MeshFormat format = options.format.empty() ? io::mesh_format_of(options.output) : io::MeshFormat::obj;
-        if (options.format == "ply" || options.format == "PLY") format = io::MeshFormat::ply;
-        if (options.format == "off" || options.format == "OFF") format = io::MeshFormat::off;
+        // Output: a mesh file, or an OGR layer of triangles.
+        const std::string format_name = [&] {
+            std::string f = options.format;
+            for (char& c : f) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            return f;
+        }();
+        const bool mesh_output = format_name.empty() ? io::has_mesh_extension(options.output)
+                                                     : (format_name == "obj" || format_name == "ply" || format_name == "off");
+        io::MeshFormat format = io::MeshFormat::obj;
+        if (mesh_output) {
+            format = format_name.empty() ? io::mesh_format_of(options.output)
+                     : format_name == "ply" ? io::MeshFormat::ply
+                     : format_name == "off" ? io::MeshFormat::off
+                                            : io::MeshFormat::obj;
+        }
         // Refuse an existing output before any work.
         io::OutputFile output(options.output, options.overwrite, &context.out);
 
-        io::MeshReadOptions read_options;
-        read_options.triangulate = options.triangulate;
-        io::MeshReadReport report;
-        mesh::Mesh m = io::read_mesh(options.input, read_options, report);
+        // Input: a mesh file, or a DEM raster triangulated into a TIN.
+        mesh::Mesh m;
+        std::optional<io::Dem> dem;
+        if (io::has_mesh_extension(options.input)) {
+            io::MeshReadOptions read_options;
+            read_options.triangulate = options.triangulate;
+            io::MeshReadReport report;
+            m = io::read_mesh(options.input, read_options, report);
+            log->debug("read {} ({}{}): {} vertices, {} faces", options.input, io::to_string(report.format),
+                       report.encoding.empty() ? "" : " " + report.encoding, m.points.size(), m.faces.size());
+            for (const std::string& dropped : report.dropped) {
+                log->warn("{}: {} dropped (not carried to the simplified mesh)", options.input, dropped);
+            }
+            if (report.polygons_triangulated > 0) log->info("{} polygons split into triangle fans", report.polygons_triangulated);
+            if (report.ignored_elements > 0) {
+                log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
+            }
+        } else if (io::is_raster(options.input)) {
+            dem = io::read_dem(options.input, options.band);
+            m = std::move(dem->tin);
+            engine->terrain = true;
+            engine->lock_boundary = !options.free_boundary;
+            log->debug("read DEM {} ({} x {} cells, {} without data): TIN of {} vertices, {} triangles", options.input,
+                       dem->width, dem->height, dem->nodata_cells, m.points.size(), m.faces.size());
+        } else {
+            throw io::InputError(options.input + ": neither a mesh (.obj, .ply, .off) nor a raster GDAL can open");
+        }
         const double seconds_read = seconds_since(start);
-        log->debug("read {} ({}{}): {} vertices, {} faces", options.input, io::to_string(report.format),
-                   report.encoding.empty() ? "" : " " + report.encoding, m.points.size(), m.faces.size());
-        for (const std::string& dropped : report.dropped) log->warn("{}: {} dropped (not carried to the simplified mesh)", options.input, dropped);
-        if (report.polygons_triangulated > 0) log->info("{} polygons split into triangle fans", report.polygons_triangulated);
-        if (report.ignored_elements > 0) log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
         if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");
         if (const auto edge = mesh::find_non_manifold_edge(m)) {
             std::string faces;
@@ -159,7 +197,11 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         }
 
         const auto write_start = Clock::now();
-        io::write_mesh(m, output.staging_path(), format, options.ascii);
+        if (mesh_output) {
+            io::write_mesh(m, output.staging_path(), format, options.ascii);
+        } else {
+            io::write_tin_layer(m, output.staging_path(), options.format, dem ? dem->crs_wkt : std::string(), options.layer_name);
+        }
         output.commit();
         const double seconds_write = seconds_since(write_start);
 
@@ -201,8 +243,12 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                 << "},\"refused\":{\"total\":" << stats.refused() << ",\"link\":" << stats.refused_link
                 << ",\"boundary\":" << stats.refused_boundary << ",\"flip\":" << stats.refused_flip
                 << ",\"degenerate\":" << stats.refused_degenerate << ",\"intersection\":" << stats.refused_intersection
-                << "},\"max_quadric_error\":" << stats.max_error << ",\"terrain\":" << (options.terrain ? "true" : "false")
-                << ",\"lock_boundary\":" << (options.lock_boundary ? "true" : "false");
+                << "},\"max_quadric_error\":" << stats.max_error << ",\"terrain\":" << (engine->terrain ? "true" : "false")
+                << ",\"lock_boundary\":" << (engine->lock_boundary ? "true" : "false");
+            if (dem) {
+                out << ",\"dem\":{\"width\":" << dem->width << ",\"height\":" << dem->height
+                    << ",\"cells_without_data\":" << dem->nodata_cells << ",\"crs\":" << (dem->crs_wkt.empty() ? "false" : "true") << "}";
+            }
             if (distance) {
                 const double diagonal = distance->diagonal > 0 ? distance->diagonal : 1.0;
                 out << ",\"hausdorff\":{\"max\":" << distance->max() << ",\"max_fraction_of_diagonal\":" << distance->max() / diagonal

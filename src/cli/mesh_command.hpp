@@ -17,6 +17,9 @@ struct MeshCommandOptions {
     double keep_faces = -1;
     double max_error = -1;
     bool lock_boundary = false;
+    bool free_boundary = false;
+    int band = 1;
+    std::string layer_name = "tin";
     bool terrain = false;
     bool triangulate = false;
     bool ascii = false;

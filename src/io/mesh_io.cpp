@@ -463,6 +463,12 @@ MeshFormat mesh_format_of(const std::string& path) {
     throw InputError(path + ": unknown mesh format (use a .obj, .ply or .off file, or -f)");
 }
 
+bool has_mesh_extension(const std::string& path) {
+    const std::size_t dot = path.find_last_of('.');
+    const std::string extension = dot == std::string::npos ? "" : lower(path.substr(dot + 1));
+    return extension == "obj" || extension == "ply" || extension == "off";
+}
+
 const char* to_string(MeshFormat format) {
     switch (format) {
         case MeshFormat::obj: return "OBJ";

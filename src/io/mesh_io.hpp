@@ -15,6 +15,8 @@ enum class MeshFormat { obj, ply, off };
 
 // From the file name's extension (case-insensitive); throws InputError for anything else.
 MeshFormat mesh_format_of(const std::string& path);
+// Does the file name end in .obj, .ply or .off?
+bool has_mesh_extension(const std::string& path);
 const char* to_string(MeshFormat format);
 
 // Shortest round-trip text of a number (for messages).

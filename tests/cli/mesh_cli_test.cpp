@@ -9,6 +9,8 @@
 
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <tuple>
 
 namespace toposimp::testing {
 namespace {
@@ -149,6 +151,93 @@ TEST(MeshCli, ExistingOutputIsKeptWithoutOverwrite) {
     std::string text;
     std::getline(in, text);
     EXPECT_EQ(text, "keep me");
+}
+
+}  // namespace
+}  // namespace toposimp::testing
+
+namespace toposimp::testing {
+namespace {
+
+// A 30 × 24 GeoTIFF in UTM 33N, 10 m cells, with a nodata hole.
+std::string write_dem(const std::filesystem::path& dir) {
+    GDALAllRegister();
+    const std::string path = (dir / "dem.tif").string();
+    GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GTiff");
+    GDALDataset* dataset = driver->Create(path.c_str(), 30, 24, 1, GDT_Float32, nullptr);
+    double gt[6] = {400000, 10, 0, 5000240, 0, -10};
+    dataset->SetGeoTransform(gt);
+    OGRSpatialReference srs;
+    srs.importFromEPSG(32633);
+    dataset->SetSpatialRef(&srs);
+    GDALRasterBand* band = dataset->GetRasterBand(1);
+    band->SetNoDataValue(-9999);
+    std::vector<float> cells(30 * 24);
+    for (int j = 0; j < 24; ++j) {
+        for (int i = 0; i < 30; ++i) {
+            const bool hole = (i - 20) * (i - 20) + (j - 12) * (j - 12) < 9;
+            cells[j * 30 + i] = hole ? -9999.0f : static_cast<float>(100 + 10 * std::sin(i * 0.3) + 5 * std::cos(j * 0.4) + (i * j % 7));
+        }
+    }
+    EXPECT_EQ(band->RasterIO(GF_Write, 0, 0, 30, 24, cells.data(), 30, 24, GDT_Float32, 0, 0), CE_None);
+    GDALClose(dataset);
+    return path;
+}
+
+TEST(MeshCli, DemBecomesASimplifiedTinLayerInTheDemsCrs) {
+    const auto dir = fresh_dir("mesh-dem");
+    const std::string dem = write_dem(dir);
+    const std::string out = (dir / "tin.gpkg").string();
+    const CliResult r = run_cli({"mesh", dem, "-o", out, "--keep", "20%", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("\"terrain\":true"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"lock_boundary\":true"), std::string::npos);
+    int hole = 0;
+    for (int j = 0; j < 24; ++j) {
+        for (int i = 0; i < 30; ++i) hole += (i - 20) * (i - 20) + (j - 12) * (j - 12) < 9;
+    }
+    EXPECT_NE(r.out.find("\"cells_without_data\":" + std::to_string(hole) + ","), std::string::npos) << r.out;
+    GDALDataset* read = static_cast<GDALDataset*>(GDALOpenEx(out.c_str(), GDAL_OF_VECTOR, nullptr, nullptr, nullptr));
+    ASSERT_NE(read, nullptr);
+    OGRLayer* layer = read->GetLayer(0);
+    ASSERT_NE(layer->GetSpatialRef(), nullptr);
+    EXPECT_EQ(std::string(layer->GetSpatialRef()->GetAuthorityCode(nullptr)), "32633");
+    EXPECT_EQ(wkbFlatten(layer->GetGeomType()), wkbPolygon);
+    // Rebuild the mesh from the triangles: no fold in the map plane, no defect, no vertex in the hole.
+    mesh::Mesh m;
+    std::map<std::tuple<double, double, double>, std::uint32_t> ids;
+    for (auto& feature : *layer) {
+        const OGRLinearRing* ring = feature->GetGeometryRef()->toPolygon()->getExteriorRing();
+        ASSERT_EQ(ring->getNumPoints(), 4);
+        mesh::Face f{};
+        for (int k = 0; k < 3; ++k) {
+            const auto key = std::make_tuple(ring->getX(k), ring->getY(k), ring->getZ(k));
+            auto [it, fresh] = ids.emplace(key, static_cast<std::uint32_t>(m.points.size()));
+            if (fresh) m.points.push_back({ring->getX(k), ring->getY(k), ring->getZ(k)});
+            f[k] = it->second;
+        }
+        m.faces.push_back(f);
+    }
+    GDALClose(read);
+    EXPECT_EQ(count_map_plane_folds(m, 1), 0u);
+    EXPECT_EQ(find_defects(m).total(), 0u);
+    for (const Point3& p : m.points) {
+        const double i = (p.x - 400005) / 10, j = (5000235 - p.y) / 10;
+        EXPECT_GE((i - 20) * (i - 20) + (j - 12) * (j - 12), 9) << "a vertex in the nodata hole";
+    }
+    // The outer border of cell centres (x 400005..400295, y 5000235..5000005) is all kept.
+    std::size_t border = 0;
+    for (const Point3& p : m.points) border += p.x == 400005 || p.x == 400295 || p.y == 5000005 || p.y == 5000235;
+    EXPECT_EQ(border, 2u * 30 + 2u * 22);
+}
+
+TEST(MeshCli, DemBandOutOfRangeIsAnError) {
+    const auto dir = fresh_dir("mesh-dem");
+    const std::string dem = write_dem(dir);
+    const CliResult r = run_cli({"mesh", dem, "-o", (dir / "out.obj").string(), "--band", "2"});
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("no band 2"), std::string::npos) << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.obj"));
 }
 
 }  // namespace
