@@ -129,7 +129,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadMesh{"NonManifold", "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
                 "more than two faces"},
         BadMesh{"NoFaces", "e.obj", kTetra, "no faces"},
-        BadMesh{"UnknownExtension", "u.stl", "solid x\n", "unknown mesh format"}),
+        BadMesh{"UnknownExtension", "u.stl", "solid x\n", "neither a mesh"}),
     [](const ::testing::TestParamInfo<BadMesh>& p) { return std::string(p.param.name); });
 
 TEST(MeshCli, PolygonsAreSplitOnlyWhenAsked) {
