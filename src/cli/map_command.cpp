@@ -1,6 +1,7 @@
 #include "cli/map_command.hpp"
 
 #include "cli/check_command.hpp"
+#include "cli/common.hpp"
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
 #include "core/map/simplify.hpp"
@@ -81,16 +82,10 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
 // --validate found something: no output, exit status 1.
 struct ValidationFailed {
     std::size_t violations;
 };
-
-double seconds_since(Clock::time_point start) {
-    return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 std::optional<map::StopCriterion> stop_criterion(const MapOptions& options, std::string& problem) {
     map::StopCriterion stop;
@@ -103,21 +98,9 @@ std::optional<map::StopCriterion> stop_criterion(const MapOptions& options, std:
     } else if (options.max_area >= 0) {
         stop = {map::Target::max_area, options.max_area};
     } else if (!options.keep.empty()) {
-        std::string text = options.keep;
-        const bool percent = text.back() == '%';
-        if (percent) text.pop_back();
-        double value = 0;
-        std::istringstream parse(text);
-        if (!(parse >> value) || !parse.eof() || !std::isfinite(value) || value < 0) {
-            problem = "--keep takes a share such as 10% or 0.1, not '" + options.keep + "'";
-            return std::nullopt;
-        }
-        if (percent) value /= 100.0;
-        if (value > 1.0) {
-            problem = "--keep " + options.keep + " is more than all vertices (did you mean " + options.keep + "%?)";
-            return std::nullopt;
-        }
-        stop = {map::Target::keep_fraction, value};
+        const std::optional<double> share = parse_share(options.keep, "vertices", problem);
+        if (!share) return std::nullopt;
+        stop = {map::Target::keep_fraction, *share};
     }
     return stop;
 }
@@ -132,16 +115,6 @@ std::string describe(const map::StopCriterion& stop) {
         case map::Target::max: text << "max"; break;
     }
     return text.str();
-}
-
-// Peak resident memory of this process so far, in MiB (Linux /proc; 0 where unknown).
-double peak_memory_mib() {
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line)) {
-        if (line.rfind("VmHWM:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
-    }
-    return 0.0;
 }
 
 struct Timings {

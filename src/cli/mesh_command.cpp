@@ -1,5 +1,6 @@
 #include "cli/mesh_command.hpp"
 
+#include "cli/common.hpp"
 #include "cli/logging.hpp"
 #include "core/mesh/distance.hpp"
 #include "core/mesh/simplify_mesh.hpp"
@@ -64,19 +65,6 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
-
-double peak_memory_mib() {
-    std::ifstream status("/proc/self/status");
-    std::string line;
-    while (std::getline(status, line)) {
-        if (line.rfind("VmHWM:", 0) == 0) return std::strtod(line.c_str() + 6, nullptr) / 1024.0;
-    }
-    return 0.0;
-}
-
 std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
     mesh::MeshOptions target;
     if (options.keep_faces >= 0) {
@@ -86,21 +74,9 @@ std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, 
         target.target = mesh::MeshTarget::max_error;
         target.value = options.max_error;
     } else if (!options.keep.empty()) {
-        std::string text = options.keep;
-        const bool percent = text.back() == '%';
-        if (percent) text.pop_back();
-        double value = 0;
-        std::istringstream parse(text);
-        if (!(parse >> value) || !parse.eof() || !std::isfinite(value) || value < 0) {
-            problem = "--keep takes a share such as 10% or 0.1, not '" + options.keep + "'";
-            return std::nullopt;
-        }
-        if (percent) value /= 100.0;
-        if (value > 1.0) {
-            problem = "--keep " + options.keep + " is more than all faces (did you mean " + options.keep + "%?)";
-            return std::nullopt;
-        }
-        target.value = value;
+        const std::optional<double> share = parse_share(options.keep, "faces", problem);
+        if (!share) return std::nullopt;
+        target.value = *share;
     }
     return target;
 }
