@@ -141,15 +141,13 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             if (report.ignored_elements > 0) {
                 log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
             }
-        } else if (io::is_raster(options.input)) {
+        } else {
             dem = io::read_dem(options.input, options.band);
             m = std::move(dem->tin);
             engine->terrain = true;
             engine->lock_boundary = !options.free_boundary;
             log->debug("read DEM {} ({} x {} cells, {} without data): TIN of {} vertices, {} triangles", options.input,
                        dem->width, dem->height, dem->nodata_cells, m.points.size(), m.faces.size());
-        } else {
-            throw io::InputError(options.input + ": neither a mesh (.obj, .ply, .off) nor a raster GDAL can open");
         }
         const double seconds_read = seconds_since(start);
         if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");

@@ -9,18 +9,13 @@
 
 namespace toposimp::io {
 
-bool is_raster(const std::string& path) {
-    register_drivers();
-    QuietGdal quiet;
-    DatasetPtr dataset(static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
-    return dataset != nullptr && dataset->GetRasterCount() > 0;
-}
-
 Dem read_dem(const std::string& path, int band_number) {
     register_drivers();
     QuietGdal quiet;
     DatasetPtr dataset(static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
-    if (!dataset) throw InputError(path + ": cannot open as a raster" + last_gdal_error());
+    if (!dataset) {
+        throw InputError(path + ": neither a mesh (.obj, .ply, .off) nor a raster GDAL can open" + last_gdal_error());
+    }
     if (band_number < 1 || band_number > dataset->GetRasterCount()) {
         throw InputError(path + ": no band " + std::to_string(band_number) + " (the raster has " +
                          std::to_string(dataset->GetRasterCount()) + ")");
@@ -89,20 +84,7 @@ void write_tin_layer(const mesh::Mesh& tin, const std::string& path, const std::
                      const std::string& layer_name) {
     register_drivers();
     QuietGdal quiet;
-    GDALDriver* driver = nullptr;
-    if (!driver_name.empty()) {
-        driver = GetGDALDriverManager()->GetDriverByName(driver_name.c_str());
-    } else {
-        const std::string extension = path.substr(path.find_last_of('.') + 1);
-        for (int k = 0; k < GetGDALDriverManager()->GetDriverCount() && !driver; ++k) {
-            GDALDriver* candidate = GetGDALDriverManager()->GetDriver(k);
-            const char* extensions = candidate->GetMetadataItem(GDAL_DMD_EXTENSIONS);
-            if (!candidate->GetMetadataItem(GDAL_DCAP_VECTOR) || !candidate->GetMetadataItem(GDAL_DCAP_CREATE) || !extensions) continue;
-            const std::string list = std::string(" ") + extensions + " ";
-            if (list.find(" " + extension + " ") != std::string::npos) driver = candidate;
-        }
-    }
-    if (!driver) throw OutputError(path + ": no GDAL vector driver for this file (use .gpkg, .shp, .fgb, .geojson or -f)");
+    GDALDriver* driver = vector_driver_for(path, driver_name);
     DatasetPtr dataset(driver->Create(path.c_str(), 0, 0, 0, GDT_Unknown, nullptr));
     if (!dataset) throw OutputError(path + ": cannot create" + last_gdal_error());
     OGRSpatialReference srs;

@@ -10,9 +10,6 @@
 
 namespace toposimp::io {
 
-// Can GDAL open `path` as a raster?
-bool is_raster(const std::string& path);
-
 struct Dem {
     mesh::Mesh tin;
     std::string crs_wkt;          // the raster's CRS, "" if it has none
@@ -20,6 +17,7 @@ struct Dem {
     std::size_t nodata_cells = 0;  // left out (nodata or not finite)
 };
 
+// InputError if GDAL cannot open `path` as a raster or it has no such band.
 Dem read_dem(const std::string& path, int band);
 
 // Each triangle as a Polygon Z feature of one layer (GDAL driver from the extension or

@@ -4,6 +4,7 @@
 
 #include <cpl_error.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <mutex>
 
@@ -62,5 +63,43 @@ OGRLayer& pick_layer(GDALDataset& dataset, const std::string& path, const std::s
 std::string feature_label(const std::string& path, OGRLayer& layer, GIntBig fid) {
     return "'" + path + "', layer '" + std::string(layer.GetName()) + "', feature " + std::to_string(fid);
 }
+
+GDALDriver* vector_driver_for(const std::string& path, const std::string& format) {
+    register_drivers();
+    GDALDriverManager& drivers = *GetGDALDriverManager();
+    std::string name = format;
+    if (name.empty()) {
+        std::string extension = std::filesystem::path(path).extension().string();
+        if (!extension.empty()) extension.erase(0, 1);
+        std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
+        static const std::pair<const char*, const char*> kKnown[] = {
+            {"shp", "ESRI Shapefile"}, {"gpkg", "GPKG"},  {"geojson", "GeoJSON"}, {"json", "GeoJSON"},
+            {"fgb", "FlatGeobuf"},     {"gml", "GML"},    {"csv", "CSV"},         {"kml", "KML"},
+            {"sqlite", "SQLite"},      {"geojsonl", "GeoJSONSeq"}, {"geojsons", "GeoJSONSeq"},
+        };
+        for (const auto& [known_extension, driver] : kKnown) {
+            if (extension == known_extension) name = driver;
+        }
+        for (int i = 0; name.empty() && i < drivers.GetDriverCount(); ++i) {
+            GDALDriver* driver = drivers.GetDriver(i);
+            const char* extensions = driver->GetMetadataItem(GDAL_DMD_EXTENSIONS);
+            if (!extensions || !driver->GetMetadataItem(GDAL_DCAP_VECTOR) || !driver->GetMetadataItem(GDAL_DCAP_CREATE)) {
+                continue;
+            }
+            const CPLStringList list(CSLTokenizeString(extensions));
+            if (!extension.empty() && list.FindString(extension.c_str()) >= 0) name = driver->GetDescription();
+        }
+        if (name.empty()) {
+            throw OutputError("cannot tell the output format of '" + path + "' from its extension; name it with -f (e.g. -f GPKG)");
+        }
+    }
+    GDALDriver* driver = drivers.GetDriverByName(name.c_str());
+    if (driver == nullptr || !driver->GetMetadataItem(GDAL_DCAP_VECTOR)) {
+        throw OutputError("unknown vector output format '" + name + "' (see `ogrinfo --formats`)");
+    }
+    if (!driver->GetMetadataItem(GDAL_DCAP_CREATE)) throw OutputError("GDAL cannot create '" + name + "' files");
+    return driver;
+}
+
 
 }  // namespace toposimp::io

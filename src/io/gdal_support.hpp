@@ -32,6 +32,10 @@ using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
 // Opens a vector dataset read-only; InputError saying why if it cannot.
 DatasetPtr open_vector(const std::string& path);
 
+// The vector driver for an output: `format` by name, or else from the path's extension;
+// OutputError if there is none that can create files.
+GDALDriver* vector_driver_for(const std::string& path, const std::string& format);
+
 // "name1, name2, …" (or "none").
 std::string layer_names(GDALDataset& dataset);
 

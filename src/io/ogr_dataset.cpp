@@ -351,43 +351,6 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
 
 namespace {
 
-GDALDriver* choose_driver(const WriteOptions& options) {
-    register_drivers();
-    GDALDriverManager& drivers = *GetGDALDriverManager();
-    std::string name = options.format;
-    if (name.empty()) {
-        std::string extension = std::filesystem::path(options.path).extension().string();
-        if (!extension.empty()) extension.erase(0, 1);
-        std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
-        static const std::pair<const char*, const char*> kKnown[] = {
-            {"shp", "ESRI Shapefile"}, {"gpkg", "GPKG"},  {"geojson", "GeoJSON"}, {"json", "GeoJSON"},
-            {"fgb", "FlatGeobuf"},     {"gml", "GML"},    {"csv", "CSV"},         {"kml", "KML"},
-            {"sqlite", "SQLite"},      {"geojsonl", "GeoJSONSeq"}, {"geojsons", "GeoJSONSeq"},
-        };
-        for (const auto& [known_extension, driver] : kKnown) {
-            if (extension == known_extension) name = driver;
-        }
-        for (int i = 0; name.empty() && i < drivers.GetDriverCount(); ++i) {
-            GDALDriver* driver = drivers.GetDriver(i);
-            const char* extensions = driver->GetMetadataItem(GDAL_DMD_EXTENSIONS);
-            if (!extensions || !driver->GetMetadataItem(GDAL_DCAP_VECTOR) || !driver->GetMetadataItem(GDAL_DCAP_CREATE)) {
-                continue;
-            }
-            const CPLStringList list(CSLTokenizeString(extensions));
-            if (!extension.empty() && list.FindString(extension.c_str()) >= 0) name = driver->GetDescription();
-        }
-        if (name.empty()) {
-            throw OutputError("cannot tell the output format of '" + options.path + "' from its extension; name it with -f (e.g. -f GPKG)");
-        }
-    }
-    GDALDriver* driver = drivers.GetDriverByName(name.c_str());
-    if (driver == nullptr || !driver->GetMetadataItem(GDAL_DCAP_VECTOR)) {
-        throw OutputError("unknown vector output format '" + name + "' (see `ogrinfo --formats`)");
-    }
-    if (!driver->GetMetadataItem(GDAL_DCAP_CREATE)) throw OutputError("GDAL cannot create '" + name + "' files");
-    return driver;
-}
-
 // The point sequences of a geometry: line parts, polygon rings (all of them, in order), points.
 void collect_parts(const OGRGeometry* geometry, std::vector<const OGRSimpleCurve*>& parts,
                    std::vector<const OGRPoint*>& points) {
@@ -490,7 +453,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                                            const std::vector<std::uint8_t>& kept) const {
     const Data& data = *data_;
     std::vector<std::string> warnings;
-    GDALDriver* driver = choose_driver(options);
+    GDALDriver* driver = vector_driver_for(options.path, options.format);
     const std::string driver_name = driver->GetDescription();
     const std::size_t layer_count = data.layers.size();
     if (layer_count > 1 && !holds_several_layers(driver_name)) {

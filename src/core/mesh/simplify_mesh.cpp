@@ -204,49 +204,44 @@ void Simplifier::build_quadrics() {
         }
         quadric_[v] = q;
     }
-    // Border edges: one face. Mark their ends; unless locked, hold them near the border with a
-    // plane through the edge perpendicular to its face, weighted heavily (Garland & Heckbert §6).
-    struct Half {
-        std::uint32_t lo, hi, face;
-    };
-    std::vector<Half> halves;
-    halves.reserve(face_.size() * 3);
-    for (std::uint32_t f = 0; f < face_.size(); ++f) {
-        for (int k = 0; k < 3; ++k) {
-            const std::uint32_t a = face_[f][k], b = face_[f][(k + 1) % 3];
-            halves.push_back({std::min(a, b), std::max(a, b), f});
+    // Border edges: one face. Each vertex finds its own (a neighbour met in only one of its
+    // faces), marks itself, and unless locked adds for each a plane through the edge
+    // perpendicular to its face, weighted heavily (Garland & Heckbert §6) — computed from the
+    // edge's lower id so both ends add the same quadric.
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < n; ++v) {
+        thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> seen;  // (neighbour, face)
+        seen.clear();
+        for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
+            const Face& f = face_[c / 3];
+            const int k = static_cast<int>(c % 3);
+            seen.emplace_back(f[(k + 1) % 3], c / 3);
+            seen.emplace_back(f[(k + 2) % 3], c / 3);
         }
-    }
-    std::sort(halves.begin(), halves.end(), [](const Half& x, const Half& y) {
-        return x.lo != y.lo ? x.lo < y.lo : (x.hi != y.hi ? x.hi < y.hi : x.face < y.face);
-    });
-    for (std::size_t i = 0; i < halves.size();) {
-        std::size_t j = i + 1;
-        while (j < halves.size() && halves[j].lo == halves[i].lo && halves[j].hi == halves[i].hi) ++j;
-        if (j - i == 1) {
-            const Half& h = halves[i];
-            flags_[h.lo] |= kBoundary;
-            flags_[h.hi] |= kBoundary;
-            if (options_.lock_boundary) {
-                flags_[h.lo] |= kLocked;
-                flags_[h.hi] |= kLocked;
-            } else {
-                const Face& f = face_[h.face];
-                const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
-                const Point3 edge = minus(pos_[h.hi], pos_[h.lo]);
-                const Point3 side = cross(edge, normal);
-                const double length = norm(side);
-                if (length > 0) {
-                    const Point3 unit{side.x / length, side.y / length, side.z / length};
-                    const double weight = 1000.0 * dot(edge, edge);
-                    Quadric q;
-                    q.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[h.lo]), weight);
-                    quadric_[h.lo] += q;
-                    quadric_[h.hi] += q;
+        std::sort(seen.begin(), seen.end());
+        for (std::size_t i = 0; i < seen.size();) {
+            std::size_t j = i + 1;
+            while (j < seen.size() && seen[j].first == seen[i].first) ++j;
+            if (j - i == 1) {
+                flags_[v] |= options_.lock_boundary ? (kBoundary | kLocked) : kBoundary;
+                if (!options_.lock_boundary) {
+                    const auto w = seen[i].first;
+                    const auto lo = std::min(static_cast<std::uint32_t>(v), w), hi = std::max(static_cast<std::uint32_t>(v), w);
+                    const Face& f = face_[seen[i].second];
+                    const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+                    const Point3 edge = minus(pos_[hi], pos_[lo]);
+                    const Point3 side = cross(edge, normal);
+                    const double length = norm(side);
+                    if (length > 0) {
+                        const Point3 unit{side.x / length, side.y / length, side.z / length};
+                        Quadric q;
+                        q.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
+                        quadric_[v] += q;
+                    }
                 }
             }
+            i = j;
         }
-        i = j;
     }
 }
 
