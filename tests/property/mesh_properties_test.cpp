@@ -38,6 +38,28 @@ bool same(const Mesh& a, const Mesh& b) {
     return true;
 }
 
+TEST(MeshProperties, CheckerFindsCoplanarAndCrossingContacts) {
+    // A flat square of two faces: clean. Fold one over its diagonal (coplanar overlap), or add a
+    // face piercing it, or one lying flat inside it: each is an intersecting pair.
+    Mesh flat{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}}};
+    EXPECT_EQ(find_defects(flat).total(), 0u) << find_defects(flat).first;
+    Mesh folded = flat;
+    folded.points[3] = {0.8, 0.2, 0};  // now on the same side of the diagonal as corner 1
+    EXPECT_EQ(find_defects(folded).intersecting_pairs, 1u);
+    Mesh pierced = flat;
+    pierced.points.push_back({0.5, 0.4, -1});
+    pierced.points.push_back({0.5, 0.4, 1});
+    pierced.points.push_back({3, 3, 3});
+    pierced.faces.push_back({4, 5, 6});
+    EXPECT_EQ(find_defects(pierced).intersecting_pairs, 1u);
+    Mesh lying = flat;
+    lying.points.push_back({0.6, 0.1, 0});
+    lying.points.push_back({0.9, 0.1, 0});
+    lying.points.push_back({0.9, 0.4, 0});
+    lying.faces.push_back({4, 5, 6});
+    EXPECT_EQ(find_defects(lying).intersecting_pairs, 1u);
+}
+
 TEST(MeshProperties, GeneratedInputsAreClean) {
     expect_clean(testing::noisy_sphere(3, 0.05, 1), "sphere");
     expect_clean(testing::noisy_heightfield(30, 0.5, 1), "heightfield");

@@ -65,7 +65,7 @@ Poly clip(const Poly& poly, const Q3& p, const Q3& q, int turn, int axis) {
         if ((sa > 0 && sb < 0) || (sa < 0 && sb > 0)) {
             // Intersection of segment ab with line pq (in the projection, lifted linearly).
             const int u = (axis + 1) % 3, v = (axis + 2) % 3;
-            auto side = [&](const Q3& x) {
+            auto side = [&](const Q3& x) -> mpq_class {
                 return (coord(q, u) - coord(p, u)) * (coord(x, v) - coord(p, v)) -
                        (coord(q, v) - coord(p, v)) * (coord(x, u) - coord(p, u));
             };
