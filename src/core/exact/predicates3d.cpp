@@ -2,7 +2,9 @@
 
 #include <gmpxx.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 namespace toposimp::exact {
 namespace {
@@ -60,27 +62,61 @@ int certified_sign(Bounded x) {
     return 2;
 }
 
-int sign_of(const mpq_class& x) { return sgn(x); }
-
-template <class T>
-T orient3d_expr(Point3 a, Point3 b, Point3 c, Point3 d) {
-    const T bx = T(b.x) - T(a.x), by = T(b.y) - T(a.y), bz = T(b.z) - T(a.z);
-    const T cx = T(c.x) - T(a.x), cy = T(c.y) - T(a.y), cz = T(c.z) - T(a.z);
-    const T dx = T(d.x) - T(a.x), dy = T(d.y) - T(a.y), dz = T(d.z) - T(a.z);
+// The polynomials, written once for every number type: `to` turns an input double into T.
+template <class T, class To>
+T orient3d_expr(Point3 a, Point3 b, Point3 c, Point3 d, To to) {
+    const T bx = to(b.x) - to(a.x), by = to(b.y) - to(a.y), bz = to(b.z) - to(a.z);
+    const T cx = to(c.x) - to(a.x), cy = to(c.y) - to(a.y), cz = to(c.z) - to(a.z);
+    const T dx = to(d.x) - to(a.x), dy = to(d.y) - to(a.y), dz = to(d.z) - to(a.z);
     const T nx = by * cz - bz * cy, ny = bz * cx - bx * cz, nz = bx * cy - by * cx;
     return nx * dx + ny * dy + nz * dz;
 }
 
-template <class T>
-T normal_dot_expr(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f) {
-    const T bx = T(b.x) - T(a.x), by = T(b.y) - T(a.y), bz = T(b.z) - T(a.z);
-    const T cx = T(c.x) - T(a.x), cy = T(c.y) - T(a.y), cz = T(c.z) - T(a.z);
-    const T ex = T(e.x) - T(d.x), ey = T(e.y) - T(d.y), ez = T(e.z) - T(d.z);
-    const T fx = T(f.x) - T(d.x), fy = T(f.y) - T(d.y), fz = T(f.z) - T(d.z);
+template <class T, class To>
+T normal_dot_expr(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, To to) {
+    const T bx = to(b.x) - to(a.x), by = to(b.y) - to(a.y), bz = to(b.z) - to(a.z);
+    const T cx = to(c.x) - to(a.x), cy = to(c.y) - to(a.y), cz = to(c.z) - to(a.z);
+    const T ex = to(e.x) - to(d.x), ey = to(e.y) - to(d.y), ez = to(e.z) - to(d.z);
+    const T fx = to(f.x) - to(d.x), fy = to(f.y) - to(d.y), fz = to(f.z) - to(d.z);
     const T n1x = by * cz - bz * cy, n1y = bz * cx - bx * cz, n1z = bx * cy - by * cx;
     const T n2x = ey * fz - ez * fy, n2y = ez * fx - ex * fz, n2z = ex * fy - ey * fx;
     return n1x * n2x + n1y * n2y + n1z * n2z;
 }
+
+template <class T>
+struct Plain {
+    T operator()(double x) const { return T(x); }
+};
+
+// Exact fallback in integers: every finite double is m·2^e with |m| < 2^53; scaled by one
+// common power of two, all inputs become integers and the polynomial's sign is unchanged (the
+// scale is positive). GMP integers need no gcd per operation, unlike rationals.
+class ToInteger {
+public:
+    template <std::size_t N>
+    explicit ToInteger(const Point3 (&points)[N]) {
+        for (const Point3& p : points) {
+            for (double x : {p.x, p.y, p.z}) {
+                if (x != 0.0) {
+                    int e = 0;
+                    std::frexp(x, &e);
+                    lowest_ = std::min(lowest_, e);
+                }
+            }
+        }
+    }
+    mpz_class operator()(double x) const {
+        if (x == 0.0) return 0;
+        int e = 0;
+        const double f = std::frexp(x, &e);
+        mpz_class z(static_cast<long>(std::ldexp(f, 53)));  // exact: |f·2^53| < 2^53
+        mpz_mul_2exp(z.get_mpz_t(), z.get_mpz_t(), static_cast<mp_bitcnt_t>(e - lowest_));
+        return z;
+    }
+
+private:
+    int lowest_ = std::numeric_limits<int>::max();
+};
 
 int orient2(Point a, Point b, Point c, PredicateStats& stats) { return orient2d(a, b, c, stats); }
 
@@ -160,7 +196,10 @@ bool enters(Point3 s, Point3 x, const Triangle3& t, int at, PredicateStats& stat
 
 }  // namespace
 
-int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) { return sign_of(orient3d_expr<mpq_class>(a, b, c, d)); }
+int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) {
+    const Point3 points[] = {a, b, c, d};
+    return sgn(orient3d_expr<mpz_class>(a, b, c, d, ToInteger(points)));
+}
 
 int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
     // Shewchuk's semi-static filter first (orient3dfast with the bound (7 + 56ε)ε·permanent);
@@ -186,7 +225,7 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
             return 1;
         }
     }
-    const int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d));
+    const int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
     if (sign != 2) {
         ++stats.filter_decided;
         return sign;
@@ -196,18 +235,19 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
 }
 
 int orient3d_float(Point3 a, Point3 b, Point3 c, Point3 d) {
-    const double det = orient3d_expr<double>(a, b, c, d);
+    const double det = orient3d_expr<double>(a, b, c, d, Plain<double>{});
     return (det > 0) - (det < 0);
 }
 
 int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, PredicateStats& stats) {
-    const int sign = certified_sign(normal_dot_expr<Bounded>(a, b, c, d, e, f));
+    const int sign = certified_sign(normal_dot_expr<Bounded>(a, b, c, d, e, f, Plain<Bounded>{}));
     if (sign != 2) {
         ++stats.filter_decided;
         return sign;
     }
     ++stats.gmp_fallbacks;
-    return sign_of(normal_dot_expr<mpq_class>(a, b, c, d, e, f));
+    const Point3 points[] = {a, b, c, d, e, f};
+    return sgn(normal_dot_expr<mpz_class>(a, b, c, d, e, f, ToInteger(points)));
 }
 
 int orient_projected(Point3 a, Point3 b, Point3 c, int axis, PredicateStats& stats) {

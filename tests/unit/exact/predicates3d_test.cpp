@@ -2,6 +2,7 @@
 // doubles get some of these cases wrong.
 #include "core/exact/predicates3d.hpp"
 
+#include <gmpxx.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,6 +14,16 @@ namespace {
 Point3 up(Point3 p, int ulps) {
     for (int k = 0; k < std::abs(ulps); ++k) p.z = std::nextafter(p.z, ulps > 0 ? INFINITY : -INFINITY);
     return p;
+}
+
+// The determinant in GMP rationals, written here independently of the library.
+int reference_orient3d(Point3 a, Point3 b, Point3 c, Point3 d) {
+    auto q = [](double x) { return mpq_class(x); };
+    const mpq_class bx = q(b.x) - q(a.x), by = q(b.y) - q(a.y), bz = q(b.z) - q(a.z);
+    const mpq_class cx = q(c.x) - q(a.x), cy = q(c.y) - q(a.y), cz = q(c.z) - q(a.z);
+    const mpq_class dx = q(d.x) - q(a.x), dy = q(d.y) - q(a.y), dz = q(d.z) - q(a.z);
+    const mpq_class det = (by * cz - bz * cy) * dx + (bz * cx - bx * cz) * dy + (bx * cy - by * cx) * dz;
+    return sgn(det);
 }
 
 TEST(Orient3d, SignsOfSimpleCases) {
@@ -39,6 +50,7 @@ TEST(Orient3d, FilterAgreesWithGmpNearPlanesWhereDoublesFail) {
         Point3 d{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z)};
         d = up(d, static_cast<int>(trial % 3) - 1);
         const int truth = orient3d_gmp(a, b, c, d);
+        EXPECT_EQ(truth, reference_orient3d(a, b, c, d));
         EXPECT_EQ(orient3d(a, b, c, d, stats), truth);
         if (orient3d_float(a, b, c, d) != truth) ++float_wrong;
         ++cases;
@@ -53,6 +65,7 @@ TEST(Orient3d, HugeAndTinyCoordinates) {
         const Point3 a{0, 0, 0}, b{scale, 0, 0}, c{0, scale, 0};
         const Point3 above{scale / 3, scale / 3, std::nextafter(0.0, 1.0)};
         EXPECT_EQ(orient3d(a, b, c, above, stats), orient3d_gmp(a, b, c, above)) << scale;
+        EXPECT_EQ(orient3d_gmp(a, b, c, above), reference_orient3d(a, b, c, above)) << scale;
         EXPECT_EQ(orient3d(a, b, c, above, stats), 1) << scale;
         const Point3 on{scale / 4, scale / 2, 0};
         EXPECT_EQ(orient3d(a, b, c, on, stats), 0) << scale;
