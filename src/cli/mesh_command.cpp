@@ -231,7 +231,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                     << ",\"mean\":" << distance->backward.mean << ",\"samples\":" << distance->backward.samples
                     << "},\"diagonal\":" << distance->diagonal << "}";
             }
-            out << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels
+            out << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
                 << "},\"predicates\":{\"filter_decided\":" << stats.predicates.filter_decided
                 << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks << "},\"seconds\":{\"read\":" << seconds_read
                 << ",\"simplify\":" << seconds_simplify << ",\"write\":" << seconds_write << ",\"hausdorff\":" << seconds_hausdorff

@@ -58,6 +58,7 @@ struct MeshStats {
     }
     double max_error = 0.0;  // largest quadric error (distance) of a collapse made
     int levels = 0;
+    int rounds = 0;  // heap builds over all levels (count targets repeat a level while it progresses)
     int threads = 1;
     double seconds_setup = 0.0, seconds_collapse = 0.0;
     exact::PredicateStats predicates;
