@@ -166,9 +166,6 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         const auto simplify_start = Clock::now();
         const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
         const double seconds_simplify = seconds_since(simplify_start);
-        if (options.terrain && stats.levels > 0 && !stats.target_reached) {
-            log->debug("target not reached");
-        }
 
         const auto write_start = Clock::now();
         if (mesh_output) {

@@ -353,7 +353,7 @@ void Simplifier::build_face_index() {
 }
 
 // Faces that may touch `box` (inside the calling block): from the level's index those whose box
-// at the start of the level overlaps it — a face another block changes lay, and lies, inside
+// at the start of the round overlaps it — a face another block changes lay, and lies, inside
 // that block, so its start box cannot overlap and it is never read — and the faces this block
 // changed, from its overlay.
 void Simplifier::query(const Box3& box, std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
@@ -735,7 +735,6 @@ MeshStats Simplifier::run() {
     for (int level = 0; level <= top; ++level) {
         if (by_count && live_faces_ <= target) break;
         ++stats.levels;
-        build_face_index();
         order.clear();
         for (std::uint32_t v = 0; v < pos_.size(); ++v) {
             if ((flags_[v] & kDead) == 0) order.emplace_back(grid_.block_of(cell_[v], level), v);
@@ -766,6 +765,9 @@ MeshStats Simplifier::run() {
         std::vector<std::vector<Candidate>> heaps(blocks.size());
         for (int round = 0; round < 3; ++round) {
             if (by_count && live_faces_ <= target) break;
+            // The index and its start-of-round boxes are what query() relies on: faces a block
+            // moved in an earlier round must be indexed where they are now.
+            build_face_index();
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
             for (std::int64_t i = 0; i < block_count; ++i) {
                 const Block& block = blocks[static_cast<std::size_t>(i)];
