@@ -1,4 +1,5 @@
 #include "cli/cli.hpp"
+#include "cli/interrupt.hpp"
 
 #include <malloc.h>
 #include <unistd.h>
@@ -12,6 +13,7 @@ int main(int argc, char** argv) {
     // memory in the heap instead; peak memory is unchanged.
     mallopt(M_MMAP_THRESHOLD, 1 << 30);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
+    toposimp::cli::clean_up_on_interrupt();
     std::ios::sync_with_stdio(false);
     toposimp::cli::Context context{std::cout, std::cerr, ::isatty(STDERR_FILENO) == 1};
     return toposimp::cli::run({argv + 1, argv + argc}, context);

@@ -1,6 +1,7 @@
 #include "cli/check_command.hpp"
 
 #include "cli/logging.hpp"
+#include "cli/progress.hpp"
 #include "io/errors.hpp"
 #include "io/json_text.hpp"
 #include "io/output_file.hpp"
@@ -27,6 +28,8 @@ CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
     check->add_flag("--json", options.json, "Print the report as JSON instead of a table");
     check->add_option("--geojson-errors", options.geojson_errors,
                       "Also write each violation as a GeoJSON point with its kind and detail (for QGIS)");
+    check->add_flag("--progress", options.progress,
+                  "Report progress as lines \"PROGRESS <percent> <phase>\" on stderr (for GUIs and wrappers)");
     check->add_flag("-q,--quiet", options.quiet, "Print nothing; the exit status tells");
     check->add_flag("-v,--verbose", options.verbosity, "More detail");
     return check;
@@ -90,8 +93,11 @@ std::string violations_geojson(const validate::CheckReport& report) {
 
 int run_check(const CheckCommandOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
+    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
     try {
+        progress.phase("checking " + options.check.simplified + " against " + options.check.original);
         const validate::CheckReport report = validate::check(options.check);
+        progress.done();
         if (!options.geojson_errors.empty()) {
             io::OutputFile output(options.geojson_errors, true, &context.out);
             {
@@ -108,8 +114,10 @@ int run_check(const CheckCommandOptions& options, Context& context) {
         }
         return report.clean() ? kOk : kTopologyFailure;
     } catch (const io::InputError& error) {
+        progress.done();
         log->error("{}", error.what());
     } catch (const io::OutputError& error) {
+        progress.done();
         log->error("{}", error.what());
     }
     return kUsageError;

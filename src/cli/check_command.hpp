@@ -15,6 +15,7 @@ struct CheckCommandOptions {
     bool json = false;
     std::string geojson_errors;
     bool quiet = false;
+    bool progress = false;  // --progress: PROGRESS lines on stderr for GUIs
     int verbosity = 0;
 };
 

@@ -75,6 +75,8 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
     map->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
     map->add_flag("--validate", options.validate,
                   "Run `toposimp check` on the output before moving it into place; exit 1 and no output if it finds anything");
+    map->add_flag("--progress", options.progress,
+                  "Report progress as lines \"PROGRESS <percent> <phase>\" on stderr (for GUIs and wrappers)");
     map->add_flag("-q,--quiet", options.quiet, "Print errors only");
     map->add_flag("-v,--verbose", options.verbosity, "More detail (repeat for more)");
     return map;
@@ -193,7 +195,7 @@ int run_map(const MapOptions& options, Context& context) {
 
     const auto start = Clock::now();
     Timings time;
-    Progress progress(context.err, context.err_is_terminal && !options.quiet);
+    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
     simplify_options.progress = [&progress](double done) { progress.update(done); };
     try {
         progress.phase("reading " + options.input);

@@ -33,6 +33,7 @@ struct MapOptions {
     bool overwrite = false;
     bool validate = false;
     bool quiet = false;
+    bool progress = false;  // --progress: PROGRESS lines on stderr for GUIs
     int verbosity = 0;
 };
 

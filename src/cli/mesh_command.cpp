@@ -1,6 +1,7 @@
 #include "cli/mesh_command.hpp"
 
 #include "cli/common.hpp"
+#include "cli/progress.hpp"
 #include "cli/logging.hpp"
 #include "core/mesh/distance.hpp"
 #include "core/mesh/simplify_mesh.hpp"
@@ -58,6 +59,8 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
         ->check(CLI::NonNegativeNumber);
     mesh->add_flag("--json", options.json, "Print a JSON summary on stdout");
     mesh->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
+    mesh->add_flag("--progress", options.progress,
+                  "Report progress as lines \"PROGRESS <percent> <phase>\" on stderr (for GUIs and wrappers)");
     mesh->add_flag("-q,--quiet", options.quiet, "Print errors only");
     mesh->add_flag("-v,--verbose", options.verbosity, "More detail (repeat for more)");
     return mesh;
@@ -105,6 +108,8 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
     engine->terrain = options.terrain;
     engine->threads = options.threads;
     const auto start = Clock::now();
+    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
+    engine->progress = [&progress](double done) { progress.update(done); };
     try {
         // Output: a mesh file, or an OGR layer of triangles.
         const std::string format_name = [&] {
@@ -125,6 +130,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         io::OutputFile output(options.output, options.overwrite, &context.out);
 
         // Input: a mesh file, or a DEM raster triangulated into a TIN.
+        progress.phase("reading " + options.input);
         mesh::Mesh m;
         std::optional<io::Dem> dem;
         if (io::has_mesh_extension(options.input)) {
@@ -163,10 +169,12 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         }
         const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : m;
 
+        progress.phase("simplifying");
         const auto simplify_start = Clock::now();
         const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
         const double seconds_simplify = seconds_since(simplify_start);
 
+        progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
         if (mesh_output) {
             io::write_mesh(m, output.staging_path(), format, options.ascii);
@@ -179,6 +187,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         std::optional<mesh::HausdorffDistance> distance;
         double seconds_hausdorff = 0;
         if (!options.no_hausdorff) {
+            progress.phase("measuring the Hausdorff distance");
             const auto measure_start = Clock::now();
             // Four samples per input face, at least 50 000 and at most 400 000 per direction.
             const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
@@ -186,6 +195,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             seconds_hausdorff = seconds_since(measure_start);
         }
         const double total = seconds_since(start);
+        progress.done();
         if (!stats.target_reached) {
             log->warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks",
                       stats.faces_out, stats.target_faces);
@@ -236,10 +246,13 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         }
         return kOk;
     } catch (const io::InputError& error) {
+        progress.done();
         log->error("{}", error.what());
     } catch (const io::OutputError& error) {
+        progress.done();
         log->error("{}", error.what());
     } catch (const std::bad_alloc&) {
+        progress.done();
         log->error("out of memory");
     }
     return kUsageError;

@@ -28,6 +28,7 @@ struct MeshCommandOptions {
     bool json = false;
     bool overwrite = false;
     bool quiet = false;
+    bool progress = false;  // --progress: PROGRESS lines on stderr for GUIs
     int verbosity = 0;
 };
 

@@ -1,5 +1,9 @@
-// Progress on a terminal: one line, rewritten in place, at most ten times a second; nothing at
-// all when the error stream is not a terminal (pipes, logs) or with --quiet.
+// Progress of a long run, on the error stream. Two forms:
+// - on a terminal: one line, rewritten in place, at most ten times a second;
+// - with --progress (for GUIs and wrappers such as the QGIS provider): plain lines
+//   `PROGRESS <percent> <phase>`, one when a phase starts (percent 0) and one each time the whole
+//   percent of the phase changes, whatever the stream is.
+// Nothing at all otherwise (pipes, logs) or with --quiet.
 #pragma once
 
 #include <chrono>
@@ -8,44 +12,71 @@
 
 namespace toposimp::cli {
 
+enum class ProgressStyle { none, terminal, lines };
+
+// The style for a run: --progress wins; else a terminal gets the rewritten line unless --quiet.
+inline ProgressStyle progress_style(bool progress_lines, bool err_is_terminal, bool quiet) {
+    if (progress_lines) return ProgressStyle::lines;
+    return err_is_terminal && !quiet ? ProgressStyle::terminal : ProgressStyle::none;
+}
+
 class Progress {
 public:
-    Progress(std::ostream& err, bool enabled) : err_(err), enabled_(enabled) {}
+    Progress(std::ostream& err, ProgressStyle style) : err_(err), style_(style) {}
     ~Progress() { done(); }
+    Progress(const Progress&) = delete;
+    Progress& operator=(const Progress&) = delete;
 
     void phase(const std::string& name) {
         phase_ = name;
         last_ = {};
-        show(-1);
+        percent_ = -1;
+        if (style_ == ProgressStyle::lines) {
+            show_line(0);
+        } else {
+            show(-1);
+        }
     }
 
-    // `share` of the current phase done (0…1).
+    // `share` of the current phase done (0…1). Safe to call often.
     void update(double share) {
+        if (style_ == ProgressStyle::lines) {
+            show_line(static_cast<int>(share * 100));
+            return;
+        }
         const auto now = std::chrono::steady_clock::now();
         if (now - last_ < std::chrono::milliseconds(100)) return;
         last_ = now;
         show(share);
     }
 
-    // Clears the line.
+    // Clears the terminal line (the line form has nothing to clear).
     void done() {
-        if (!enabled_ || !shown_) return;
+        if (style_ != ProgressStyle::terminal || !shown_) return;
         err_ << "\r\033[K" << std::flush;
         shown_ = false;
     }
 
 private:
     void show(double share) {
-        if (!enabled_) return;
+        if (style_ != ProgressStyle::terminal) return;
         err_ << "\r\033[Ktoposimp: " << phase_;
         if (share >= 0) err_ << ' ' << static_cast<int>(share * 100) << '%';
         err_ << std::flush;
         shown_ = true;
     }
 
+    void show_line(int percent) {
+        percent = percent < 0 ? 0 : percent > 100 ? 100 : percent;
+        if (percent == percent_) return;
+        percent_ = percent;
+        err_ << "PROGRESS " << percent << ' ' << phase_ << '\n' << std::flush;
+    }
+
     std::ostream& err_;
-    bool enabled_;
+    ProgressStyle style_;
     bool shown_ = false;
+    int percent_ = -1;
     std::string phase_;
     std::chrono::steady_clock::time_point last_{};
 };

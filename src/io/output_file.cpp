@@ -6,8 +6,10 @@
 
 #include <cstdio>
 #include <fstream>
+#include <mutex>
 #include <ostream>
 #include <random>
+#include <vector>
 
 namespace fs = std::filesystem;
 
@@ -26,7 +28,38 @@ fs::path make_private_dir(const fs::path& parent, const std::string& stem) {
     throw OutputError("cannot create a temporary folder in '" + parent.string() + "'");
 }
 
+// Staging folders of the OutputFiles alive now, for abandon_all(). The mutex is also held by
+// every commit, so a commit and an abandon never interleave.
+std::mutex& registry_mutex() {
+    static std::mutex mutex;
+    return mutex;
+}
+
+std::vector<fs::path>& registry() {
+    static std::vector<fs::path> folders;
+    return folders;
+}
+
+void enroll(const fs::path& dir) {
+    const std::lock_guard lock(registry_mutex());
+    registry().push_back(dir);
+}
+
+void withdraw(const fs::path& dir) {
+    const std::lock_guard lock(registry_mutex());
+    std::erase(registry(), dir);
+}
+
 }  // namespace
+
+void OutputFile::abandon_all() {
+    registry_mutex().lock();  // never unlocked: the process is about to end
+    for (const fs::path& dir : registry()) {
+        std::error_code ignored;
+        fs::remove_all(dir, ignored);
+    }
+    registry().clear();
+}
 
 OutputFile::OutputFile(std::string destination, bool overwrite, std::ostream* stdout_stream)
     : destination_(std::move(destination)), overwrite_(overwrite), stdout_stream_(stdout_stream) {
@@ -45,15 +78,18 @@ OutputFile::OutputFile(std::string destination, bool overwrite, std::ostream* st
         staging_dir_ = make_private_dir(fs::temp_directory_path(), "stdout");
     }
     staging_path_ = (staging_dir_ / target.filename()).string();
+    enroll(staging_dir_);
 }
 
 OutputFile::~OutputFile() {
+    withdraw(staging_dir_);
     std::error_code ignored;
     fs::remove_all(staging_dir_, ignored);
 }
 
 void OutputFile::commit(const std::function<void(const std::string&)>& remove_existing) {
     if (committed_) return;
+    const std::lock_guard lock(registry_mutex());
     if (to_stdout_) {
         std::ifstream in(staging_path_, std::ios::binary);
         if (!in) throw OutputError("cannot read back the output written for stdout");

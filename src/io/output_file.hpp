@@ -30,6 +30,12 @@ public:
     // first (e.g. with the GDAL driver, which knows a format's side files).
     void commit(const std::function<void(const std::string&)>& remove_existing = {});
 
+    // For an interrupted process (SIGINT, SIGTERM, SIGHUP; called from a thread that waits for
+    // them): removes the staging folder of every OutputFile still open and keeps any commit from
+    // starting afterwards, so the caller can end the process with nothing half-written left.
+    // A commit already under way finishes first.
+    static void abandon_all();
+
 private:
     std::string destination_;
     std::filesystem::path staging_dir_;

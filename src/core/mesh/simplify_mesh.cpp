@@ -820,6 +820,11 @@ MeshStats Simplifier::run() {
             }
             live_faces_ -= removed;
             ++stats.rounds;
+            if (options_.progress) {
+                const double work = by_count ? static_cast<double>(stats.faces_in - std::min(target, stats.faces_in)) : top + 1.0;
+                const double done = by_count ? static_cast<double>(stats.faces_in - live_faces_) : level + 1.0;
+                options_.progress(work > 0 ? std::min(1.0, done / work) : 1.0);
+            }
             // Unlimited rounds do all they can at once; limited ones stop when they stall.
             if (!std::isfinite(limit) || removed * 8 < left) break;
         }

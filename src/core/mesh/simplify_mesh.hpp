@@ -18,6 +18,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 
 namespace toposimp::mesh {
 
@@ -39,6 +40,9 @@ struct MeshOptions {
     int threads = 0;  // 0: OpenMP's default
     // Meshes with fewer faces run on one thread (results are identical either way).
     std::size_t parallel_threshold = std::size_t{1} << 14;
+    // Called on the calling thread after every round with the share of the work done (0…1):
+    // faces removed of those to remove for count targets, levels done for --max-error.
+    std::function<void(double done)> progress;
 };
 
 struct MeshStats {
