@@ -25,6 +25,8 @@ CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
     check->add_option("--key", options.check.key, "Match features by this field (default: by order)");
     check->add_option("-l,--layer", options.check.layers, "Layer to compare (repeatable; default: every layer)")
         ->allow_extra_args(false);
+    check->add_option("-L,--simplified-layer", options.check.simplified_layer,
+                      "The simplified dataset's layer to compare with the one original layer (-l), whatever its name");
     check->add_flag("--json", options.json, "Print the report as JSON instead of a table");
     check->add_option("--geojson-errors", options.geojson_errors,
                       "Also write each violation as a GeoJSON point with its kind and detail (for QGIS)");

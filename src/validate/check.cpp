@@ -292,7 +292,16 @@ std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linewor
 
 CheckReport check(const CheckOptions& options) {
     const std::vector<Layer> original = read_layers(options.original, options.layers, options.key);
-    std::vector<Layer> simplified = read_layers(options.simplified, {}, options.key);
+    std::vector<Layer> simplified;
+    if (options.simplified_layer.empty()) {
+        simplified = read_layers(options.simplified, {}, options.key);
+    } else {
+        if (original.size() != 1) {
+            throw InputError("--simplified-layer compares one layer, and the original has several: name one with -l");
+        }
+        simplified = read_layers(options.simplified, {options.simplified_layer}, options.key);
+        simplified.front().name = original.front().name;  // matched whatever it is called
+    }
     CheckReport report;
     Geos geos;
     exact::PredicateStats stats;

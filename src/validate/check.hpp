@@ -20,6 +20,8 @@ struct CheckOptions {
     std::string points;              // control points: FILE or FILE:LAYER; empty: none
     std::string key;                 // match features by this field; empty: by order
     std::vector<std::string> layers; // layers to compare; empty: every layer of the original
+    std::string simplified_layer;    // the simplified dataset's layer to compare with the one
+                                     // original layer, whatever its name; empty: match by name
 };
 
 struct Violation {

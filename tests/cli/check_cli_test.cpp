@@ -57,6 +57,30 @@ TEST(CheckCli, CleanSimplificationPasses) {
     EXPECT_NE(checked.json.find("\"clean\":true"), std::string::npos);
 }
 
+// A simplified layer saved under another name in a dataset with several layers (as QGIS may
+// save it): --simplified-layer names it; without it the layers cannot be matched.
+TEST(CheckCli, SimplifiedLayerNamedExplicitly) {
+    const Case c = make_case("renamed", wkbLineString, {kZigzag}, {kZigzag});
+    const std::string other = (c.dir / "two_layers.gpkg").string();
+    write_layer(other, "GPKG", wkbLineString, {{"LINESTRING (0 0, 1 1, 2 0, 3 5, 4 0)", "f"}}, "simplified");
+    {
+        // A second layer that a by-name match would not find either.
+        GDALDataset* dataset = GDALDataset::Open(other.c_str(), GDAL_OF_VECTOR | GDAL_OF_UPDATE);
+        ASSERT_NE(dataset, nullptr);
+        dataset->CreateLayer("notes", nullptr, wkbPoint, nullptr);
+        GDALClose(dataset);
+    }
+    const CliResult unmatched = run_cli({"check", c.original, other, "--json"});
+    EXPECT_EQ(unmatched.code, 2) << unmatched.out << unmatched.err;
+    EXPECT_NE(unmatched.err.find("has no layer 'lines'"), std::string::npos) << unmatched.err;
+    const Checked named = run_check({c.dir, c.original, other}, "not_subset", {"-l", "lines", "--simplified-layer", "simplified"});
+    EXPECT_EQ(named.code, 1) << named.json;
+    EXPECT_EQ(named.count, 1) << named.json;  // (3 5) is not an input vertex
+    // The original has one layer, so -l may be left out.
+    const Checked short_form = run_check({c.dir, c.original, other}, "not_subset", {"-L", "simplified"});
+    EXPECT_EQ(short_form.count, 1) << short_form.json;
+}
+
 TEST(CheckCli, FeatureLost) {
     const Case c = make_case("lost", wkbLineString, {kZigzag, "LINESTRING (0 3, 4 3)"}, {"LINESTRING (0 0, 4 0)", ""});
     const Checked checked = run_check(c, "feature_lost");
