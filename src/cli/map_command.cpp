@@ -6,6 +6,7 @@
 #include "cli/progress.hpp"
 #include "core/map/simplify.hpp"
 #include "io/errors.hpp"
+#include "io/gdal_support.hpp"
 #include "io/giscup.hpp"
 #include "io/json_text.hpp"
 #include "io/ogr_dataset.hpp"
@@ -198,6 +199,9 @@ int run_map(const MapOptions& options, Context& context) {
     Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
     simplify_options.progress = [&progress](double done) { progress.update(done); };
     try {
+        // An output that cannot be written fails now, not after reading and simplifying.
+        io::OutputFile::check_destination(options.output, options.overwrite);
+        if (!options.giscup) io::vector_driver_for(options.output, options.format);
         progress.phase("reading " + options.input);
         // read → simplify → write; the engine builds chains, indexes and ranks inside simplify().
         map::MapData map;

@@ -61,18 +61,33 @@ void OutputFile::abandon_all() {
     registry().clear();
 }
 
+namespace {
+
+bool is_stdout(const std::string& destination) {
+    return destination == "/vsistdout/" || destination == "/vsistdout" || destination == "-";
+}
+
+}  // namespace
+
+void OutputFile::check_destination(const std::string& destination, bool overwrite) {
+    if (is_stdout(destination)) return;
+    const fs::path target(destination);
+    if (target.filename().empty()) throw OutputError("output '" + destination + "' is a folder, not a file name");
+    std::error_code error;
+    if (fs::exists(target, error) && !overwrite) {
+        throw OutputError("output '" + destination + "' exists; pass --overwrite to replace it");
+    }
+    const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
+    if (!fs::is_directory(parent, error)) throw OutputError("output folder '" + parent.string() + "' does not exist");
+}
+
 OutputFile::OutputFile(std::string destination, bool overwrite, std::ostream* stdout_stream)
     : destination_(std::move(destination)), overwrite_(overwrite), stdout_stream_(stdout_stream) {
-    to_stdout_ = destination_ == "/vsistdout/" || destination_ == "/vsistdout" || destination_ == "-";
+    to_stdout_ = is_stdout(destination_);
     fs::path target = to_stdout_ ? fs::path("stdout") : fs::path(destination_);
     if (!to_stdout_) {
-        if (target.filename().empty()) throw OutputError("output '" + destination_ + "' is a folder, not a file name");
-        std::error_code error;
-        if (fs::exists(target, error) && !overwrite_) {
-            throw OutputError("output '" + destination_ + "' exists; pass --overwrite to replace it");
-        }
+        check_destination(destination_, overwrite_);
         const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
-        if (!fs::is_directory(parent, error)) throw OutputError("output folder '" + parent.string() + "' does not exist");
         staging_dir_ = make_private_dir(parent, target.filename().string());
     } else {
         staging_dir_ = make_private_dir(fs::temp_directory_path(), "stdout");

@@ -30,6 +30,10 @@ public:
     // first (e.g. with the GDAL driver, which knows a format's side files).
     void commit(const std::function<void(const std::string&)>& remove_existing = {});
 
+    // The constructor's checks alone (an existing output without `overwrite`, a missing folder),
+    // for commands that open the output only after long work: they fail before it.
+    static void check_destination(const std::string& destination, bool overwrite);
+
     // For an interrupted process (SIGINT, SIGTERM, SIGHUP; called from a thread that waits for
     // them): removes the staging folder of every OutputFile still open and keeps any commit from
     // starting afterwards, so the caller can end the process with nothing half-written left.

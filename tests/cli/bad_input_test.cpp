@@ -91,10 +91,13 @@ TEST(MapBadInput, NonFiniteCoordinates) {
 
 TEST(MapBadInput, OutputFolderMissingOrFormatUnknown) {
     const auto dir = fresh_dir("bad-output");
-    auto result = run_cli({"map", testdata("nh_borders.gpkg"), "-o", (dir / "no/such/dir/out.gpkg").string()});
+    // Each fails before the input is read (no progress phase starts).
+    auto result = run_cli({"map", testdata("nh_borders.gpkg"), "-o", (dir / "no/such/dir/out.gpkg").string(), "--progress"});
     expect_clean_failure(result, dir, "does not exist", {});
-    result = run_cli({"map", testdata("nh_borders.gpkg"), "-o", (dir / "out.xyz").string()});
+    EXPECT_EQ(result.err.find("PROGRESS"), std::string::npos) << result.err;
+    result = run_cli({"map", testdata("nh_borders.gpkg"), "-o", (dir / "out.xyz").string(), "--progress"});
     expect_clean_failure(result, dir, "cannot tell the output format", {});
+    EXPECT_EQ(result.err.find("PROGRESS"), std::string::npos) << result.err;
     result = run_cli({"map", testdata("nh_borders.gpkg"), "-f", "NoSuchDriver", "-o", (dir / "out.x").string()});
     expect_clean_failure(result, dir, "unknown vector output format 'NoSuchDriver'", {});
 }

@@ -141,13 +141,17 @@ def map_args(input_path, output_path, input_layer=None, output_layer=None, point
     return args + _common(threads, progress) + ["--json"]
 
 
-def check_args(original_path, simplified_path, layer=None, points_path=None, points_layer=None,
-               key_field=None, errors_path=None, progress=True):
-    """Arguments of `toposimp check`. One layer of each dataset is compared: when the two
-    datasets name it differently, pass each as its own file (the algorithm exports them)."""
+def check_args(original_path, simplified_path, layer=None, simplified_layer=None, points_path=None,
+               points_layer=None, key_field=None, errors_path=None, progress=True):
+    """Arguments of `toposimp check`: `layer` of the original against `simplified_layer` of the
+    simplified dataset (by name, or the only one, when not given)."""
+    if not original_path or not simplified_path:
+        raise ArgumentError("check needs the original and the simplified layer")
     args = ["check", original_path, simplified_path]
     if layer:
         args += ["-l", layer]
+    if simplified_layer:
+        args += ["--simplified-layer", simplified_layer]
     if points_path:
         args += ["--points", source_spec(points_path, points_layer)]
     if key_field:
