@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# `cpack -G DEB` builds a Debian package that declares its library dependencies, holds the
+# executable, the man pages and the QGIS plugin, and that apt can install on this system
+# (checked with apt-get's simulation: dependencies resolved, nothing changed).
+# Usage: package_test.sh BUILD_DIR
+set -euo pipefail
+build=$1
+tmp=$(mktemp -d /tmp/toposimp-package-test.XXXXXX)
+trap 'rm -rf "$tmp"' EXIT
+fail() { echo "FAIL: $*"; exit 1; }
+
+(cd "$build" && cpack -G DEB -B "$tmp" >"$tmp/cpack.log" 2>&1) || { cat "$tmp/cpack.log"; fail "cpack failed"; }
+deb=$(ls "$tmp"/toposimp_*_*.deb)
+depends=$(dpkg-deb -f "$deb" Depends)
+for library in libgdal libgeos-c libgmp libgomp libspdlog libstdc++; do
+    echo "$depends" | grep -q "$library" || fail "Depends lacks $library: $depends"
+done
+contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
+for path in ./usr/bin/toposimp ./usr/share/man/man1/toposimp.1 ./usr/share/man/man1/toposimp-map.1 \
+            ./usr/share/man/man1/toposimp-mesh.1 ./usr/share/man/man1/toposimp-check.1 \
+            ./usr/share/qgis/python/plugins/toposimp/metadata.txt ./usr/share/qgis/python/plugins/toposimp/algorithms.py; do
+    echo "$contents" | grep -qx "$path" || fail "$path not in the package"
+done
+dpkg-deb -I "$deb" prerm >/dev/null || fail "no prerm script"
+# The package's own executable runs against this system's libraries.
+dpkg-deb -x "$deb" "$tmp/root"
+"$tmp/root/usr/bin/toposimp" --version | grep -q '^toposimp ' || fail "the packaged executable does not run"
+simulation=$(apt-get install -s "$deb" 2>&1) || { echo "$simulation"; fail "apt-get cannot install the package"; }
+echo "$simulation" | grep -q '^Inst toposimp' || { echo "$simulation"; fail "apt-get would not install toposimp"; }
+echo "package $(basename "$deb"): Depends: $depends"
