@@ -1,8 +1,17 @@
 #!/usr/bin/env bash
 # Installs everything toposimp needs on Debian 12, from Debian packages only. Idempotent.
+#   scripts/setup.sh          build and test dependencies
+#   scripts/setup.sh --qgis   also QGIS (qgis, python3-qgis), to run the QGIS provider's test in
+#                             qgis_process for real (without it that test reports itself skipped)
 set -euo pipefail
-packages=(build-essential cmake ninja-build pkg-config
+packages=(build-essential cmake ninja-build pkg-config file python3
           libgdal-dev gdal-bin libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev groff-base)
+for arg in "$@"; do
+  case "$arg" in
+    --qgis) packages+=(qgis python3-qgis) ;;
+    *) echo "setup: unknown option $arg (--qgis is the only one)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

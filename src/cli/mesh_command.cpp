@@ -57,7 +57,7 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     mesh->add_option("-j,--threads", options.threads,
                      "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
         ->check(CLI::NonNegativeNumber);
-    mesh->add_flag("--json", options.json, "Print a JSON summary on stdout");
+    mesh->add_flag("--json", options.json, "Print a JSON summary on stdout (on stderr when the output is stdout)");
     mesh->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
     mesh->add_flag("--progress", options.progress,
                   "Report progress as lines \"PROGRESS <percent> <phase>\" on stderr (for GUIs and wrappers)");
@@ -214,7 +214,8 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         }
         if (context.err_is_terminal || options.verbosity > 0) log->info("{}", summary);
         if (options.json) {
-            std::ostream& out = context.out;
+            // The summary never mixes with a mesh written to stdout.
+            std::ostream& out = output.to_stdout() ? context.err : context.out;
             out << "{\"command\":\"mesh\",\"input\":" << io::json_string(options.input)
                 << ",\"output\":" << io::json_string(options.output) << ",\"vertices_in\":" << stats.vertices_in
                 << ",\"vertices_out\":" << stats.vertices_out << ",\"faces_in\":" << stats.faces_in

@@ -55,6 +55,14 @@ TEST(MeshCli, TerrainWithLockedBorderKeepsItsBorderAndNeverFolds) {
     EXPECT_EQ(find_defects(m).total(), 0u);
 }
 
+TEST(MeshCli, MeshToStdoutKeepsTheSummaryOnStderr) {
+    const CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", "/vsistdout/", "-f", "off", "--json", "--no-hausdorff"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.out.rfind("OFF\n240 480 0\n", 0), 0u) << r.out.substr(0, 40);
+    EXPECT_EQ(r.out.find("\"command\""), std::string::npos) << "JSON mixed into the mesh";
+    EXPECT_NE(r.err.find("{\"command\":\"mesh\""), std::string::npos) << r.err;
+}
+
 TEST(MeshCli, EveryFormatRoundTripsExactly) {
     const auto dir = fresh_dir("mesh");
     const std::string first = (dir / "a.ply").string();
