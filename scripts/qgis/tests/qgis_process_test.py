@@ -37,6 +37,7 @@ def qgis_process_command():
 class Qgis:
     def __init__(self, executable, home, plugins, toposimp_dir):
         self.executable = executable
+        self.toposimp_dir = toposimp_dir
         runtime = os.path.join(home, "runtime")
         os.makedirs(runtime, mode=0o700)
         # PATH: the toposimp under test, then the system's. QGIS's embedded Python finds its
@@ -48,6 +49,16 @@ class Qgis:
         self.env.update(HOME=home, QT_QPA_PLATFORM="offscreen", QGIS_PLUGINPATH=plugins, XDG_RUNTIME_DIR=runtime,
                         PATH=toposimp_dir + os.pathsep + system_path,
                         PYTHONDONTWRITEBYTECODE="1")  # no __pycache__ in the plugin folder under test
+
+    def without_toposimp_on_path(self, configured=None):
+        """The same QGIS with toposimp off PATH and, if given, its path in the provider's setting
+        (what Settings > Options > Processing > Providers > toposimp writes)."""
+        self.env["PATH"] = os.pathsep.join(d for d in self.env["PATH"].split(os.pathsep) if d != self.toposimp_dir)
+        ini = os.path.join(self.env["HOME"], ".local", "share", "QGIS", "QGIS3", "profiles", "default", "QGIS", "QGIS3.ini")
+        with open(ini) as settings:
+            text = settings.read().split("\n[Processing]\n")[0]  # the section this method appends
+        with open(ini, "w") as settings:
+            settings.write(text + "\n[Processing]\nConfiguration\\TOPOSIMP_EXECUTABLE={}\n".format(configured or ""))
 
     def call(self, *args):
         return subprocess.run([self.executable] + list(args), env=self.env, capture_output=True, text=True,
@@ -155,7 +166,20 @@ def main():
                                        OUTPUT=os.path.join(tmp, "no", "such", "folder", "x.gpkg"))
         if code == 0 or "does not exist" not in text:
             fail("an output in a missing folder did not fail with toposimp's message: exit {}\n{}".format(code, text))
-    print("qgis_process: map, check, mesh, dem and an error all behaved")
+
+        # The executable's path from the provider's setting, when it is not on PATH; and a
+        # clear error when it is neither.
+        qgis.without_toposimp_on_path(os.path.abspath(binary))
+        code, results, text = qgis.run("toposimp:mesh", INPUT=os.path.join(TESTDATA, "mesh", "torus.off"),
+                                       OUTPUT=os.path.join(tmp, "configured.obj"))
+        if code != 0 or results.get("FACES_OUT") != 480:
+            fail("toposimp:mesh with the executable set in the settings: exit {}\n{}".format(code, text))
+        qgis.without_toposimp_on_path(None)
+        code, results, text = qgis.run("toposimp:mesh", INPUT=os.path.join(TESTDATA, "mesh", "torus.off"),
+                                       OUTPUT=os.path.join(tmp, "nowhere.obj"))
+        if code == 0 or "toposimp was not found on PATH" not in text:
+            fail("no executable anywhere did not give the 'not found' error: exit {}\n{}".format(code, text))
+    print("qgis_process: map, check, mesh, dem, the executable setting and errors all behaved")
     return 0
 
 
