@@ -137,7 +137,8 @@ void print_json(std::ostream& out, const MapOptions& options, const map::StopCri
         << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
         << "},\"engine_seconds\":{\"index\":" << stats.seconds_index << ",\"crossings\":" << stats.seconds_crossings
         << ",\"sweep\":" << stats.seconds_sweep << "},\"predicates\":{\"filter_decided\":"
-        << stats.predicates.filter_decided << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
+        << stats.predicates.filter_decided << ",\"expansion_decided\":" << stats.predicates.expansion_decided
+        << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
         << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
         << ",\"total\":" << time.total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";
 }
@@ -290,8 +291,8 @@ int run_map(const MapOptions& options, Context& context) {
             log->warn("target not reached: removed {} of the {} vertices asked for; no more can go without changing topology",
                       stats.removed, stats.removal_goal);
         }
-        log->debug("predicates: {} decided by the float filter, {} by GMP", stats.predicates.filter_decided,
-                   stats.predicates.gmp_fallbacks);
+        log->debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP",
+                   stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks);
         const double memory = peak_memory_mib();
         log->debug("peak memory {:.0f} MiB: {:.0f} bytes per vertex and control point", memory,
                    memory * 1048576.0 / static_cast<double>(std::max<std::size_t>(1, map.vertices.size() + map.control_points.size())));

@@ -203,8 +203,9 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         log->debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection",
                    stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
                    stats.refused_intersection);
-        log->debug("predicates: {} decided by the float filter, {} by GMP; peak memory {:.0f} MiB",
-                   stats.predicates.filter_decided, stats.predicates.gmp_fallbacks, peak_memory_mib());
+        log->debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP; peak memory {:.0f} MiB",
+                   stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks,
+                   peak_memory_mib());
         std::string summary = fmt::format("{} -> {} faces, {} -> {} vertices ({} collapses, {} refused), {}, {:.3f} s",
                                           stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out,
                                           stats.collapses, stats.refused(), describe(*engine), total);
@@ -241,6 +242,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             }
             out << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
                 << "},\"predicates\":{\"filter_decided\":" << stats.predicates.filter_decided
+                << ",\"expansion_decided\":" << stats.predicates.expansion_decided
                 << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks << "},\"seconds\":{\"read\":" << seconds_read
                 << ",\"simplify\":" << seconds_simplify << ",\"write\":" << seconds_write << ",\"hausdorff\":" << seconds_hausdorff
                 << ",\"total\":" << total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";

@@ -1,5 +1,7 @@
 #include "core/exact/predicates.hpp"
 
+#include "core/exact/expansion.hpp"
+
 #include <gmpxx.h>
 
 #include <cmath>
@@ -49,6 +51,16 @@ bool in_collinear_hull(Point a, Point b, Point c, Point p, Arithmetic arithmetic
 
 int orient2d_gmp(Point a, Point b, Point c) { return orient_rational(a, b, c); }
 
+int orient2d_expansion(Point a, Point b, Point c) {
+    using namespace expansion;
+    for (const Point& p : {a, b, c}) {
+        if (!in_range(p.x) || !in_range(p.y)) return 2;
+    }
+    const Expansion<2> ax = difference(a.x, c.x), ay = difference(a.y, c.y);
+    const Expansion<2> bx = difference(b.x, c.x), by = difference(b.y, c.y);
+    return sum(product(ax, by), negate(product(ay, bx))).sign();
+}
+
 int orient2d(Point a, Point b, Point c, PredicateStats& stats) {
     const double detleft = (a.x - c.x) * (b.y - c.y);
     const double detright = (a.y - c.y) * (b.x - c.x);
@@ -70,6 +82,10 @@ int orient2d(Point a, Point b, Point c, PredicateStats& stats) {
         // Both products are exactly zero because a factor is exactly zero: det is exactly 0.
         ++stats.filter_decided;
         return 0;
+    }
+    if (const int sign = orient2d_expansion(a, b, c); sign != 2) {
+        ++stats.expansion_decided;
+        return sign;
     }
     ++stats.gmp_fallbacks;
     return orient_rational(a, b, c);

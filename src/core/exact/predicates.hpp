@@ -22,15 +22,21 @@ std::string_view to_string(Arithmetic arithmetic);
 
 // How often the float filter decided, and how often GMP had to.
 struct PredicateStats {
-    std::uint64_t filter_decided = 0;
-    std::uint64_t gmp_fallbacks = 0;
+    std::uint64_t filter_decided = 0;     // by a floating-point error bound
+    std::uint64_t expansion_decided = 0;  // exactly, in floating-point expansions (no allocation)
+    std::uint64_t gmp_fallbacks = 0;      // exactly, in GMP (inputs beyond the expansions' range)
 
     PredicateStats& operator+=(const PredicateStats& other) {
         filter_decided += other.filter_decided;
+        expansion_decided += other.expansion_decided;
         gmp_fallbacks += other.gmp_fallbacks;
         return *this;
     }
 };
+
+// Sign of the orientation determinant in floating-point expansions (exact), or 2 when an input
+// lies outside expansion::in_range and only GMP can decide. For tests and the filters.
+int orient2d_expansion(Point a, Point b, Point c);
 
 // Sign of the orientation determinant, computed exactly with GMP:
 // > 0: c lies left of the directed line a→b (counter-clockwise turn), < 0: right, 0: collinear.

@@ -1,5 +1,7 @@
 #include "core/exact/predicates3d.hpp"
 
+#include "core/exact/expansion.hpp"
+
 #include <gmpxx.h>
 
 #include <algorithm>
@@ -201,6 +203,20 @@ int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) {
     return sgn(orient3d_expr<mpz_class>(a, b, c, d, ToInteger(points)));
 }
 
+int orient3d_expansion(Point3 a, Point3 b, Point3 c, Point3 d) {
+    using namespace expansion;
+    for (const Point3& p : {a, b, c, d}) {
+        if (!in_range(p.x) || !in_range(p.y) || !in_range(p.z)) return 2;
+    }
+    const Expansion<2> bx = difference(b.x, a.x), by = difference(b.y, a.y), bz = difference(b.z, a.z);
+    const Expansion<2> cx = difference(c.x, a.x), cy = difference(c.y, a.y), cz = difference(c.z, a.z);
+    const Expansion<2> dx = difference(d.x, a.x), dy = difference(d.y, a.y), dz = difference(d.z, a.z);
+    const Expansion<16> nx = sum(product(by, cz), negate(product(bz, cy)));
+    const Expansion<16> ny = sum(product(bz, cx), negate(product(bx, cz)));
+    const Expansion<16> nz = sum(product(bx, cy), negate(product(by, cx)));
+    return sum(sum(product(nx, dx), product(ny, dy)), product(nz, dz)).sign();
+}
+
 int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
     // Shewchuk's semi-static filter first (orient3dfast with the bound (7 + 56ε)ε·permanent);
     // his determinant det[a−d; b−d; c−d] is the negative of ours.
@@ -225,9 +241,14 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
             return 1;
         }
     }
-    const int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
+    int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
     if (sign != 2) {
         ++stats.filter_decided;
+        return sign;
+    }
+    sign = orient3d_expansion(a, b, c, d);
+    if (sign != 2) {
+        ++stats.expansion_decided;
         return sign;
     }
     ++stats.gmp_fallbacks;

@@ -24,6 +24,10 @@ using Triangle3 = std::array<Point3, 3>;
 // counter-clockwise triangle abc points to, 0 when the four points are coplanar.
 int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats);
 int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d);
+// The same sign in floating-point expansions (exact), or 2 when an input lies outside
+// expansion::in_range. orient3d uses it between its filters and GMP: exact zeros (coplanar
+// points, everywhere in flat CAD regions) cost no allocation.
+int orient3d_expansion(Point3 a, Point3 b, Point3 c, Point3 d);
 // The same determinant in plain doubles (unsafe; for tests that show what it gets wrong).
 int orient3d_float(Point3 a, Point3 b, Point3 c, Point3 d);
 

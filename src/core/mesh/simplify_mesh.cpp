@@ -122,8 +122,11 @@ private:
     void check_terrain();
     void build_face_index();
     std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block);
-    BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap, std::uint64_t budget,
-                               double cost_limit);
+    BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
+                               std::vector<Candidate>& refused, std::uint64_t budget, double cost_limit);
+    // The candidates of a block for its next round of the level: what its heap kept plus what it
+    // refused, without those a collapse made stale.
+    void reopen(std::vector<Candidate>& heap, std::vector<Candidate>& refused) const;
 
     // Live faces around v, unlinking dead corners from v's list as it goes.
     void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
@@ -498,20 +501,26 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
     return heap;
 }
 
-BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap, std::uint64_t budget,
-                                       double cost_limit) {
+BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
+                                       std::vector<Candidate>& refused, std::uint64_t budget, double cost_limit) {
     BlockResult result;
     std::vector<std::uint32_t> scratch;
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> overlay;
     std::vector<Candidate> fresh;
+    // The heap and the refused list together keep every live edge of the block's inside
+    // vertices (a collapse re-pushes the edges it changes and stamps make the old ones stale),
+    // so a later round of the level starts from them instead of from scratch, in the same order.
     while (!heap.empty() && result.faces_removed < budget) {
+        if (heap.front().cost > cost_limit) break;  // the smallest: every other is dearer
         std::pop_heap(heap.begin(), heap.end(), later);
         const Candidate c = heap.back();
         heap.pop_back();
-        if (c.cost > cost_limit) break;  // the heap's smallest: every other is dearer
         if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
         if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b) continue;
-        if (!try_collapse(c.a, c.b, level, block, result, overlay)) continue;
+        if (!try_collapse(c.a, c.b, level, block, result, overlay)) {
+            refused.push_back(c);
+            continue;
+        }
         fresh.clear();
         collect_edges(c.a, false, level, block, fresh, scratch);
         for (const Candidate& e : fresh) {
@@ -519,9 +528,16 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
             std::push_heap(heap.begin(), heap.end(), later);
         }
     }
-    heap.clear();
-    heap.shrink_to_fit();
     return result;
+}
+
+void Simplifier::reopen(std::vector<Candidate>& heap, std::vector<Candidate>& refused) const {
+    heap.insert(heap.end(), refused.begin(), refused.end());
+    refused.clear();
+    std::erase_if(heap, [this](const Candidate& c) {
+        return (flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0 || stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b;
+    });
+    std::make_heap(heap.begin(), heap.end(), later);
 }
 
 bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
@@ -762,7 +778,7 @@ MeshStats Simplifier::run() {
         // proportion to its candidates under the threshold: no block is pushed into dear
         // collapses while cheap ones wait elsewhere. Rounds repeat while they make progress.
         const auto block_count = static_cast<std::int64_t>(blocks.size());
-        std::vector<std::vector<Candidate>> heaps(blocks.size());
+        std::vector<std::vector<Candidate>> heaps(blocks.size()), refused(blocks.size());
         for (int round = 0; round < 3; ++round) {
             if (by_count && live_faces_ <= target) break;
             // The index and its start-of-round boxes are what query() relies on: faces a block
@@ -771,7 +787,12 @@ MeshStats Simplifier::run() {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
             for (std::int64_t i = 0; i < block_count; ++i) {
                 const Block& block = blocks[static_cast<std::size_t>(i)];
-                heaps[static_cast<std::size_t>(i)] = block_candidates(level, vertices.data() + block.first, block.count, block.key);
+                const auto k = static_cast<std::size_t>(i);
+                if (round == 0) {
+                    heaps[k] = block_candidates(level, vertices.data() + block.first, block.count, block.key);
+                } else {
+                    reopen(heaps[k], refused[k]);
+                }
             }
             const std::uint64_t left = by_count ? live_faces_ - target : std::numeric_limits<std::uint64_t>::max();
             double limit = std::numeric_limits<double>::infinity();
@@ -803,7 +824,7 @@ MeshStats Simplifier::run() {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
             for (std::int64_t i = 0; i < block_count; ++i) {
                 const auto k = static_cast<std::size_t>(i);
-                results[k] = collapse_block(level, blocks[k].key, heaps[k], blocks[k].budget, limit);
+                results[k] = collapse_block(level, blocks[k].key, heaps[k], refused[k], blocks[k].budget, limit);
             }
             std::uint64_t removed = 0;
             for (const BlockResult& r : results) {

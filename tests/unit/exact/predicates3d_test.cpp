@@ -56,7 +56,63 @@ TEST(Orient3d, FilterAgreesWithGmpNearPlanesWhereDoublesFail) {
         ++cases;
     }
     EXPECT_GT(float_wrong, 0) << "plain doubles should get some of " << cases << " cases wrong";
-    EXPECT_GT(stats.gmp_fallbacks, 0u);
+    EXPECT_GT(stats.expansion_decided, 0u) << "the filters cannot decide points within an ulp of the plane";
+}
+
+// The expansion stage alone against the rational reference: points exactly on oblique planes
+// (the exact zeros of flat CAD regions), one and a few ulps off them, with coordinates of mixed
+// magnitude and sign (so the differences themselves are inexact in doubles), across the whole
+// range the stage accepts; outside it, it declines.
+TEST(Orient3dExpansion, AgreesWithRationalsOnAndNearObliquePlanes) {
+    std::mt19937_64 random(11);
+    int zeros = 0, nonzeros = 0;
+    // The reference sign, or 2 where a magnitude lies outside [2^-150, 2^150] (the extreme
+    // scales and subnormal nudges here), which the stage must decline.
+    auto expected = [](Point3 a, Point3 b, Point3 c, Point3 d) {
+        for (const Point3& x : {a, b, c, d}) {
+            for (const double v : {x.x, x.y, x.z}) {
+                if (v != 0 && !(std::fabs(v) >= 0x1p-150 && std::fabs(v) <= 0x1p150)) return 2;
+            }
+        }
+        return reference_orient3d(a, b, c, d);
+    };
+    for (const double scale : {0x1p-140, 0x1p-60, 1e-3, 1.0, 1e5, 0x1p60, 0x1p140}) {
+        std::uniform_int_distribution<int> small(-1000, 1000);
+        std::uniform_real_distribution<double> unit(-1, 1);
+        for (int trial = 0; trial < 3000; ++trial) {
+            // Exactly coplanar: integer points on the plane x + 2y + 3z = k, scaled by a power
+            // of two (exact), then moved by whole multiples of a vector in the plane.
+            auto on_plane = [&](int k) {
+                const int y = small(random), z = small(random);
+                return Point3{std::ldexp(k - 2.0 * y - 3.0 * z, std::ilogb(scale)), std::ldexp(y, std::ilogb(scale)),
+                              std::ldexp(z, std::ilogb(scale))};
+            };
+            const int k = small(random);
+            const Point3 a = on_plane(k), b = on_plane(k), c = on_plane(k);
+            Point3 d = on_plane(k);
+            if (trial % 3 == 1) d = up(d, 1 + trial % 5);
+            if (trial % 3 == 2) {
+                // Random points of mixed magnitude, d on the rounded segment ab: the differences
+                // (b − a etc.) are not exact in doubles.
+                const Point3 p{scale * unit(random), scale * 1e-6 * unit(random), scale * 1e3 * unit(random)};
+                const Point3 q{-scale * unit(random), scale * unit(random), scale * 1e-3 * unit(random)};
+                const Point3 r{scale * 7 * unit(random), -scale * unit(random), scale * unit(random)};
+                const double t = std::uniform_real_distribution<double>(0, 1)(random);
+                const Point3 m{p.x + t * (q.x - p.x), p.y + t * (q.y - p.y), p.z + t * (q.z - p.z)};
+                EXPECT_EQ(orient3d_expansion(p, q, r, m), expected(p, q, r, m)) << scale << " trial " << trial;
+                continue;
+            }
+            const int truth = expected(a, b, c, d);
+            if (truth != 2) (truth == 0 ? zeros : nonzeros) += 1;
+            EXPECT_EQ(orient3d_expansion(a, b, c, d), truth) << scale << " trial " << trial;
+        }
+    }
+    EXPECT_GT(zeros, 1000);
+    EXPECT_GT(nonzeros, 1000);
+    // Outside [2^-150, 2^150] the stage declines and GMP decides.
+    EXPECT_EQ(orient3d_expansion({0, 0, 0}, {1e200, 0, 0}, {0, 1, 0}, {0, 0, 1}), 2);
+    EXPECT_EQ(orient3d_expansion({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1e-200}), 2);
+    EXPECT_EQ(orient3d_expansion({0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, -0x1p-150}), -1);
 }
 
 TEST(Orient3d, HugeAndTinyCoordinates) {
