@@ -279,7 +279,8 @@ bool degenerate(const Triangle3& t, PredicateStats& stats) { return area_axis(t,
 
 bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateStats& stats) {
     if (!segment_box(p, q).overlaps(triangle_box(t[0], t[1], t[2]))) return false;
-    if (degenerate(t, stats)) {
+    const int axis = area_axis(t, stats).first;
+    if (axis < 0) {
         // A segment or a point: the union of its three sides.
         return segments_meet_3d(p, q, t[0], t[1], stats) || segments_meet_3d(p, q, t[1], t[2], stats) ||
                segments_meet_3d(p, q, t[2], t[0], stats);
@@ -288,16 +289,10 @@ bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateSta
     const int sq = orient3d(t[0], t[1], t[2], q, stats);
     if (sp * sq > 0) return false;
     if (sp == 0 && sq == 0) {
-        // All five points coplanar. Some coordinate projection is one-to-one
-        // on their common plane or line, and none can separate sets that meet: the sets meet
-        // iff their projections meet in all three.
-        for (int axis = 0; axis < 3; ++axis) {
-            if (!segment_meets_triangle_2d(drop_axis(p, axis), drop_axis(q, axis), drop_axis(t[0], axis),
-                                           drop_axis(t[1], axis), drop_axis(t[2], axis), stats)) {
-                return false;
-            }
-        }
-        return true;
+        // All five points lie in t's plane, which the projection dropping `axis` (where t keeps
+        // its area) maps one-to-one: they meet iff their projections do.
+        return segment_meets_triangle_2d(drop_axis(p, axis), drop_axis(q, axis), drop_axis(t[0], axis),
+                                         drop_axis(t[1], axis), drop_axis(t[2], axis), stats);
     }
     // The line pq meets t's plane in one point (t is not degenerate, p ≠ q); it lies in the
     // closed triangle iff the line passes no edge on the outer side.
@@ -311,13 +306,31 @@ bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateSta
 
 bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
     if (!triangle_box(t[0], t[1], t[2]).overlaps(triangle_box(u[0], u[1], u[2]))) return false;
-    // One strictly on one side of the other's plane: apart (the usual quick rejection).
+    // u strictly on one side of t's plane: apart (the usual quick rejection).
+    const int u0 = orient3d(t[0], t[1], t[2], u[0], stats);
+    const int u1 = orient3d(t[0], t[1], t[2], u[1], stats);
+    if (u0 != 0 && u1 == u0 && orient3d(t[0], t[1], t[2], u[2], stats) == u0) return false;
+    if (u0 == 0 && u1 == 0 && orient3d(t[0], t[1], t[2], u[2], stats) == 0) {
+        // u lies in the plane of t, if t is a proper triangle (in flat regions, most pairs).
+        // The projection dropping the axis where t keeps its area maps that plane one-to-one,
+        // so the closed triangles meet iff their projections do: an edge of u meets t, or t
+        // lies inside u (then t's corner does).
+        if (const int axis = area_axis(t, stats).first; axis >= 0) {
+            auto flat = [axis](Point3 p) { return drop_axis(p, axis); };
+            for (int i = 0; i < 3; ++i) {
+                if (segment_meets_triangle_2d(flat(u[i]), flat(u[(i + 1) % 3]), flat(t[0]), flat(t[1]), flat(t[2]), stats)) {
+                    return true;
+                }
+            }
+            return in_closed_triangle(flat(u[0]), flat(u[1]), flat(u[2]), flat(t[0]), Arithmetic::exact, stats);
+        }
+    }
     auto apart = [&](const Triangle3& a, const Triangle3& b) {
         const int s0 = orient3d(a[0], a[1], a[2], b[0], stats);
         if (s0 == 0) return false;
         return orient3d(a[0], a[1], a[2], b[1], stats) == s0 && orient3d(a[0], a[1], a[2], b[2], stats) == s0;
     };
-    if (apart(t, u) || apart(u, t)) return false;
+    if (apart(u, t)) return false;
     // Closed triangles meet iff an edge of one meets the other: the boundary of their
     // intersection (a point, segment or convex polygon) lies on their edges.
     for (int i = 0; i < 3; ++i) {

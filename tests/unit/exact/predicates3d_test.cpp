@@ -2,6 +2,8 @@
 // doubles get some of these cases wrong.
 #include "core/exact/predicates3d.hpp"
 
+#include "support/mesh_checker.hpp"
+
 #include <gmpxx.h>
 #include <gtest/gtest.h>
 
@@ -181,6 +183,48 @@ TEST(FacesConflict, SharedCornersAndEdges) {
     EXPECT_TRUE(faces_conflict(f, {b, s, a}, stats));
     // No shared corner, touching at a point: conflict.
     EXPECT_TRUE(faces_conflict(f, {Point3{0.25, 0.25, 0}, Point3{1, 1, 1}, Point3{0, 1, 1}}, stats));
+}
+
+}  // namespace
+}  // namespace toposimp::exact
+
+namespace toposimp::exact {
+namespace {
+
+// Coplanar pairs on an oblique plane (as in flat CAD regions, where triangles_meet decides in
+// one projection), with small integer coordinates so that touching, overlapping, nested and
+// disjoint pairs all occur, some with u one ulp off the plane: triangles_meet agrees with the
+// tests' independent checker (exact plane cuts and polygon clipping in rationals).
+TEST(TrianglesMeet, CoplanarPairsAgreeWithTheIndependentChecker) {
+    std::mt19937_64 random(5);
+    std::uniform_int_distribution<int> small(-4, 4);
+    auto on_plane = [&] {
+        const int y = small(random), z = small(random);
+        return Point3{7.0 - 2.0 * y - 3.0 * z, static_cast<double>(y), static_cast<double>(z)};
+    };
+    PredicateStats stats;
+    int meeting = 0, apart = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const Triangle3 t{on_plane(), on_plane(), on_plane()};
+        Triangle3 u{on_plane(), on_plane(), on_plane()};
+        if (trial % 4 == 3) u[trial % 3].x = std::nextafter(u[trial % 3].x, 100.0);  // off the plane
+        bool shares = false;
+        for (const Point3& p : t) {
+            for (const Point3& q : u) shares = shares || (p.x == q.x && p.y == q.y && p.z == q.z);
+        }
+        // The checker allows contact at shared corners and reports degenerate faces instead
+        // of their contacts.
+        if (shares || degenerate(t, stats) || degenerate(u, stats)) continue;
+        mesh::Mesh pair;
+        pair.points = {t[0], t[1], t[2], u[0], u[1], u[2]};
+        pair.faces = {{0, 1, 2}, {3, 4, 5}};
+        const bool checker = testing::find_defects(pair).intersecting_pairs > 0;
+        EXPECT_EQ(triangles_meet(t, u, stats), checker) << "trial " << trial;
+        EXPECT_EQ(triangles_meet(u, t, stats), checker) << "trial " << trial << " (swapped)";
+        (checker ? meeting : apart) += 1;
+    }
+    EXPECT_GT(meeting, 300);
+    EXPECT_GT(apart, 300);
 }
 
 }  // namespace
