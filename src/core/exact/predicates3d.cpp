@@ -304,6 +304,29 @@ bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateSta
     return !(positive && negative);
 }
 
+int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
+    // The projection dropping the axis where t keeps its area maps t's plane one-to-one, so
+    // the closed triangles meet iff their projections do: an edge of u meets t, or t lies
+    // inside u (then t's corner does).
+    const auto [axis, turn] = area_axis(t, stats);
+    if (axis < 0) return -1;
+    auto flat = [axis](Point3 p) { return drop_axis(p, axis); };
+    // Quick rejection: u strictly beyond the line of one of t's edges (side-by-side faces of a
+    // flat region, the usual case).
+    for (int i = 0; i < 3; ++i) {
+        const Point a = flat(t[i]), b = flat(t[(i + 1) % 3]);
+        bool beyond = true;
+        for (int j = 0; j < 3 && beyond; ++j) beyond = orient2(a, b, flat(u[j]), stats) * turn < 0;
+        if (beyond) return 0;
+    }
+    for (int i = 0; i < 3; ++i) {
+        if (segment_meets_triangle_2d(flat(u[i]), flat(u[(i + 1) % 3]), flat(t[0]), flat(t[1]), flat(t[2]), stats)) {
+            return 1;
+        }
+    }
+    return in_closed_triangle(flat(u[0]), flat(u[1]), flat(u[2]), flat(t[0]), Arithmetic::exact, stats) ? 1 : 0;
+}
+
 bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
     if (!triangle_box(t[0], t[1], t[2]).overlaps(triangle_box(u[0], u[1], u[2]))) return false;
     // u strictly on one side of t's plane: apart (the usual quick rejection).
@@ -311,19 +334,8 @@ bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stat
     const int u1 = orient3d(t[0], t[1], t[2], u[1], stats);
     if (u0 != 0 && u1 == u0 && orient3d(t[0], t[1], t[2], u[2], stats) == u0) return false;
     if (u0 == 0 && u1 == 0 && orient3d(t[0], t[1], t[2], u[2], stats) == 0) {
-        // u lies in the plane of t, if t is a proper triangle (in flat regions, most pairs).
-        // The projection dropping the axis where t keeps its area maps that plane one-to-one,
-        // so the closed triangles meet iff their projections do: an edge of u meets t, or t
-        // lies inside u (then t's corner does).
-        if (const int axis = area_axis(t, stats).first; axis >= 0) {
-            auto flat = [axis](Point3 p) { return drop_axis(p, axis); };
-            for (int i = 0; i < 3; ++i) {
-                if (segment_meets_triangle_2d(flat(u[i]), flat(u[(i + 1) % 3]), flat(t[0]), flat(t[1]), flat(t[2]), stats)) {
-                    return true;
-                }
-            }
-            return in_closed_triangle(flat(u[0]), flat(u[1]), flat(u[2]), flat(t[0]), Arithmetic::exact, stats);
-        }
+        // u lies in the plane of t (in flat regions, most pairs).
+        if (const int met = coplanar_triangles_meet(t, u, stats); met >= 0) return met == 1;
     }
     auto apart = [&](const Triangle3& a, const Triangle3& b) {
         const int s0 = orient3d(a[0], a[1], a[2], b[0], stats);

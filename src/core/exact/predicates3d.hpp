@@ -48,6 +48,10 @@ bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateSta
 // Do two closed triangles share a point? Any degeneracy allowed.
 bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats);
 
+// The same when every corner of u is known to lie in t's plane (orient3d == 0): 1 they meet,
+// 0 they do not, −1 t is degenerate (then ask triangles_meet).
+int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats);
+
 // May two faces of one surface sit side by side? `f` must be non-degenerate. They may share
 // corners (compared by location) and meet exactly there: at one shared corner, or along the
 // segment between two. Any other contact — a crossing, a touch, a coplanar overlap, a third

@@ -137,6 +137,14 @@ private:
         return grid_.block_of(grid_.cell_key(p), level) == block;
     }
     exact::Triangle3 triangle(const Face& f) const { return {pos_[f[0]], pos_[f[1]], pos_[f[2]]}; }
+    static bool shares_a_location(const exact::Triangle3& f, const exact::Triangle3& g) {
+        for (const Point3& p : f) {
+            for (const Point3& q : g) {
+                if (same_location(p, q)) return true;
+            }
+        }
+        return false;
+    }
     Box3 face_box(std::uint32_t f) const {
         const Face& c = face_[f];
         return triangle_box(pos_[c[0]], pos_[c[1]], pos_[c[2]]);
@@ -666,15 +674,55 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         query(box, overlay, found);
         std::sort(fa.begin(), fa.end());
         std::sort(fb.begin(), fb.end());
+        // The faces near the star, and their corners numbered locally: the side of each corner
+        // of a nearby face with respect to a new face's plane is decided once per corner, not
+        // once per face using it (in flat regions those are exact zeros, the dear case).
+        thread_local std::vector<std::uint32_t> near, corners;
+        thread_local std::vector<std::array<std::uint32_t, 3>> local;
+        thread_local std::vector<std::int8_t> side;
+        near.clear();
+        corners.clear();
         for (std::uint32_t g : found) {
             if (!alive_[g] || std::binary_search(fa.begin(), fa.end(), g) || std::binary_search(fb.begin(), fb.end(), g)) {
                 continue;
             }
-            const exact::Triangle3 other = flat(triangle(face_[g]));
-            const Box3 other_box = triangle_box(other[0], other[1], other[2]);
-            for (const exact::Triangle3& t : fresh) {
-                const exact::Triangle3 mine = flat(t);
-                if (!triangle_box(mine[0], mine[1], mine[2]).overlaps(other_box)) continue;
+            near.push_back(g);
+            corners.insert(corners.end(), face_[g].begin(), face_[g].end());
+        }
+        std::sort(corners.begin(), corners.end());
+        corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
+        local.resize(near.size());
+        for (std::size_t k = 0; k < near.size(); ++k) {
+            for (int i = 0; i < 3; ++i) {
+                local[k][i] = static_cast<std::uint32_t>(std::lower_bound(corners.begin(), corners.end(), face_[near[k]][i]) -
+                                                         corners.begin());
+            }
+        }
+        for (const exact::Triangle3& t : fresh) {
+            const exact::Triangle3 mine = flat(t);
+            const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
+            side.assign(corners.size(), 2);  // 2: not decided yet
+            for (std::size_t k = 0; k < near.size(); ++k) {
+                const exact::Triangle3 other = flat(triangle(face_[near[k]]));
+                if (!mine_box.overlaps(triangle_box(other[0], other[1], other[2]))) continue;
+                if (!flatten) {
+                    // All three corners strictly on one side of this face's plane: apart.
+                    int signs[3];
+                    for (int i = 0; i < 3; ++i) {
+                        std::int8_t& s = side[local[k][i]];
+                        if (s == 2) s = static_cast<std::int8_t>(exact::orient3d(mine[0], mine[1], mine[2], other[i], predicates));
+                        signs[i] = s;
+                    }
+                    if (signs[0] != 0 && signs[0] == signs[1] && signs[1] == signs[2]) continue;
+                    if (signs[0] == 0 && signs[1] == 0 && signs[2] == 0 && !shares_a_location(mine, other)) {
+                        // In the new face's plane and sharing no corner: any contact is a conflict.
+                        if (exact::coplanar_triangles_meet(mine, other, predicates) == 1) {
+                            ++stats.refused_intersection;
+                            return false;
+                        }
+                        continue;
+                    }
+                }
                 if (exact::faces_conflict(mine, other, predicates)) {
                     ++stats.refused_intersection;
                     return false;
