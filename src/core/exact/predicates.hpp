@@ -4,7 +4,8 @@
 // each predicate first in double precision with a semi-static error bound (Shewchuk, "Adaptive
 // Precision Floating-Point Arithmetic and Fast Robust Geometric Predicates", 1997, §4.2: the
 // orient2d bound (3 + 16ε)ε·(|detleft| + |detright|)); only when that bound cannot certify the
-// sign is the determinant recomputed exactly with GMP rationals. `rational` always uses GMP, as
+// sign is the determinant recomputed exactly: in floating-point expansions (expansion.hpp) for
+// inputs within 2^±150, with GMP rationals beyond. `rational` always uses GMP, as
 // the dissertation's EPLSimp did (chapter 3). `floating` is the naive double barycentric test of
 // TopoVW (chapter 2): it can answer wrongly near edges and is kept for experiments only.
 #pragma once

@@ -4,8 +4,9 @@
 // double precision with a running forward error bound (every operation carries |error| ≤ e,
 // grown by the unit roundoff per operation — the "dynamic filter" of Burnikel, Funke and Seel,
 // "Exact geometric computation using cascading", 2001); only when |value| does not exceed the
-// bound is the same polynomial evaluated with GMP rationals, which is exact. No epsilon anywhere:
-// a sign is either certified or recomputed exactly.
+// bound is the sign computed exactly: in floating-point expansions (orient3d, for inputs within
+// 2^±150) or else with GMP integers. No epsilon anywhere: a sign is either certified or
+// recomputed exactly.
 //
 // Contacts between closed triangles are decided from these signs alone (segment–triangle tests,
 // with every degenerate and coplanar case reduced to exact 2D tests in coordinate projections).

@@ -674,53 +674,54 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         query(box, overlay, found);
         std::sort(fa.begin(), fa.end());
         std::sort(fb.begin(), fb.end());
-        // The faces near the star, and their corners numbered locally: the side of each corner
-        // of a nearby face with respect to a new face's plane is decided once per corner, not
-        // once per face using it (in flat regions those are exact zeros, the dear case).
-        thread_local std::vector<std::uint32_t> near, corners;
-        thread_local std::vector<std::array<std::uint32_t, 3>> local;
-        thread_local std::vector<std::int8_t> side;
+        // The faces near the star. The side of a nearby corner with respect to a new face's
+        // plane is remembered (a small direct-mapped cache by vertex, one generation per new
+        // face), so a corner shared by several nearby faces is decided once: in flat regions
+        // those are exact zeros, the dear case.
+        thread_local std::vector<std::uint32_t> near;
+        struct SideEntry {
+            std::uint32_t vertex = kNone;
+            std::uint32_t generation = 0;
+            int side = 0;
+        };
+        thread_local std::array<SideEntry, 512> sides{};
+        thread_local std::uint32_t generation = 0;
         near.clear();
-        corners.clear();
         for (std::uint32_t g : found) {
-            if (!alive_[g] || std::binary_search(fa.begin(), fa.end(), g) || std::binary_search(fb.begin(), fb.end(), g)) {
-                continue;
-            }
-            near.push_back(g);
-            corners.insert(corners.end(), face_[g].begin(), face_[g].end());
-        }
-        std::sort(corners.begin(), corners.end());
-        corners.erase(std::unique(corners.begin(), corners.end()), corners.end());
-        local.resize(near.size());
-        for (std::size_t k = 0; k < near.size(); ++k) {
-            for (int i = 0; i < 3; ++i) {
-                local[k][i] = static_cast<std::uint32_t>(std::lower_bound(corners.begin(), corners.end(), face_[near[k]][i]) -
-                                                         corners.begin());
+            if (alive_[g] && !std::binary_search(fa.begin(), fa.end(), g) && !std::binary_search(fb.begin(), fb.end(), g)) {
+                near.push_back(g);
             }
         }
         for (const exact::Triangle3& t : fresh) {
             const exact::Triangle3 mine = flat(t);
             const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
-            side.assign(corners.size(), 2);  // 2: not decided yet
-            for (std::size_t k = 0; k < near.size(); ++k) {
-                const exact::Triangle3 other = flat(triangle(face_[near[k]]));
+            ++generation;
+            for (std::uint32_t g : near) {
+                const exact::Triangle3 other = flat(triangle(face_[g]));
                 if (!mine_box.overlaps(triangle_box(other[0], other[1], other[2]))) continue;
-                if (!flatten) {
-                    // All three corners strictly on one side of this face's plane: apart.
-                    int signs[3];
-                    for (int i = 0; i < 3; ++i) {
-                        std::int8_t& s = side[local[k][i]];
-                        if (s == 2) s = static_cast<std::int8_t>(exact::orient3d(mine[0], mine[1], mine[2], other[i], predicates));
-                        signs[i] = s;
-                    }
-                    if (signs[0] != 0 && signs[0] == signs[1] && signs[1] == signs[2]) continue;
-                    if (signs[0] == 0 && signs[1] == 0 && signs[2] == 0 && !shares_a_location(mine, other)) {
-                        // In the new face's plane and sharing no corner: any contact is a conflict.
-                        if (exact::coplanar_triangles_meet(mine, other, predicates) == 1) {
-                            ++stats.refused_intersection;
-                            return false;
+                if (!flatten && !shares_a_location(mine, other)) {
+                    auto side = [&](int i) {
+                        const std::uint32_t v = face_[g][i];
+                        SideEntry& entry = sides[v % sides.size()];
+                        if (entry.vertex != v || entry.generation != generation) {
+                            entry = {v, generation, exact::orient3d(mine[0], mine[1], mine[2], other[i], predicates)};
                         }
-                        continue;
+                        return entry.side;
+                    };
+                    // All three corners strictly on one side of this face's plane: apart. All
+                    // three in it: the coplanar test, where any contact is a conflict (no corner
+                    // is shared). Otherwise the general test.
+                    const int s0 = side(0), s1 = side(1);
+                    if (s0 == s1) {
+                        const int s2 = side(2);
+                        if (s2 == s0 && s0 != 0) continue;
+                        if (s2 == 0 && s0 == 0) {
+                            if (exact::coplanar_triangles_meet(mine, other, predicates) == 1) {
+                                ++stats.refused_intersection;
+                                return false;
+                            }
+                            continue;
+                        }
                     }
                 }
                 if (exact::faces_conflict(mine, other, predicates)) {
