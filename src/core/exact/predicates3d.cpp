@@ -196,6 +196,28 @@ bool enters(Point3 s, Point3 x, const Triangle3& t, int at, PredicateStats& stat
     return orient2(ps, pa, px, stats) * turn >= 0 && orient2(ps, pb, px, stats) * turn <= 0;
 }
 
+// Coplanar faces f and g (f proper, g not degenerate) sharing the corner f[i] = g[j]: true when
+// a line through that corner along one of the four edges leaving it has the other face's two
+// other corners strictly beyond it — the faces then meet only at the corner. False says nothing
+// (the caller decides exactly by other means). Decided in the projection where f keeps its
+// area, which is one-to-one on the common plane.
+bool coplanar_apart_at_corner(const Triangle3& f, int i, const Triangle3& g, int j, PredicateStats& stats) {
+    const auto [axis, turn_f] = area_axis(f, stats);
+    if (axis < 0) return false;
+    auto flat = [axis = axis](Point3 p) { return drop_axis(p, axis); };
+    const Point s = flat(f[i]);
+    const Point f1 = flat(f[(i + 1) % 3]), f2 = flat(f[(i + 2) % 3]);
+    const Point g1 = flat(g[(j + 1) % 3]), g2 = flat(g[(j + 2) % 3]);
+    const int turn_g = orient2(s, g1, g2, stats);
+    if (turn_g == 0) return false;
+    // Both x and y strictly on the other side of the line s→edge from `inner`'s side (sign).
+    auto beyond = [&](Point edge, int inner, Point x, Point y) {
+        return orient2(s, edge, x, stats) * inner < 0 && orient2(s, edge, y, stats) * inner < 0;
+    };
+    return beyond(f1, turn_f, g1, g2) || beyond(f2, -turn_f, g1, g2) || beyond(g1, turn_g, f1, f2) ||
+           beyond(g2, -turn_g, f1, f2);
+}
+
 }  // namespace
 
 int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) {
@@ -375,7 +397,9 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stat
         // other's plane — that face then meets the other's plane only at s.
         const int i0 = f_at[0], j0 = g_at[0];
         const int g1 = orient3d(f[0], f[1], f[2], g[(j0 + 1) % 3], stats);
-        if (g1 != 0 && orient3d(f[0], f[1], f[2], g[(j0 + 2) % 3], stats) == g1) return false;
+        const int g2 = orient3d(f[0], f[1], f[2], g[(j0 + 2) % 3], stats);
+        if (g1 != 0 && g2 == g1) return false;
+        if (g1 == 0 && g2 == 0 && coplanar_apart_at_corner(f, i0, g, j0, stats)) return false;
         const int f1 = orient3d(g[0], g[1], g[2], f[(i0 + 1) % 3], stats);
         if (f1 != 0 && orient3d(g[0], g[1], g[2], f[(i0 + 2) % 3], stats) == f1) return false;
         // Meeting beyond the shared corner s means an edge opposite s meets the other face, or

@@ -227,5 +227,38 @@ TEST(TrianglesMeet, CoplanarPairsAgreeWithTheIndependentChecker) {
     EXPECT_GT(apart, 300);
 }
 
+// Coplanar faces sharing one corner (fans of a flat region, where faces_conflict first looks for
+// a line through the corner that separates them): its answer agrees with the checker's.
+TEST(FacesConflict, CoplanarFacesSharingOneCornerAgreeWithTheIndependentChecker) {
+    std::mt19937_64 random(9);
+    std::uniform_int_distribution<int> small(-4, 4);
+    auto on_plane = [&] {
+        const int y = small(random), z = small(random);
+        return Point3{7.0 - 2.0 * y - 3.0 * z, static_cast<double>(y), static_cast<double>(z)};
+    };
+    PredicateStats stats;
+    int conflicts = 0, clean = 0;
+    for (int trial = 0; trial < 4000; ++trial) {
+        const Point3 s = on_plane();
+        const Triangle3 f{s, on_plane(), on_plane()};
+        const Triangle3 g{on_plane(), s, on_plane()};
+        if (degenerate(f, stats) || degenerate(g, stats)) continue;
+        int shared = 0;
+        for (const Point3& p : f) {
+            for (const Point3& q : g) shared += same_location(p, q);
+        }
+        if (shared != 1) continue;
+        mesh::Mesh pair;
+        pair.points = {f[0], f[1], f[2], g[0], g[2]};
+        pair.faces = {{0, 1, 2}, {3, 0, 4}};
+        const bool checker = testing::find_defects(pair).intersecting_pairs > 0;
+        EXPECT_EQ(faces_conflict(f, g, stats), checker) << "trial " << trial;
+        EXPECT_EQ(faces_conflict(g, f, stats), checker) << "trial " << trial << " (swapped)";
+        (checker ? conflicts : clean) += 1;
+    }
+    EXPECT_GT(conflicts, 300);
+    EXPECT_GT(clean, 300);
+}
+
 }  // namespace
 }  // namespace toposimp::exact
