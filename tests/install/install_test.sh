@@ -40,7 +40,7 @@ done
 
 # The QGIS plugin: its files, and its QGIS-free modules import from the installed folder.
 plugins="$prefix/share/qgis/python/plugins"
-for file in __init__.py metadata.txt plugin.py provider.py algorithms.py cli_args.py runner.py icon.svg; do
+for file in __init__.py metadata.txt plugin.py provider.py settings.py algorithms.py cli_args.py runner.py icon.svg; do
     [ -f "$plugins/toposimp/$file" ] || fail "plugin file $file not installed"
 done
 grep -q '^hasProcessingProvider=yes' "$plugins/toposimp/metadata.txt" || fail "metadata without hasProcessingProvider"

@@ -29,7 +29,7 @@ from qgis.core import (
     QgsProcessingParameterVectorDestination,
 )
 
-from . import cli_args, runner
+from . import cli_args, runner, settings
 
 # Formats toposimp reads directly; anything else (memory layers, databases, selections) is
 # exported by QGIS to a temporary GeoPackage first.
@@ -42,20 +42,35 @@ def _advanced(parameter):
 
 
 class ToposimpAlgorithm(QgsProcessingAlgorithm):
-    """What the algorithms share: running the executable and turning its failures into
-    Processing errors with toposimp's own message."""
+    """What the algorithms share: their description (class attributes), running the executable,
+    and turning its failures into Processing errors with toposimp's own message."""
+
+    NAME = DISPLAY_NAME = GROUP = GROUP_ID = HELP = ""
 
     def createInstance(self):
         return type(self)()
 
+    def name(self):
+        return self.NAME
+
+    def displayName(self):
+        return self.DISPLAY_NAME
+
+    def group(self):
+        return self.GROUP
+
+    def groupId(self):
+        return self.GROUP_ID
+
+    def shortHelpString(self):
+        return self.HELP
+
     def icon(self):
-        from .provider import ToposimpProvider  # noqa: avoid a cycle at import time
-        return ToposimpProvider().icon()
+        return settings.icon()
 
     def run_toposimp(self, args, feedback):
-        from .provider import configured_executable
         try:
-            executable = runner.find_executable(configured_executable())
+            executable = runner.find_executable(settings.configured_executable())
             code, stdout = runner.run(executable, args, feedback)
         except runner.ExecutableNotFound as error:
             raise QgsProcessingException(str(error))
@@ -96,28 +111,19 @@ class ToposimpAlgorithm(QgsProcessingAlgorithm):
 
 
 class MapAlgorithm(ToposimpAlgorithm):
-    def name(self):
-        return "map"
-
-    def displayName(self):
-        return "Simplify lines and polygons (topology-preserving)"
-
-    def group(self):
-        return "Maps"
-
-    def groupId(self):
-        return "maps"
-
-    def shortHelpString(self):
-        return ("Visvalingam-Whyatt simplification that never changes topology: a vertex is removed only if "
-                "no other vertex and no control point lies in its triangle, decided with exact predicates. "
-                "Polygons sharing borders stay a coverage (each border simplified once); lines that cross "
-                "keep their crossings; control points (e.g. cities) stay on their side of every line and "
-                "in their polygon. Attributes, CRS and feature order are kept.\n\n"
-                "Stop when: a share of the vertices is left (Share, %), N vertices are left or removed "
-                "(N), every vertex with effective area up to A is gone (A), or nothing more can go.\n"
-                "Validate runs toposimp check on the result before writing it; on a violation nothing "
-                "is written and the algorithm fails.")
+    NAME = "map"
+    DISPLAY_NAME = "Simplify lines and polygons (topology-preserving)"
+    GROUP = "Maps"
+    GROUP_ID = "maps"
+    HELP = ("Visvalingam-Whyatt simplification that never changes topology: a vertex is removed only if "
+            "no other vertex and no control point lies in its triangle, decided with exact predicates. "
+            "Polygons sharing borders stay a coverage (each border simplified once); lines that cross "
+            "keep their crossings; control points (e.g. cities) stay on their side of every line and "
+            "in their polygon. Attributes, CRS and feature order are kept.\n\n"
+            "Stop when: a share of the vertices is left (Share, %), N vertices are left or removed "
+            "(N), every vertex with effective area up to A is gone (A), or nothing more can go.\n"
+            "Validate runs toposimp check on the result before writing it; on a violation nothing "
+            "is written and the algorithm fails.")
 
     def initAlgorithm(self, config=None):
         self.addParameter(QgsProcessingParameterFeatureSource(
@@ -173,24 +179,15 @@ class MapAlgorithm(ToposimpAlgorithm):
 
 
 class CheckAlgorithm(ToposimpAlgorithm):
-    def name(self):
-        return "check"
-
-    def displayName(self):
-        return "Check a simplification (topology and control points)"
-
-    def group(self):
-        return "Maps"
-
-    def groupId(self):
-        return "maps"
-
-    def shortHelpString(self):
-        return ("Compares an original layer with a simplified one (made by any tool) and reports what broke: "
-                "lost features, vertices that are not a subset, collapsed or flipped rings, invalid polygons, "
-                "new or lost crossings and touchings, borders no longer shared, control points now in "
-                "another polygon or on the other side of a line. Features are matched by the key field, or "
-                "by order.\nThe violations can be written as a point layer to see where they are.")
+    NAME = "check"
+    DISPLAY_NAME = "Check a simplification (topology and control points)"
+    GROUP = "Maps"
+    GROUP_ID = "maps"
+    HELP = ("Compares an original layer with a simplified one (made by any tool) and reports what broke: "
+            "lost features, vertices that are not a subset, collapsed or flipped rings, invalid polygons, "
+            "new or lost crossings and touchings, borders no longer shared, control points now in "
+            "another polygon or on the other side of a line. Features are matched by the key field, or "
+            "by order.\nThe violations can be written as a point layer to see where they are.")
 
     def initAlgorithm(self, config=None):
         types = [QgsProcessing.TypeVectorLine, QgsProcessing.TypeVectorPolygon]
@@ -277,23 +274,14 @@ class _MeshTargets:
 
 
 class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
-    def name(self):
-        return "mesh"
-
-    def displayName(self):
-        return "Simplify a triangle mesh (OBJ, PLY, OFF)"
-
-    def group(self):
-        return "Meshes and terrain"
-
-    def groupId(self):
-        return "meshes"
-
-    def shortHelpString(self):
-        return ("Quadric-error edge collapse that never makes the surface touch or cross itself, turn a face "
-                "over or lose its manifoldness (exact predicates). Terrain: the faces must keep their "
-                "orientation in the map plane (a TIN with z = height). Lock the border to keep tiles "
-                "matching. Normals, colours and texture coordinates are dropped.")
+    NAME = "mesh"
+    DISPLAY_NAME = "Simplify a triangle mesh (OBJ, PLY, OFF)"
+    GROUP = "Meshes and terrain"
+    GROUP_ID = "meshes"
+    HELP = ("Quadric-error edge collapse that never makes the surface touch or cross itself, turn a face "
+            "over or lose its manifoldness (exact predicates). Terrain: the faces must keep their "
+            "orientation in the map plane (a TIN with z = height). Lock the border to keep tiles "
+            "matching. Normals, colours and texture coordinates are dropped.")
 
     def initAlgorithm(self, config=None):
         self.addParameter(QgsProcessingParameterFile(
@@ -324,23 +312,14 @@ class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
 
 
 class DemAlgorithm(_MeshTargets, ToposimpAlgorithm):
-    def name(self):
-        return "dem"
-
-    def displayName(self):
-        return "DEM to simplified TIN"
-
-    def group(self):
-        return "Meshes and terrain"
-
-    def groupId(self):
-        return "meshes"
-
-    def shortHelpString(self):
-        return ("Triangulates a DEM band over its cell centres (cells without data left out) and simplifies "
-                "the TIN with quadric-error edge collapses; no triangle ever folds over in the map plane "
-                "(exact orient2d). The border stays as it is unless you free it, so neighbouring tiles "
-                "still match. The result is a layer of triangles (Polygon Z) in the DEM's CRS.")
+    NAME = "dem"
+    DISPLAY_NAME = "DEM to simplified TIN"
+    GROUP = "Meshes and terrain"
+    GROUP_ID = "meshes"
+    HELP = ("Triangulates a DEM band over its cell centres (cells without data left out) and simplifies "
+            "the TIN with quadric-error edge collapses; no triangle ever folds over in the map plane "
+            "(exact orient2d). The border stays as it is unless you free it, so neighbouring tiles "
+            "still match. The result is a layer of triangles (Polygon Z) in the DEM's CRS.")
 
     def initAlgorithm(self, config=None):
         self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "DEM"))

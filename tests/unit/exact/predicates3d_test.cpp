@@ -191,17 +191,21 @@ TEST(FacesConflict, SharedCornersAndEdges) {
 namespace toposimp::exact {
 namespace {
 
+// A point with small integer coordinates on the oblique plane x + 2y + 3z = 7: exactly
+// representable, and close enough to its neighbours that touching and collinear cases abound.
+Point3 on_oblique_plane(std::mt19937_64& random) {
+    std::uniform_int_distribution<int> small(-4, 4);
+    const int y = small(random), z = small(random);
+    return Point3{7.0 - 2.0 * y - 3.0 * z, static_cast<double>(y), static_cast<double>(z)};
+}
+
 // Coplanar pairs on an oblique plane (as in flat CAD regions, where triangles_meet decides in
 // one projection), with small integer coordinates so that touching, overlapping, nested and
 // disjoint pairs all occur, some with u one ulp off the plane: triangles_meet agrees with the
 // tests' independent checker (exact plane cuts and polygon clipping in rationals).
 TEST(TrianglesMeet, CoplanarPairsAgreeWithTheIndependentChecker) {
     std::mt19937_64 random(5);
-    std::uniform_int_distribution<int> small(-4, 4);
-    auto on_plane = [&] {
-        const int y = small(random), z = small(random);
-        return Point3{7.0 - 2.0 * y - 3.0 * z, static_cast<double>(y), static_cast<double>(z)};
-    };
+    auto on_plane = [&] { return on_oblique_plane(random); };
     PredicateStats stats;
     int meeting = 0, apart = 0;
     for (int trial = 0; trial < 4000; ++trial) {
@@ -231,11 +235,7 @@ TEST(TrianglesMeet, CoplanarPairsAgreeWithTheIndependentChecker) {
 // a line through the corner that separates them): its answer agrees with the checker's.
 TEST(FacesConflict, CoplanarFacesSharingOneCornerAgreeWithTheIndependentChecker) {
     std::mt19937_64 random(9);
-    std::uniform_int_distribution<int> small(-4, 4);
-    auto on_plane = [&] {
-        const int y = small(random), z = small(random);
-        return Point3{7.0 - 2.0 * y - 3.0 * z, static_cast<double>(y), static_cast<double>(z)};
-    };
+    auto on_plane = [&] { return on_oblique_plane(random); };
     PredicateStats stats;
     int conflicts = 0, clean = 0;
     for (int trial = 0; trial < 4000; ++trial) {
