@@ -681,11 +681,11 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         thread_local std::vector<std::uint32_t> near;
         struct SideEntry {
             std::uint32_t vertex = kNone;
-            std::uint32_t generation = 0;
             int side = 0;
+            std::uint64_t generation = 0;  // 64 bits: never wraps
         };
         thread_local std::array<SideEntry, 512> sides{};
-        thread_local std::uint32_t generation = 0;
+        thread_local std::uint64_t generation = 0;
         near.clear();
         for (std::uint32_t g : found) {
             if (alive_[g] && !std::binary_search(fa.begin(), fa.end(), g) && !std::binary_search(fb.begin(), fb.end(), g)) {
@@ -704,7 +704,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                         const std::uint32_t v = face_[g][i];
                         SideEntry& entry = sides[v % sides.size()];
                         if (entry.vertex != v || entry.generation != generation) {
-                            entry = {v, generation, exact::orient3d(mine[0], mine[1], mine[2], other[i], predicates)};
+                            entry = {v, exact::orient3d(mine[0], mine[1], mine[2], other[i], predicates), generation};
                         }
                         return entry.side;
                     };
@@ -716,11 +716,12 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                         const int s2 = side(2);
                         if (s2 == s0 && s0 != 0) continue;
                         if (s2 == 0 && s0 == 0) {
-                            if (exact::coplanar_triangles_meet(mine, other, predicates) == 1) {
+                            const int met = exact::coplanar_triangles_meet(mine, other, predicates);
+                            if (met == 1) {
                                 ++stats.refused_intersection;
                                 return false;
                             }
-                            continue;
+                            if (met == 0) continue;  // (−1, a degenerate new face: the general test)
                         }
                     }
                 }
