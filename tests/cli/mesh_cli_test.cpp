@@ -135,7 +135,7 @@ INSTANTIATE_TEST_SUITE_P(
         BadMesh{"OffIndexOutOfRange", "i.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "refers to vertex"},
         BadMesh{"NotANumber", "x.obj", "v 0 zero 0\n", "is not a number"},
         BadMesh{"NonManifold", "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
-                "more than two faces"},
+                "the edge between vertices 0 and 1 (counted from 0) has more than two faces (0, 1, 2"},
         BadMesh{"NoFaces", "e.obj", kTetra, "no faces"},
         BadMesh{"UnknownExtension", "u.stl", "solid x\n", "neither a mesh"}),
     [](const ::testing::TestParamInfo<BadMesh>& p) { return std::string(p.param.name); });

@@ -10,31 +10,42 @@ bool repeats_corner(const Face& f) { return f[0] == f[1] || f[1] == f[2] || f[2]
 }  // namespace
 
 std::optional<NonManifoldEdge> find_non_manifold_edge(const Mesh& mesh) {
+    // Edge uses bucketed by their smaller vertex (a counting sort: linear, where sorting all
+    // 3F uses took a tenth of a 2 M-triangle run), each small bucket then sorted by (larger
+    // vertex, face): the first edge with more than two uses, in vertex order.
     struct Use {
-        std::uint32_t lo, hi, face;
+        std::uint32_t hi, face;
+        bool operator<(const Use& other) const { return hi != other.hi ? hi < other.hi : face < other.face; }
     };
-    std::vector<Use> uses;
-    uses.reserve(mesh.faces.size() * 3);
+    std::vector<std::uint32_t> start(mesh.points.size() + 1, 0);
+    for (const Face& face : mesh.faces) {
+        if (repeats_corner(face)) continue;
+        for (int k = 0; k < 3; ++k) ++start[std::min(face[k], face[(k + 1) % 3]) + 1];
+    }
+    for (std::size_t v = 0; v < mesh.points.size(); ++v) start[v + 1] += start[v];
+    std::vector<Use> uses(start.back());
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
     for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) {
         const Face& face = mesh.faces[f];
         if (repeats_corner(face)) continue;
         for (int k = 0; k < 3; ++k) {
             const std::uint32_t a = face[k], b = face[(k + 1) % 3];
-            uses.push_back({std::min(a, b), std::max(a, b), f});
+            uses[fill[std::min(a, b)]++] = {std::max(a, b), f};
         }
     }
-    std::sort(uses.begin(), uses.end(), [](const Use& x, const Use& y) {
-        return x.lo != y.lo ? x.lo < y.lo : (x.hi != y.hi ? x.hi < y.hi : x.face < y.face);
-    });
-    for (std::size_t i = 0; i < uses.size();) {
-        std::size_t j = i;
-        while (j < uses.size() && uses[j].lo == uses[i].lo && uses[j].hi == uses[i].hi) ++j;
-        if (j - i > 2) {
-            NonManifoldEdge edge{uses[i].lo, uses[i].hi, {}};
-            for (std::size_t k = i; k < j && k < i + 4; ++k) edge.faces.push_back(uses[k].face);
-            return edge;
+    for (std::uint32_t lo = 0; lo < mesh.points.size(); ++lo) {
+        const auto first = uses.begin() + start[lo], last = uses.begin() + start[lo + 1];
+        std::sort(first, last);
+        for (auto i = first; i != last;) {
+            auto j = i;
+            while (j != last && j->hi == i->hi) ++j;
+            if (j - i > 2) {
+                NonManifoldEdge edge{lo, i->hi, {}};
+                for (auto k = i; k != j && k != i + 4; ++k) edge.faces.push_back(k->face);
+                return edge;
+            }
+            i = j;
         }
-        i = j;
     }
     return std::nullopt;
 }
