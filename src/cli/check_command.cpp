@@ -95,8 +95,9 @@ std::string violations_geojson(const validate::CheckReport& report) {
 
 int run_check(const CheckCommandOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
-    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
     try {
+        // Inside the try: on an error its destructor clears the terminal line before the message.
+        Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         progress.phase("checking " + options.check.simplified + " against " + options.check.original);
         const validate::CheckReport report = validate::check(options.check);
         progress.done();
@@ -116,10 +117,8 @@ int run_check(const CheckCommandOptions& options, Context& context) {
         }
         return report.clean() ? kOk : kTopologyFailure;
     } catch (const io::InputError& error) {
-        progress.done();
         log->error("{}", error.what());
     } catch (const io::OutputError& error) {
-        progress.done();
         log->error("{}", error.what());
     }
     return kUsageError;

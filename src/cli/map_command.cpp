@@ -197,9 +197,10 @@ int run_map(const MapOptions& options, Context& context) {
 
     const auto start = Clock::now();
     Timings time;
-    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
-    simplify_options.progress = [&progress](double done) { progress.update(done); };
     try {
+        // Inside the try: on an error its destructor clears the terminal line before the message.
+        Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
+        simplify_options.progress = [&progress](double done) { progress.update(done); };
         // An output that cannot be written fails now, not after reading and simplifying.
         io::OutputFile::check_destination(options.output, options.overwrite);
         if (!options.giscup) io::vector_driver_for(options.output, options.format);
@@ -313,10 +314,8 @@ int run_map(const MapOptions& options, Context& context) {
         }
         return kOk;
     } catch (const io::InputError& error) {
-        progress.done();
         log->error("{}", error.what());
     } catch (const io::OutputError& error) {
-        progress.done();
         log->error("{}", error.what());
     } catch (const ValidationFailed& failed) {
         log->error("--validate found {} violation(s); no output written", failed.violations);

@@ -108,9 +108,10 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
     engine->terrain = options.terrain;
     engine->threads = options.threads;
     const auto start = Clock::now();
-    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
-    engine->progress = [&progress](double done) { progress.update(done); };
     try {
+        // Inside the try: on an error its destructor clears the terminal line before the message.
+        Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
+        engine->progress = [&progress](double done) { progress.update(done); };
         // Output: a mesh file, or an OGR layer of triangles.
         const std::string format_name = [&] {
             std::string f = options.format;
@@ -249,13 +250,10 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         }
         return kOk;
     } catch (const io::InputError& error) {
-        progress.done();
         log->error("{}", error.what());
     } catch (const io::OutputError& error) {
-        progress.done();
         log->error("{}", error.what());
     } catch (const std::bad_alloc&) {
-        progress.done();
         log->error("out of memory");
     }
     return kUsageError;
