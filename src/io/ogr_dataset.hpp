@@ -75,7 +75,7 @@ private:
     std::unique_ptr<Data> data_;
 };
 
-// Reads control points from "path" or "path:layer" (Point or MultiPoint features), a big
+// Reads control points from "path" or "path:layer" (Point or MultiPoint features), a
 // GeoPackage on up to `threads` connections at once.
 std::vector<Point> read_control_points(const std::string& spec, unsigned threads = 1);
 

@@ -57,44 +57,6 @@ TEST(Parallel, GiscupTrainingSetsSameForAnyThreadCount) {
     }
 }
 
-// A big GeoPackage of control points is read on several connections by FID range: the same
-// points in the same order as one connection reads them, gaps in the FIDs included.
-TEST(Parallel, ControlPointsReadByFidRangesAsByOneConnection) {
-    const auto dir = fresh_dir("parallel-points");
-    const std::string path = (dir / "points.gpkg").string();
-    {
-        GDALAllRegister();
-        GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
-        GDALDataset* dataset = driver->Create(path.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
-        ASSERT_NE(dataset, nullptr);
-        OGRLayer* layer = dataset->CreateLayer("points", nullptr, wkbPoint, nullptr);
-        OGRFieldDefn name("name", OFTString);
-        ASSERT_EQ(layer->CreateField(&name), OGRERR_NONE);
-        ASSERT_EQ(dataset->StartTransaction(), OGRERR_NONE);
-        std::mt19937_64 rng(3);
-        std::uniform_real_distribution<double> coordinate(-180.0, 180.0);
-        for (int i = 0; i < (1 << 20) + 60000; ++i) {  // still over 2^20 (the chunked size) after the gaps
-            OGRFeature feature(layer->GetLayerDefn());
-            feature.SetField(0, "p");
-            OGRPoint point(coordinate(rng), coordinate(rng) / 2);
-            feature.SetGeometry(&point);
-            ASSERT_EQ(layer->CreateFeature(&feature), OGRERR_NONE);
-        }
-        for (GIntBig fid = 1000; fid < 300000; fid += 7) ASSERT_EQ(layer->DeleteFeature(fid), OGRERR_NONE);  // gaps
-        ASSERT_EQ(dataset->CommitTransaction(), OGRERR_NONE);
-        GDALClose(dataset);
-    }
-    const std::vector<Point> one = io::read_control_points(path, 1);
-    ASSERT_GT(one.size(), std::size_t{1} << 20);
-    for (const unsigned threads : {2u, 3u}) {
-        const std::vector<Point> chunked = io::read_control_points(path, threads);
-        ASSERT_EQ(chunked.size(), one.size()) << threads << " connections";
-        for (std::size_t i = 0; i < one.size(); ++i) {
-            ASSERT_TRUE(same_location(chunked[i], one[i])) << "point " << i << ", " << threads << " connections";
-        }
-    }
-}
-
 // Through the CLI: -j changes nothing in the written file (GeoJSON: no timestamps inside).
 TEST(Parallel, CliOutputByteIdenticalForAnyThreadCount) {
     const auto dir = fresh_dir("parallel-cli");
