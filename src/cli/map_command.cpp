@@ -241,7 +241,7 @@ int run_map(const MapOptions& options, Context& context) {
 
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        const map::SimplifyResult result = map::simplify(map, simplify_options);
+        const map::SimplifyResult result = map::simplify_releasing_points(map, simplify_options);
         time.simplify = seconds_since(simplify_start);
         const map::SimplifyStats& stats = result.stats;
 
@@ -296,7 +296,7 @@ int run_map(const MapOptions& options, Context& context) {
                    stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks);
         const double memory = peak_memory_mib();
         log->debug("peak memory {:.0f} MiB: {:.0f} bytes per vertex and control point", memory,
-                   memory * 1048576.0 / static_cast<double>(std::max<std::size_t>(1, map.vertices.size() + map.control_points.size())));
+                   memory * 1048576.0 / static_cast<double>(std::max<std::uint64_t>(1, stats.vertices_in + stats.control_points)));
         log->debug("refused removals: {} point in triangle, {} ring, {} coincident segment", stats.blocked_by_point,
                    stats.blocked_by_ring, stats.blocked_by_coincidence);
         if (stats.pinned_by_crossing > 0) {

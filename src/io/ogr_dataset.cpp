@@ -274,6 +274,9 @@ OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::stri
             data->m[v] = data->ring_m[origin];
         }
     }
+    // Grown by doubling while reading: up to half of it spare, held through simplification.
+    map.vertices.shrink_to_fit();
+    map.chains.shrink_to_fit();
     data->summary.arcs = data->coverage.arc_count();
     data->summary.shared_arcs = data->coverage.shared_arc_count();
     data->summary.degenerate_rings = data->coverage.degenerate_ring_count();

@@ -2,18 +2,20 @@
 
 #include <algorithm>
 #include <cmath>
+#include <omp.h>
 
 namespace toposimp::map {
 
-PointGrid::PointGrid(std::span<const Point> removable, std::span<const Point> fixed, double points_per_cell) {
-    const std::size_t r = removable.size(), n = r + fixed.size();
-    auto point = [&](std::size_t i) { return i < r ? removable[i] : fixed[i - r]; };
+PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second, double points_per_cell, int threads_wanted) {
+    const std::size_t f = first.size(), n = f + second.size();
+    auto point = [&](std::size_t i) { return i < f ? first[i] : second[i - f]; };
     if (n == 0) {
         cell_start_.assign(2, 0);
         return;
     }
     double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
-#pragma omp parallel for reduction(min : min_x, min_y) reduction(max : max_x, max_y) schedule(static) if (n >= 1 << 14)
+#pragma omp parallel for reduction(min : min_x, min_y) reduction(max : max_x, max_y) schedule(static) \
+    num_threads(threads_wanted > 0 ? threads_wanted : omp_get_max_threads()) if (n >= 1 << 14)
     for (std::size_t i = 0; i < n; ++i) {
         const Point p = point(i);
         min_x = std::min(min_x, p.x);
@@ -44,48 +46,75 @@ PointGrid::PointGrid(std::span<const Point> removable, std::span<const Point> fi
     scale_x_ = width > 0 ? columns_ / width : 0.0;
     scale_y_ = height > 0 ? rows_ / height : 0.0;
 
-    const std::size_t cell_count = std::size_t{columns_} * rows_;
-    std::vector<std::uint32_t> cell_of_point(n);
-#pragma omp parallel for schedule(static) if (n >= 1 << 14)
-    for (std::size_t i = 0; i < n; ++i) {
-        const Point p = point(i);
-        cell_of_point[i] = row(p.y) * columns_ + column(p.x);
+    // Two counting sorts, both parallel: points into rows (each thread its own contiguous range
+    // of ids, so a row keeps id order), then each row on its own into cells, each cell sorted by
+    // x (ties by id) — which sorts each row by x.
+    const bool parallel = n >= (1u << 14);
+    const int threads = !parallel ? 1 : threads_wanted > 0 ? threads_wanted : omp_get_max_threads();
+    const auto share = static_cast<std::size_t>(threads);
+    std::vector<std::size_t> row_start(share * rows_ + 1, 0);  // [row][thread]: where each thread's part of a row starts
+    auto chunk = [&](int t) { return std::pair{n * static_cast<std::size_t>(t) / share, n * static_cast<std::size_t>(t + 1) / share}; };
+#pragma omp parallel num_threads(threads) if (parallel)
+    {
+        const int t = omp_get_thread_num();
+        const auto [begin, end] = chunk(t);
+        std::vector<std::size_t> count(rows_, 0);
+        for (std::size_t i = begin; i < end; ++i) ++count[row(point(i).y)];
+        for (std::uint32_t y = 0; y < rows_; ++y) row_start[std::size_t{y} * share + t + 1] = count[y];
     }
-    cell_start_.assign(cell_count + 1, 0);
-    for (std::size_t i = 0; i < n; ++i) ++cell_start_[cell_of_point[i] + 1];
-    for (std::size_t c = 0; c < cell_count; ++c) cell_start_[c + 1] += cell_start_[c];
+    for (std::size_t k = 1; k < row_start.size(); ++k) row_start[k] += row_start[k - 1];
     points_.resize(n);
     ids_.resize(n);
-    slot_.resize(r);
-    std::vector<std::uint32_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t slot = fill[cell_of_point[i]]++;
-        points_[slot] = point(i);
-        ids_[slot] = static_cast<std::uint32_t>(i);
-    }
-    // Sort each cell by x (ties by id), which sorts each row of cells by x.
-    const auto cell_total = static_cast<std::ptrdiff_t>(cell_count);
-#pragma omp parallel if (n >= 1 << 14)
+#pragma omp parallel num_threads(threads) if (parallel)
     {
-        std::vector<std::pair<Point, std::uint32_t>> cell;
-#pragma omp for schedule(dynamic, 4096)
-        for (std::ptrdiff_t c = 0; c < cell_total; ++c) {
-            const std::uint32_t begin = cell_start_[static_cast<std::size_t>(c)], end = cell_start_[static_cast<std::size_t>(c) + 1];
-            if (end - begin < 2) continue;
-            cell.clear();
-            for (std::uint32_t k = begin; k < end; ++k) cell.emplace_back(points_[k], ids_[k]);
-            std::sort(cell.begin(), cell.end(), [](const auto& a, const auto& b) {
-                return a.first.x < b.first.x || (a.first.x == b.first.x && a.second < b.second);
-            });
-            for (std::uint32_t k = begin; k < end; ++k) {
-                points_[k] = cell[k - begin].first;
-                ids_[k] = cell[k - begin].second;
-            }
+        const int t = omp_get_thread_num();
+        const auto [begin, end] = chunk(t);
+        std::vector<std::size_t> fill(rows_);
+        for (std::uint32_t y = 0; y < rows_; ++y) fill[y] = row_start[std::size_t{y} * share + t];
+        for (std::size_t i = begin; i < end; ++i) {
+            const Point p = point(i);
+            const std::size_t slot = fill[row(p.y)]++;
+            points_[slot] = p;
+            ids_[slot] = static_cast<std::uint32_t>(i);
         }
     }
-#pragma omp parallel for schedule(static) if (n >= 1 << 14)
-    for (std::size_t k = 0; k < n; ++k) {
-        if (ids_[k] < r) slot_[ids_[k]] = static_cast<std::uint32_t>(k);
+    cell_start_.resize(std::size_t{columns_} * rows_ + 1);
+    cell_start_.back() = static_cast<std::uint32_t>(n);
+#pragma omp parallel num_threads(threads) if (parallel)
+    {
+        std::vector<std::pair<Point, std::uint32_t>> entries;
+        std::vector<std::uint32_t> start(columns_ + 1);
+#pragma omp for schedule(dynamic, 16)
+        for (std::uint32_t y = 0; y < rows_; ++y) {
+            const std::size_t begin = row_start[std::size_t{y} * share], end = row_start[std::size_t{y + 1} * share];
+            entries.clear();
+            std::fill(start.begin(), start.end(), 0);
+            for (std::size_t k = begin; k < end; ++k) ++start[column(points_[k].x) + 1];
+            for (std::uint32_t x = 0; x < columns_; ++x) {
+                start[x + 1] += start[x];
+                cell_start_[std::size_t{y} * columns_ + x] = static_cast<std::uint32_t>(begin + start[x]);
+            }
+            entries.resize(end - begin);
+            for (std::size_t k = begin; k < end; ++k) entries[start[column(points_[k].x)]++] = {points_[k], ids_[k]};
+            // Cells now follow each other in column order, ids in order within each: sort each
+            // cell by x, ties by id, and write the row back.
+            for (std::size_t a = 0; a < entries.size();) {
+                std::size_t b = a + 1;
+                const std::uint32_t x = column(entries[a].first.x);
+                while (b < entries.size() && column(entries[b].first.x) == x) ++b;
+                if (b - a > 1) {
+                    std::sort(entries.begin() + static_cast<std::ptrdiff_t>(a), entries.begin() + static_cast<std::ptrdiff_t>(b),
+                              [](const auto& u, const auto& v) {
+                                  return u.first.x < v.first.x || (u.first.x == v.first.x && u.second < v.second);
+                              });
+                }
+                a = b;
+            }
+            for (std::size_t k = begin; k < end; ++k) {
+                points_[k] = entries[k - begin].first;
+                ids_[k] = entries[k - begin].second;
+            }
+        }
     }
 }
 

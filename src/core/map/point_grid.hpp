@@ -1,5 +1,6 @@
 // A uniform grid over points (dissertation §2.3.1): each cell lists the points in it (id and
-// coordinates), stored compactly (counting sort into one array, no per-cell allocation).
+// coordinates), stored compactly (counting sort into one array, no per-cell allocation). It
+// never changes once built: users skip the points they have taken out themselves.
 //
 // Cell lookup is a monotone function of each coordinate, so every point inside a query box is
 // in one of the cells the box's corners map to: the grid never misses a point, whatever the
@@ -19,17 +20,16 @@ namespace toposimp::map {
 
 class PointGrid {
 public:
-    static constexpr std::uint32_t kRemoved = 0xffffffffu;
+    // Indexes `first` as ids [0, f) and `second` as ids [f, f + s). About `points_per_cell`
+    // points share a cell on average. Built on `threads` threads (0: OpenMP's default) when
+    // big; the grid is the same for any number.
+    explicit PointGrid(std::span<const Point> first, std::span<const Point> second = {}, double points_per_cell = 2.0,
+                       int threads = 0);
 
-    // Indexes `removable` as ids [0, r) and `fixed` as ids [r, r + f); only removable points can
-    // be taken out again. About `points_per_cell` points share a cell on average.
-    explicit PointGrid(std::span<const Point> removable, std::span<const Point> fixed = {},
-                       double points_per_cell = 2.0);
-
-    // Calls visit(id, point) for each point still in the grid whose x lies in the box's x range,
-    // within the rows of cells the box overlaps (a superset of the points inside it), until visit
-    // returns true; returns whether it did. Each cell's points are sorted by x, so a row of cells
-    // is sorted by x: a query binary-searches its x range and reads memory sequentially.
+    // Calls visit(id, point) for each point whose x lies in the box's x range, within the rows
+    // of cells the box overlaps (a superset of the points inside it), until visit returns true;
+    // returns whether it did. Each cell's points are sorted by x, so a row of cells is sorted by
+    // x: a query binary-searches its x range and reads memory sequentially.
     template <class Visit>
     bool any_in_cells(const Box& box, Visit&& visit) const {
         const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
@@ -46,22 +46,18 @@ public:
                 while (p != last && p->x < box.min_x) ++p;
             }
             for (; p != last && p->x <= box.max_x; ++p) {
-                const std::uint32_t id = ids_[static_cast<std::size_t>(p - points_.data())];
-                if (id != kRemoved && visit(id, *p)) return true;
+                if (visit(ids_[static_cast<std::size_t>(p - points_.data())], *p)) return true;
             }
         }
         return false;
     }
-
-    // Takes removable point `id` out of the grid.
-    void remove(std::uint32_t id) { ids_[slot_[id]] = kRemoved; }
 
     std::uint32_t columns() const { return columns_; }
     std::uint32_t rows() const { return rows_; }
     std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
     std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
 
-    // The ids and points of cell (column x, row y), sorted by x (removed ones included as kRemoved).
+    // The ids and points of cell (column x, row y), sorted by x (ties by id).
     std::span<const std::uint32_t> cell_ids(std::uint32_t x, std::uint32_t y) const {
         const std::size_t cell = std::size_t{y} * columns_ + x;
         return {ids_.data() + cell_start_[cell], ids_.data() + cell_start_[cell + 1]};
@@ -84,7 +80,6 @@ private:
     std::vector<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
     std::vector<Point> points_;            // in cell order
     std::vector<std::uint32_t> ids_;       // parallel to points_
-    std::vector<std::uint32_t> slot_;      // per removable id: its entry
 };
 
 }  // namespace toposimp::map

@@ -106,8 +106,11 @@ struct Worker {
 
 class Simplifier {
 public:
-    Simplifier(const MapData& map, const SimplifyOptions& options)
+    // `owned_points`: the control points, if they are handed over (else the map's are used).
+    Simplifier(const MapData& map, const SimplifyOptions& options, std::vector<Point> owned_points = {})
         : map_(map),
+          owned_points_(std::move(owned_points)),
+          control_points_(owned_points_.empty() ? std::span<const Point>(map.control_points) : owned_points_),
           options_(options),
           vertex_count_(static_cast<std::uint32_t>(map.vertices.size())),
           threads_(options.threads > 0 ? options.threads : omp_get_max_threads()),
@@ -131,7 +134,12 @@ private:
     // ---- set-up --------------------------------------------------------------------------
 
     // One grid over vertices (ids [0, n), removable) and control points (ids [n, n+m)).
-    void index_points() { grid_.emplace(map_.vertices, map_.control_points); }
+    void index_points() {
+        grid_.emplace(map_.vertices, control_points_, 2.0, threads_);
+        stats_.control_points = control_points_.size();
+        control_points_ = {};
+        owned_points_ = std::vector<Point>();  // freed: the grid has them
+    }
 
     // Blocks of 2^shift_ × 2^shift_ grid cells form level 0; level l groups 2^l × 2^l of them.
     void set_up_levels() {
@@ -300,39 +308,91 @@ private:
         stats_.target_reached = stats_.removed >= goal;
     }
 
-    // Marks the `budget` queued vertices of smallest area (all if fewer) and sets the round's
-    // threshold to the largest of them. Returns false if nothing is queued.
+    // Marks the `budget` queued vertices smallest in (area, id) order (all if fewer) and sets
+    // the round's threshold to the largest of them. Returns false if nothing is queued.
+    //
+    // A radix selection, so that no (area, id) pool is kept: the areas of the queued vertices,
+    // in id order, are 8 bytes each; 16 bits at a time from the top, histograms narrow them
+    // down to the key K of the budget-th smallest. Then every queued vertex with a smaller area
+    // is marked, and of those with area K, the first ones in id order up to the budget.
     bool mark_smallest(std::uint64_t budget) {
-        std::vector<Ranked>& pool = pool_;  // kept between rounds: no fresh pages each time
-        pool.clear();
-        pool.reserve(vertex_count_);
-        // Each thread scans one contiguous range of ids; joined in thread order, the pool is in
-        // id order whatever the number of threads.
-        std::vector<std::vector<Ranked>> parts(static_cast<std::size_t>(threads_));
-#pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
+        const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
+        auto range = [&](int t) {
+            return std::pair{static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * t / threads),
+                             static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * (t + 1) / threads)};
+        };
+        std::vector<std::size_t> offset(static_cast<std::size_t>(threads) + 1, 0);
+#pragma omp parallel num_threads(threads)
         {
-            std::vector<Ranked>& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
-#pragma omp for schedule(static)
-            for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            const int t = omp_get_thread_num();
+            const auto [begin, end] = range(t);
+            std::size_t count = 0;
+            for (std::uint32_t v = begin; v < end; ++v) count += state_[v] == State::queued;
+            offset[static_cast<std::size_t>(t) + 1] = count;
+        }
+        for (int t = 0; t < threads; ++t) offset[static_cast<std::size_t>(t) + 1] += offset[static_cast<std::size_t>(t)];
+        const std::size_t queued = offset.back();
+        if (queued == 0) return false;
+        std::vector<std::uint64_t> keys(queued);  // area bits: non-negative doubles order as their bits
+#pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            const auto [begin, end] = range(t);
+            std::size_t k = offset[static_cast<std::size_t>(t)];
+            for (std::uint32_t v = begin; v < end; ++v) {
                 marked_[v] = 0;
-                if (state_[v] == State::queued) part.push_back({area_of(v), v});
+                if (state_[v] == State::queued) keys[k++] = std::bit_cast<std::uint64_t>(area_of(v));
             }
         }
-        for (const auto& part : parts) pool.insert(pool.end(), part.begin(), part.end());
-        if (pool.empty()) return false;
-        if (budget < pool.size()) {
-            // The budget smallest form one set under the total order, whoever finds them.
-            if (threads_ > 1 && pool.size() >= parallel_min_) {
-                __gnu_parallel::nth_element(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(budget - 1), pool.end());
-            } else {
-                std::nth_element(pool.begin(), pool.begin() + static_cast<std::ptrdiff_t>(budget - 1), pool.end());
+        std::uint64_t key = 0, rank = 0;  // select the rank-th smallest (1-based) among keys equal to key
+        if (budget >= queued) {
+            key = *std::max_element(keys.begin(), keys.end());
+            rank = static_cast<std::uint64_t>(std::count(keys.begin(), keys.end(), key));
+        } else {
+            rank = budget;
+            for (int shift = 48; shift >= 0; shift -= 16) {
+                // Histogram of the next 16 bits among the keys whose higher bits are `key`'s.
+                const std::uint64_t high_mask = shift == 48 ? 0 : ~std::uint64_t{0} << (shift + 16);
+                std::vector<std::uint64_t> histogram(std::size_t{1} << 16, 0);
+#pragma omp parallel num_threads(threads)
+                {
+                    std::vector<std::uint64_t> part(std::size_t{1} << 16, 0);
+#pragma omp for schedule(static) nowait
+                    for (std::size_t k = 0; k < queued; ++k) {
+                        if ((keys[k] & high_mask) == key) ++part[(keys[k] >> shift) & 0xffffu];
+                    }
+#pragma omp critical(toposimp_histogram)
+                    for (std::size_t d = 0; d < part.size(); ++d) histogram[d] += part[d];
+                }
+                std::uint64_t digit = 0;
+                while (rank > histogram[digit]) rank -= histogram[digit++];
+                key |= digit << shift;
             }
-            pool.resize(budget);
         }
-        bound_ = *std::max_element(pool.begin(), pool.end());
-        const auto marked = static_cast<std::ptrdiff_t>(pool.size());
-#pragma omp parallel for schedule(static) num_threads(threads_) if (pool.size() >= parallel_min_)
-        for (std::ptrdiff_t i = 0; i < marked; ++i) marked_[pool[static_cast<std::size_t>(i)].id] = 1;
+        // Mark: areas below the key, and the first `rank` vertices (in id order) at the key.
+        std::vector<std::uint64_t> at_key(static_cast<std::size_t>(threads) + 1, 0);
+#pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            const std::size_t begin = offset[static_cast<std::size_t>(t)], end = offset[static_cast<std::size_t>(t) + 1];
+            at_key[static_cast<std::size_t>(t) + 1] = static_cast<std::uint64_t>(std::count(keys.begin() + begin, keys.begin() + end, key));
+#pragma omp barrier
+#pragma omp single
+            for (int u = 0; u < threads; ++u) at_key[static_cast<std::size_t>(u) + 1] += at_key[static_cast<std::size_t>(u)];
+            const auto [first, last] = range(t);
+            std::uint64_t seen = at_key[static_cast<std::size_t>(t)];
+            std::size_t k = begin;
+            for (std::uint32_t v = first; v < last; ++v) {
+                if (state_[v] != State::queued) continue;
+                const std::uint64_t own = keys[k++];
+                if (own < key) {
+                    marked_[v] = 1;
+                } else if (own == key && seen < rank) {
+                    marked_[v] = 1;
+                    if (++seen == rank) bound_ = {std::bit_cast<double>(key), v};
+                }
+            }
+        }
         return true;
     }
 
@@ -478,7 +538,9 @@ private:
         const Box box = triangle_box(a, b, c);
         std::optional<exact::ClosedTriangle> triangle;  // prepared at the first candidate point
         const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
+            // A point in the box lies in this block: its state is this thread's to read.
             if (id == v || !box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
+            if (id < vertex_count_ && state_[id] == State::removed) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
             if (!triangle->contains(q)) return false;
             blocker = id;
@@ -568,7 +630,6 @@ private:
             }
         }
         state_[v] = State::removed;
-        grid_->remove(v);
         next_[p] = n;
         prev_[n] = p;
         ++worker.stats.removed;
@@ -636,7 +697,6 @@ private:
     SimplifyResult finish() {
         stats_.vertices_in = vertex_count_;
         stats_.vertices_out = vertex_count_ - stats_.removed;
-        stats_.control_points = map_.control_points.size();
         stats_.threads = threads_;
         std::vector<std::uint8_t> kept(vertex_count_);
         for (std::uint32_t v = 0; v < vertex_count_; ++v) kept[v] = state_[v] != State::removed;
@@ -644,6 +704,8 @@ private:
     }
 
     const MapData& map_;
+    std::vector<Point> owned_points_;
+    std::span<const Point> control_points_;  // until indexed
     const SimplifyOptions& options_;
     const std::uint32_t vertex_count_;
     const int threads_;
@@ -661,7 +723,6 @@ private:
     std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
     std::vector<std::uint32_t> blocked_head_, blocked_on_, blocked_prev_, blocked_next_;
     std::vector<std::vector<std::uint32_t>> later_;  // per level: vertices to queue there
-    std::vector<Ranked> pool_;                                // scratch, reused between rounds
     std::vector<std::uint32_t> start_, block_of_, grouped_;  // scratch, reused between levels
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
@@ -674,6 +735,12 @@ private:
 
 SimplifyResult simplify(const MapData& map, const SimplifyOptions& options) {
     return Simplifier(map, options).run();
+}
+
+SimplifyResult simplify_releasing_points(MapData& map, const SimplifyOptions& options) {
+    std::vector<Point> points = std::move(map.control_points);
+    map.control_points.clear();
+    return Simplifier(map, options, std::move(points)).run();
 }
 
 }  // namespace toposimp::map

@@ -104,4 +104,9 @@ std::uint64_t removal_goal(const StopCriterion& stop, std::uint64_t vertices);
 
 SimplifyResult simplify(const MapData& map, const SimplifyOptions& options);
 
+// The same for a caller that needs the control points no more: they are moved out of `map`
+// (left empty; nothing else in it changes) and freed once the engine has indexed them, which
+// keeps its own copy in grid order — for 10 M points, 160 MB less at the peak.
+SimplifyResult simplify_releasing_points(MapData& map, const SimplifyOptions& options);
+
 }  // namespace toposimp::map

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <random>
 #include <set>
 
@@ -51,12 +53,44 @@ TEST(PointGrid, HandlesDegenerateAndExtremeExtents) {
     expect_no_point_missed({{-big, 0}, {big, 0}, {0, 0}}, {-big, 0, big, 0});
 }
 
-TEST(PointGrid, RemovedPointsAreNotVisited) {
-    const std::vector<Point> points{{0, 0}, {1, 1}, {2, 2}};
-    PointGrid grid(points);
-    grid.remove(1);
-    const auto found = in_cells(grid, {0, 0, 2, 2});
-    EXPECT_EQ(found, (std::set<std::uint32_t>{0, 2}));
+// Built in parallel, the grid is the same for any thread count: every id once, in the cell its
+// coordinates map to, each cell sorted by x with ties by id.
+TEST(PointGrid, SameCellsForAnyThreadCountEachSortedByXThenId) {
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<Point> first(40000), second(30000);
+    for (auto& p : first) p = {std::floor(unit(rng) * 300) / 3, unit(rng) * 50};  // many equal x
+    for (auto& p : second) p = first[static_cast<std::size_t>(unit(rng) * 1000)];  // duplicates of the first
+    const PointGrid one(first, second, 2.0, 1);
+    std::vector<int> seen(first.size() + second.size(), 0);
+    for (std::uint32_t y = 0; y < one.rows(); ++y) {
+        for (std::uint32_t x = 0; x < one.columns(); ++x) {
+            const auto ids = one.cell_ids(x, y);
+            const auto points = one.cell_points(x, y);
+            for (std::size_t k = 0; k < ids.size(); ++k) {
+                ++seen[ids[k]];
+                const Point p = ids[k] < first.size() ? first[ids[k]] : second[ids[k] - first.size()];
+                ASSERT_TRUE(same_location(points[k], p));
+                ASSERT_EQ(one.column(p.x), x);
+                ASSERT_EQ(one.row(p.y), y);
+                if (k > 0) {
+                    ASSERT_TRUE(points[k - 1].x < p.x || (points[k - 1].x == p.x && ids[k - 1] < ids[k]));
+                }
+            }
+        }
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), static_cast<std::ptrdiff_t>(seen.size()));
+    for (const int threads : {2, 3, 7}) {
+        const PointGrid other(first, second, 2.0, threads);
+        ASSERT_EQ(other.columns(), one.columns());
+        ASSERT_EQ(other.rows(), one.rows());
+        for (std::uint32_t y = 0; y < one.rows(); ++y) {
+            for (std::uint32_t x = 0; x < one.columns(); ++x) {
+                const auto a = one.cell_ids(x, y), b = other.cell_ids(x, y);
+                ASSERT_TRUE(std::equal(a.begin(), a.end(), b.begin(), b.end())) << threads << " threads, cell " << x << ", " << y;
+            }
+        }
+    }
 }
 
 }  // namespace
