@@ -2,11 +2,13 @@
 #include "core/map/simplify.hpp"
 
 #include "support/exact_checker.hpp"
+#include "support/random_maps.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <optional>
+#include <random>
 
 namespace toposimp::map {
 namespace {
@@ -171,6 +173,49 @@ TEST(MapSimplify, CountTargetsLandExactly) {
     const SimplifyResult floor = simplify(map, options);
     EXPECT_EQ(floor.stats.vertices_out, 2u) << "endpoints always stay";
     EXPECT_FALSE(floor.stats.target_reached);
+}
+
+// Rounds pick their budget by a radix selection over the areas: ties (all areas equal, or all
+// zero) are broken by vertex id, and the count still lands exactly.
+TEST(MapSimplify, CountTargetsLandExactlyAmongEqualAreas) {
+    MapData zigzag, straight;
+    std::vector<Point> teeth, run;
+    for (int i = 0; i <= 1000; ++i) {
+        teeth.push_back({static_cast<double>(i), static_cast<double>(i % 2)});  // every triangle has area 1
+        run.push_back({static_cast<double>(i), 0.0});                          // every triangle has area 0
+    }
+    zigzag.add_chain(teeth);
+    straight.add_chain(run);
+    for (const MapData* map : {&zigzag, &straight}) {
+        for (const double keep : {2.0, 3.0, 300.0, 999.0, 1000.0}) {
+            SimplifyOptions options;
+            options.stop = {Target::keep_points, keep};
+            options.parallel_threshold = 0;
+            for (const int threads : {1, 3}) {
+                options.threads = threads;
+                const SimplifyResult result = simplify(*map, options);
+                EXPECT_EQ(result.stats.vertices_out, static_cast<std::uint64_t>(keep)) << keep << ", " << threads << " threads";
+            }
+        }
+    }
+}
+
+// Handing the control points over changes nothing but where they are freed.
+TEST(MapSimplify, ReleasingThePointsGivesTheSameResult) {
+    std::mt19937_64 rng(17);
+    testing::RandomMapOptions shape;
+    shape.control_points = 400;
+    const MapData map = testing::random_planar_map(rng, shape);
+    SimplifyOptions options;
+    options.stop = {Target::keep_fraction, 0.3};
+    const SimplifyResult kept = simplify(map, options);
+    MapData handed = map;
+    const SimplifyResult released = simplify_releasing_points(handed, options);
+    EXPECT_EQ(released.kept, kept.kept);
+    EXPECT_EQ(released.stats.control_points, map.control_points.size());
+    EXPECT_GT(released.stats.blocked_by_point, 0u) << "the points should matter here";
+    EXPECT_TRUE(handed.control_points.empty());
+    EXPECT_EQ(handed.vertices.size(), map.vertices.size());
 }
 
 TEST(MapSimplify, MaxAreaStopsAtTheThreshold) {
