@@ -14,8 +14,10 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <mutex>
 #include <optional>
 #include <span>
+#include <unordered_map>
 
 namespace toposimp::map {
 
@@ -85,10 +87,57 @@ double lap(Clock::time_point& start) {
 
 enum class Verdict { remove, blocked_by_point, blocked_by_ring, blocked_by_coincidence, later };
 
+// Vertices refused because a vertex lies in their triangle, waiting for it to go: a map under
+// a lock, not arrays over all vertices — a few thousand waits per million removals.
+class Waits {
+public:
+    void add(std::uint32_t waiter, std::uint32_t blocker) {
+        const std::lock_guard lock(mutex_);
+        blocker_of_[waiter] = blocker;
+        waiters_of_[blocker].push_back(waiter);
+    }
+
+    // Forgets `waiter`'s wait, if it has one.
+    void remove(std::uint32_t waiter) {
+        const std::lock_guard lock(mutex_);
+        const auto found = blocker_of_.find(waiter);
+        if (found == blocker_of_.end()) return;
+        std::vector<std::uint32_t>& list = waiters_of_[found->second];
+        list.erase(std::find(list.begin(), list.end(), waiter));
+        if (list.empty()) waiters_of_.erase(found->second);
+        blocker_of_.erase(found);
+    }
+
+    bool waits(std::uint32_t waiter) {
+        const std::lock_guard lock(mutex_);
+        return blocker_of_.count(waiter) != 0;
+    }
+
+    // The vertices waiting on `blocker`, in id order; their waits end.
+    std::vector<std::uint32_t> take(std::uint32_t blocker) {
+        const std::lock_guard lock(mutex_);
+        std::vector<std::uint32_t> waiters;
+        if (const auto found = waiters_of_.find(blocker); found != waiters_of_.end()) {
+            waiters = std::move(found->second);
+            waiters_of_.erase(found);
+        }
+        for (const std::uint32_t waiter : waiters) blocker_of_.erase(waiter);
+        std::sort(waiters.begin(), waiters.end());
+        return waiters;
+    }
+
+private:
+    std::mutex mutex_;
+    std::unordered_map<std::uint32_t, std::uint32_t> blocker_of_;
+    std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> waiters_of_;
+};
+
 // What one thread accumulates while it works through blocks.
 struct Worker {
     std::vector<Ranked> queue;                       // the block's queue: a binary min-heap
     std::vector<std::vector<std::uint32_t>> later;   // per level: vertices to queue there
+    std::vector<std::uint32_t> released;             // waiters outside the block whose blocker went
+    std::uint32_t block = 0;                         // the block being processed
     SimplifyStats stats;
     std::uint64_t reported = 0;  // removals already added to the progress count
 
@@ -121,7 +170,7 @@ public:
         index_points();
         set_up_levels();
         build_chains();
-        link_locations();
+        find_shared_locations();
         stats_.seconds_index = lap(start);
         pin_crossings();
         stats_.seconds_crossings = lap(start);
@@ -223,11 +272,11 @@ private:
         return static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
     }
 
-    // Vertices at one location form a circular list (twin_), found cell by cell in the grid:
-    // only segments ending at a location held by two or more vertices (a node, a ring's closing
-    // vertex, a duplicate, a touch) can ever coincide with another segment.
-    void link_locations() {
-        twin_.resize(vertex_count_);
+    // Vertices whose location another vertex holds too (a node, a ring's closing vertex, a
+    // duplicate, a touch), found cell by cell in the grid: only segments ending at such a
+    // location can ever coincide with another segment.
+    void find_shared_locations() {
+        shared_.assign(vertex_count_, 0);
         const std::uint32_t columns = grid_->columns(), rows = grid_->rows();
 #pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
         {
@@ -245,15 +294,15 @@ private:
                     for (std::size_t i = 0; i < here.size();) {
                         std::size_t j = i + 1;
                         while (j < here.size() && here[j].first == here[i].first) ++j;
-                        for (std::size_t k = i; k < j; ++k) twin_[here[k].second] = here[k + 1 < j ? k + 1 : i].second;
+                        if (j - i > 1) {
+                            for (std::size_t k = i; k < j; ++k) shared_[here[k].second] = 1;
+                        }
                         i = j;
                     }
                 }
             }
         }
     }
-
-    bool is_shared(std::uint32_t v) const { return twin_[v] != v; }
 
     // Vertices at either end of a segment that crosses or touches another one improperly in the
     // input are never removed (see crossings.hpp for why that is enough); nor are frozen chains'.
@@ -272,10 +321,7 @@ private:
             }
         }
         stats_.pinned_by_crossing = pinned_count;
-        blocked_head_.assign(vertex_count_, kNone);
-        blocked_on_.assign(vertex_count_, kNone);
-        blocked_prev_.assign(vertex_count_, kNone);
-        blocked_next_.assign(vertex_count_, kNone);
+        has_waiters_.assign(vertex_count_, 0);
     }
 
     double area_of(std::uint32_t v) const {
@@ -456,8 +502,10 @@ private:
         for (std::ptrdiff_t i = 0; i < busy_count; ++i) {
             const std::uint32_t b = busy[static_cast<std::size_t>(i)];
             Worker& worker = workers[static_cast<std::size_t>(omp_get_thread_num())];
+            worker.block = b;
             process_block(level, {grouped.data() + start[b], grouped.data() + start[b + 1]}, worker);
         }
+        queue_released(workers);
         for (Worker& worker : workers) {
             for (unsigned l = level + 1; l < levels_; ++l) {
                 later_[l].insert(later_[l].end(), worker.later[l].begin(), worker.later[l].end());
@@ -597,24 +645,21 @@ private:
     }
 
     // Rule 3: would the new segment p–n lie on another live segment with the same end locations?
-    // Every such segment has a live vertex at p's location, so p's location list finds them all.
-    // v's own segments p–v and v–n disappear with it and do not count (they can have the same
-    // locations when v duplicates a neighbour).
+    // Every such segment has a live vertex at p's location, which the grid lists (all of them in
+    // this block). v's own segments p–v and v–n disappear with it and do not count (they can
+    // have the same locations when v duplicates a neighbour).
     bool coincides_with_other_segment(std::uint32_t p, std::uint32_t v, std::uint32_t n) const {
         const Point from = map_.vertices[p], to = map_.vertices[n];
-        if ((!is_shared(p) && !is_shared(n)) || same_location(from, to)) return false;
-        std::uint32_t u = p;
-        do {
-            if (state_[u] != State::removed) {
-                for (const std::uint32_t w : {prev_[u], next_[u]}) {
-                    if (w == kNone || !same_location(map_.vertices[w], to)) continue;
-                    const bool own = (u == p && w == v) || (u == v && w == n);  // p–v or v–n
-                    if (!own) return true;
-                }
+        if ((!shared_[p] && !shared_[n]) || same_location(from, to)) return false;
+        return grid_->any_in_cells({from.x, from.y, from.x, from.y}, [&](std::uint32_t u, Point q) {
+            if (u >= vertex_count_ || !same_location(q, from) || state_[u] == State::removed) return false;
+            for (const std::uint32_t w : {prev_[u], next_[u]}) {
+                if (w == kNone || !same_location(map_.vertices[w], to)) continue;
+                const bool own = (u == p && w == v) || (u == v && w == n);  // p–v or v–n
+                if (!own) return true;
             }
-            u = twin_[u];
-        } while (u != p);
-        return false;
+            return false;
+        });
     }
 
     void remove(std::uint32_t v, unsigned level, Worker& worker) {
@@ -653,30 +698,44 @@ private:
         }
     }
 
-    // Lists of vertices refused because of one blocking vertex (doubly linked, intrusive).
     void wait_on(std::uint32_t v, std::uint32_t blocker) {
         state_[v] = State::waiting;
-        blocked_on_[v] = blocker;
-        blocked_prev_[v] = kNone;
-        blocked_next_[v] = blocked_head_[blocker];
-        if (blocked_head_[blocker] != kNone) blocked_prev_[blocked_head_[blocker]] = v;
-        blocked_head_[blocker] = v;
+        waits_.add(v, blocker);
+        has_waiters_[blocker] = 1;  // the blocker lies in v's triangle: in this block
     }
 
     void stop_waiting(std::uint32_t v) {
-        const std::uint32_t blocker = blocked_on_[v];
-        if (blocked_prev_[v] != kNone) {
-            blocked_next_[blocked_prev_[v]] = blocked_next_[v];
-        } else {
-            blocked_head_[blocker] = blocked_next_[v];
-        }
-        if (blocked_next_[v] != kNone) blocked_prev_[blocked_next_[v]] = blocked_prev_[v];
-        blocked_on_[v] = kNone;
+        waits_.remove(v);
         state_[v] = State::queued;
     }
 
+    // The blocker goes: its waiters are candidates again. A waiter may lie outside this block
+    // when its wait began at a coarser level of an earlier round; it is another thread's to
+    // touch, so it is set aside and queued after the level, for the next round.
     void release_waiting_on(std::uint32_t blocker, unsigned level, Worker& worker) {
-        while (blocked_head_[blocker] != kNone) requeue(blocked_head_[blocker], level, worker);
+        if (!has_waiters_[blocker]) return;
+        has_waiters_[blocker] = 0;
+        for (const std::uint32_t u : waits_.take(blocker)) {
+            if (block_at(u, level) == worker.block) {
+                requeue(u, level, worker);
+            } else {
+                worker.released.push_back(u);
+            }
+        }
+    }
+
+    // After a level: the waiters set aside are queued, unless they have been dealt with since
+    // (queued again, or waiting on another vertex).
+    void queue_released(std::vector<Worker>& workers) {
+        std::vector<std::uint32_t> released;
+        for (Worker& worker : workers) {
+            released.insert(released.end(), worker.released.begin(), worker.released.end());
+            worker.released.clear();
+        }
+        std::sort(released.begin(), released.end());
+        for (const std::uint32_t u : released) {
+            if (state_[u] == State::waiting && !waits_.waits(u)) state_[u] = State::queued;
+        }
     }
 
     static void add(SimplifyStats& total, const SimplifyStats& part) {
@@ -713,7 +772,8 @@ private:
     std::optional<PointGrid> grid_;
     unsigned shift_ = kMinShift, levels_ = 1;
     std::uint32_t block_columns_ = 1, block_rows_ = 1;
-    std::vector<std::uint32_t> prev_, next_, chain_of_, twin_;
+    std::vector<std::uint32_t> prev_, next_, chain_of_;
+    std::vector<std::uint8_t> shared_;     // per vertex: another vertex is at its location
     std::vector<std::uint32_t> block_xy_;  // per vertex: level-0 block, column << 16 | row
     std::vector<State> state_;
     std::vector<std::uint8_t> marked_;       // count targets: this round's budget
@@ -721,7 +781,8 @@ private:
     std::vector<std::int8_t> orientation_;   // per chain: input ring orientation, 2 = unknown
     std::vector<std::uint8_t> whole_level_;  // per chain: first level where the ring is in one block; kOpen
     std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
-    std::vector<std::uint32_t> blocked_head_, blocked_on_, blocked_prev_, blocked_next_;
+    Waits waits_;
+    std::vector<std::uint8_t> has_waiters_;  // per vertex: some vertex may wait on it (written by its block only)
     std::vector<std::vector<std::uint32_t>> later_;  // per level: vertices to queue there
     std::vector<std::uint32_t> start_, block_of_, grouped_;  // scratch, reused between levels
     bool use_marks_ = false;
