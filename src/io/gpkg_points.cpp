@@ -188,8 +188,10 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
     {
         Connection db = open_read_only(table.path);
         if (!db) return std::nullopt;
-        const std::string fid = sql_identifier(table.fid_column);
-        Statement bounds = prepare(db.get(), "SELECT MIN(" + fid + "), MAX(" + fid + ") FROM " + sql_identifier(table.table));
+        // Two subqueries: SQLite looks a lone MIN or MAX up in the key's b-tree, but scans the
+        // whole table for "SELECT MIN(fid), MAX(fid)".
+        const std::string fid = sql_identifier(table.fid_column), from = " FROM " + sql_identifier(table.table);
+        Statement bounds = prepare(db.get(), "SELECT (SELECT MIN(" + fid + ")" + from + "), (SELECT MAX(" + fid + ")" + from + ")");
         if (!bounds || sqlite3_step(bounds.get()) != SQLITE_ROW) return std::nullopt;
         if (sqlite3_column_type(bounds.get(), 0) == SQLITE_NULL) return std::vector<Point>{};  // no rows
         first = sqlite3_column_int64(bounds.get(), 0);
