@@ -1,6 +1,9 @@
 #include "core/map/crossings.hpp"
 
 #include "core/exact/segments.hpp"
+#include "core/fill_later.hpp"
+
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,122 +11,147 @@
 namespace toposimp::map {
 namespace {
 
-// A uniform grid of segment boxes, stored compactly (counting sort, no per-cell allocation).
-class SegmentGrid {
-public:
-    SegmentGrid(const MapData& map, const std::vector<std::uint32_t>& segments) : map_(map) {
-        Box bounds{INFINITY, INFINITY, -INFINITY, -INFINITY};
-        for (const Point& p : map.vertices) {
-            bounds = {std::min(bounds.min_x, p.x), std::min(bounds.min_y, p.y), std::max(bounds.max_x, p.x),
-                      std::max(bounds.max_y, p.y)};
-        }
-        const double width = bounds.max_x - bounds.min_x, height = bounds.max_y - bounds.min_y;
-        const double side = std::clamp(std::floor(std::sqrt(static_cast<double>(segments.size()) / 2.0)), 1.0, 4096.0);
-        columns_ = static_cast<std::uint32_t>(side);
-        rows_ = columns_;
-        origin_x_ = bounds.min_x;
-        origin_y_ = bounds.min_y;
-        scale_x_ = width > 0 ? columns_ / width : 0.0;
-        scale_y_ = height > 0 ? rows_ / height : 0.0;
+Box segment_box(Point a, Point b) {
+    return {std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
+}
 
-        cell_start_.assign(std::size_t{columns_} * rows_ + 1, 0);
-        for_each_registration(segments, [&](std::size_t cell, std::uint32_t) { ++cell_start_[cell + 1]; });
-        for (std::size_t c = 0; c + 1 < cell_start_.size(); ++c) cell_start_[c + 1] += cell_start_[c];
-        entries_.resize(cell_start_.back());
-        std::vector<std::size_t> fill(cell_start_.begin(), cell_start_.end() - 1);
-        for_each_registration(segments, [&](std::size_t cell, std::uint32_t v) { entries_[fill[cell]++] = v; });
-    }
+// Cell index along one axis: monotone in the coordinate, so a box's cells are those between
+// its corners' cells whatever the rounding.
+struct Axis {
+    double origin = 0, scale = 0;
+    std::uint32_t count = 1;
 
-    Box box_of(std::uint32_t v) const { return segment_box(map_.vertices[v], map_.vertices[v + 1]); }
-
-    std::size_t cell_of(double x, double y) const { return std::size_t{row(y)} * columns_ + column(x); }
-
-    std::size_t cell_count() const { return cell_start_.size() - 1; }
-
-    template <class Visit>
-    void for_each_in_cell(std::size_t cell, Visit&& visit) const {
-        for (std::size_t k = cell_start_[cell]; k < cell_start_[cell + 1]; ++k) visit(k, entries_[k]);
-    }
-
-    std::uint32_t entry(std::size_t k) const { return entries_[k]; }
-    std::size_t cell_end(std::size_t cell) const { return cell_start_[cell + 1]; }
-
-private:
-    static Box segment_box(Point a, Point b) {
-        return {std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
-    }
-
-    static std::uint32_t index(double value, double origin, double scale, std::uint32_t count) {
+    std::uint32_t operator()(double value) const {
         double t = (value - origin) * scale;
         if (!(t >= 0.0)) t = 0.0;
         if (t >= static_cast<double>(count)) return count - 1;
         return static_cast<std::uint32_t>(t);
     }
-    std::uint32_t column(double x) const { return index(x, origin_x_, scale_x_, columns_); }
-    std::uint32_t row(double y) const { return index(y, origin_y_, scale_y_, rows_); }
-
-    template <class Register>
-    void for_each_registration(const std::vector<std::uint32_t>& segments, Register&& add) const {
-        for (const std::uint32_t v : segments) {
-            const Box box = box_of(v);
-            for (std::uint32_t y = row(box.min_y); y <= row(box.max_y); ++y) {
-                for (std::uint32_t x = column(box.min_x); x <= column(box.max_x); ++x) add(std::size_t{y} * columns_ + x, v);
-            }
-        }
-    }
-
-    const MapData& map_;
-    double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
-    std::uint32_t columns_ = 1, rows_ = 1;
-    std::vector<std::size_t> cell_start_;
-    std::vector<std::uint32_t> entries_;
 };
+
+// Calls visit(v) for each segment (named by its first vertex v) whose first vertex lies in
+// [begin, end), chain by chain.
+template <class Visit>
+void for_each_segment(const MapData& map, std::uint32_t begin, std::uint32_t end, Visit&& visit) {
+    auto chain = std::partition_point(map.chains.begin(), map.chains.end(), [&](const Chain& c) { return c.last < begin; });
+    for (; chain != map.chains.end() && chain->first < end; ++chain) {
+        for (std::uint32_t v = std::max(chain->first, begin); v < std::min(chain->last, end); ++v) visit(v);
+    }
+}
 
 }  // namespace
 
+// A uniform grid over the segments' boxes, one row of cells at a time: the segments are first
+// distributed to the rows their boxes span (a parallel counting sort), then each row, on its
+// own, to its cells, where the pairs are tested. A pair is tested only in the cell holding the
+// low corner of its boxes' overlap, so once.
 std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
                                                   exact::PredicateStats& stats) {
     std::vector<SegmentContact> contacts;
-    std::vector<std::uint32_t> segments;  // each named by its first vertex
-    for (const Chain& chain : map.chains) {
-        for (std::uint32_t v = chain.first; v < chain.last; ++v) segments.push_back(v);
+    const auto vertex_count = static_cast<std::uint32_t>(map.vertices.size());
+    std::size_t segment_count = 0;
+    for (const Chain& chain : map.chains) segment_count += chain.last - chain.first;
+    if (segment_count < 2) return contacts;
+    const bool parallel = segment_count >= (1u << 14);
+    const int threads = parallel ? omp_get_max_threads() : 1;
+    const auto share = static_cast<std::size_t>(threads);
+
+    double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+#pragma omp parallel for reduction(min : min_x, min_y) reduction(max : max_x, max_y) schedule(static) num_threads(threads)
+    for (std::uint32_t v = 0; v < vertex_count; ++v) {
+        const Point p = map.vertices[v];
+        min_x = std::min(min_x, p.x);
+        min_y = std::min(min_y, p.y);
+        max_x = std::max(max_x, p.x);
+        max_y = std::max(max_y, p.y);
     }
-    if (segments.size() < 2) return contacts;
-    const SegmentGrid grid(map, segments);
-    const auto cells = static_cast<std::ptrdiff_t>(grid.cell_count());
-#pragma omp parallel if (segments.size() >= 1 << 14)
+    const auto side = static_cast<std::uint32_t>(std::clamp(std::floor(std::sqrt(static_cast<double>(segment_count) / 2.0)), 1.0, 4096.0));
+    const double width = max_x - min_x, height = max_y - min_y;
+    const Axis column{min_x, width > 0 ? side / width : 0.0, side}, row{min_y, height > 0 ? side / height : 0.0, side};
+    auto box_of = [&](std::uint32_t v) { return segment_box(map.vertices[v], map.vertices[v + 1]); };
+    auto vertices_of = [&](int t) {
+        return std::pair{static_cast<std::uint32_t>(std::uint64_t{vertex_count} * static_cast<std::size_t>(t) / share),
+                         static_cast<std::uint32_t>(std::uint64_t{vertex_count} * static_cast<std::size_t>(t + 1) / share)};
+    };
+
+    // Segments into the rows they span: row_start[row · threads + thread] is where that
+    // thread's entries of that row begin.
+    std::vector<std::size_t> row_start(std::size_t{side} * share + 1, 0);
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num();
+        const auto [begin, end] = vertices_of(t);
+        std::vector<std::size_t> count(side, 0);
+        for_each_segment(map, begin, end, [&](std::uint32_t v) {
+            const Box box = box_of(v);
+            for (std::uint32_t y = row(box.min_y), last = row(box.max_y); y <= last; ++y) ++count[y];
+        });
+        for (std::uint32_t y = 0; y < side; ++y) row_start[std::size_t{y} * share + static_cast<std::size_t>(t) + 1] = count[y];
+    }
+    for (std::size_t k = 1; k < row_start.size(); ++k) row_start[k] += row_start[k - 1];
+    FillLater<std::uint32_t> in_rows(row_start.back());
+#pragma omp parallel num_threads(threads)
+    {
+        const int t = omp_get_thread_num();
+        const auto [begin, end] = vertices_of(t);
+        std::vector<std::size_t> fill(side);
+        for (std::uint32_t y = 0; y < side; ++y) fill[y] = row_start[std::size_t{y} * share + static_cast<std::size_t>(t)];
+        for_each_segment(map, begin, end, [&](std::uint32_t v) {
+            const Box box = box_of(v);
+            for (std::uint32_t y = row(box.min_y), last = row(box.max_y); y <= last; ++y) in_rows[fill[y]++] = v;
+        });
+    }
+
+#pragma omp parallel num_threads(threads)
     {
         std::vector<SegmentContact> found;
         exact::PredicateStats counted;
-        std::vector<std::pair<Box, std::uint32_t>> here;  // the cell's segments by left edge
-#pragma omp for schedule(dynamic, 256) nowait
-        for (std::ptrdiff_t cell = 0; cell < cells; ++cell) {
-            here.clear();
-            grid.for_each_in_cell(static_cast<std::size_t>(cell), [&](std::size_t, std::uint32_t s) {
-                here.emplace_back(grid.box_of(s), s);
-            });
-            if (here.size() < 2) continue;
-            std::sort(here.begin(), here.end(), [](const auto& a, const auto& b) {
-                return a.first.min_x < b.first.min_x || (a.first.min_x == b.first.min_x && a.second < b.second);
-            });
-            for (std::size_t i = 0; i < here.size(); ++i) {
-                const auto& [sb, s] = here[i];
-                // Only boxes starting before this one ends can overlap it in x.
-                for (std::size_t j = i + 1; j < here.size() && here[j].first.min_x <= sb.max_x; ++j) {
-                    const auto& [tb, t] = here[j];
-                    // Test each pair once: in the cell holding the low corner of the boxes' overlap.
-                    const double x = std::max(sb.min_x, tb.min_x), y = std::max(sb.min_y, tb.min_y);
-                    if (x > std::min(sb.max_x, tb.max_x) || y > std::min(sb.max_y, tb.max_y)) continue;
-                    if (grid.cell_of(x, y) != static_cast<std::size_t>(cell)) continue;
-                    const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
-                    if (!exact::improper_contact(p, q, r, u, arithmetic, counted)) continue;
-                    ContactKind kind = ContactKind::touching;
-                    if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
-                        kind = ContactKind::identical;
-                    } else if (exact::proper_crossing(p, q, r, u, arithmetic, counted)) {
-                        kind = ContactKind::crossing;
+        std::vector<std::uint32_t> cell_start(std::size_t{side} + 1);
+        std::vector<std::pair<Box, std::uint32_t>> cells;  // the row's segments, cell after cell
+#pragma omp for schedule(dynamic, 8) nowait
+        for (std::uint32_t y = 0; y < side; ++y) {
+            const std::size_t begin = row_start[std::size_t{y} * share], end = row_start[std::size_t{y + 1} * share];
+            if (end - begin < 2) continue;
+            std::fill(cell_start.begin(), cell_start.end(), 0);
+            for (std::size_t k = begin; k < end; ++k) {
+                const Box box = box_of(in_rows[k]);
+                for (std::uint32_t x = column(box.min_x), last = column(box.max_x); x <= last; ++x) ++cell_start[x + 1];
+            }
+            for (std::uint32_t x = 0; x < side; ++x) cell_start[x + 1] += cell_start[x];
+            cells.resize(cell_start[side]);
+            {
+                std::vector<std::uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
+                for (std::size_t k = begin; k < end; ++k) {
+                    const Box box = box_of(in_rows[k]);
+                    for (std::uint32_t x = column(box.min_x), last = column(box.max_x); x <= last; ++x) {
+                        cells[fill[x]++] = {box, in_rows[k]};
                     }
-                    found.push_back({std::min(s, t), std::max(s, t), kind});
+                }
+            }
+            for (std::uint32_t x = 0; x < side; ++x) {
+                const auto first = cells.begin() + cell_start[x], last = cells.begin() + cell_start[x + 1];
+                if (last - first < 2) continue;
+                // By left edge: only boxes starting before one ends can overlap it in x.
+                std::sort(first, last, [](const auto& a, const auto& b) {
+                    return a.first.min_x < b.first.min_x || (a.first.min_x == b.first.min_x && a.second < b.second);
+                });
+                for (auto i = first; i != last; ++i) {
+                    const auto& [sb, s] = *i;
+                    for (auto j = i + 1; j != last && j->first.min_x <= sb.max_x; ++j) {
+                        const auto& [tb, t] = *j;
+                        const double low_x = std::max(sb.min_x, tb.min_x), low_y = std::max(sb.min_y, tb.min_y);
+                        if (low_x > std::min(sb.max_x, tb.max_x) || low_y > std::min(sb.max_y, tb.max_y)) continue;
+                        if (column(low_x) != x || row(low_y) != y) continue;  // tested in another cell
+                        const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
+                        if (!exact::improper_contact(p, q, r, u, arithmetic, counted)) continue;
+                        ContactKind kind = ContactKind::touching;
+                        if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
+                            kind = ContactKind::identical;
+                        } else if (exact::proper_crossing(p, q, r, u, arithmetic, counted)) {
+                            kind = ContactKind::crossing;
+                        }
+                        found.push_back({std::min(s, t), std::max(s, t), kind});
+                    }
                 }
             }
         }

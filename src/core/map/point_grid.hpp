@@ -9,6 +9,7 @@
 // two intervals), which the parallel simplifier relies on.
 #pragma once
 
+#include "core/fill_later.hpp"
 #include "core/geometry.hpp"
 
 #include <algorithm>
@@ -77,9 +78,9 @@ private:
 
     double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
     std::uint32_t columns_ = 1, rows_ = 1;
-    std::vector<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
-    std::vector<Point> points_;            // in cell order
-    std::vector<std::uint32_t> ids_;       // parallel to points_
+    FillLater<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
+    FillLater<Point> points_;              // in cell order
+    FillLater<std::uint32_t> ids_;         // parallel to points_
 };
 
 }  // namespace toposimp::map

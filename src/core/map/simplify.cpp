@@ -1,5 +1,6 @@
 #include "core/map/simplify.hpp"
 
+#include "core/fill_later.hpp"
 #include "core/map/crossings.hpp"
 #include "core/map/location_key.hpp"
 #include "core/map/point_grid.hpp"
@@ -357,17 +358,20 @@ private:
     // Marks the `budget` queued vertices smallest in (area, id) order (all if fewer) and sets
     // the round's threshold to the largest of them. Returns false if nothing is queued.
     //
-    // A radix selection, so that no (area, id) pool is kept: the areas of the queued vertices,
-    // in id order, are 8 bytes each; 16 bits at a time from the top, histograms narrow them
-    // down to the key K of the budget-th smallest. Then every queued vertex with a smaller area
-    // is marked, and of those with area K, the first ones in id order up to the budget.
+    // A radix-style selection, so that no (area, id) pool is kept: the areas of the queued
+    // vertices, in id order, take 8 bytes each, and a histogram of their top 16 bits (bit
+    // patterns of non-negative doubles order as the values) finds the bucket holding the
+    // budget-th smallest; only that bucket's keys are copied out and selected from. Then every
+    // queued vertex with a smaller area is marked, and of those with area K, the first ones in
+    // id order up to the budget.
     bool mark_smallest(std::uint64_t budget) {
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
+        const auto share = static_cast<std::size_t>(threads);
         auto range = [&](int t) {
-            return std::pair{static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * t / threads),
-                             static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * (t + 1) / threads)};
+            return std::pair{static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * t / share),
+                             static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * (t + 1) / share)};
         };
-        std::vector<std::size_t> offset(static_cast<std::size_t>(threads) + 1, 0);
+        std::vector<std::size_t> offset(share + 1, 0);
 #pragma omp parallel num_threads(threads)
         {
             const int t = omp_get_thread_num();
@@ -376,44 +380,45 @@ private:
             for (std::uint32_t v = begin; v < end; ++v) count += state_[v] == State::queued;
             offset[static_cast<std::size_t>(t) + 1] = count;
         }
-        for (int t = 0; t < threads; ++t) offset[static_cast<std::size_t>(t) + 1] += offset[static_cast<std::size_t>(t)];
+        for (std::size_t t = 0; t < share; ++t) offset[t + 1] += offset[t];
         const std::size_t queued = offset.back();
         if (queued == 0) return false;
-        std::vector<std::uint64_t> keys(queued);  // area bits: non-negative doubles order as their bits
+        constexpr int kShift = 48;  // the histogram's digit: the keys' top 16 bits
+        FillLater<std::uint64_t> keys(queued);
+        std::vector<std::uint64_t> histogram(std::size_t{1} << 16, 0);
 #pragma omp parallel num_threads(threads)
         {
             const int t = omp_get_thread_num();
             const auto [begin, end] = range(t);
+            std::vector<std::uint64_t> part(std::size_t{1} << 16, 0);
             std::size_t k = offset[static_cast<std::size_t>(t)];
             for (std::uint32_t v = begin; v < end; ++v) {
                 marked_[v] = 0;
-                if (state_[v] == State::queued) keys[k++] = std::bit_cast<std::uint64_t>(area_of(v));
+                if (state_[v] != State::queued) continue;
+                const auto key = std::bit_cast<std::uint64_t>(area_of(v));
+                keys[k++] = key;
+                ++part[key >> kShift];
             }
+#pragma omp critical(toposimp_histogram)
+            for (std::size_t d = 0; d < part.size(); ++d) histogram[d] += part[d];
         }
         std::uint64_t key = 0, rank = 0;  // select the rank-th smallest (1-based) among keys equal to key
         if (budget >= queued) {
             key = *std::max_element(keys.begin(), keys.end());
             rank = static_cast<std::uint64_t>(std::count(keys.begin(), keys.end(), key));
         } else {
+            std::uint64_t digit = 0;
             rank = budget;
-            for (int shift = 48; shift >= 0; shift -= 16) {
-                // Histogram of the next 16 bits among the keys whose higher bits are `key`'s.
-                const std::uint64_t high_mask = shift == 48 ? 0 : ~std::uint64_t{0} << (shift + 16);
-                std::vector<std::uint64_t> histogram(std::size_t{1} << 16, 0);
-#pragma omp parallel num_threads(threads)
-                {
-                    std::vector<std::uint64_t> part(std::size_t{1} << 16, 0);
-#pragma omp for schedule(static) nowait
-                    for (std::size_t k = 0; k < queued; ++k) {
-                        if ((keys[k] & high_mask) == key) ++part[(keys[k] >> shift) & 0xffffu];
-                    }
-#pragma omp critical(toposimp_histogram)
-                    for (std::size_t d = 0; d < part.size(); ++d) histogram[d] += part[d];
-                }
-                std::uint64_t digit = 0;
-                while (rank > histogram[digit]) rank -= histogram[digit++];
-                key |= digit << shift;
+            while (rank > histogram[digit]) rank -= histogram[digit++];
+            std::vector<std::uint64_t> bucket;
+            bucket.reserve(histogram[digit]);
+            for (const std::uint64_t own : keys) {
+                if (own >> kShift == digit) bucket.push_back(own);
             }
+            const auto nth = bucket.begin() + static_cast<std::ptrdiff_t>(rank - 1);
+            std::nth_element(bucket.begin(), nth, bucket.end());
+            key = *nth;
+            rank -= static_cast<std::uint64_t>(std::count_if(bucket.begin(), bucket.end(), [&](std::uint64_t own) { return own < key; }));
         }
         // Mark: areas below the key, and the first `rank` vertices (in id order) at the key.
         std::vector<std::uint64_t> at_key(static_cast<std::size_t>(threads) + 1, 0);
