@@ -46,14 +46,14 @@ void for_each_segment(const MapData& map, std::uint32_t begin, std::uint32_t end
 // own, to its cells, where the pairs are tested. A pair is tested only in the cell holding the
 // low corner of its boxes' overlap, so once.
 std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
-                                                  exact::PredicateStats& stats) {
+                                                  exact::PredicateStats& stats, int threads_wanted) {
     std::vector<SegmentContact> contacts;
     const auto vertex_count = static_cast<std::uint32_t>(map.vertices.size());
     std::size_t segment_count = 0;
     for (const Chain& chain : map.chains) segment_count += chain.last - chain.first;
     if (segment_count < 2) return contacts;
     const bool parallel = segment_count >= (1u << 14);
-    const int threads = parallel ? omp_get_max_threads() : 1;
+    const int threads = !parallel ? 1 : threads_wanted > 0 ? threads_wanted : omp_get_max_threads();
     const auto share = static_cast<std::size_t>(threads);
 
     double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
@@ -169,9 +169,9 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
 }
 
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
-                                                 exact::PredicateStats& stats) {
+                                                 exact::PredicateStats& stats, int threads) {
     std::vector<std::uint8_t> improper(map.vertices.size(), 0);
-    for (const SegmentContact& contact : find_segment_contacts(map, arithmetic, stats)) {
+    for (const SegmentContact& contact : find_segment_contacts(map, arithmetic, stats, threads)) {
         improper[contact.s] = improper[contact.t] = 1;
     }
     return improper;

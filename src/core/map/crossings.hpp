@@ -33,13 +33,14 @@ struct SegmentContact {
 };
 
 // Every pair of segments of the map that meets other than at a shared end location, decided
-// exactly; candidate pairs come from a uniform grid over segment boxes, each tested once.
+// exactly; candidate pairs come from a uniform grid over segment boxes, each tested once. On
+// `threads` threads (0: OpenMP's default); the result is the same for any number.
 std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
-                                                  exact::PredicateStats& stats);
+                                                  exact::PredicateStats& stats, int threads = 0);
 
 // Per vertex v: 1 if the segment from v to the next vertex of its chain meets another segment of
 // the map improperly (any contact above).
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
-                                                 exact::PredicateStats& stats);
+                                                 exact::PredicateStats& stats, int threads = 0);
 
 }  // namespace toposimp::map

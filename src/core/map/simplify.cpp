@@ -308,7 +308,7 @@ private:
     // Vertices at either end of a segment that crosses or touches another one improperly in the
     // input are never removed (see crossings.hpp for why that is enough); nor are frozen chains'.
     void pin_crossings() {
-        const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates);
+        const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_);
         state_.assign(vertex_count_, State::fixed);
         std::uint64_t pinned_count = 0;
 #pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : pinned_count) if (vertex_count_ >= parallel_min_)

@@ -69,10 +69,17 @@ MapData tangled_map(std::uint64_t seed, int chains, int steps, int extent) {
     return map;
 }
 
+void check_against(const std::vector<SegmentContact>& grid, const std::vector<SegmentContact>& brute);
+
 void expect_same_contacts(const MapData& map) {
-    exact::PredicateStats stats;
-    const std::vector<SegmentContact> grid = find_segment_contacts(map, exact::Arithmetic::exact, stats);
     const std::vector<SegmentContact> brute = every_pair(map);
+    for (const int threads : {1, 2, 3}) {
+        exact::PredicateStats stats;
+        check_against(find_segment_contacts(map, exact::Arithmetic::exact, stats, threads), brute);
+    }
+}
+
+void check_against(const std::vector<SegmentContact>& grid, const std::vector<SegmentContact>& brute) {
     ASSERT_GT(brute.size(), 10u);
     ASSERT_EQ(grid.size(), brute.size());
     for (std::size_t i = 0; i < brute.size(); ++i) {
