@@ -7,7 +7,6 @@
 
 #include <gmpxx.h>
 #include <omp.h>
-#include <parallel/algorithm>
 
 #include <algorithm>
 #include <atomic>
