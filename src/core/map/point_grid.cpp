@@ -116,6 +116,11 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
             }
         }
     }
+    slot_.resize(f);
+#pragma omp parallel for schedule(static) num_threads(threads) if (parallel)
+    for (std::size_t k = 0; k < n; ++k) {
+        if (ids_[k] < f) slot_[ids_[k]] = static_cast<std::uint32_t>(k);
+    }
 }
 
 }  // namespace toposimp::map

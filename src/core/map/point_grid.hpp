@@ -1,6 +1,6 @@
 // A uniform grid over points (dissertation §2.3.1): each cell lists the points in it (id and
-// coordinates), stored compactly (counting sort into one array, no per-cell allocation). It
-// never changes once built: users skip the points they have taken out themselves.
+// coordinates), stored compactly (counting sort into one array, no per-cell allocation).
+// Points of the first span can be taken out; queries then skip them without looking further.
 //
 // Cell lookup is a monotone function of each coordinate, so every point inside a query box is
 // in one of the cells the box's corners map to: the grid never misses a point, whatever the
@@ -13,6 +13,7 @@
 #include "core/geometry.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -21,6 +22,8 @@ namespace toposimp::map {
 
 class PointGrid {
 public:
+    static constexpr std::uint32_t kRemoved = 0xffffffffu;
+
     // Indexes `first` as ids [0, f) and `second` as ids [f, f + s). About `points_per_cell`
     // points share a cell on average. Built on `threads` threads (0: OpenMP's default) when
     // big; the grid is the same for any number.
@@ -47,18 +50,24 @@ public:
                 while (p != last && p->x < box.min_x) ++p;
             }
             for (; p != last && p->x <= box.max_x; ++p) {
-                if (visit(ids_[static_cast<std::size_t>(p - points_.data())], *p)) return true;
+                const std::uint32_t id = load(ids_[static_cast<std::size_t>(p - points_.data())]);
+                if (id != kRemoved && visit(id, *p)) return true;
             }
         }
         return false;
     }
+
+    // Takes point `id` of the first span out: queries skip it from now on. Points that other
+    // threads may be taking out at the same time can lie in the cells a query scans (outside
+    // its box), hence the relaxed atomic accesses to ids.
+    void remove(std::uint32_t id) { std::atomic_ref<std::uint32_t>(ids_[slot_[id]]).store(kRemoved, std::memory_order_relaxed); }
 
     std::uint32_t columns() const { return columns_; }
     std::uint32_t rows() const { return rows_; }
     std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
     std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
 
-    // The ids and points of cell (column x, row y), sorted by x (ties by id).
+    // The ids and points of cell (column x, row y), sorted by x (ties by id); kRemoved for taken-out points.
     std::span<const std::uint32_t> cell_ids(std::uint32_t x, std::uint32_t y) const {
         const std::size_t cell = std::size_t{y} * columns_ + x;
         return {ids_.data() + cell_start_[cell], ids_.data() + cell_start_[cell + 1]};
@@ -69,6 +78,10 @@ public:
     }
 
 private:
+    static std::uint32_t load(const std::uint32_t& id) {
+        return std::atomic_ref<const std::uint32_t>(id).load(std::memory_order_relaxed);
+    }
+
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;
         if (!(t >= 0.0)) t = 0.0;  // also catches NaN from 0·∞ in a zero-width grid
@@ -80,7 +93,8 @@ private:
     std::uint32_t columns_ = 1, rows_ = 1;
     FillLater<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
     FillLater<Point> points_;              // in cell order
-    FillLater<std::uint32_t> ids_;         // parallel to points_
+    FillLater<std::uint32_t> ids_;         // parallel to points_; kRemoved once taken out
+    FillLater<std::uint32_t> slot_;        // per point of the first span: its entry
 };
 
 }  // namespace toposimp::map

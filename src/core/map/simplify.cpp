@@ -590,9 +590,7 @@ private:
         const Box box = triangle_box(a, b, c);
         std::optional<exact::ClosedTriangle> triangle;  // prepared at the first candidate point
         const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
-            // A point in the box lies in this block: its state is this thread's to read.
             if (id == v || !box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
-            if (id < vertex_count_ && state_[id] == State::removed) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
             if (!triangle->contains(q)) return false;
             blocker = id;
@@ -656,7 +654,7 @@ private:
         const Point from = map_.vertices[p], to = map_.vertices[n];
         if ((!shared_[p] && !shared_[n]) || same_location(from, to)) return false;
         return grid_->any_in_cells({from.x, from.y, from.x, from.y}, [&](std::uint32_t u, Point q) {
-            if (u >= vertex_count_ || !same_location(q, from) || state_[u] == State::removed) return false;
+            if (u >= vertex_count_ || !same_location(q, from)) return false;
             for (const std::uint32_t w : {prev_[u], next_[u]}) {
                 if (w == kNone || !same_location(map_.vertices[w], to)) continue;
                 const bool own = (u == p && w == v) || (u == v && w == n);  // p–v or v–n
@@ -679,6 +677,7 @@ private:
             }
         }
         state_[v] = State::removed;
+        grid_->remove(v);
         next_[p] = n;
         prev_[n] = p;
         ++worker.stats.removed;
