@@ -30,10 +30,10 @@ public:
     explicit PointGrid(std::span<const Point> first, std::span<const Point> second = {}, double points_per_cell = 2.0,
                        int threads = 0);
 
-    // Calls visit(id, point) for each point whose x lies in the box's x range, within the rows
-    // of cells the box overlaps (a superset of the points inside it), until visit returns true;
-    // returns whether it did. Each cell's points are sorted by x, so a row of cells is sorted by
-    // x: a query binary-searches its x range and reads memory sequentially.
+    // Calls visit(id, point) for each point not taken out whose x lies in the box's x range,
+    // within the rows of cells the box overlaps (a superset of the points inside it), until
+    // visit returns true; returns whether it did. Each cell's points are sorted by x, so a row
+    // of cells is sorted by x: a query binary-searches its x range and reads memory sequentially.
     template <class Visit>
     bool any_in_cells(const Box& box, Visit&& visit) const {
         const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
