@@ -1,6 +1,7 @@
 #include "core/mesh/simplify_mesh.hpp"
 
 #include "core/exact/predicates3d.hpp"
+#include "core/fill_later.hpp"
 
 #include <omp.h>
 
@@ -21,6 +22,10 @@ constexpr std::uint8_t kBoundary = 1;  // on an edge with one face
 constexpr std::uint8_t kLocked = 2;    // never moves, never removed
 constexpr std::uint8_t kDead = 4;      // merged into another vertex
 constexpr std::uint8_t kInside = 8;    // this level: it and all its neighbours lie in its block
+constexpr std::uint8_t kNewlyInside = 16;  // inside at this level but not at the one before
+
+// Stamps count the collapses a vertex has absorbed, in 31 bits (a candidate keeps one more bit).
+constexpr std::uint32_t kStampMask = 0x7fffffff;
 
 // A symmetric 4×4 quadric (Garland & Heckbert 1997) plus the area it was built from.
 struct Quadric {
@@ -88,7 +93,13 @@ struct Grid {
 struct Candidate {
     double cost;
     std::uint32_t a, b;  // a < b
-    std::uint32_t stamp_a, stamp_b;
+    std::uint32_t stamp_a;
+    std::uint32_t stamp_b_bound;  // b's stamp; top bit: the placement was held back by the block
+
+    std::uint32_t stamp_b() const { return stamp_b_bound & kStampMask; }
+    // The optimal point or the midpoint lay outside the block: a coarser level's block, which
+    // holds this one, may place the merged vertex differently.
+    bool bound() const { return (stamp_b_bound >> 31) != 0; }
 };
 
 // Heap order: the smallest (cost, a, b) on top.
@@ -101,6 +112,7 @@ bool later(const Candidate& x, const Candidate& y) {
 struct Placement {
     Point3 p;
     double cost;
+    bool bound = false;  // see Candidate::bound
 };
 
 // What one block did.
@@ -121,7 +133,16 @@ private:
     void choose_grid();
     void check_terrain();
     void build_face_index();
-    std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block);
+    // The candidates of a block at the start of a level: the still valid ones of the blocks it
+    // was made of at the level before (`before`, emptied), the others computed afresh.
+    std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block,
+                                            const std::vector<std::vector<Candidate>*>& before);
+    bool stale(const Candidate& c) const {
+        return (flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0 || stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b();
+    }
+    Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
+        return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u)};
+    }
     BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
                                std::vector<Candidate>& refused, std::uint64_t budget, double cost_limit);
     // The candidates of a block for its next round of the level: what its heap kept plus what it
@@ -153,7 +174,9 @@ private:
     void for_cells(const Box3& box, Visit visit) const;
     void query(const Box3& box, std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
                std::vector<std::uint32_t>& out) const;
-    void collect_edges(std::uint32_t v, bool only_larger, int level, std::uint64_t block, std::vector<Candidate>& out,
+    // The edges from v to its inside neighbours w for which wanted(w), placed, into `out`.
+    template <class Wanted>
+    void collect_edges(std::uint32_t v, Wanted wanted, int level, std::uint64_t block, std::vector<Candidate>& out,
                        std::vector<std::uint32_t>& scratch);
     double error_of(const Placement& placement, std::uint32_t a, std::uint32_t b) const;
 
@@ -426,6 +449,7 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     if (locked_a || locked_b) {
         out.p = locked_a ? pos_[a] : pos_[b];
         out.cost = q(out.p);
+        out.bound = false;
         return true;
     }
     // Optimal placement: solve the 3×3 system ∇(vᵀQv) = 0 by Cramer's rule when it is well
@@ -436,6 +460,7 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     const double det = m00 * c00 + m01 * c01 + m02 * c02;
     const double scale = std::max({std::fabs(m00), std::fabs(m11), std::fabs(m22)});
     const Point3 pa = pos_[a], pb = pos_[b];
+    bool bound = false;
     if (std::fabs(det) > 1e-10 * scale * scale * scale && std::isfinite(det)) {
         const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
         const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det, (c01 * r0 + c11 * r1 + c12 * r2) / det,
@@ -443,18 +468,28 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
         const double reach = norm(minus(pb, pa));
         const bool near = std::fabs(p.x - 0.5 * (pa.x + pb.x)) <= reach && std::fabs(p.y - 0.5 * (pa.y + pb.y)) <= reach &&
                           std::fabs(p.z - 0.5 * (pa.z + pb.z)) <= reach;
-        if (near && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z) && in_block(p, level, block)) {
-            out = {p, q(p)};
-            return true;
+        if (near && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
+            if (in_block(p, level, block)) {
+                out = {p, q(p), false};
+                return true;
+            }
+            bound = true;
         }
     }
     // Otherwise the best of the two ends and the midpoint.
-    out = {pa, q(pa)};
+    out = {pa, q(pa), false};
     const double cost_b = q(pb);
-    if (cost_b < out.cost) out = {pb, cost_b};
+    if (cost_b < out.cost) out = {pb, cost_b, false};
     const Point3 mid{0.5 * (pa.x + pb.x), 0.5 * (pa.y + pb.y), 0.5 * (pa.z + pb.z)};
     const double cost_mid = q(mid);
-    if (cost_mid < out.cost && in_block(mid, level, block)) out = {mid, cost_mid};
+    if (cost_mid < out.cost) {
+        if (in_block(mid, level, block)) {
+            out = {mid, cost_mid, false};
+        } else {
+            bound = true;
+        }
+    }
+    out.bound = bound;
     return true;
 }
 
@@ -463,48 +498,69 @@ double Simplifier::error_of(const Placement& placement, std::uint32_t a, std::ui
     return area > 0 ? std::sqrt(std::max(placement.cost, 0.0) / area) : 0.0;
 }
 
-void Simplifier::collect_edges(std::uint32_t v, bool only_larger, int level, std::uint64_t block,
-                               std::vector<Candidate>& out, std::vector<std::uint32_t>& scratch) {
+template <class Wanted>
+void Simplifier::collect_edges(std::uint32_t v, Wanted wanted, int level, std::uint64_t block, std::vector<Candidate>& out,
+                               std::vector<std::uint32_t>& scratch) {
     // Neighbours of v (it is inside: they all lie in its block).
     thread_local std::vector<std::uint32_t> around;
     around.clear();
     faces_of(v, scratch);
     for (std::uint32_t f : scratch) {
         for (std::uint32_t w : face_[f]) {
-            if (w != v && (!only_larger || w > v)) around.push_back(w);
+            if (w != v) around.push_back(w);
         }
     }
     std::sort(around.begin(), around.end());
     around.erase(std::unique(around.begin(), around.end()), around.end());
     for (std::uint32_t w : around) {
-        if ((flags_[w] & kInside) == 0) continue;
+        if ((flags_[w] & kInside) == 0 || !wanted(w)) continue;
         const std::uint32_t a = std::min(v, w), b = std::max(v, w);
         Placement placement;
         if (!place(a, b, level, block, placement)) continue;
-        out.push_back({placement.cost, a, b, stamp_[a], stamp_[b]});
+        out.push_back(candidate(a, b, placement));
     }
 }
 
 std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32_t* vertices, std::size_t count,
-                                                     std::uint64_t block) {
+                                                     std::uint64_t block,
+                                                     const std::vector<std::vector<Candidate>*>& before) {
     std::vector<std::uint32_t> scratch;
     // Which vertices have their whole star in the block (fixed for the level: a collapse only
-    // merges two inside vertices, so no neighbour outside the block appears or disappears).
+    // merges two inside vertices, so no neighbour outside the block appears or disappears). A
+    // vertex inside at the level before stays inside: its block holds the one it was in.
     for (std::size_t i = 0; i < count; ++i) {
         const std::uint32_t v = vertices[i];
-        if ((flags_[v] & kDead) != 0) continue;
+        if ((flags_[v] & (kDead | kInside)) != 0) continue;
         faces_of(v, scratch);
         bool inside = true;
         for (std::uint32_t f : scratch) {
             for (std::uint32_t w : face_[f]) inside = inside && grid_.block_of(cell_[w], level) == block;
         }
-        flags_[v] = static_cast<std::uint8_t>(inside ? flags_[v] | kInside : flags_[v] & ~kInside);
+        if (inside) flags_[v] |= kInside | kNewlyInside;
     }
+    // Edges between vertices inside before: their candidates from the finer blocks, which keep
+    // one valid candidate for each (heap and refused list together, see collapse_block). The
+    // placement is the same in the bigger block unless the smaller one held it back.
     std::vector<Candidate> heap;
+    for (std::vector<Candidate>* list : before) {
+        for (const Candidate& c : *list) {
+            if (stale(c)) continue;
+            if (!c.bound()) {
+                heap.push_back(c);
+                continue;
+            }
+            Placement placement;
+            if (place(c.a, c.b, level, block, placement)) heap.push_back(candidate(c.a, c.b, placement));
+        }
+        std::vector<Candidate>().swap(*list);
+    }
+    // Edges with a newly inside end: each once.
     for (std::size_t i = 0; i < count; ++i) {
         const std::uint32_t v = vertices[i];
-        if ((flags_[v] & (kInside | kDead)) == kInside) collect_edges(v, true, level, block, heap, scratch);
+        if ((flags_[v] & (kNewlyInside | kDead)) != kNewlyInside) continue;
+        collect_edges(v, [&](std::uint32_t w) { return (flags_[w] & kNewlyInside) == 0 || w > v; }, level, block, heap, scratch);
     }
+    for (std::size_t i = 0; i < count; ++i) flags_[vertices[i]] &= static_cast<std::uint8_t>(~kNewlyInside);
     std::make_heap(heap.begin(), heap.end(), later);
     return heap;
 }
@@ -524,13 +580,13 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
         const Candidate c = heap.back();
         heap.pop_back();
         if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
-        if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b) continue;
+        if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b()) continue;
         if (!try_collapse(c.a, c.b, level, block, result, overlay)) {
             refused.push_back(c);
             continue;
         }
         fresh.clear();
-        collect_edges(c.a, false, level, block, fresh, scratch);
+        collect_edges(c.a, [](std::uint32_t) { return true; }, level, block, fresh, scratch);
         for (const Candidate& e : fresh) {
             heap.push_back(e);
             std::push_heap(heap.begin(), heap.end(), later);
@@ -542,9 +598,7 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
 void Simplifier::reopen(std::vector<Candidate>& heap, std::vector<Candidate>& refused) const {
     heap.insert(heap.end(), refused.begin(), refused.end());
     refused.clear();
-    std::erase_if(heap, [this](const Candidate& c) {
-        return (flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0 || stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b;
-    });
+    std::erase_if(heap, [this](const Candidate& c) { return stale(c); });
     std::make_heap(heap.begin(), heap.end(), later);
 }
 
@@ -754,7 +808,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     quadric_[a] += quadric_[b];
     flags_[a] = static_cast<std::uint8_t>(flags_[a] | (flags_[b] & (kBoundary | kLocked)));
     flags_[b] = static_cast<std::uint8_t>(flags_[b] | kDead);
-    ++stamp_[a];
+    stamp_[a] = (stamp_[a] + 1) & kStampMask;
     if (use_index_) {
         for (std::uint32_t f : star) {
             for_cells(face_box(f), [&](std::uint64_t key) {
@@ -797,6 +851,14 @@ MeshStats Simplifier::run() {
 
     const bool by_count = options_.target != MeshTarget::max_error;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
+    struct Block {
+        std::uint64_t key;
+        std::size_t first, count;
+        std::uint64_t budget;
+    };
+    // A level's blocks with their candidates, handed down to the next level's blocks.
+    std::vector<Block> blocks, finer;
+    std::vector<std::vector<Candidate>> heaps, refused;
     const int top = grid_.top_level();
     for (int level = 0; level <= top; ++level) {
         if (by_count && live_faces_ <= target) break;
@@ -807,12 +869,8 @@ MeshStats Simplifier::run() {
         }
         std::sort(order.begin(), order.end());
         std::vector<std::uint32_t> vertices(order.size());
-        struct Block {
-            std::uint64_t key;
-            std::size_t first, count;
-            std::uint64_t budget;
-        };
-        std::vector<Block> blocks;
+        finer.swap(blocks);
+        blocks.clear();
         for (std::size_t i = 0; i < order.size();) {
             std::size_t j = i;
             while (j < order.size() && order[j].first == order[i].first) {
@@ -822,13 +880,26 @@ MeshStats Simplifier::run() {
             blocks.push_back({order[i].first, i, j - i, 0});
             i = j;
         }
+
         // Rounds. Every block builds its heap; with a count target (below the last level) a
         // global cost threshold is the cost of the k-th cheapest candidate of all blocks, k the
         // collapses still needed, and each block gets a share of the faces still to go in
         // proportion to its candidates under the threshold: no block is pushed into dear
         // collapses while cheap ones wait elsewhere. Rounds repeat while they make progress.
         const auto block_count = static_cast<std::int64_t>(blocks.size());
-        std::vector<std::vector<Candidate>> heaps(blocks.size()), refused(blocks.size());
+        // Each block of the level before lies in one block of this level.
+        std::vector<std::vector<std::vector<Candidate>*>> before(blocks.size());
+        for (std::size_t j = 0; j < finer.size(); ++j) {
+            const std::uint64_t key = finer[j].key;
+            const std::uint64_t parent = Grid::pack(Grid::unpack(key, 0) >> 1, Grid::unpack(key, 1) >> 1, Grid::unpack(key, 2) >> 1);
+            const auto it = std::lower_bound(blocks.begin(), blocks.end(), parent,
+                                             [](const Block& block, std::uint64_t k) { return block.key < k; });
+            if (it == blocks.end() || it->key != parent) continue;  // (no live vertex left there)
+            auto& lists = before[static_cast<std::size_t>(it - blocks.begin())];
+            lists.push_back(&heaps[j]);
+            lists.push_back(&refused[j]);
+        }
+        std::vector<std::vector<Candidate>> next_heaps(blocks.size());
         for (int round = 0; round < 3; ++round) {
             if (by_count && live_faces_ <= target) break;
             // The index and its start-of-round boxes are what query() relies on: faces a block
@@ -839,29 +910,42 @@ MeshStats Simplifier::run() {
                 const Block& block = blocks[static_cast<std::size_t>(i)];
                 const auto k = static_cast<std::size_t>(i);
                 if (round == 0) {
-                    heaps[k] = block_candidates(level, vertices.data() + block.first, block.count, block.key);
+                    next_heaps[k] = block_candidates(level, vertices.data() + block.first, block.count, block.key, before[k]);
                 } else {
                     reopen(heaps[k], refused[k]);
                 }
             }
+            if (round == 0) {
+                heaps.swap(next_heaps);
+                refused.assign(blocks.size(), {});
+            }
+
             const std::uint64_t left = by_count ? live_faces_ - target : std::numeric_limits<std::uint64_t>::max();
             double limit = std::numeric_limits<double>::infinity();
             if (by_count && level < top) {
-                std::vector<double> costs;
-                for (const auto& heap : heaps) {
-                    for (const Candidate& c : heap) costs.push_back(c.cost);
+                std::vector<std::size_t> offset(heaps.size() + 1, 0);
+                for (std::size_t i = 0; i < heaps.size(); ++i) offset[i + 1] = offset[i] + heaps[i].size();
+                FillLater<double> costs(offset.back());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+                for (std::int64_t i = 0; i < block_count; ++i) {
+                    const auto k = static_cast<std::size_t>(i);
+                    std::transform(heaps[k].begin(), heaps[k].end(), costs.begin() + static_cast<std::ptrdiff_t>(offset[k]),
+                                   [](const Candidate& c) { return c.cost; });
                 }
                 const std::size_t needed = static_cast<std::size_t>((left + 1) / 2);  // a collapse removes ~2 faces
                 if (needed > 0 && needed < costs.size()) {
                     std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(needed - 1), costs.end());
                     limit = costs[needed - 1];
                 }
-                std::uint64_t under = 0;
                 std::vector<std::uint64_t> share(blocks.size(), 0);
-                for (std::size_t i = 0; i < heaps.size(); ++i) {
-                    for (const Candidate& c : heaps[i]) share[i] += c.cost <= limit;
-                    under += share[i];
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+                for (std::int64_t i = 0; i < block_count; ++i) {
+                    const auto k = static_cast<std::size_t>(i);
+                    share[k] = static_cast<std::uint64_t>(
+                        std::count_if(heaps[k].begin(), heaps[k].end(), [limit](const Candidate& c) { return c.cost <= limit; }));
                 }
+                std::uint64_t under = 0;
+                for (std::uint64_t n : share) under += n;
                 for (std::size_t i = 0; i < blocks.size(); ++i) {
                     blocks[i].budget = under == 0 ? 0
                                                   : static_cast<std::uint64_t>(static_cast<long double>(left) * share[i] /
@@ -870,12 +954,14 @@ MeshStats Simplifier::run() {
             } else {
                 for (Block& block : blocks) block.budget = left;
             }
+
             std::vector<BlockResult> results(blocks.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
             for (std::int64_t i = 0; i < block_count; ++i) {
                 const auto k = static_cast<std::size_t>(i);
                 results[k] = collapse_block(level, blocks[k].key, heaps[k], refused[k], blocks[k].budget, limit);
             }
+
             std::uint64_t removed = 0;
             for (const BlockResult& r : results) {
                 const MeshStats& s = r.stats;
@@ -902,6 +988,7 @@ MeshStats Simplifier::run() {
     }
     omp_set_num_threads(saved_threads);
     stats.target_reached = by_count ? live_faces_ <= target : true;
+
     // Compact: surviving faces and vertices in input order.
     std::size_t kept = 0;
     for (std::size_t f = 0; f < face_.size(); ++f) {
@@ -909,6 +996,7 @@ MeshStats Simplifier::run() {
     }
     face_.resize(kept);
     drop_unused(mesh_);
+
     stats.vertices_out = pos_.size();
     stats.faces_out = face_.size();
     stats.seconds_collapse = std::chrono::duration<double>(Clock::now() - sweep).count();
