@@ -151,7 +151,9 @@ private:
 
     // Live faces around v, unlinking dead corners from v's list as it goes.
     void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
+    // On success, `around` holds a's neighbours after the collapse.
     bool try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
+                      std::vector<std::uint32_t>& around,
                       std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay);
     bool place(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, Placement& out) const;
     bool in_block(Point3 p, int level, std::uint64_t block) const {
@@ -175,6 +177,9 @@ private:
     void query(const Box3& box, std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
                std::vector<std::uint32_t>& out) const;
     // The edges from v to its inside neighbours w for which wanted(w), placed, into `out`.
+    template <class Wanted>
+    void place_edges(std::uint32_t v, const std::vector<std::uint32_t>& around, Wanted wanted, int level, std::uint64_t block,
+                     std::vector<Candidate>& out) const;
     template <class Wanted>
     void collect_edges(std::uint32_t v, Wanted wanted, int level, std::uint64_t block, std::vector<Candidate>& out,
                        std::vector<std::uint32_t>& scratch);
@@ -512,6 +517,12 @@ void Simplifier::collect_edges(std::uint32_t v, Wanted wanted, int level, std::u
     }
     std::sort(around.begin(), around.end());
     around.erase(std::unique(around.begin(), around.end()), around.end());
+    place_edges(v, around, wanted, level, block, out);
+}
+
+template <class Wanted>
+void Simplifier::place_edges(std::uint32_t v, const std::vector<std::uint32_t>& around, Wanted wanted, int level,
+                             std::uint64_t block, std::vector<Candidate>& out) const {
     for (std::uint32_t w : around) {
         if ((flags_[w] & kInside) == 0 || !wanted(w)) continue;
         const std::uint32_t a = std::min(v, w), b = std::max(v, w);
@@ -571,6 +582,7 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
     std::vector<std::uint32_t> scratch;
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> overlay;
     std::vector<Candidate> fresh;
+    std::vector<std::uint32_t> around;
     // The heap and the refused list together keep every live edge of the block's inside
     // vertices (a collapse re-pushes the edges it changes and stamps make the old ones stale),
     // so a later round of the level starts from them instead of from scratch, in the same order.
@@ -581,12 +593,12 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
         heap.pop_back();
         if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
         if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b()) continue;
-        if (!try_collapse(c.a, c.b, level, block, result, overlay)) {
+        if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
             refused.push_back(c);
             continue;
         }
         fresh.clear();
-        collect_edges(c.a, [](std::uint32_t) { return true; }, level, block, fresh, scratch);
+        place_edges(c.a, around, [](std::uint32_t) { return true; }, level, block, fresh);
         for (const Candidate& e : fresh) {
             heap.push_back(e);
             std::push_heap(heap.begin(), heap.end(), later);
@@ -603,6 +615,7 @@ void Simplifier::reopen(std::vector<Candidate>& heap, std::vector<Candidate>& re
 }
 
 bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
+                              std::vector<std::uint32_t>& around,
                               std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay) {
     MeshStats& stats = result.stats;
     Placement placement;
@@ -615,6 +628,12 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     thread_local std::vector<std::uint32_t> fa, fb, shared, na, nb, common, opposite, star, found;
     faces_of(a, fa);
     faces_of(b, fb);
+    // a's list now holds the corners of fa, in order: b's are appended after the last.
+    std::uint32_t last_of_a = kNone;
+    if (!fa.empty()) {
+        const Face& last = face_[fa.back()];
+        last_of_a = 3 * fa.back() + (last[0] == a ? 0 : last[1] == a ? 1 : 2);
+    }
     shared.clear();
     for (std::uint32_t f : fa) {
         const Face& c = face_[f];
@@ -678,15 +697,15 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         for (int k = 0; k < 3; ++k) {
             if (c[k] == a || c[k] == b) after[k] = placement.p;
         }
-        if (exact::degenerate(after, predicates)) {
-            ++stats.refused_degenerate;
-            return false;
-        }
         if (terrain_) {
+            // Turned the terrain's way in the map plane: not degenerate either.
             if (exact::orient_projected(after[0], after[1], after[2], 2, predicates) != terrain_turn_) {
-                ++stats.refused_flip;
+                ++(exact::degenerate(after, predicates) ? stats.refused_degenerate : stats.refused_flip);
                 return false;
             }
+        } else if (exact::degenerate(after, predicates)) {
+            ++stats.refused_degenerate;
+            return false;
         } else if (exact::normal_dot_sign(before[0], before[1], before[2], after[0], after[1], after[2], predicates) <= 0) {
             ++stats.refused_flip;
             return false;
@@ -796,8 +815,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     }
     // Apply: b merges into a at the placement.
     for (std::uint32_t f : shared) alive_[f] = 0;
-    std::uint32_t* tail = &head_[a];
-    while (*tail != kNone) tail = &next_[*tail];
+    std::uint32_t* tail = &next_[last_of_a];
     for (std::uint32_t c = head_[b]; c != kNone; c = next_[c]) {
         if (alive_[c / 3]) face_[c / 3][c % 3] = a;
     }
@@ -817,6 +835,15 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             });
         }
     }
+    // a's faces now: the star.
+    around.clear();
+    for (std::uint32_t f : star) {
+        for (std::uint32_t w : face_[f]) {
+            if (w != a) around.push_back(w);
+        }
+    }
+    std::sort(around.begin(), around.end());
+    around.erase(std::unique(around.begin(), around.end()), around.end());
     ++stats.collapses;
     stats.max_error = std::max(stats.max_error, error);
     result.faces_removed += shared.size();
