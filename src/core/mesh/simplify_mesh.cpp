@@ -143,11 +143,13 @@ private:
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
         return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u)};
     }
+    // One round of a block: `heap` holds its candidates (in any order), `aside` receives those
+    // refused or dearer than `cost_limit`.
     BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
-                               std::vector<Candidate>& refused, std::uint64_t budget, double cost_limit);
-    // The candidates of a block for its next round of the level: what its heap kept plus what it
-    // refused, without those a collapse made stale.
-    void reopen(std::vector<Candidate>& heap, std::vector<Candidate>& refused) const;
+                               std::vector<Candidate>& aside, std::uint64_t budget, double cost_limit);
+    // The candidates of a block for its next round of the level: what its heap kept plus what
+    // was set aside, without those a collapse made stale.
+    void reopen(std::vector<Candidate>& heap, std::vector<Candidate>& aside) const;
 
     // Live faces around v, unlinking dead corners from v's list as it goes.
     void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
@@ -550,7 +552,7 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
         if (inside) flags_[v] |= kInside | kNewlyInside;
     }
     // Edges between vertices inside before: their candidates from the finer blocks, which keep
-    // one valid candidate for each (heap and refused list together, see collapse_block). The
+    // one valid candidate for each (heap and the list set aside together, see collapse_block). The
     // placement is the same in the bigger block unless the smaller one held it back.
     std::vector<Candidate> heap;
     for (std::vector<Candidate>* list : before) {
@@ -572,20 +574,27 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
         collect_edges(v, [&](std::uint32_t w) { return (flags_[w] & kNewlyInside) == 0 || w > v; }, level, block, heap, scratch);
     }
     for (std::size_t i = 0; i < count; ++i) flags_[vertices[i]] &= static_cast<std::uint8_t>(~kNewlyInside);
-    std::make_heap(heap.begin(), heap.end(), later);
     return heap;
 }
 
 BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
-                                       std::vector<Candidate>& refused, std::uint64_t budget, double cost_limit) {
+                                       std::vector<Candidate>& aside, std::uint64_t budget, double cost_limit) {
     BlockResult result;
-    std::vector<std::uint32_t> scratch;
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> overlay;
     std::vector<Candidate> fresh;
     std::vector<std::uint32_t> around;
-    // The heap and the refused list together keep every live edge of the block's inside
+    // The heap and the list set aside together keep every live edge of the block's inside
     // vertices (a collapse re-pushes the edges it changes and stamps make the old ones stale),
     // so a later round of the level starts from them instead of from scratch, in the same order.
+    // Candidates dearer than the round's limit cannot be taken in it: they wait aside, which
+    // keeps the heap small.
+    auto dear = [cost_limit](const Candidate& c) { return c.cost > cost_limit; };
+    if (std::isfinite(cost_limit)) {
+        const auto cheap_end = std::partition(heap.begin(), heap.end(), [&](const Candidate& c) { return !dear(c); });
+        aside.insert(aside.end(), cheap_end, heap.end());
+        heap.erase(cheap_end, heap.end());
+    }
+    std::make_heap(heap.begin(), heap.end(), later);
     while (!heap.empty() && result.faces_removed < budget) {
         if (heap.front().cost > cost_limit) break;  // the smallest: every other is dearer
         std::pop_heap(heap.begin(), heap.end(), later);
@@ -594,12 +603,16 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
         if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
         if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b()) continue;
         if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
-            refused.push_back(c);
+            aside.push_back(c);
             continue;
         }
         fresh.clear();
         place_edges(c.a, around, [](std::uint32_t) { return true; }, level, block, fresh);
         for (const Candidate& e : fresh) {
+            if (dear(e)) {
+                aside.push_back(e);
+                continue;
+            }
             heap.push_back(e);
             std::push_heap(heap.begin(), heap.end(), later);
         }
@@ -607,11 +620,10 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
     return result;
 }
 
-void Simplifier::reopen(std::vector<Candidate>& heap, std::vector<Candidate>& refused) const {
-    heap.insert(heap.end(), refused.begin(), refused.end());
-    refused.clear();
+void Simplifier::reopen(std::vector<Candidate>& heap, std::vector<Candidate>& aside) const {
+    heap.insert(heap.end(), aside.begin(), aside.end());
+    aside.clear();
     std::erase_if(heap, [this](const Candidate& c) { return stale(c); });
-    std::make_heap(heap.begin(), heap.end(), later);
 }
 
 bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
@@ -885,7 +897,7 @@ MeshStats Simplifier::run() {
     };
     // A level's blocks with their candidates, handed down to the next level's blocks.
     std::vector<Block> blocks, finer;
-    std::vector<std::vector<Candidate>> heaps, refused;
+    std::vector<std::vector<Candidate>> heaps, aside;
     const int top = grid_.top_level();
     for (int level = 0; level <= top; ++level) {
         if (by_count && live_faces_ <= target) break;
@@ -924,7 +936,7 @@ MeshStats Simplifier::run() {
             if (it == blocks.end() || it->key != parent) continue;  // (no live vertex left there)
             auto& lists = before[static_cast<std::size_t>(it - blocks.begin())];
             lists.push_back(&heaps[j]);
-            lists.push_back(&refused[j]);
+            lists.push_back(&aside[j]);
         }
         std::vector<std::vector<Candidate>> next_heaps(blocks.size());
         for (int round = 0; round < 3; ++round) {
@@ -939,12 +951,12 @@ MeshStats Simplifier::run() {
                 if (round == 0) {
                     next_heaps[k] = block_candidates(level, vertices.data() + block.first, block.count, block.key, before[k]);
                 } else {
-                    reopen(heaps[k], refused[k]);
+                    reopen(heaps[k], aside[k]);
                 }
             }
             if (round == 0) {
                 heaps.swap(next_heaps);
-                refused.assign(blocks.size(), {});
+                aside.assign(blocks.size(), {});
             }
 
             const std::uint64_t left = by_count ? live_faces_ - target : std::numeric_limits<std::uint64_t>::max();
@@ -986,7 +998,7 @@ MeshStats Simplifier::run() {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
             for (std::int64_t i = 0; i < block_count; ++i) {
                 const auto k = static_cast<std::size_t>(i);
-                results[k] = collapse_block(level, blocks[k].key, heaps[k], refused[k], blocks[k].budget, limit);
+                results[k] = collapse_block(level, blocks[k].key, heaps[k], aside[k], blocks[k].budget, limit);
             }
 
             std::uint64_t removed = 0;
