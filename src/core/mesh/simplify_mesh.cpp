@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <unordered_map>
 
 namespace toposimp::mesh {
@@ -121,6 +122,58 @@ struct BlockResult {
     std::uint64_t faces_removed = 0;
 };
 
+// Faces by grid cell for one round: the faces grouped by cell, and an open-addressing table
+// from a cell to its group.
+class CellIndex {
+public:
+    // `pairs`: (cell, face), sorted.
+    void build(const std::vector<std::pair<std::uint64_t, std::uint32_t>>& pairs) {
+        faces_.resize(pairs.size());
+        std::size_t groups = 0;
+        for (std::size_t i = 0; i < pairs.size(); ++i) {
+            faces_[i] = pairs[i].second;
+            groups += i == 0 || pairs[i].first != pairs[i - 1].first;
+        }
+        int bits = 4;
+        while ((std::size_t{1} << bits) < 2 * groups) ++bits;
+        shift_ = 64 - bits;
+        slots_.assign(std::size_t{1} << bits, Slot{});
+        for (std::size_t i = 0; i < pairs.size();) {
+            std::size_t j = i;
+            while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
+            std::size_t at = home(pairs[i].first);
+            while (slots_[at].key != kEmpty) at = (at + 1) & (slots_.size() - 1);
+            slots_[at] = {pairs[i].first, i, j - i};
+            i = j;
+        }
+    }
+    void clear() {
+        faces_.clear();
+        slots_.clear();
+    }
+    // The faces listed in a cell.
+    std::span<const std::uint32_t> faces(std::uint64_t key) const {
+        if (slots_.empty()) return {};
+        for (std::size_t at = home(key);; at = (at + 1) & (slots_.size() - 1)) {
+            const Slot& slot = slots_[at];
+            if (slot.key == key) return {faces_.data() + slot.first, slot.count};
+            if (slot.key == kEmpty) return {};
+        }
+    }
+
+private:
+    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no cell key: they use 63 bits
+    struct Slot {
+        std::uint64_t key = kEmpty;
+        std::size_t first = 0, count = 0;
+    };
+    std::size_t home(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
+
+    std::vector<std::uint32_t> faces_;
+    std::vector<Slot> slots_;
+    int shift_ = 60;
+};
+
 class Simplifier {
 public:
     Simplifier(Mesh& mesh, const MeshOptions& options) : mesh_(mesh), options_(options) {}
@@ -203,9 +256,11 @@ private:
     std::vector<std::uint32_t> stamp_;
     std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
     std::vector<Quadric> quadric_;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> index_;  // (cell, face), sorted
-    Grid index_grid_;                                              // the index's cells (not the blocks')
-    std::vector<Box3> snapshot_;                                   // per face: its box when the index was built
+    CellIndex index_;
+    Grid index_grid_;                   // the index's cells (not the blocks')
+    std::vector<Box3> snapshot_;        // per face: its box when the index was built
+    std::vector<std::uint64_t> first_;  // per face: the index cell of its snapshot's low corner
+    std::vector<std::uint8_t> moved_;   // per face: changed in this round (the overlay has it)
     std::uint64_t live_faces_ = 0;
 };
 
@@ -378,6 +433,8 @@ void Simplifier::build_face_index() {
         index_grid_.cells[axis] = static_cast<std::uint32_t>(std::min(1048576.0, std::floor(extent[axis] / size) + 1));
     }
     snapshot_.resize(face_.size());
+    first_.resize(face_.size());
+    moved_.assign(face_.size(), 0);
     std::vector<std::vector<std::pair<std::uint64_t, std::uint32_t>>> parts(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel
     {
@@ -386,24 +443,36 @@ void Simplifier::build_face_index() {
         for (std::int64_t f = 0; f < m; ++f) {
             if (!alive_[f]) continue;
             snapshot_[f] = face_box(static_cast<std::uint32_t>(f));
+            first_[f] = index_grid_.cell_key(snapshot_[f].lo);
             for_cells(snapshot_[f], [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
         }
     }
-    for (auto& part : parts) index_.insert(index_.end(), part.begin(), part.end());
-    std::sort(index_.begin(), index_.end());
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
+    for (auto& part : parts) pairs.insert(pairs.end(), part.begin(), part.end());
+    parts.clear();
+    std::sort(pairs.begin(), pairs.end());
+    index_.build(pairs);
 }
 
-// Faces that may touch `box` (inside the calling block): from the level's index those whose box
-// at the start of the round overlaps it — a face another block changes lay, and lies, inside
-// that block, so its start box cannot overlap and it is never read — and the faces this block
-// changed, from its overlay.
+// Faces that may touch `box` (inside the calling block), each once: from the round's index
+// those whose box at the start of the round overlaps it — a face another block changes lay, and
+// lies, inside that block, so its start box cannot overlap and it is never read — unless this
+// block changed them, and the faces this block changed, from its overlay, if their box now
+// overlaps it. A face spanning several of the box's cells is taken in the first (lowest on every
+// axis) of them.
 void Simplifier::query(const Box3& box, std::unordered_map<std::uint64_t, std::vector<std::uint32_t>>& overlay,
                        std::vector<std::uint32_t>& out) const {
     out.clear();
+    const std::uint64_t box_lo = index_grid_.cell_key(box.lo);
+    auto first_shared_cell = [box_lo](std::uint64_t face_lo, std::uint64_t key) {
+        for (int axis = 0; axis < 3; ++axis) {
+            if (std::max(Grid::unpack(face_lo, axis), Grid::unpack(box_lo, axis)) != Grid::unpack(key, axis)) return false;
+        }
+        return true;
+    };
     for_cells(box, [&](std::uint64_t key) {
-        auto it = std::lower_bound(index_.begin(), index_.end(), std::pair<std::uint64_t, std::uint32_t>{key, 0});
-        for (; it != index_.end() && it->first == key; ++it) {
-            if (snapshot_[it->second].overlaps(box)) out.push_back(it->second);
+        for (std::uint32_t f : index_.faces(key)) {
+            if (snapshot_[f].overlaps(box) && !moved_[f] && first_shared_cell(first_[f], key)) out.push_back(f);
         }
         auto found = overlay.find(key);
         if (found == overlay.end()) return;
@@ -414,9 +483,11 @@ void Simplifier::query(const Box3& box, std::unordered_map<std::uint64_t, std::v
             const std::uint32_t f = list[i];
             bool keep = alive_[f] != 0;
             Box3 now{};
+            std::uint64_t lo = 0;
             if (keep) {
                 now = face_box(f);
-                const std::uint64_t lo = index_grid_.cell_key(now.lo), hi = index_grid_.cell_key(now.hi);
+                lo = index_grid_.cell_key(now.lo);
+                const std::uint64_t hi = index_grid_.cell_key(now.hi);
                 for (int axis = 0; axis < 3 && keep; ++axis) {
                     const std::uint32_t c = Grid::unpack(key, axis);
                     keep = Grid::unpack(lo, axis) <= c && c <= Grid::unpack(hi, axis);
@@ -427,12 +498,10 @@ void Simplifier::query(const Box3& box, std::unordered_map<std::uint64_t, std::v
                 list.pop_back();
                 continue;
             }
-            if (now.overlaps(box)) out.push_back(f);
+            if (now.overlaps(box) && first_shared_cell(lo, key)) out.push_back(f);
             ++i;
         }
     });
-    std::sort(out.begin(), out.end());
-    out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
 void Simplifier::faces_of(std::uint32_t v, std::vector<std::uint32_t>& out) {
@@ -771,19 +840,27 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         };
         thread_local std::array<SideEntry, 512> sides{};
         thread_local std::uint64_t generation = 0;
+        thread_local std::vector<exact::Triangle3> near_triangle;
+        thread_local std::vector<Box3> near_box;
         near.clear();
+        near_triangle.clear();
+        near_box.clear();
         for (std::uint32_t g : found) {
             if (alive_[g] && !std::binary_search(fa.begin(), fa.end(), g) && !std::binary_search(fb.begin(), fb.end(), g)) {
                 near.push_back(g);
+                near_triangle.push_back(flat(triangle(face_[g])));
+                const exact::Triangle3& t = near_triangle.back();
+                near_box.push_back(triangle_box(t[0], t[1], t[2]));
             }
         }
         for (const exact::Triangle3& t : fresh) {
             const exact::Triangle3 mine = flat(t);
             const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
             ++generation;
-            for (std::uint32_t g : near) {
-                const exact::Triangle3 other = flat(triangle(face_[g]));
-                if (!mine_box.overlaps(triangle_box(other[0], other[1], other[2]))) continue;
+            for (std::size_t n = 0; n < near.size(); ++n) {
+                if (!mine_box.overlaps(near_box[n])) continue;
+                const std::uint32_t g = near[n];
+                const exact::Triangle3& other = near_triangle[n];
                 if (!flatten && !shares_a_location(mine, other)) {
                     auto side = [&](int i) {
                         const std::uint32_t v = face_[g][i];
@@ -841,6 +918,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     stamp_[a] = (stamp_[a] + 1) & kStampMask;
     if (use_index_) {
         for (std::uint32_t f : star) {
+            moved_[f] = 1;
             for_cells(face_box(f), [&](std::uint64_t key) {
                 std::vector<std::uint32_t>& list = overlay[key];
                 if (std::find(list.begin(), list.end(), f) == list.end()) list.push_back(f);
