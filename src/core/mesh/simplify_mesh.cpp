@@ -196,13 +196,12 @@ private:
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
         return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u)};
     }
-    // One round of a block: `heap` holds its candidates (in any order), `aside` receives those
-    // refused or dearer than `cost_limit`.
-    BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
-                               std::vector<Candidate>& aside, std::uint64_t budget, double cost_limit);
-    // The candidates of a block for its next round of the level: what its heap kept plus what
-    // was set aside, without those a collapse made stale.
-    void reopen(std::vector<Candidate>& heap, std::vector<Candidate>& aside) const;
+    // One round of a block, from its candidates (in any order; left in any order).
+    BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& candidates, std::uint64_t budget,
+                               double cost_limit);
+    // The candidates of a block for its next round of the level: those it has, without those a
+    // collapse made stale.
+    void reopen(std::vector<Candidate>& candidates) const;
 
     // Live faces around v, unlinking dead corners from v's list as it goes.
     void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
@@ -621,7 +620,7 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
         if (inside) flags_[v] |= kInside | kNewlyInside;
     }
     // Edges between vertices inside before: their candidates from the finer blocks, which keep
-    // one valid candidate for each (heap and the list set aside together, see collapse_block). The
+    // one valid candidate for each (see collapse_block). The
     // placement is the same in the bigger block unless the smaller one held it back.
     std::vector<Candidate> heap;
     for (std::vector<Candidate>* list : before) {
@@ -646,53 +645,51 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
     return heap;
 }
 
-BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vector<Candidate>& heap,
-                                       std::vector<Candidate>& aside, std::uint64_t budget, double cost_limit) {
+BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vector<Candidate>& candidates,
+                                       std::uint64_t budget, double cost_limit) {
     BlockResult result;
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> overlay;
     std::vector<Candidate> fresh;
     std::vector<std::uint32_t> around;
-    // The heap and the list set aside together keep every live edge of the block's inside
-    // vertices (a collapse re-pushes the edges it changes and stamps make the old ones stale),
-    // so a later round of the level starts from them instead of from scratch, in the same order.
-    // Candidates dearer than the round's limit cannot be taken in it: they wait aside, which
-    // keeps the heap small.
+    // `candidates` keeps every live edge of the block's inside vertices (a collapse adds the
+    // edges it changes and stamps make the old ones stale), so a later round of the level starts
+    // from them instead of from scratch, in the same order. Its first `heap` entries are the
+    // heap; after them wait those refused and those dearer than the round's limit, which cannot
+    // be taken in it (kept out of the heap, which stays small).
     auto dear = [cost_limit](const Candidate& c) { return c.cost > cost_limit; };
-    if (std::isfinite(cost_limit)) {
-        const auto cheap_end = std::partition(heap.begin(), heap.end(), [&](const Candidate& c) { return !dear(c); });
-        aside.insert(aside.end(), cheap_end, heap.end());
-        heap.erase(cheap_end, heap.end());
-    }
-    std::make_heap(heap.begin(), heap.end(), later);
-    while (!heap.empty() && result.faces_removed < budget) {
-        if (heap.front().cost > cost_limit) break;  // the smallest: every other is dearer
-        std::pop_heap(heap.begin(), heap.end(), later);
-        const Candidate c = heap.back();
-        heap.pop_back();
+    auto first = candidates.begin();
+    auto heap = static_cast<std::size_t>(
+        std::partition(candidates.begin(), candidates.end(), [&](const Candidate& c) { return !dear(c); }) - first);
+    std::make_heap(first, first + static_cast<std::ptrdiff_t>(heap), later);
+    while (heap > 0 && result.faces_removed < budget) {
+        std::pop_heap(first, first + static_cast<std::ptrdiff_t>(heap), later);
+        const Candidate c = candidates[heap - 1];
+        candidates[heap - 1] = candidates.back();
+        candidates.pop_back();
+        --heap;
         if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
         if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b()) continue;
         if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
-            aside.push_back(c);
+            candidates.push_back(c);
+            first = candidates.begin();
             continue;
         }
         fresh.clear();
         place_edges(c.a, around, [](std::uint32_t) { return true; }, level, block, fresh);
         for (const Candidate& e : fresh) {
-            if (dear(e)) {
-                aside.push_back(e);
-                continue;
-            }
-            heap.push_back(e);
-            std::push_heap(heap.begin(), heap.end(), later);
+            candidates.push_back(e);
+            first = candidates.begin();
+            if (dear(e)) continue;
+            std::swap(candidates[heap], candidates.back());
+            ++heap;
+            std::push_heap(first, first + static_cast<std::ptrdiff_t>(heap), later);
         }
     }
     return result;
 }
 
-void Simplifier::reopen(std::vector<Candidate>& heap, std::vector<Candidate>& aside) const {
-    heap.insert(heap.end(), aside.begin(), aside.end());
-    aside.clear();
-    std::erase_if(heap, [this](const Candidate& c) { return stale(c); });
+void Simplifier::reopen(std::vector<Candidate>& candidates) const {
+    std::erase_if(candidates, [this](const Candidate& c) { return stale(c); });
 }
 
 bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
@@ -975,7 +972,7 @@ MeshStats Simplifier::run() {
     };
     // A level's blocks with their candidates, handed down to the next level's blocks.
     std::vector<Block> blocks, finer;
-    std::vector<std::vector<Candidate>> heaps, aside;
+    std::vector<std::vector<Candidate>> candidates;
     const int top = grid_.top_level();
     for (int level = 0; level <= top; ++level) {
         if (by_count && live_faces_ <= target) break;
@@ -1013,10 +1010,9 @@ MeshStats Simplifier::run() {
                                              [](const Block& block, std::uint64_t k) { return block.key < k; });
             if (it == blocks.end() || it->key != parent) continue;  // (no live vertex left there)
             auto& lists = before[static_cast<std::size_t>(it - blocks.begin())];
-            lists.push_back(&heaps[j]);
-            lists.push_back(&aside[j]);
+            lists.push_back(&candidates[j]);
         }
-        std::vector<std::vector<Candidate>> next_heaps(blocks.size());
+        std::vector<std::vector<Candidate>> next_candidates(blocks.size());
         for (int round = 0; round < 3; ++round) {
             if (by_count && live_faces_ <= target) break;
             // The index and its start-of-round boxes are what query() relies on: faces a block
@@ -1027,26 +1023,25 @@ MeshStats Simplifier::run() {
                 const Block& block = blocks[static_cast<std::size_t>(i)];
                 const auto k = static_cast<std::size_t>(i);
                 if (round == 0) {
-                    next_heaps[k] = block_candidates(level, vertices.data() + block.first, block.count, block.key, before[k]);
+                    next_candidates[k] = block_candidates(level, vertices.data() + block.first, block.count, block.key, before[k]);
                 } else {
-                    reopen(heaps[k], aside[k]);
+                    reopen(candidates[k]);
                 }
             }
             if (round == 0) {
-                heaps.swap(next_heaps);
-                aside.assign(blocks.size(), {});
+                candidates.swap(next_candidates);
             }
 
             const std::uint64_t left = by_count ? live_faces_ - target : std::numeric_limits<std::uint64_t>::max();
             double limit = std::numeric_limits<double>::infinity();
             if (by_count && level < top) {
-                std::vector<std::size_t> offset(heaps.size() + 1, 0);
-                for (std::size_t i = 0; i < heaps.size(); ++i) offset[i + 1] = offset[i] + heaps[i].size();
+                std::vector<std::size_t> offset(candidates.size() + 1, 0);
+                for (std::size_t i = 0; i < candidates.size(); ++i) offset[i + 1] = offset[i] + candidates[i].size();
                 FillLater<double> costs(offset.back());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
                 for (std::int64_t i = 0; i < block_count; ++i) {
                     const auto k = static_cast<std::size_t>(i);
-                    std::transform(heaps[k].begin(), heaps[k].end(), costs.begin() + static_cast<std::ptrdiff_t>(offset[k]),
+                    std::transform(candidates[k].begin(), candidates[k].end(), costs.begin() + static_cast<std::ptrdiff_t>(offset[k]),
                                    [](const Candidate& c) { return c.cost; });
                 }
                 const std::size_t needed = static_cast<std::size_t>((left + 1) / 2);  // a collapse removes ~2 faces
@@ -1059,7 +1054,7 @@ MeshStats Simplifier::run() {
                 for (std::int64_t i = 0; i < block_count; ++i) {
                     const auto k = static_cast<std::size_t>(i);
                     share[k] = static_cast<std::uint64_t>(
-                        std::count_if(heaps[k].begin(), heaps[k].end(), [limit](const Candidate& c) { return c.cost <= limit; }));
+                        std::count_if(candidates[k].begin(), candidates[k].end(), [limit](const Candidate& c) { return c.cost <= limit; }));
                 }
                 std::uint64_t under = 0;
                 for (std::uint64_t n : share) under += n;
@@ -1076,7 +1071,7 @@ MeshStats Simplifier::run() {
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
             for (std::int64_t i = 0; i < block_count; ++i) {
                 const auto k = static_cast<std::size_t>(i);
-                results[k] = collapse_block(level, blocks[k].key, heaps[k], aside[k], blocks[k].budget, limit);
+                results[k] = collapse_block(level, blocks[k].key, candidates[k], blocks[k].budget, limit);
             }
 
             std::uint64_t removed = 0;
