@@ -1,11 +1,11 @@
 #include "core/mesh/simplify_mesh.hpp"
 
 #include "core/exact/predicates3d.hpp"
-#include "core/fill_later.hpp"
 
 #include <omp.h>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -108,6 +108,43 @@ bool later(const Candidate& x, const Candidate& y) {
     if (x.cost != y.cost) return x.cost > y.cost;
     if (x.a != y.a) return x.a > y.a;
     return x.b > y.b;
+}
+
+// Doubles in their order as unsigned integers (−0 just before +0; costs are never NaN).
+std::uint64_t ordered_bits(double value) {
+    const auto bits = std::bit_cast<std::uint64_t>(value);
+    return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
+}
+
+// The k-th smallest cost (k from 1, at most their number) of all the blocks' candidates: a
+// histogram of the top 16 bits of the costs' order, counted in parallel, then a selection among
+// the costs of the bucket that holds the k-th.
+double kth_smallest_cost(const std::vector<std::vector<Candidate>>& lists, std::size_t k, int threads) {
+    constexpr int kShift = 48;
+    std::vector<std::size_t> count(std::size_t{1} << (64 - kShift), 0);
+    const auto n = static_cast<std::int64_t>(lists.size());
+#pragma omp parallel num_threads(threads)
+    {
+        std::vector<std::size_t> mine(count.size(), 0);
+#pragma omp for schedule(dynamic, 1) nowait
+        for (std::int64_t i = 0; i < n; ++i) {
+            for (const Candidate& c : lists[static_cast<std::size_t>(i)]) ++mine[ordered_bits(c.cost) >> kShift];
+        }
+#pragma omp critical
+        for (std::size_t b = 0; b < count.size(); ++b) count[b] += mine[b];
+    }
+    std::size_t bucket = 0, below = 0;
+    while (below + count[bucket] < k) below += count[bucket++];
+    std::vector<double> costs;
+    costs.reserve(count[bucket]);
+    for (const auto& list : lists) {
+        for (const Candidate& c : list) {
+            if ((ordered_bits(c.cost) >> kShift) == bucket) costs.push_back(c.cost);
+        }
+    }
+    const auto at = costs.begin() + static_cast<std::ptrdiff_t>(k - below - 1);
+    std::nth_element(costs.begin(), at, costs.end());
+    return *at;
 }
 
 struct Placement {
@@ -1035,20 +1072,10 @@ MeshStats Simplifier::run() {
             const std::uint64_t left = by_count ? live_faces_ - target : std::numeric_limits<std::uint64_t>::max();
             double limit = std::numeric_limits<double>::infinity();
             if (by_count && level < top) {
-                std::vector<std::size_t> offset(candidates.size() + 1, 0);
-                for (std::size_t i = 0; i < candidates.size(); ++i) offset[i + 1] = offset[i] + candidates[i].size();
-                FillLater<double> costs(offset.back());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-                for (std::int64_t i = 0; i < block_count; ++i) {
-                    const auto k = static_cast<std::size_t>(i);
-                    std::transform(candidates[k].begin(), candidates[k].end(), costs.begin() + static_cast<std::ptrdiff_t>(offset[k]),
-                                   [](const Candidate& c) { return c.cost; });
-                }
+                std::size_t total = 0;
+                for (const auto& list : candidates) total += list.size();
                 const std::size_t needed = static_cast<std::size_t>((left + 1) / 2);  // a collapse removes ~2 faces
-                if (needed > 0 && needed < costs.size()) {
-                    std::nth_element(costs.begin(), costs.begin() + static_cast<std::ptrdiff_t>(needed - 1), costs.end());
-                    limit = costs[needed - 1];
-                }
+                if (needed > 0 && needed < total) limit = kth_smallest_cost(candidates, needed, threads);
                 std::vector<std::uint64_t> share(blocks.size(), 0);
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
                 for (std::int64_t i = 0; i < block_count; ++i) {
