@@ -17,7 +17,7 @@ cd "$data"
 need_apt=()
 # The mesh benchmark's peers and models: meshoptimizer, CGAL (its Garland–Heckbert policies need Eigen),
 # CGAL's demo meshes.
-for p in gmt gmt-gshhg-full qgis-common gdal-bin time python3 libmeshoptimizer-dev libcgal-dev libcgal-demo libeigen3-dev; do
+for p in gmt gmt-gshhg-full qgis-common gdal-bin time python3 libmeshoptimizer-dev libcgal-dev libcgal-demo libeigen3-dev python-matplotlib-data; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || need_apt+=("$p")
 done
 # Node and npm: whatever the machine has (Debian's nodejs + npm if there are none).

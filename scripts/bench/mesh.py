@@ -23,6 +23,7 @@ import struct
 import subprocess
 import sys
 import tarfile
+import zipfile
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", ".."))
 TOPOSIMP = os.path.join(ROOT, "build", "release", "toposimp")
@@ -51,6 +52,42 @@ def terrain(path, n, seed=1):
                 a = j * (n + 1) + i
                 buf += struct.pack("<Biii", 3, a, a + 1, a + n + 2) + struct.pack("<Biii", 3, a, a + n + 2, a + n + 1)
         out.write(buf)
+
+
+def npy(data):
+    """A little-endian array from a NumPy .npy file (format 1): (values, shape)."""
+    size = struct.unpack("<H", data[8:10])[0]
+    header = data[10:10 + size].decode("latin-1")
+    descr = re.search(r"'descr': '<(\w\d)'", header).group(1)
+    shape = tuple(int(x) for x in re.search(r"'shape': \(([^)]*)\)", header).group(1).split(",") if x.strip())
+    code = {"i2": "h", "f8": "d", "f4": "f", "i4": "i"}[descr]
+    count = 1
+    for n in shape:
+        count *= n
+    return struct.unpack(f"<{count}{code}", data[10 + size:10 + size + count * struct.calcsize(code)]), shape
+
+
+def dem(data):
+    """The real DEM of ../shared/data/README.md (Debian python-matplotlib-data: Jacksboro fault,
+    403 x 344 cells of 3 arc-seconds, heights in metres), written as an ESRI ASCII grid in local
+    metres (cells about 75 x 93 m), then triangulated by toposimp's own DEM reader into a binary
+    PLY (--keep 100%: no collapse) that every tool reads."""
+    path = os.path.join(data, "jacksboro.ply")
+    if os.path.exists(path):
+        return path
+    source = "/usr/share/matplotlib/mpl-data/sample_data/jacksboro_fault_dem.npz"
+    with zipfile.ZipFile(source) as archive:
+        heights, (rows, cols) = npy(archive.read("elevation.npy"))
+        lat = npy(archive.read("ymin.npy"))[0][0]
+        dx, dy = npy(archive.read("dx.npy"))[0][0], npy(archive.read("dy.npy"))[0][0]
+    metres_x, metres_y = dx * 111320.0 * math.cos(math.radians(lat)), dy * 110574.0
+    grid = os.path.join(data, "jacksboro.asc")
+    with open(grid, "w") as out:
+        out.write(f"ncols {cols}\nnrows {rows}\nxllcorner 0\nyllcorner 0\ndx {metres_x!r}\ndy {metres_y!r}\n")
+        for r in range(rows):
+            out.write(" ".join(str(h) for h in heights[r * cols:(r + 1) * cols]) + "\n")
+    subprocess.run([TOPOSIMP, "mesh", grid, "-o", path, "--keep", "100%", "--no-hausdorff", "-q"], check=True)
+    return path
 
 
 def cgal_model(data, name):
@@ -86,7 +123,7 @@ def faces_of(path):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--data", default="/work/bench-data")
-    parser.add_argument("--datasets", default="elephant,armadillo,bunny,fandisk,terrain-0.9M,terrain-2M,terrain-4M")
+    parser.add_argument("--datasets", default="elephant,armadillo,bunny,fandisk,jacksboro,terrain-0.9M,terrain-2M,terrain-4M")
     parser.add_argument("--keep", type=float, default=0.1)
     args = parser.parse_args()
     os.makedirs(args.data, exist_ok=True)
@@ -98,6 +135,7 @@ def main():
         "armadillo": lambda: cgal_model(args.data, "armadillo"),
         "bunny": lambda: cgal_model(args.data, "bunny00"),
         "fandisk": lambda: cgal_model(args.data, "fandisk_large"),
+        "jacksboro": lambda: dem(args.data),
     }
     for name, n in (("terrain-0.9M", 671), ("terrain-2M", 1000), ("terrain-4M", 1414)):
         sources[name] = (lambda n=n, name=name: (terrain(os.path.join(args.data, name + ".ply"), n),
@@ -108,7 +146,7 @@ def main():
     rows = []
     for name in args.datasets.split(","):
         source = sources[name]()
-        is_terrain = name.startswith("terrain")
+        is_terrain = name.startswith("terrain") or name == "jacksboro"
         faces = faces_of(source)
         target = round(args.keep * faces)
         runs = []
