@@ -242,6 +242,17 @@ private:
 
     // Live faces around v, unlinking dead corners from v's list as it goes.
     void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
+    // The corners of `faces` other than v, sorted, each once: v's neighbours when they are its faces.
+    void corners_but(const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) const {
+        out.clear();
+        for (std::uint32_t f : faces) {
+            for (std::uint32_t w : face_[f]) {
+                if (w != v) out.push_back(w);
+            }
+        }
+        std::sort(out.begin(), out.end());
+        out.erase(std::unique(out.begin(), out.end()), out.end());
+    }
     // On success, `around` holds a's neighbours after the collapse.
     bool try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
                       std::vector<std::uint32_t>& around,
@@ -615,15 +626,8 @@ void Simplifier::collect_edges(std::uint32_t v, Wanted wanted, int level, std::u
                                std::vector<std::uint32_t>& scratch) {
     // Neighbours of v (it is inside: they all lie in its block).
     thread_local std::vector<std::uint32_t> around;
-    around.clear();
     faces_of(v, scratch);
-    for (std::uint32_t f : scratch) {
-        for (std::uint32_t w : face_[f]) {
-            if (w != v) around.push_back(w);
-        }
-    }
-    std::sort(around.begin(), around.end());
-    around.erase(std::unique(around.begin(), around.end()), around.end());
+    corners_but(scratch, v, around);
     place_edges(v, around, wanted, level, block, out);
 }
 
@@ -757,18 +761,8 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     if (shared.empty()) return false;  // no longer an edge
     // Link condition (Dey et al. 1999): the common neighbours of a and b are exactly the corners
     // opposite the edge; a border vertex pair joined through the interior would pinch.
-    auto neighbours = [&](const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) {
-        out.clear();
-        for (std::uint32_t f : faces) {
-            for (std::uint32_t w : face_[f]) {
-                if (w != v) out.push_back(w);
-            }
-        }
-        std::sort(out.begin(), out.end());
-        out.erase(std::unique(out.begin(), out.end()), out.end());
-    };
-    neighbours(fa, a, na);
-    neighbours(fb, b, nb);
+    corners_but(fa, a, na);
+    corners_but(fb, b, nb);
     common.clear();
     std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
     common.erase(std::remove(common.begin(), common.end(), a), common.end());
@@ -959,15 +953,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             });
         }
     }
-    // a's faces now: the star.
-    around.clear();
-    for (std::uint32_t f : star) {
-        for (std::uint32_t w : face_[f]) {
-            if (w != a) around.push_back(w);
-        }
-    }
-    std::sort(around.begin(), around.end());
-    around.erase(std::unique(around.begin(), around.end()), around.end());
+    corners_but(star, a, around);  // a's faces now: the star
     ++stats.collapses;
     stats.max_error = std::max(stats.max_error, error);
     result.faces_removed += shared.size();
