@@ -661,8 +661,8 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
         if (inside) flags_[v] |= kInside | kNewlyInside;
     }
     // Edges between vertices inside before: their candidates from the finer blocks, which keep
-    // one valid candidate for each (see collapse_block). The
-    // placement is the same in the bigger block unless the smaller one held it back.
+    // one valid candidate for each (see collapse_block). The placement is the same in the bigger
+    // block unless the smaller one held it back.
     std::vector<Candidate> heap;
     for (std::vector<Candidate>* list : before) {
         for (const Candidate& c : *list) {
@@ -708,8 +708,7 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
         candidates[heap - 1] = candidates.back();
         candidates.pop_back();
         --heap;
-        if ((flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0) continue;
-        if (stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b()) continue;
+        if (stale(c)) continue;
         if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
             candidates.push_back(c);
             first = candidates.begin();
@@ -1017,7 +1016,6 @@ MeshStats Simplifier::run() {
             blocks.push_back({order[i].first, i, j - i, 0});
             i = j;
         }
-
         // Rounds. Every block builds its heap; with a count target (below the last level) a
         // global cost threshold is the cost of the k-th cheapest candidate of all blocks, k the
         // collapses still needed, and each block gets a share of the faces still to go in
