@@ -6,6 +6,7 @@
 #include "io/geojson_writer.hpp"
 #include "io/gpkg_points.hpp"
 #include "io/output_file.hpp"
+#include "io/shapefile_points.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
@@ -630,6 +631,11 @@ std::vector<Point> read_control_points(const std::string& spec, unsigned threads
     if (driver == "GPKG" && path.rfind("/vsi", 0) != 0) {
         const GpkgTable table{path, layer.GetName(), layer.GetGeometryColumn(), layer.GetFIDColumn()};
         if (std::optional<std::vector<Point>> points = read_gpkg_points(table, threads)) return std::move(*points);
+    }
+    // A Shapefile's records are decoded here too (shapefile_points.hpp): OGR would parse its .prj first.
+    const std::string extension = std::filesystem::path(path).extension().string();
+    if (driver == "ESRI Shapefile" && (extension == ".shp" || extension == ".SHP") && path.rfind("/vsi", 0) != 0) {
+        if (std::optional<std::vector<Point>> points = read_shapefile_points(path)) return std::move(*points);
     }
     std::vector<Point> points;
     const GIntBig count = layer.GetFeatureCount(FALSE);

@@ -1,0 +1,167 @@
+#include "io/shapefile_points.hpp"
+
+#include "io/errors.hpp"
+
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+
+namespace toposimp::io {
+namespace {
+
+// A file read front to back through a buffer; every read fails past the end.
+class SequentialFile {
+public:
+    explicit SequentialFile(const std::filesystem::path& path) : in_(path, std::ios::binary) {}
+
+    bool is_open() const { return in_.is_open(); }
+    std::uint64_t offset() const { return offset_; }
+
+    bool take(unsigned char* out, std::size_t count) {
+        while (count > 0) {
+            if (at_ == filled_ && !refill()) return false;
+            const std::size_t n = std::min(count, filled_ - at_);
+            std::memcpy(out, buffer_.data() + at_, n);
+            at_ += n;
+            offset_ += n;
+            out += n;
+            count -= n;
+        }
+        return true;
+    }
+
+    bool skip(std::uint64_t count) {
+        while (count > 0) {
+            if (at_ == filled_ && !refill()) return false;
+            const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(count, filled_ - at_));
+            at_ += n;
+            offset_ += n;
+            count -= n;
+        }
+        return true;
+    }
+
+private:
+    bool refill() {
+        in_.read(reinterpret_cast<char*>(buffer_.data()), static_cast<std::streamsize>(buffer_.size()));
+        filled_ = static_cast<std::size_t>(in_.gcount());
+        at_ = 0;
+        return filled_ > 0;
+    }
+
+    std::ifstream in_;
+    std::vector<unsigned char> buffer_ = std::vector<unsigned char>(std::size_t{1} << 20);
+    std::size_t filled_ = 0;
+    std::size_t at_ = 0;
+    std::uint64_t offset_ = 0;
+};
+
+std::uint32_t big_u32(const unsigned char* bytes) {
+    return std::uint32_t{bytes[0]} << 24 | std::uint32_t{bytes[1]} << 16 | std::uint32_t{bytes[2]} << 8 | bytes[3];
+}
+
+std::uint32_t little_u32(const unsigned char* bytes) {
+    return std::uint32_t{bytes[3]} << 24 | std::uint32_t{bytes[2]} << 16 | std::uint32_t{bytes[1]} << 8 | bytes[0];
+}
+
+double little_f64(const unsigned char* bytes) {
+    std::uint64_t bits = 0;
+    for (int i = 0; i < 8; ++i) bits |= std::uint64_t{bytes[i]} << (8 * i);
+    double value = 0;
+    std::memcpy(&value, &bits, sizeof value);
+    return value;
+}
+
+// The sibling of `shp` with this extension, in the case the .shp's extension is written in.
+std::filesystem::path sibling(const std::filesystem::path& shp, const char* lower, const char* upper) {
+    const std::string extension = shp.extension().string();
+    const bool is_upper = extension.size() == 4 && extension[1] == 'S';
+    std::filesystem::path path = shp;
+    path.replace_extension(is_upper ? upper : lower);
+    return path;
+}
+
+// The 100-byte header of a .shp or .shx: file code 9994 and version 1000; returns the shape type.
+std::optional<std::uint32_t> shape_header(SequentialFile& file) {
+    std::array<unsigned char, 100> header{};
+    if (!file.take(header.data(), header.size())) return std::nullopt;
+    if (big_u32(&header[0]) != 9994 || little_u32(&header[28]) != 1000) return std::nullopt;
+    return little_u32(&header[32]);
+}
+
+bool is_point_type(std::uint32_t type) { return type == 1 || type == 11 || type == 21; }
+bool is_multipoint_type(std::uint32_t type) { return type == 8 || type == 18 || type == 28; }
+
+}  // namespace
+
+std::optional<std::vector<Point>> read_shapefile_points(const std::string& path) {
+    const std::filesystem::path shp_path(path);
+    SequentialFile shp(shp_path);
+    SequentialFile shx(sibling(shp_path, ".shx", ".SHX"));
+    SequentialFile dbf(sibling(shp_path, ".dbf", ".DBF"));
+    if (!shp.is_open() || !shx.is_open() || !dbf.is_open()) return std::nullopt;
+
+    const std::optional<std::uint32_t> file_type = shape_header(shp);
+    if (!file_type || shape_header(shx) != file_type) return std::nullopt;
+    if (*file_type != 0 && !is_point_type(*file_type) && !is_multipoint_type(*file_type)) return std::nullopt;
+    std::error_code error;
+    const std::uintmax_t shx_size = std::filesystem::file_size(sibling(shp_path, ".shx", ".SHX"), error);
+    if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return std::nullopt;
+    const std::uint64_t records = (shx_size - 100) / 8;
+
+    // dBASE header: record count, header length and record length; each record starts with
+    // its deletion flag ('*' deleted, ' ' not).
+    std::array<unsigned char, 12> dbf_header{};
+    if (!dbf.take(dbf_header.data(), dbf_header.size())) return std::nullopt;
+    const std::uint32_t dbf_records = little_u32(&dbf_header[4]);
+    const unsigned dbf_header_length = dbf_header[8] | unsigned{dbf_header[9]} << 8;
+    const unsigned dbf_record_length = dbf_header[10] | unsigned{dbf_header[11]} << 8;
+    if (dbf_records != records || dbf_record_length == 0 || dbf_header_length < 12 || !dbf.skip(dbf_header_length - 12)) {
+        return std::nullopt;
+    }
+
+    std::vector<Point> points;
+    points.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(records, std::uint64_t{1} << 26)));
+    std::vector<unsigned char> content;
+    for (std::uint64_t fid = 0; fid < records; ++fid) {
+        unsigned char index[8], record_header[8], deletion = 0;
+        if (!shx.take(index, 8) || !dbf.take(&deletion, 1) || !dbf.skip(dbf_record_length - 1)) return std::nullopt;
+        // The .shx locates every record (as OGR reads them); here they must follow one another.
+        const std::uint64_t offset = std::uint64_t{big_u32(index)} * 2, length = std::uint64_t{big_u32(index + 4)} * 2;
+        if (offset != shp.offset() || !shp.take(record_header, 8) || std::uint64_t{big_u32(record_header + 4)} * 2 != length) {
+            return std::nullopt;
+        }
+        content.resize(static_cast<std::size_t>(length));
+        if (length < 4 || !shp.take(content.data(), content.size())) return std::nullopt;
+        if (deletion == '*') continue;
+        if (deletion != ' ') return std::nullopt;
+
+        const std::uint32_t type = little_u32(content.data());
+        const std::size_t before = points.size();
+        if (type == 0) continue;
+        if (type != *file_type) return std::nullopt;
+        if (is_point_type(type)) {
+            if (length < 20) return std::nullopt;
+            points.push_back({little_f64(&content[4]), little_f64(&content[12])});
+        } else {
+            if (length < 40) return std::nullopt;
+            const std::uint64_t count = little_u32(&content[36]);
+            if (length < 40 + 16 * count) return std::nullopt;
+            for (std::uint64_t i = 0; i < count; ++i) {
+                points.push_back({little_f64(&content[40 + 16 * i]), little_f64(&content[48 + 16 * i])});
+            }
+        }
+        for (std::size_t i = before; i < points.size(); ++i) {
+            if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y)) {
+                throw InputError("'" + path + "', layer '" + shp_path.stem().string() + "', feature " + std::to_string(fid) +
+                                 ": control point has a non-finite coordinate");
+            }
+        }
+    }
+    return points;
+}
+
+}  // namespace toposimp::io
