@@ -64,9 +64,11 @@ struct Grid {
     std::uint32_t cells[3] = {1, 1, 1};
     int shift = 0;
 
+    // The floor of the scaled offset, clamped to the grid (NaN: cell 0). Truncation is the floor
+    // for c >= 1, and it stays inline (std::floor is a library call on baseline x86-64).
     std::uint32_t cell(double value, double origin_value, int axis) const {
-        const double c = std::floor((value - origin_value) * inverse_size);
-        if (!(c > 0)) return 0;
+        const double c = (value - origin_value) * inverse_size;
+        if (!(c >= 1)) return 0;
         return c >= cells[axis] - 1.0 ? cells[axis] - 1 : static_cast<std::uint32_t>(c);
     }
     std::uint64_t cell_key(Point3 p) const {
@@ -103,12 +105,13 @@ struct Candidate {
     bool bound() const { return (stamp_b_bound >> 31) != 0; }
 };
 
-// Heap order: the smallest (cost, a, b) on top.
-bool later(const Candidate& x, const Candidate& y) {
+// Heap order: the smallest (cost, a, b) on top. (A lambda, not a function: the heap algorithms
+// inline it instead of calling through a pointer.)
+constexpr auto later = [](const Candidate& x, const Candidate& y) {
     if (x.cost != y.cost) return x.cost > y.cost;
     if (x.a != y.a) return x.a > y.a;
     return x.b > y.b;
-}
+};
 
 // Doubles in their order as unsigned integers (−0 just before +0; costs are never NaN).
 std::uint64_t ordered_bits(double value) {
@@ -743,7 +746,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     }
     const double error = error_of(placement, a, b);
     if (options_.target == MeshTarget::max_error && error > options_.value) return false;
-    thread_local std::vector<std::uint32_t> fa, fb, shared, na, nb, common, opposite, star, found;
+    thread_local std::vector<std::uint32_t> fa, fb, shared, opposite, star, found;
     faces_of(a, fa);
     faces_of(b, fb);
     // a's list now holds the corners of fa, in order: b's are appended after the last.
@@ -759,13 +762,9 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     }
     if (shared.empty()) return false;  // no longer an edge
     // Link condition (Dey et al. 1999): the common neighbours of a and b are exactly the corners
-    // opposite the edge; a border vertex pair joined through the interior would pinch.
-    corners_but(fa, a, na);
-    corners_but(fb, b, nb);
-    common.clear();
-    std::set_intersection(na.begin(), na.end(), nb.begin(), nb.end(), std::back_inserter(common));
-    common.erase(std::remove(common.begin(), common.end(), a), common.end());
-    common.erase(std::remove(common.begin(), common.end(), b), common.end());
+    // opposite the edge, each once; a border vertex pair joined through the interior would pinch.
+    // The opposite corners are common neighbours, so it is enough that they are distinct and that
+    // no other corner of b's faces is a corner of a's (a few dozen comparisons: no sorting).
     opposite.clear();
     for (std::uint32_t f : shared) {
         for (std::uint32_t w : face_[f]) {
@@ -773,7 +772,17 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         }
     }
     std::sort(opposite.begin(), opposite.end());
-    if (common != opposite) {
+    bool linked = std::adjacent_find(opposite.begin(), opposite.end()) == opposite.end();
+    for (std::size_t i = 0; linked && i < fb.size(); ++i) {
+        for (std::uint32_t w : face_[fb[i]]) {
+            if (w == a || w == b || std::find(opposite.begin(), opposite.end(), w) != opposite.end()) continue;
+            for (std::uint32_t f : fa) {
+                const Face& c = face_[f];
+                if (c[0] == w || c[1] == w || c[2] == w) linked = false;
+            }
+        }
+    }
+    if (!linked) {
         ++stats.refused_link;
         return false;
     }
