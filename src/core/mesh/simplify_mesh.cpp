@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <span>
 #include <unordered_map>
 
@@ -426,20 +427,28 @@ void Simplifier::choose_grid() {
         ++grid_.shift;
     }
     cell_.resize(pos_.size());
-    for (std::size_t v = 0; v < pos_.size(); ++v) cell_[v] = grid_.cell_key(pos_[v]);
+    const auto n = static_cast<std::int64_t>(pos_.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t v = 0; v < n; ++v) cell_[static_cast<std::size_t>(v)] = grid_.cell_key(pos_[static_cast<std::size_t>(v)]);
 }
 
 void Simplifier::check_terrain() {
     terrain_ = false;
     if (!options_.terrain) return;
-    exact::PredicateStats stats;
-    int turn = 0;
-    for (const Face& f : face_) {
-        const int t = exact::orient_projected(pos_[f[0]], pos_[f[1]], pos_[f[2]], 2, stats);
-        if (t == 0 || (turn != 0 && t != turn)) return;  // not a planar triangulation: 3D tests
-        turn = t;
-    }
-    terrain_ = true;
+    if (face_.empty()) return;
+    // Every face turned the same way in the map plane, none degenerate there; otherwise not a
+    // planar triangulation: 3D tests.
+    auto turn_of = [this](const Face& f) {
+        exact::PredicateStats unused;
+        return exact::orient_projected(pos_[f[0]], pos_[f[1]], pos_[f[2]], 2, unused);
+    };
+    const int turn = turn_of(face_[0]);
+    if (turn == 0) return;
+    const auto m = static_cast<std::int64_t>(face_.size());
+    bool same = true;
+#pragma omp parallel for schedule(static) reduction(&& : same)
+    for (std::int64_t f = 1; f < m; ++f) same = same && turn_of(face_[static_cast<std::size_t>(f)]) == turn;
+    terrain_ = same;
     terrain_turn_ = turn;
 }
 
@@ -995,7 +1004,6 @@ MeshStats Simplifier::run() {
     const auto sweep = Clock::now();
 
     const bool by_count = options_.target != MeshTarget::max_error;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> order;
     struct Block {
         std::uint64_t key;
         std::size_t first, count;
@@ -1008,22 +1016,30 @@ MeshStats Simplifier::run() {
     for (int level = 0; level <= top; ++level) {
         if (by_count && live_faces_ <= target) break;
         ++stats.levels;
-        order.clear();
+        // The live vertices grouped by block, blocks in key order, each block's in id order: a
+        // counting sort over the level's blocks, numbered densely in key order (x, then y, then z).
+        const int bits = grid_.shift + level;
+        std::uint32_t span[3];
+        for (int axis = 0; axis < 3; ++axis) span[axis] = ((grid_.cells[axis] - 1) >> bits) + 1;
+        auto dense = [&](std::uint64_t cell) {
+            return (std::size_t{Grid::unpack(cell, 0) >> bits} * span[1] + (Grid::unpack(cell, 1) >> bits)) * span[2] +
+                   (Grid::unpack(cell, 2) >> bits);
+        };
+        std::vector<std::size_t> first(std::size_t{span[0]} * span[1] * span[2] + 1, 0);
         for (std::uint32_t v = 0; v < pos_.size(); ++v) {
-            if ((flags_[v] & kDead) == 0) order.emplace_back(grid_.block_of(cell_[v], level), v);
+            if ((flags_[v] & kDead) == 0) ++first[dense(cell_[v]) + 1];
         }
-        std::sort(order.begin(), order.end());
-        std::vector<std::uint32_t> vertices(order.size());
+        std::partial_sum(first.begin(), first.end(), first.begin());
+        std::vector<std::uint32_t> vertices(first.back());
         finer.swap(blocks);
         blocks.clear();
-        for (std::size_t i = 0; i < order.size();) {
-            std::size_t j = i;
-            while (j < order.size() && order[j].first == order[i].first) {
-                vertices[j] = order[j].second;
-                ++j;
-            }
-            blocks.push_back({order[i].first, i, j - i, 0});
-            i = j;
+        for (std::size_t id = 0; id + 1 < first.size(); ++id) {
+            if (first[id + 1] == first[id]) continue;
+            const std::size_t z = id % span[2], y = id / span[2] % span[1], x = id / span[2] / span[1];
+            blocks.push_back({Grid::pack(x, y, z), first[id], first[id + 1] - first[id], 0});
+        }
+        for (std::uint32_t v = 0; v < pos_.size(); ++v) {
+            if ((flags_[v] & kDead) == 0) vertices[first[dense(cell_[v])]++] = v;
         }
         // Rounds. Every block builds its heap; with a count target (below the last level) a
         // global cost threshold is the cost of the k-th cheapest candidate of all blocks, k the
