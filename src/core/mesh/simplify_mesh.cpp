@@ -706,37 +706,47 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
     std::vector<std::uint32_t> around;
     // `candidates` keeps every live edge of the block's inside vertices (a collapse adds the
     // edges it changes and stamps make the old ones stale), so a later round of the level starts
-    // from them instead of from scratch, in the same order. Its first `heap` entries are the
-    // heap; after them wait those refused and those dearer than the round's limit, which cannot
-    // be taken in it (kept out of the heap, which stays small).
+    // from them instead of from scratch. Those under the round's cost limit are sorted and taken
+    // in order, merged with a small heap of the new edges under the limit: the cheapest (cost, a,
+    // b) first, as from one heap, but a candidate gone stale costs a step, not a heap pop. Those
+    // refused and those dearer than the limit, which cannot be taken in this round, wait after
+    // them; at the end the taken ones are dropped and the heap's rest joins the others.
     auto dear = [cost_limit](const Candidate& c) { return c.cost > cost_limit; };
-    auto first = candidates.begin();
-    auto heap = static_cast<std::size_t>(
-        std::partition(candidates.begin(), candidates.end(), [&](const Candidate& c) { return !dear(c); }) - first);
-    std::make_heap(first, first + static_cast<std::ptrdiff_t>(heap), later);
-    while (heap > 0 && result.faces_removed < budget) {
-        std::pop_heap(first, first + static_cast<std::ptrdiff_t>(heap), later);
-        const Candidate c = candidates[heap - 1];
-        candidates[heap - 1] = candidates.back();
-        candidates.pop_back();
-        --heap;
+    const auto cheap = static_cast<std::size_t>(
+        std::partition(candidates.begin(), candidates.end(), [&](const Candidate& c) { return !dear(c); }) - candidates.begin());
+    std::sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(cheap),
+              [](const Candidate& x, const Candidate& y) { return later(y, x); });
+    std::vector<Candidate> heap;
+    std::size_t next = 0;  // the first sorted one not taken
+    while (result.faces_removed < budget) {
+        Candidate c;
+        if (next < cheap && (heap.empty() || !later(candidates[next], heap.front()))) {
+            c = candidates[next++];
+        } else if (!heap.empty()) {
+            std::pop_heap(heap.begin(), heap.end(), later);
+            c = heap.back();
+            heap.pop_back();
+        } else {
+            break;
+        }
         if (stale(c)) continue;
         if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
             candidates.push_back(c);
-            first = candidates.begin();
             continue;
         }
         fresh.clear();
         place_edges(c.a, around, [](std::uint32_t) { return true; }, level, block, fresh);
         for (const Candidate& e : fresh) {
-            candidates.push_back(e);
-            first = candidates.begin();
-            if (dear(e)) continue;
-            std::swap(candidates[heap], candidates.back());
-            ++heap;
-            std::push_heap(first, first + static_cast<std::ptrdiff_t>(heap), later);
+            if (dear(e)) {
+                candidates.push_back(e);
+            } else {
+                heap.push_back(e);
+                std::push_heap(heap.begin(), heap.end(), later);
+            }
         }
     }
+    candidates.erase(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(next));
+    candidates.insert(candidates.end(), heap.begin(), heap.end());
     return result;
 }
 
