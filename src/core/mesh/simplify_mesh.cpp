@@ -646,6 +646,11 @@ void Simplifier::collect_edges(std::uint32_t v, Wanted wanted, int level, std::u
 template <class Wanted>
 void Simplifier::place_edges(std::uint32_t v, const std::vector<std::uint32_t>& around, Wanted wanted, int level,
                              std::uint64_t block, std::vector<Candidate>& out) const {
+    // The neighbours' quadrics are scattered: start loading them all before the first is needed.
+    for (std::uint32_t w : around) {
+        __builtin_prefetch(&quadric_[w]);
+        __builtin_prefetch(reinterpret_cast<const char*>(&quadric_[w]) + sizeof(Quadric) - 1);
+    }
     for (std::uint32_t w : around) {
         if ((flags_[w] & kInside) == 0 || !wanted(w)) continue;
         const std::uint32_t a = std::min(v, w), b = std::max(v, w);
