@@ -334,37 +334,45 @@ void Simplifier::build_topology() {
 }
 
 void Simplifier::build_quadrics() {
-    const auto n = static_cast<std::int64_t>(pos_.size());
-    quadric_.assign(pos_.size(), Quadric{});
-    // Each vertex sums the planes of its faces in list order: deterministic for any thread count.
+    // Each face's plane once (unit normal, offset, and the normal's length: twice the area).
+    struct Plane {
+        double a, b, c, d, length;
+    };
+    const auto m = static_cast<std::int64_t>(face_.size());
+    std::vector<Plane> planes(face_.size());
 #pragma omp parallel for schedule(static)
-    for (std::int64_t v = 0; v < n; ++v) {
-        Quadric q;
-        for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
-            const Face& f = face_[c / 3];
-            const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
-            const double length = norm(normal);
-            if (!(length > 0)) continue;
-            const Point3 unit{normal.x / length, normal.y / length, normal.z / length};
-            const double area = 0.5 * length;
-            q.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[f[0]]), area);
-            q.area += area;
-        }
-        quadric_[v] = q;
+    for (std::int64_t i = 0; i < m; ++i) {
+        const Face& f = face_[static_cast<std::size_t>(i)];
+        const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+        const double length = norm(normal);
+        Plane& plane = planes[static_cast<std::size_t>(i)];
+        plane.length = length;
+        if (!(length > 0)) continue;
+        const Point3 unit{normal.x / length, normal.y / length, normal.z / length};
+        plane = {unit.x, unit.y, unit.z, -dot(unit, pos_[f[0]]), length};
     }
-    // Border edges: one face. Each vertex finds its own (a neighbour met in only one of its
+    // Each vertex sums the planes of its faces in list order: deterministic for any thread count.
+    // Then its border edges (one face): it finds its own (a neighbour met in only one of its
     // faces), marks itself, and unless locked adds for each a plane through the edge
     // perpendicular to its face, weighted heavily (Garland & Heckbert §6) — computed from the
     // edge's lower id so both ends add the same quadric.
+    const auto n = static_cast<std::int64_t>(pos_.size());
+    quadric_.resize(pos_.size());
 #pragma omp parallel for schedule(static)
     for (std::int64_t v = 0; v < n; ++v) {
         thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> seen;  // (neighbour, face)
         seen.clear();
+        Quadric q;
         for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
             const Face& f = face_[c / 3];
             const int k = static_cast<int>(c % 3);
             seen.emplace_back(f[(k + 1) % 3], c / 3);
             seen.emplace_back(f[(k + 2) % 3], c / 3);
+            const Plane& plane = planes[c / 3];
+            if (!(plane.length > 0)) continue;
+            const double area = 0.5 * plane.length;
+            q.add_plane(plane.a, plane.b, plane.c, plane.d, area);
+            q.area += area;
         }
         std::sort(seen.begin(), seen.end());
         for (std::size_t i = 0; i < seen.size();) {
@@ -382,14 +390,15 @@ void Simplifier::build_quadrics() {
                     const double length = norm(side);
                     if (length > 0) {
                         const Point3 unit{side.x / length, side.y / length, side.z / length};
-                        Quadric q;
-                        q.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
-                        quadric_[v] += q;
+                        Quadric border;
+                        border.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
+                        q += border;
                     }
                 }
             }
             i = j;
         }
+        quadric_[v] = q;
     }
 }
 
