@@ -114,16 +114,19 @@ constexpr auto later = [](const Candidate& x, const Candidate& y) {
     return x.b > y.b;
 };
 
-// Doubles in their order as unsigned integers (−0 just before +0; costs are never NaN).
+// Doubles in their order as unsigned integers (costs are never NaN; −0 is taken as +0, which it
+// equals).
 std::uint64_t ordered_bits(double value) {
-    const auto bits = std::bit_cast<std::uint64_t>(value);
+    const auto bits = std::bit_cast<std::uint64_t>(value + 0.0);
     return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
 }
 
-// The k-th smallest cost (k from 1, at most their number) of all the blocks' candidates: a
-// histogram of the top 16 bits of the costs' order, counted in parallel, then a selection among
-// the costs of the bucket that holds the k-th.
-double kth_smallest_cost(const std::vector<std::vector<Candidate>>& lists, std::size_t k, int threads) {
+// The k-th smallest cost (k from 1, at most their number) of all the blocks' candidates, and in
+// `under` how many of each block's are at most that cost: a histogram of the top 16 bits of the
+// costs' order, counted in parallel; then, in parallel, each list counts its costs in lower
+// buckets and collects those in the bucket that holds the k-th, among which the k-th is selected.
+double kth_smallest_cost(const std::vector<std::vector<Candidate>>& lists, std::size_t k, int threads,
+                         std::vector<std::uint64_t>& under) {
     constexpr int kShift = 48;
     std::vector<std::size_t> count(std::size_t{1} << (64 - kShift), 0);
     const auto n = static_cast<std::int64_t>(lists.size());
@@ -139,16 +142,27 @@ double kth_smallest_cost(const std::vector<std::vector<Candidate>>& lists, std::
     }
     std::size_t bucket = 0, below = 0;
     while (below + count[bucket] < k) below += count[bucket++];
-    std::vector<double> costs;
-    costs.reserve(count[bucket]);
-    for (const auto& list : lists) {
-        for (const Candidate& c : list) {
-            if ((ordered_bits(c.cost) >> kShift) == bucket) costs.push_back(c.cost);
+    std::vector<std::vector<double>> in_bucket(lists.size());
+    under.assign(lists.size(), 0);
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (std::int64_t i = 0; i < n; ++i) {
+        const auto l = static_cast<std::size_t>(i);
+        for (const Candidate& c : lists[l]) {
+            const std::uint64_t b = ordered_bits(c.cost) >> kShift;
+            if (b < bucket) ++under[l];
+            if (b == bucket) in_bucket[l].push_back(c.cost);
         }
     }
+    std::vector<double> costs;
+    costs.reserve(count[bucket]);
+    for (const auto& list : in_bucket) costs.insert(costs.end(), list.begin(), list.end());
     const auto at = costs.begin() + static_cast<std::ptrdiff_t>(k - below - 1);
     std::nth_element(costs.begin(), at, costs.end());
-    return *at;
+    const double kth = *at;
+    for (std::size_t l = 0; l < lists.size(); ++l) {
+        under[l] += static_cast<std::uint64_t>(std::count_if(in_bucket[l].begin(), in_bucket[l].end(), [kth](double c) { return c <= kth; }));
+    }
+    return kth;
 }
 
 struct Placement {
@@ -1108,13 +1122,11 @@ MeshStats Simplifier::run() {
                 std::size_t total = 0;
                 for (const auto& list : candidates) total += list.size();
                 const std::size_t needed = static_cast<std::size_t>((left + 1) / 2);  // a collapse removes ~2 faces
-                if (needed > 0 && needed < total) limit = kth_smallest_cost(candidates, needed, threads);
-                std::vector<std::uint64_t> share(blocks.size(), 0);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-                for (std::int64_t i = 0; i < block_count; ++i) {
-                    const auto k = static_cast<std::size_t>(i);
-                    share[k] = static_cast<std::uint64_t>(
-                        std::count_if(candidates[k].begin(), candidates[k].end(), [limit](const Candidate& c) { return c.cost <= limit; }));
+                std::vector<std::uint64_t> share(blocks.size(), 0);  // candidates at most the limit
+                if (needed > 0 && needed < total) {
+                    limit = kth_smallest_cost(candidates, needed, threads, share);
+                } else {
+                    for (std::size_t k = 0; k < blocks.size(); ++k) share[k] = candidates[k].size();
                 }
                 std::uint64_t under = 0;
                 for (std::uint64_t n : share) under += n;
