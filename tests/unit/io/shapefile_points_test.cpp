@@ -5,6 +5,7 @@
 #include "io/errors.hpp"
 #include "io/gdal_support.hpp"
 #include "io/ogr_dataset.hpp"
+#include "unit/io/ogr_points_reference.hpp"
 
 #include <gtest/gtest.h>
 
@@ -49,25 +50,7 @@ public:
     }
     ~ShapeFile() { std::filesystem::remove_all(directory_); }
 
-    // The points as OGR reads them, feature by feature: the reference.
-    std::vector<Point> read_with_ogr() const {
-        std::vector<Point> points;
-        DatasetPtr dataset = open_vector(path_);
-        OGRLayer* layer = dataset->GetLayer(0);
-        while (OGRFeatureUniquePtr feature{layer->GetNextFeature()}) {
-            const OGRGeometry* geometry = feature->GetGeometryRef();
-            if (geometry == nullptr) continue;
-            auto add = [&](const OGRPoint& p) {
-                if (!p.IsEmpty()) points.push_back({p.getX(), p.getY()});
-            };
-            if (wkbFlatten(geometry->getGeometryType()) == wkbPoint) {
-                add(*geometry->toPoint());
-            } else {
-                for (const OGRPoint* p : *geometry->toMultiPoint()) add(*p);
-            }
-        }
-        return points;
-    }
+    std::vector<Point> read_with_ogr() const { return points_read_by_ogr(path_); }
 
     const std::string& path() const { return path_; }
     std::filesystem::path sibling(const char* extension) const {
@@ -78,14 +61,6 @@ private:
     std::filesystem::path directory_;
     std::string path_;
 };
-
-void expect_same_points(const std::vector<Point>& got, const std::vector<Point>& want) {
-    ASSERT_EQ(got.size(), want.size());
-    for (std::size_t i = 0; i < want.size(); ++i) {
-        EXPECT_TRUE(std::memcmp(&got[i], &want[i], sizeof(Point)) == 0)
-            << "point " << i << ": (" << got[i].x << ", " << got[i].y << ") != (" << want[i].x << ", " << want[i].y << ")";
-    }
-}
 
 TEST(ShapefilePoints, EveryPointTypeReadsAsOgrReadsIt) {
     const std::string tiny = "4.9406564584124654e-324", odd = "0.30000000000000004";
