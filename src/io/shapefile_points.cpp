@@ -2,6 +2,7 @@
 
 #include "io/errors.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -100,7 +101,8 @@ bool is_multipoint_type(std::uint32_t type) { return type == 8 || type == 18 || 
 std::optional<std::vector<Point>> read_shapefile_points(const std::string& path) {
     const std::filesystem::path shp_path(path);
     SequentialFile shp(shp_path);
-    SequentialFile shx(sibling(shp_path, ".shx", ".SHX"));
+    const std::filesystem::path shx_path = sibling(shp_path, ".shx", ".SHX");
+    SequentialFile shx(shx_path);
     SequentialFile dbf(sibling(shp_path, ".dbf", ".DBF"));
     if (!shp.is_open() || !shx.is_open() || !dbf.is_open()) return std::nullopt;
 
@@ -108,7 +110,7 @@ std::optional<std::vector<Point>> read_shapefile_points(const std::string& path)
     if (!file_type || shape_header(shx) != file_type) return std::nullopt;
     if (*file_type != 0 && !is_point_type(*file_type) && !is_multipoint_type(*file_type)) return std::nullopt;
     std::error_code error;
-    const std::uintmax_t shx_size = std::filesystem::file_size(sibling(shp_path, ".shx", ".SHX"), error);
+    const std::uintmax_t shx_size = std::filesystem::file_size(shx_path, error);
     if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return std::nullopt;
     const std::uint64_t records = (shx_size - 100) / 8;
 

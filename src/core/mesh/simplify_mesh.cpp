@@ -1056,14 +1056,14 @@ MeshStats Simplifier::run() {
         ++stats.levels;
         // The live vertices grouped by block, blocks in key order, each block's in id order: a
         // counting sort over the level's blocks, numbered densely in key order (x, then y, then z).
-        const int bits = grid_.shift + level;
-        std::uint32_t span[3];
-        for (int axis = 0; axis < 3; ++axis) span[axis] = ((grid_.cells[axis] - 1) >> bits) + 1;
+        const std::uint64_t last = grid_.block_of(Grid::pack(grid_.cells[0] - 1, grid_.cells[1] - 1, grid_.cells[2] - 1), level);
+        std::size_t span[3];
+        for (int axis = 0; axis < 3; ++axis) span[axis] = std::size_t{Grid::unpack(last, axis)} + 1;
         auto dense = [&](std::uint64_t cell) {
-            return (std::size_t{Grid::unpack(cell, 0) >> bits} * span[1] + (Grid::unpack(cell, 1) >> bits)) * span[2] +
-                   (Grid::unpack(cell, 2) >> bits);
+            const std::uint64_t key = grid_.block_of(cell, level);
+            return (Grid::unpack(key, 0) * span[1] + Grid::unpack(key, 1)) * span[2] + Grid::unpack(key, 2);
         };
-        std::vector<std::size_t> first(std::size_t{span[0]} * span[1] * span[2] + 1, 0);
+        std::vector<std::size_t> first(span[0] * span[1] * span[2] + 1, 0);
         for (std::uint32_t v = 0; v < pos_.size(); ++v) {
             if ((flags_[v] & kDead) == 0) ++first[dense(cell_[v]) + 1];
         }
