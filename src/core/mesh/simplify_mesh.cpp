@@ -936,49 +936,65 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                 near_box.push_back(triangle_box(t[0], t[1], t[2]));
             }
         }
-        for (const exact::Triangle3& t : fresh) {
-            const exact::Triangle3 mine = flat(t);
+        // Each new face against the nearby faces and the new faces after it. A face whose corners
+        // lie strictly on one side of the new face's plane, but for those at a corner of the new
+        // face, meets it at most in those corners: apart (this decides most pairs, the corners
+        // shared with the new face included). All corners in the plane and none shared: the
+        // coplanar test, where any contact is a conflict. Otherwise the general test.
+        enum class Verdict { apart, coplanar, unknown };
+        for (std::size_t i = 0; i < fresh.size(); ++i) {
+            const exact::Triangle3 mine = flat(fresh[i]);
             const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
             ++generation;
-            for (std::size_t n = 0; n < near.size(); ++n) {
-                if (!mine_box.overlaps(near_box[n])) continue;
-                const std::uint32_t g = near[n];
-                const exact::Triangle3& other = near_triangle[n];
-                if (!flatten && !shares_a_location(mine, other)) {
-                    auto side = [&](int i) {
-                        const std::uint32_t v = face_[g][i];
-                        SideEntry& entry = sides[v % sides.size()];
-                        if (entry.vertex != v || entry.generation != generation) {
-                            entry = {v, exact::orient3d(mine[0], mine[1], mine[2], other[i], predicates), generation};
-                        }
-                        return entry.side;
-                    };
-                    // All three corners strictly on one side of this face's plane: apart. All
-                    // three in it: the coplanar test, where any contact is a conflict (no corner
-                    // is shared). Otherwise the general test.
-                    const int s0 = side(0), s1 = side(1);
-                    if (s0 == s1) {
-                        const int s2 = side(2);
-                        if (s2 == s0 && s0 != 0) continue;
-                        if (s2 == 0 && s0 == 0) {
-                            const int met = exact::coplanar_triangles_meet(mine, other, predicates);
-                            if (met == 1) {
-                                ++stats.refused_intersection;
-                                return false;
-                            }
-                            if (met == 0) continue;  // (−1, a degenerate new face: the general test)
-                        }
+            auto verdict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other) {
+                int sign = 0;
+                bool on_corner = false, unshared_in_plane = false;
+                for (int k = 0; k < 3; ++k) {
+                    if (same_location(other[k], mine[0]) || same_location(other[k], mine[1]) ||
+                        same_location(other[k], mine[2])) {
+                        on_corner = true;  // in the plane, no predicate needed
+                        continue;
+                    }
+                    const std::uint32_t v = ids[k];
+                    SideEntry& entry = sides[v % sides.size()];
+                    if (entry.vertex != v || entry.generation != generation) {
+                        entry = {v, exact::orient3d(mine[0], mine[1], mine[2], other[k], predicates), generation};
+                    }
+                    if (entry.side == 0) {
+                        unshared_in_plane = true;
+                    } else if (sign == 0) {
+                        sign = entry.side;
+                    } else if (entry.side != sign) {
+                        return Verdict::unknown;
                     }
                 }
-                if (exact::faces_conflict(mine, other, predicates)) {
+                if (sign != 0) return unshared_in_plane ? Verdict::unknown : Verdict::apart;
+                return on_corner ? Verdict::unknown : Verdict::coplanar;
+            };
+            auto conflict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other) {
+                if (!flatten) {
+                    const Verdict v = verdict(ids, other);
+                    if (v == Verdict::apart) return false;
+                    if (v == Verdict::coplanar) {
+                        const int met = exact::coplanar_triangles_meet(mine, other, predicates);
+                        if (met >= 0) return met == 1;  // (−1, a degenerate new face: the general test)
+                    }
+                }
+                return exact::faces_conflict(mine, other, predicates);
+            };
+            for (std::size_t n = 0; n < near.size(); ++n) {
+                if (!mine_box.overlaps(near_box[n])) continue;
+                if (conflict(face_[near[n]], near_triangle[n])) {
                     ++stats.refused_intersection;
                     return false;
                 }
             }
-        }
-        for (std::size_t i = 0; i < fresh.size(); ++i) {
             for (std::size_t j = i + 1; j < fresh.size(); ++j) {
-                if (exact::faces_conflict(flat(fresh[i]), flat(fresh[j]), predicates)) {
+                const exact::Triangle3 other = flat(fresh[j]);
+                if (!mine_box.overlaps(triangle_box(other[0], other[1], other[2]))) continue;
+                std::array<std::uint32_t, 3> ids = face_[star[j]];
+                for (std::uint32_t& v : ids) v = v == b ? a : v;
+                if (conflict(ids, other)) {
                     ++stats.refused_intersection;
                     return false;
                 }
