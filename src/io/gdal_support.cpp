@@ -27,11 +27,12 @@ std::string last_gdal_error() {
     return message && *message ? std::string(": ") + message : std::string();
 }
 
-DatasetPtr open_vector(const std::string& path) {
+DatasetPtr open_vector(const std::string& path, const char* driver) {
     register_drivers();
     QuietGdal quiet;
+    const char* const only[] = {driver, nullptr};
     auto* dataset = static_cast<GDALDataset*>(
-        GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, nullptr, nullptr, nullptr));
+        GDALOpenEx(path.c_str(), GDAL_OF_VECTOR | GDAL_OF_READONLY, driver != nullptr ? only : nullptr, nullptr, nullptr));
     if (dataset == nullptr) {
         std::error_code error;
         if (path.rfind("/vsi", 0) != 0 && !std::filesystem::exists(path, error)) {

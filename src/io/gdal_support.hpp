@@ -29,8 +29,9 @@ struct DatasetCloser {
 };
 using DatasetPtr = std::unique_ptr<GDALDataset, DatasetCloser>;
 
-// Opens a vector dataset read-only; InputError saying why if it cannot.
-DatasetPtr open_vector(const std::string& path);
+// Opens a vector dataset read-only; InputError saying why if it cannot. With `driver`, only
+// that driver is tried (no probing of the others).
+DatasetPtr open_vector(const std::string& path, const char* driver = nullptr);
 
 // The vector driver for an output: `format` by name, or else from the path's extension;
 // OutputError if there is none that can create files.

@@ -6,7 +6,7 @@
 #include "io/geojson_writer.hpp"
 #include "io/gpkg_points.hpp"
 #include "io/output_file.hpp"
-#include "io/shapefile_points.hpp"
+#include "io/shapefile.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
@@ -536,32 +536,66 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         if (CPLGetLastErrorType() >= CE_Failure) throw OutputError("error writing '" + options.path + "'" + last_gdal_error());
     }
 
-    // Read the file back: coordinates must have survived bit for bit, features all there.
+    // Read the file back: coordinates must have survived bit for bit, features all there. A
+    // Shapefile's records are decoded here (shapefile.hpp): through OGR, each geometry handed out
+    // would make the driver parse the .prj again.
     {
-        DatasetPtr written = open_vector(output.staging_path());
-        QuietGdal quiet;
-        for (const auto& layer_pointer : data.layers) {
-            const Data::Layer& layer = *layer_pointer;
-            const std::string name = output_name(layer);
-            OGRLayer* check = written->GetLayerByName(name.c_str());
-            if (check == nullptr && written->GetLayerCount() == 1) check = written->GetLayer(0);
-            if (check == nullptr) throw OutputError("'" + options.path + "': written layer '" + name + "' cannot be read back");
-            std::size_t i = 0;
-            for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
-                if (i >= layer.features.size()) break;
-                std::string difference;
-                const auto expected = data.build_geometry(layer, i, map, kept);
-                if (!same_coordinates(expected.get(), feature->GetGeometryRef(), difference)) {
-                    throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
-                                      "' (layer '" + name + "', feature " + std::to_string(layer.features[i]->GetFID()) + ", " +
-                                      difference +
-                                      "); toposimp never rounds coordinates: write GeoPackage (.gpkg), FlatGeobuf (.fgb), "
-                                      "Shapefile (.shp) or GeoJSON (.geojson) instead");
-                }
+        auto check_geometry = [&](const Data::Layer& layer, std::size_t i, const OGRGeometry* actual) {
+            std::string difference;
+            const auto expected = data.build_geometry(layer, i, map, kept);
+            if (!same_coordinates(expected.get(), actual, difference)) {
+                throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
+                                  "' (layer '" + output_name(layer) + "', feature " + std::to_string(layer.features[i]->GetFID()) +
+                                  ", " + difference +
+                                  "); toposimp never rounds coordinates: write GeoPackage (.gpkg), FlatGeobuf (.fgb), "
+                                  "Shapefile (.shp) or GeoJSON (.geojson) instead");
             }
-            if (i != layer.features.size()) {
-                throw OutputError("'" + options.path + "' holds " + std::to_string(i) + " features in layer '" + name +
-                                  "' after writing, not " + std::to_string(layer.features.size()));
+        };
+        auto check_count = [&](const Data::Layer& layer, std::size_t count) {
+            if (count != layer.features.size()) {
+                throw OutputError("'" + options.path + "' holds " + std::to_string(count) + " features in layer '" +
+                                  output_name(layer) + "' after writing, not " + std::to_string(layer.features.size()));
+            }
+        };
+        std::optional<std::vector<ShapeRecord>> shapes;
+        if (driver_name == "ESRI Shapefile" && layer_count == 1) shapes = read_shapefile_shapes(output.staging_path());
+        if (shapes) {
+            const Data::Layer& layer = *data.layers.front();
+            check_count(layer, shapes->size());
+            for (std::size_t i = 0; i < shapes->size(); ++i) {
+                const ShapeRecord& shape = (*shapes)[i];
+                OGRMultiLineString parts;
+                for (std::size_t k = 0; k < shape.part_starts.size(); ++k) {
+                    const std::size_t first = shape.part_starts[k];
+                    const std::size_t end = k + 1 < shape.part_starts.size() ? shape.part_starts[k + 1] : shape.xy.size();
+                    auto part = std::make_unique<OGRLineString>();
+                    part->setNumPoints(static_cast<int>(end - first), FALSE);
+                    for (std::size_t j = first; j < end; ++j) {
+                        const auto at = static_cast<int>(j - first);
+                        if (shape.z.empty()) {
+                            part->setPoint(at, shape.xy[j].x, shape.xy[j].y);
+                        } else {
+                            part->setPoint(at, shape.xy[j].x, shape.xy[j].y, shape.z[j]);
+                        }
+                    }
+                    parts.addGeometryDirectly(part.release());
+                }
+                check_geometry(layer, i, shape.part_starts.empty() ? nullptr : &parts);
+            }
+        } else {
+            DatasetPtr written = open_vector(output.staging_path(), driver_name.c_str());
+            QuietGdal quiet;
+            for (const auto& layer_pointer : data.layers) {
+                const Data::Layer& layer = *layer_pointer;
+                const std::string name = output_name(layer);
+                OGRLayer* check = written->GetLayerByName(name.c_str());
+                if (check == nullptr && written->GetLayerCount() == 1) check = written->GetLayer(0);
+                if (check == nullptr) throw OutputError("'" + options.path + "': written layer '" + name + "' cannot be read back");
+                std::size_t i = 0;
+                for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
+                    if (i < layer.features.size()) check_geometry(layer, i, feature->GetGeometryRef());
+                }
+                check_count(layer, i);
             }
         }
     }
@@ -632,7 +666,7 @@ std::vector<Point> read_control_points(const std::string& spec, unsigned threads
         const GpkgTable table{path, layer.GetName(), layer.GetGeometryColumn(), layer.GetFIDColumn()};
         if (std::optional<std::vector<Point>> points = read_gpkg_points(table, threads)) return std::move(*points);
     }
-    // A Shapefile's records are decoded here too (shapefile_points.hpp): OGR would parse its .prj first.
+    // A Shapefile's records are decoded here too (shapefile.hpp): OGR would parse its .prj first.
     const std::string extension = std::filesystem::path(path).extension().string();
     if (driver == "ESRI Shapefile" && (extension == ".shp" || extension == ".SHP") && path.rfind("/vsi", 0) != 0) {
         if (std::optional<std::vector<Point>> points = read_shapefile_points(path)) return std::move(*points);

@@ -1,4 +1,4 @@
-#include "io/shapefile_points.hpp"
+#include "io/shapefile.hpp"
 
 #include "io/errors.hpp"
 
@@ -95,75 +95,125 @@ std::optional<std::uint32_t> shape_header(SequentialFile& file) {
 
 bool is_point_type(std::uint32_t type) { return type == 1 || type == 11 || type == 21; }
 bool is_multipoint_type(std::uint32_t type) { return type == 8 || type == 18 || type == 28; }
+bool is_poly_type(std::uint32_t type) { return type == 3 || type == 5 || type == 13 || type == 15 || type == 23 || type == 25; }
 
-}  // namespace
-
-std::optional<std::vector<Point>> read_shapefile_points(const std::string& path) {
+// Calls visit(fid, deleted, content) for every record of the .shp at `path` whose file shape
+// type passes `accepts`, `content` being the record after its 8-byte header (at least the
+// 4-byte shape type, which is 0 or the file's unless the record is deleted). False when a sibling file is missing, the files
+// disagree, or visit returns false.
+template <class Accepts, class Visit>
+bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
     const std::filesystem::path shp_path(path);
     SequentialFile shp(shp_path);
     const std::filesystem::path shx_path = sibling(shp_path, ".shx", ".SHX");
     SequentialFile shx(shx_path);
     SequentialFile dbf(sibling(shp_path, ".dbf", ".DBF"));
-    if (!shp.is_open() || !shx.is_open() || !dbf.is_open()) return std::nullopt;
+    if (!shp.is_open() || !shx.is_open() || !dbf.is_open()) return false;
 
     const std::optional<std::uint32_t> file_type = shape_header(shp);
-    if (!file_type || shape_header(shx) != file_type) return std::nullopt;
-    if (*file_type != 0 && !is_point_type(*file_type) && !is_multipoint_type(*file_type)) return std::nullopt;
+    if (!file_type || shape_header(shx) != file_type) return false;
+    if (*file_type != 0 && !accepts(*file_type)) return false;
     std::error_code error;
     const std::uintmax_t shx_size = std::filesystem::file_size(shx_path, error);
-    if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return std::nullopt;
+    if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return false;
     const std::uint64_t records = (shx_size - 100) / 8;
 
     // dBASE header: record count, header length and record length; each record starts with
     // its deletion flag ('*' deleted, ' ' not).
     std::array<unsigned char, 12> dbf_header{};
-    if (!dbf.take(dbf_header.data(), dbf_header.size())) return std::nullopt;
+    if (!dbf.take(dbf_header.data(), dbf_header.size())) return false;
     const std::uint32_t dbf_records = little_u32(&dbf_header[4]);
     const unsigned dbf_header_length = dbf_header[8] | unsigned{dbf_header[9]} << 8;
     const unsigned dbf_record_length = dbf_header[10] | unsigned{dbf_header[11]} << 8;
     if (dbf_records != records || dbf_record_length == 0 || dbf_header_length < 12 || !dbf.skip(dbf_header_length - 12)) {
-        return std::nullopt;
+        return false;
     }
 
-    std::vector<Point> points;
-    points.reserve(static_cast<std::size_t>(std::min<std::uint64_t>(records, std::uint64_t{1} << 26)));
     std::vector<unsigned char> content;
     for (std::uint64_t fid = 0; fid < records; ++fid) {
         unsigned char index[8], record_header[8], deletion = 0;
-        if (!shx.take(index, 8) || !dbf.take(&deletion, 1) || !dbf.skip(dbf_record_length - 1)) return std::nullopt;
+        if (!shx.take(index, 8) || !dbf.take(&deletion, 1) || !dbf.skip(dbf_record_length - 1)) return false;
         // The .shx locates every record (as OGR reads them); here they must follow one another.
         const std::uint64_t offset = std::uint64_t{big_u32(index)} * 2, length = std::uint64_t{big_u32(index + 4)} * 2;
         if (offset != shp.offset() || !shp.take(record_header, 8) || std::uint64_t{big_u32(record_header + 4)} * 2 != length) {
-            return std::nullopt;
+            return false;
         }
         content.resize(static_cast<std::size_t>(length));
-        if (length < 4 || !shp.take(content.data(), content.size())) return std::nullopt;
-        if (deletion == '*') continue;
-        if (deletion != ' ') return std::nullopt;
-
+        if (length < 4 || !shp.take(content.data(), content.size())) return false;
+        if (deletion != '*' && deletion != ' ') return false;
         const std::uint32_t type = little_u32(content.data());
-        const std::size_t before = points.size();
-        if (type == 0) continue;
-        if (type != *file_type) return std::nullopt;
-        if (is_point_type(type)) {
-            if (length < 20) return std::nullopt;
-            points.push_back({little_f64(&content[4]), little_f64(&content[12])});
-        } else {
-            if (length < 40) return std::nullopt;
-            const std::uint64_t count = little_u32(&content[36]);
-            if (length < 40 + 16 * count) return std::nullopt;
-            for (std::uint64_t i = 0; i < count; ++i) {
-                points.push_back({little_f64(&content[40 + 16 * i]), little_f64(&content[48 + 16 * i])});
-            }
-        }
-        for (std::size_t i = before; i < points.size(); ++i) {
-            if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y)) {
-                throw InputError("'" + path + "', layer '" + shp_path.stem().string() + "', feature " + std::to_string(fid) +
-                                 ": control point has a non-finite coordinate");
-            }
-        }
+        if (deletion == ' ' && type != 0 && type != *file_type) return false;
+        if (!visit(fid, deletion == '*', content)) return false;
     }
+    return true;
+}
+
+}  // namespace
+
+std::optional<std::vector<Point>> read_shapefile_points(const std::string& path) {
+    std::vector<Point> points;
+    const bool read = for_each_record(
+        path, [](std::uint32_t type) { return is_point_type(type) || is_multipoint_type(type); },
+        [&](std::uint64_t fid, bool deleted, const std::vector<unsigned char>& content) {
+            const std::uint32_t type = little_u32(content.data());
+            if (deleted || type == 0) return true;
+            const std::size_t length = content.size(), before = points.size();
+            if (is_point_type(type)) {
+                if (length < 20) return false;
+                points.push_back({little_f64(&content[4]), little_f64(&content[12])});
+            } else {
+                if (length < 40) return false;
+                const std::uint64_t count = little_u32(&content[36]);
+                if (length < 40 + 16 * count) return false;
+                for (std::uint64_t i = 0; i < count; ++i) {
+                    points.push_back({little_f64(&content[40 + 16 * i]), little_f64(&content[48 + 16 * i])});
+                }
+            }
+            for (std::size_t i = before; i < points.size(); ++i) {
+                if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y)) {
+                    throw InputError("'" + path + "', layer '" + std::filesystem::path(path).stem().string() + "', feature " +
+                                     std::to_string(fid) + ": control point has a non-finite coordinate");
+                }
+            }
+            return true;
+        });
+    if (!read) return std::nullopt;
     return points;
+}
+
+std::optional<std::vector<ShapeRecord>> read_shapefile_shapes(const std::string& path) {
+    std::vector<ShapeRecord> shapes;
+    const bool read = for_each_record(path, is_poly_type, [&](std::uint64_t, bool deleted, const std::vector<unsigned char>& content) {
+        if (deleted) return false;  // (not in a file just written)
+        ShapeRecord& shape = shapes.emplace_back();
+        const std::uint32_t type = little_u32(content.data());
+        if (type == 0) return true;
+        // Box (32 bytes), part and point counts, the parts' first points, the points; for Z
+        // types then the z range and the z values (M values after them are not read).
+        const std::uint64_t length = content.size();
+        if (length < 44) return false;
+        const std::uint64_t parts = little_u32(&content[36]), count = little_u32(&content[40]);
+        const std::uint64_t points_at = 44 + 4 * parts, z_at = points_at + 16 * count + 16;
+        const bool has_z = type == 13 || type == 15;
+        if (length < points_at + 16 * count || (has_z && length < z_at + 8 * count)) return false;
+        for (std::uint64_t k = 0; k < parts; ++k) {
+            const std::uint64_t start = little_u32(&content[44 + 4 * k]);
+            if (start >= count || (k == 0 ? start != 0 : start <= shape.part_starts.back())) return false;
+            shape.part_starts.push_back(static_cast<std::size_t>(start));
+        }
+        if (parts == 0 && count != 0) return false;
+        shape.xy.reserve(static_cast<std::size_t>(count));
+        for (std::uint64_t i = 0; i < count; ++i) {
+            shape.xy.push_back({little_f64(&content[points_at + 16 * i]), little_f64(&content[points_at + 16 * i + 8])});
+        }
+        if (has_z) {
+            shape.z.reserve(static_cast<std::size_t>(count));
+            for (std::uint64_t i = 0; i < count; ++i) shape.z.push_back(little_f64(&content[z_at + 8 * i]));
+        }
+        return true;
+    });
+    if (!read) return std::nullopt;
+    return shapes;
 }
 
 }  // namespace toposimp::io

@@ -1,6 +1,7 @@
-// Shapefile control points decoded from the .shp directly must be exactly the points OGR reads:
-// files written by OGR in every point shape type, checked against OGR's reading of the same file.
-#include "io/shapefile_points.hpp"
+// Shapefile records decoded from the .shp directly must be exactly what OGR reads: control
+// points from files written by OGR in every point shape type, and line and polygon shapes (what
+// a written output is checked with) in every such type, each against OGR's reading of the file.
+#include "io/shapefile.hpp"
 
 #include "io/errors.hpp"
 #include "io/gdal_support.hpp"
@@ -165,6 +166,111 @@ TEST(ShapefilePoints, AnythingElseIsLeftToOgr) {
         shx.put(static_cast<char>(0x41));  // was 0x40: (100 + 28) / 2
     }
     EXPECT_FALSE(read_shapefile_points(moved.path()).has_value());
+}
+
+// The parts of an OGR geometry as read_shapefile_shapes gives them: vertices one after another
+// (z too for 3D ones), each part's start.
+ShapeRecord as_record(const OGRGeometry* geometry) {
+    ShapeRecord record;
+    auto add = [&](const OGRSimpleCurve& curve) {
+        record.part_starts.push_back(record.xy.size());
+        for (int i = 0; i < curve.getNumPoints(); ++i) {
+            record.xy.push_back({curve.getX(i), curve.getY(i)});
+            if (curve.Is3D()) record.z.push_back(curve.getZ(i));
+        }
+    };
+    auto walk = [&](auto&& self, const OGRGeometry* g) -> void {
+        if (g == nullptr) return;
+        switch (wkbFlatten(g->getGeometryType())) {
+            case wkbLineString: add(*g->toLineString()); break;
+            case wkbPolygon:
+                for (const OGRLinearRing* ring : *g->toPolygon()) add(*ring);
+                break;
+            case wkbMultiLineString:
+            case wkbMultiPolygon:
+                for (const OGRGeometry* member : *g->toGeometryCollection()) self(self, member);
+                break;
+            default: ADD_FAILURE() << "unexpected " << g->getGeometryName();
+        }
+    };
+    walk(walk, geometry);
+    return record;
+}
+
+void expect_same_record(const ShapeRecord& read, const ShapeRecord& reference, std::size_t fid) {
+    ASSERT_EQ(read.part_starts, reference.part_starts) << "feature " << fid;
+    ASSERT_EQ(read.xy.size(), reference.xy.size()) << "feature " << fid;
+    for (std::size_t i = 0; i < read.xy.size(); ++i) {
+        EXPECT_EQ(std::memcmp(&read.xy[i], &reference.xy[i], sizeof(Point)), 0) << "feature " << fid << ", vertex " << i;
+    }
+    ASSERT_EQ(read.z.size(), reference.z.size()) << "feature " << fid;
+    for (std::size_t i = 0; i < read.z.size(); ++i) {
+        EXPECT_EQ(std::memcmp(&read.z[i], &reference.z[i], sizeof(double)), 0) << "feature " << fid << ", z " << i;
+    }
+}
+
+TEST(ShapefileShapes, EveryLineAndPolygonTypeReadsAsOgrReadsIt) {
+    const std::string tiny = "4.9406564584124654e-324", odd = "0.30000000000000004";
+    struct Case {
+        const char* name;
+        OGRwkbGeometryType type;
+        std::vector<std::string> wkts;
+    };
+    const std::vector<Case> cases = {
+        {"line", wkbLineString, {"LINESTRING (0 0,1 " + odd + ",2 " + tiny + ")", "", "LINESTRING (1e300 -1e-300,5 6)"}},
+        {"multiline", wkbMultiLineString, {"MULTILINESTRING ((0 0,1 1),(2 2,3 3,4 " + odd + "))", "LINESTRING (7 7,8 8)"}},
+        {"linez", wkbLineString25D, {"LINESTRING Z (0 0 1,1 1 " + odd + ")", "MULTILINESTRING Z ((0 0 0,1 0 0),(5 5 5,6 6 6))"}},
+        {"linem", wkbLineStringM, {"LINESTRING M (0 0 1,1 1 2,3 " + odd + " 4)"}},
+        // Rings written clockwise outside and counter-clockwise inside, as the driver stores
+        // them: OGR reads them back in the stored order either way.
+        {"polygon", wkbPolygon,
+         {"POLYGON ((0 0,0 10,10 10,10 0,0 0),(2 2,4 2,4 4,2 4,2 2))", "",
+          "MULTIPOLYGON (((20 20,20 30,30 30,20 20)),((40 40,40 " + odd + ",50 40,40 40)))"}},
+        {"polygonz", wkbPolygon25D, {"POLYGON Z ((0 0 1,0 10 2,10 10 3,0 0 1))"}},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        const ShapeFile file(c.name, c.type, c.wkts);
+        const std::optional<std::vector<ShapeRecord>> read = read_shapefile_shapes(file.path());
+        ASSERT_TRUE(read.has_value());
+        ASSERT_EQ(read->size(), c.wkts.size());
+        DatasetPtr dataset = open_vector(file.path());
+        OGRLayer* layer = dataset->GetLayer(0);
+        std::size_t fid = 0;
+        for (OGRFeatureUniquePtr feature{layer->GetNextFeature()}; feature; feature.reset(layer->GetNextFeature()), ++fid) {
+            ASSERT_LT(fid, read->size());
+            expect_same_record((*read)[fid], as_record(feature->GetGeometryRef()), fid);
+        }
+        EXPECT_EQ(fid, read->size());
+        EXPECT_EQ((*read)[0].part_starts.empty(), false);
+    }
+}
+
+// Points, deleted records, a missing sibling, or a record cut short: the reader declines (and
+// the written output is read back through OGR).
+TEST(ShapefileShapes, AnythingElseIsLeftToOgr) {
+    const ShapeFile points("points", wkbPoint, {"POINT (1 2)"});
+    EXPECT_FALSE(read_shapefile_shapes(points.path()).has_value());
+
+    const ShapeFile deleted("deleted", wkbLineString, {"LINESTRING (0 0,1 1)", "LINESTRING (2 2,3 3)"}, {1});
+    EXPECT_FALSE(read_shapefile_shapes(deleted.path()).has_value());
+
+    const ShapeFile no_shx("noshx", wkbLineString, {"LINESTRING (0 0,1 1)"});
+    std::filesystem::remove(no_shx.sibling(".shx"));
+    EXPECT_FALSE(read_shapefile_shapes(no_shx.path()).has_value());
+
+    const ShapeFile truncated("cut", wkbLineString, {"LINESTRING (0 0,1 1,2 2)"});
+    std::filesystem::resize_file(truncated.path(), std::filesystem::file_size(truncated.path()) - 8);
+    EXPECT_FALSE(read_shapefile_shapes(truncated.path()).has_value());
+
+    // A part index beyond the points (the record's first part start, at 8 + 44, set to 5).
+    const ShapeFile bad_part("badpart", wkbLineString, {"LINESTRING (0 0,1 1,2 2)"});
+    {
+        std::fstream shp(bad_part.path(), std::ios::in | std::ios::out | std::ios::binary);
+        shp.seekp(100 + 8 + 44);
+        shp.put(5);
+    }
+    EXPECT_FALSE(read_shapefile_shapes(bad_part.path()).has_value());
 }
 
 }  // namespace
