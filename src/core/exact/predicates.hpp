@@ -13,6 +13,7 @@
 #include "core/geometry.hpp"
 
 #include <cstdint>
+#include <span>
 #include <string_view>
 
 namespace toposimp::exact {
@@ -45,6 +46,14 @@ int orient2d_gmp(Point a, Point b, Point c);
 
 // The same sign, decided by the float filter when it can be certified, by GMP otherwise.
 int orient2d(Point a, Point b, Point c, PredicateStats& stats);
+
+// Sign of the shoelace sum over consecutive corners of `ring` (twice its signed area when the
+// ring is closed: its last corner at its first's location): > 0 counter-clockwise, < 0
+// clockwise. A closed ring is summed about its first corner in doubles with a forward error
+// bound (2(n + 8)ε times the sum of the products' magnitudes, n corners); GMP decides when the
+// bound does not, and always for an open sequence.
+int ring_area_sign(std::span<const Point> ring, PredicateStats& stats);
+int ring_area_sign_gmp(std::span<const Point> ring);
 
 // Is p in the closed triangle abc (interior or boundary)? Degenerate triangles (collinear or
 // coincident corners) are the closed segment or point they span.

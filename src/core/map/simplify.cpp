@@ -5,7 +5,6 @@
 #include "core/map/location_key.hpp"
 #include "core/map/point_grid.hpp"
 
-#include <gmpxx.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -624,7 +623,7 @@ private:
         const int turn = options_.arithmetic == exact::Arithmetic::floating
                              ? orient_float(corners[0], corners[1], corners[2])
                              : exact::orient2d(corners[0], corners[1], corners[2], stats.predicates);
-        return turn != 0 && turn == ring_orientation(chain) ? Verdict::remove : Verdict::blocked_by_ring;
+        return turn != 0 && turn == ring_orientation(chain, stats.predicates) ? Verdict::remove : Verdict::blocked_by_ring;
     }
 
     static int orient_float(Point a, Point b, Point c) {
@@ -634,15 +633,13 @@ private:
 
     // Sign of the input ring's signed area, exactly (computed once, only for rings that get
     // down to their last triangle, by the one thread that owns the whole ring).
-    int ring_orientation(std::uint32_t chain) {
+    int ring_orientation(std::uint32_t chain, exact::PredicateStats& stats) {
         if (orientation_[chain] != 2) return orientation_[chain];
         const Chain& range = map_.chains[chain];
-        mpq_class twice_area = 0;
-        for (std::uint32_t v = range.first; v < range.last; ++v) {
-            const Point p = map_.vertices[v], q = map_.vertices[v + 1];
-            twice_area += mpq_class(p.x) * mpq_class(q.y) - mpq_class(q.x) * mpq_class(p.y);
-        }
-        orientation_[chain] = static_cast<std::int8_t>(sgn(twice_area));
+        const std::span<const Point> ring(map_.vertices.data() + range.first, range.last - range.first + 1);
+        orientation_[chain] = static_cast<std::int8_t>(options_.arithmetic == exact::Arithmetic::rational
+                                                           ? exact::ring_area_sign_gmp(ring)
+                                                           : exact::ring_area_sign(ring, stats));
         return orientation_[chain];
     }
 

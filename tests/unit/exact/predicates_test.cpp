@@ -4,8 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
+#include <vector>
 
 namespace toposimp::exact {
 namespace {
@@ -152,6 +154,124 @@ TEST(InClosedTriangle, FilterAgreesWithGmpOnRandomNearDegenerateCases) {
     }
     EXPECT_GT(exact_stats.expansion_decided, 0u);
     EXPECT_LT(exact_stats.expansion_decided, exact_stats.filter_decided);
+}
+
+// The naive shoelace sum of a ring, in doubles about the origin.
+int naive_area_sign(const std::vector<Point>& ring) {
+    double sum = 0;
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) sum += ring[i].x * ring[i + 1].y - ring[i + 1].x * ring[i].y;
+    return (sum > 0) - (sum < 0);
+}
+
+// Thin rings: a triangle whose third corner lies a few ulps off the line through the other two,
+// with collinear corners added along that line, far from the origin and at tiny scales.
+TEST(RingAreaSign, FilterAgreesWithGmpOnThinRings) {
+    PredicateStats stats;
+    int naive_wrong = 0, checked = 0;
+    for (const double scale : {1.0, 1e-200, 1e6}) {
+        for (const double offset : {0.0, 1e6, 1e15}) {
+            for (int i = -8; i <= 8; ++i) {
+                const double base = offset + 0.5 * scale;
+                const Point a{base, base}, b{offset + 12 * scale, offset + 12 * scale};
+                const Point c{offset + 24 * scale, ulps_from(offset + 24 * scale, i)};
+                // Corners along ab (exactly on it: both coordinates equal).
+                std::vector<Point> ring{a};
+                for (int k = 1; k < 5; ++k) {
+                    const double t = base + (b.x - base) * k / 5;
+                    ring.push_back({t, t});
+                }
+                ring.insert(ring.end(), {b, c, a});
+                const int exact = ring_area_sign_gmp(ring);
+                ASSERT_EQ(ring_area_sign(ring, stats), exact) << scale << ' ' << offset << ' ' << i;
+                // Reversed: the opposite sign.
+                const std::vector<Point> reversed(ring.rbegin(), ring.rend());
+                ASSERT_EQ(ring_area_sign(reversed, stats), -exact);
+                naive_wrong += naive_area_sign(ring) != exact;
+                ++checked;
+            }
+        }
+    }
+    EXPECT_GT(stats.filter_decided, 0u);
+    EXPECT_GT(stats.gmp_fallbacks, 0u);  // the collinear (i = 0) and near-collinear rings
+    EXPECT_GT(naive_wrong, 0) << "the naive double shoelace sum should fail somewhere among " << checked;
+}
+
+TEST(RingAreaSign, ZeroAreaOverflowAndOpenSequences) {
+    PredicateStats stats;
+    // Back and forth along a segment, and a collinear run: exactly zero.
+    EXPECT_EQ(ring_area_sign(std::vector<Point>{{0.1, 0.3}, {7.7, 1.9}, {0.1, 0.3}}, stats), 0);
+    EXPECT_EQ(ring_area_sign(std::vector<Point>{{1, 1}, {2, 2}, {3, 3}, {1, 1}}, stats), 0);
+    // Products beyond 2^1000: GMP.
+    const PredicateStats before = stats;
+    EXPECT_EQ(ring_area_sign(std::vector<Point>{{1e300, 1e300}, {-1e300, 1e300}, {-1e300, -1e300}, {1e300, 1e300}}, stats), 1);
+    EXPECT_EQ(stats.gmp_fallbacks, before.gmp_fallbacks + 1);
+    // An open sequence is summed as given, about the origin, which differs from the sum about
+    // its first point by o × (last − o): here +9 about the origin, −1 about (10, 0).
+    const std::vector<Point> open{{10, 0}, {9, 1}, {10, 1}};
+    EXPECT_EQ(ring_area_sign_gmp(open), 1);
+    EXPECT_EQ(ring_area_sign(open, stats), 1);
+}
+
+// The shoelace sum about the first corner in doubles with no error bound: what the filter
+// computes before it asks whether the bound settles the sign.
+int unbounded_area_sign(const std::vector<Point>& ring) {
+    double sum = 0;
+    const Point o = ring.front();
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+        sum += (ring[i].x - o.x) * (ring[i + 1].y - o.y) - (ring[i + 1].x - o.x) * (ring[i].y - o.y);
+    }
+    return (sum > 0) - (sum < 0);
+}
+
+// Slivers: out along y = x/3 and back a few ulps beside it, many corners, so that the terms
+// cancel to almost nothing: the sum without its bound gets signs wrong, and the filter must
+// hand those rings to GMP.
+TEST(RingAreaSign, SliversNeedTheBound) {
+    std::mt19937_64 random(11);
+    std::uniform_real_distribution<double> along(0.001, 1000.0);
+    std::uniform_int_distribution<int> ulps(-3, 3);
+    PredicateStats stats;
+    int unbounded_wrong = 0;
+    for (int trial = 0; trial < 400; ++trial) {
+        std::vector<double> out(20), back(20);
+        for (double& t : out) t = along(random);
+        for (double& t : back) t = along(random);
+        std::sort(out.begin(), out.end());
+        std::sort(back.rbegin(), back.rend());
+        std::vector<Point> ring;
+        for (const double t : out) ring.push_back({t, t / 3});
+        for (const double t : back) ring.push_back({t, ulps_from(t / 3, ulps(random))});
+        ring.push_back(ring.front());
+        const int exact = ring_area_sign_gmp(ring);
+        ASSERT_EQ(ring_area_sign(ring, stats), exact) << trial;
+        unbounded_wrong += unbounded_area_sign(ring) != exact;
+    }
+    EXPECT_GT(unbounded_wrong, 0);
+    EXPECT_GT(stats.gmp_fallbacks, 0u);
+}
+
+// Random star-shaped polygons of many corners at many scales: all decided by the filter, each
+// as GMP decides.
+TEST(RingAreaSign, ManyCornersDecidedByTheFilter) {
+    std::mt19937_64 random(7);
+    std::uniform_real_distribution<double> unit(0.5, 1.0);
+    PredicateStats stats;
+    for (int trial = 0; trial < 40; ++trial) {
+        const double scale = std::ldexp(1.0, trial * 20 - 400), cx = 1e5 * scale * trial, cy = -3e4 * scale;
+        const int n = 10 + 97 * trial;
+        std::vector<Point> ring;
+        for (int k = 0; k < n; ++k) {
+            const double angle = 2 * M_PI * k / n, r = unit(random) * scale;
+            ring.push_back({cx + r * std::cos(angle), cy + r * std::sin(angle)});
+        }
+        ring.push_back(ring.front());
+        if (trial % 2 == 1) std::reverse(ring.begin(), ring.end());
+        const int exact = ring_area_sign_gmp(ring);
+        EXPECT_EQ(exact, trial % 2 == 1 ? -1 : 1);
+        ASSERT_EQ(ring_area_sign(ring, stats), exact) << trial;
+    }
+    EXPECT_EQ(stats.gmp_fallbacks, 0u);
+    EXPECT_EQ(stats.filter_decided, 40u);
 }
 
 }  // namespace
