@@ -176,8 +176,75 @@ struct BlockResult {
     std::uint64_t faces_removed = 0;
 };
 
-// Faces by grid cell for one round: the faces grouped by cell, and an open-addressing table
-// from a cell to its group.
+// An open-addressing table (linear probing) from grid cell keys to values; it doubles when half
+// full.
+template <class Value>
+class CellMap {
+public:
+    Value* find(std::uint64_t key) {
+        const std::size_t at = slot_of(key);
+        return at == kNowhere ? nullptr : &slots_[at].value;
+    }
+    const Value* find(std::uint64_t key) const {
+        const std::size_t at = slot_of(key);
+        return at == kNowhere ? nullptr : &slots_[at].value;
+    }
+    // The value of a cell, default-made if it had none.
+    Value& operator[](std::uint64_t key) {
+        if (2 * (size_ + 1) > slots_.size()) grow(slots_.empty() ? 64 : 2 * slots_.size());
+        std::size_t at = home(key);
+        for (; slots_[at].key != kEmpty; at = (at + 1) & (slots_.size() - 1)) {
+            if (slots_[at].key == key) return slots_[at].value;
+        }
+        ++size_;
+        slots_[at].key = key;
+        return slots_[at].value;
+    }
+    // Room for `count` cells without growing.
+    void reserve(std::size_t count) {
+        std::size_t size = 64;
+        while (size < 2 * (count + 1)) size *= 2;
+        if (size > slots_.size()) grow(size);
+    }
+    void clear() {
+        slots_.clear();
+        size_ = 0;
+    }
+
+private:
+    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no cell key: they use 63 bits
+    struct Slot {
+        std::uint64_t key = kEmpty;
+        Value value{};
+    };
+    static constexpr std::size_t kNowhere = ~std::size_t{0};
+    std::size_t home(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
+    std::size_t slot_of(std::uint64_t key) const {
+        if (slots_.empty()) return kNowhere;
+        for (std::size_t at = home(key);; at = (at + 1) & (slots_.size() - 1)) {
+            if (slots_[at].key == key) return at;
+            if (slots_[at].key == kEmpty) return kNowhere;
+        }
+    }
+    void grow(std::size_t size) {
+        std::vector<Slot> old(size);
+        old.swap(slots_);
+        shift_ = 64 - std::countr_zero(slots_.size());
+        for (Slot& slot : old) {
+            if (slot.key == kEmpty) continue;
+            std::size_t at = home(slot.key);
+            while (slots_[at].key != kEmpty) at = (at + 1) & (slots_.size() - 1);
+            slots_[at] = std::move(slot);
+        }
+    }
+
+    std::vector<Slot> slots_;
+    std::size_t size_ = 0;
+    int shift_ = 58;
+};
+
+// Faces by grid cell for one round: the faces grouped by cell, and a table from a cell to its
+// group.
 class CellIndex {
 public:
     // `pairs`: (cell, face), sorted.
@@ -188,91 +255,34 @@ public:
             faces_[i] = pairs[i].second;
             groups += i == 0 || pairs[i].first != pairs[i - 1].first;
         }
-        int bits = 4;
-        while ((std::size_t{1} << bits) < 2 * groups) ++bits;
-        shift_ = 64 - bits;
-        slots_.assign(std::size_t{1} << bits, Slot{});
+        groups_.reserve(groups);
         for (std::size_t i = 0; i < pairs.size();) {
             std::size_t j = i;
             while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
-            std::size_t at = home(pairs[i].first);
-            while (slots_[at].key != kEmpty) at = (at + 1) & (slots_.size() - 1);
-            slots_[at] = {pairs[i].first, i, j - i};
+            groups_[pairs[i].first] = {i, j - i};
             i = j;
         }
     }
     void clear() {
         faces_.clear();
-        slots_.clear();
+        groups_.clear();
     }
     // The faces listed in a cell.
     std::span<const std::uint32_t> faces(std::uint64_t key) const {
-        if (slots_.empty()) return {};
-        for (std::size_t at = home(key);; at = (at + 1) & (slots_.size() - 1)) {
-            const Slot& slot = slots_[at];
-            if (slot.key == key) return {faces_.data() + slot.first, slot.count};
-            if (slot.key == kEmpty) return {};
-        }
+        const Group* group = groups_.find(key);
+        return group == nullptr ? std::span<const std::uint32_t>{} : std::span(faces_.data() + group->first, group->count);
     }
 
 private:
-    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no cell key: they use 63 bits
-    struct Slot {
-        std::uint64_t key = kEmpty;
+    struct Group {
         std::size_t first = 0, count = 0;
     };
-    std::size_t home(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
-
     std::vector<std::uint32_t> faces_;
-    std::vector<Slot> slots_;
-    int shift_ = 60;
+    CellMap<Group> groups_;
 };
 
 // The faces a block changed in the current round, by index cell.
-class Overlay {
-public:
-    // The list of a cell, or null.
-    std::vector<std::uint32_t>* find(std::uint64_t key) {
-        if (slots_.empty()) return nullptr;
-        for (std::size_t at = home(key);; at = (at + 1) & (slots_.size() - 1)) {
-            if (slots_[at].key == key) return &lists_[slots_[at].list];
-            if (slots_[at].key == kEmpty) return nullptr;
-        }
-    }
-    // The list of a cell, made empty if it had none.
-    std::vector<std::uint32_t>& operator[](std::uint64_t key) {
-        if (2 * (lists_.size() + 1) > slots_.size()) grow();
-        std::size_t at = home(key);
-        for (; slots_[at].key != kEmpty; at = (at + 1) & (slots_.size() - 1)) {
-            if (slots_[at].key == key) return lists_[slots_[at].list];
-        }
-        slots_[at] = {key, static_cast<std::uint32_t>(lists_.size())};
-        return lists_.emplace_back();
-    }
-
-private:
-    static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no cell key: they use 63 bits
-    struct Slot {
-        std::uint64_t key = kEmpty;
-        std::uint32_t list = 0;
-    };
-    std::size_t home(std::uint64_t key) const { return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_); }
-    void grow() {
-        std::vector<Slot> old(slots_.empty() ? 64 : 2 * slots_.size());
-        old.swap(slots_);
-        shift_ = 64 - std::countr_zero(slots_.size());
-        for (const Slot& slot : old) {
-            if (slot.key == kEmpty) continue;
-            std::size_t at = home(slot.key);
-            while (slots_[at].key != kEmpty) at = (at + 1) & (slots_.size() - 1);
-            slots_[at] = slot;
-        }
-    }
-
-    std::vector<Slot> slots_;
-    std::vector<std::vector<std::uint32_t>> lists_;
-    int shift_ = 58;
-};
+using Overlay = CellMap<std::vector<std::uint32_t>>;
 
 class Simplifier {
 public:
