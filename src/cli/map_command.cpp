@@ -17,6 +17,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <optional>
@@ -220,7 +221,13 @@ int run_map(const MapOptions& options, Context& context) {
                 points = std::async(std::launch::async, [&options, threads] { return io::read_control_points(options.points, threads); });
             }
             try {
-                dataset.emplace(io::OgrDataset::read(options.input, options.layers, map));
+                // A Shapefile input's .prj may go to a Shapefile output (one .shp file, not a
+                // directory of them) as it is, without parsing the CRS.
+                const std::string extension = std::filesystem::path(options.output).extension().string();
+                const bool prj_as_file = (extension == ".shp" || extension == ".SHP") &&
+                                         io::vector_driver_for(options.output, options.format)->GetDescription() ==
+                                             std::string("ESRI Shapefile");
+                dataset.emplace(io::OgrDataset::read(options.input, options.layers, map, prj_as_file));
             } catch (...) {
                 if (points.valid()) points.wait();
                 throw;

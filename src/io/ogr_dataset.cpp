@@ -12,10 +12,12 @@
 #include <cpl_error.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 namespace toposimp::io {
 namespace {
@@ -48,6 +50,7 @@ struct OgrDataset::Data {
         std::string fid_column;
         OGRwkbGeometryType geometry_type = wkbUnknown;
         std::unique_ptr<OGRSpatialReference> srs;
+        std::filesystem::path prj;  // instead of srs: the input's .prj, written out as it is
         OGRFeatureDefn* definition = nullptr;       // reference-counted
         std::vector<OGRFeatureUniquePtr> features;  // attributes only: geometries are in the map
         std::vector<Shape> shapes;
@@ -78,7 +81,7 @@ struct OgrDataset::Data {
         ring_m.assign(coverage.point_count(), 0.0);
     }
 
-    void read_layer(const std::string& path, OGRLayer& source, map::MapData& map);
+    void read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file);
 
     std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
                                                 const std::vector<std::uint8_t>& kept) const;
@@ -142,9 +145,33 @@ void set_point(OGRSimpleCurve& line, int i, Point p, bool with_z, bool with_m, d
     }
 }
 
+// A .shp record's shape as OGR reads a PolyLine: one part a LineString, more a
+// MultiLineString.
+std::unique_ptr<OGRGeometry> shape_geometry(const ShapeRecord& record) {
+    auto part = [&](std::size_t k) {
+        const std::size_t first = record.part_starts[k];
+        const std::size_t end = k + 1 < record.part_starts.size() ? record.part_starts[k + 1] : record.xy.size();
+        auto line = std::make_unique<OGRLineString>();
+        line->setNumPoints(static_cast<int>(end - first), FALSE);
+        for (std::size_t j = first; j < end; ++j) {
+            const auto at = static_cast<int>(j - first);
+            if (record.z.empty()) {
+                line->setPoint(at, record.xy[j].x, record.xy[j].y);
+            } else {
+                line->setPoint(at, record.xy[j].x, record.xy[j].y, record.z[j]);
+            }
+        }
+        return line;
+    };
+    if (record.part_starts.size() == 1) return part(0);
+    auto lines = std::make_unique<OGRMultiLineString>();
+    for (std::size_t k = 0; k < record.part_starts.size(); ++k) lines->addGeometryDirectly(part(k).release());
+    return lines;
+}
+
 }  // namespace
 
-void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map::MapData& map) {
+void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file) {
     auto layer = std::make_unique<Layer>();
     LayerSummary summary_of_layer;
     summary_of_layer.layer = source.GetName();
@@ -154,7 +181,33 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     summary_of_layer.has_z = OGR_GT_HasZ(layer->geometry_type);
     summary_of_layer.has_m = OGR_GT_HasM(layer->geometry_type);
     if (summary_of_layer.has_z || summary_of_layer.has_m) start_carrying_zm(map);
-    if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
+    // A plain PolyLine Shapefile going to a Shapefile: OGR hands out each geometry with the
+    // layer's CRS, and the first one makes the driver parse the .prj with PROJ (and search
+    // proj.db for its EPSG code) — most of a small file's run, for a CRS that is only written
+    // back. Then the shapes are decoded from the .shp here (shapefile.hpp; a one-part record is
+    // a LineString, more a MultiLineString, as OGR reads them), OGR reads the attributes only,
+    // and the .prj file goes to the output as it is.
+    std::optional<std::vector<ShapeRecord>> records;
+    const std::filesystem::path shp(path);
+    if (prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
+        path.rfind("/vsi", 0) != 0 && (shp.extension() == ".shp" || shp.extension() == ".SHP")) {
+        records = read_shapefile_shapes(path);
+        if (records && (static_cast<GIntBig>(records->size()) != source.GetFeatureCount() ||
+                        source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) != OGRERR_NONE)) {
+            records.reset();
+        }
+    }
+    if (records) {
+        for (const char* extension : {".prj", ".PRJ"}) {
+            std::error_code error;
+            if (std::filesystem::exists(std::filesystem::path(shp).replace_extension(extension), error)) {
+                layer->prj = std::filesystem::path(shp).replace_extension(extension);
+                break;
+            }
+        }
+    } else if (const OGRSpatialReference* srs = source.GetSpatialRef()) {
+        layer->srs.reset(srs->Clone());
+    }
     layer->definition = source.GetLayerDefn();
     layer->definition->Reference();
 
@@ -164,6 +217,12 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         const std::string label = feature_label(path, source, feature->GetFID());
         Layer::Shape shape;
         shape.first = static_cast<std::uint32_t>(layer->items.size());
+        if (records) {
+            const auto fid = static_cast<std::size_t>(feature->GetFID());
+            if (fid >= records->size()) throw InputError(label + ": no such record in the .shp");
+            const ShapeRecord& record = (*records)[fid];
+            feature->SetGeometryDirectly(record.part_starts.empty() ? nullptr : shape_geometry(record).release());
+        }
         OGRGeometry* geometry = feature->GetGeometryRef();
         if (geometry != nullptr) {
             shape.type = geometry->getGeometryType();
@@ -245,15 +304,16 @@ OgrDataset::~OgrDataset() = default;
 
 const DatasetSummary& OgrDataset::summary() const { return data_->summary; }
 
-OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map) {
+OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map,
+                            bool prj_as_file) {
     DatasetPtr dataset = open_vector(path);
     auto data = std::make_unique<Data>();
     data->summary.driver = dataset->GetDriver() ? dataset->GetDriver()->GetDescription() : "";
     if (dataset->GetLayerCount() == 0) throw InputError("'" + path + "' has no vector layer");
     if (layer_names_wanted.empty()) {
-        for (int i = 0; i < dataset->GetLayerCount(); ++i) data->read_layer(path, *dataset->GetLayer(i), map);
+        for (int i = 0; i < dataset->GetLayerCount(); ++i) data->read_layer(path, *dataset->GetLayer(i), map, prj_as_file);
     } else {
-        for (const std::string& name : layer_names_wanted) data->read_layer(path, pick_layer(*dataset, path, name), map);
+        for (const std::string& name : layer_names_wanted) data->read_layer(path, pick_layer(*dataset, path, name), map, prj_as_file);
     }
     if (data->summary.sum(&LayerSummary::line_features) + data->summary.sum(&LayerSummary::polygon_features) == 0) {
         std::string what;
@@ -534,6 +594,15 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         }
         dataset.reset();
         if (CPLGetLastErrorType() >= CE_Failure) throw OutputError("error writing '" + options.path + "'" + last_gdal_error());
+        // A Shapefile input's .prj read as a file (read_layer) goes next to the output as it is.
+        for (const auto& layer : data.layers) {
+            if (layer->prj.empty()) continue;
+            if (driver_name != "ESRI Shapefile") throw std::logic_error("a .prj kept as a file for a " + driver_name + " output");
+            std::error_code error;
+            std::filesystem::copy_file(layer->prj, std::filesystem::path(output.staging_path()).replace_extension(".prj"),
+                                       std::filesystem::copy_options::overwrite_existing, error);
+            if (error) throw OutputError("cannot copy '" + layer->prj.string() + "' next to '" + options.path + "': " + error.message());
+        }
     }
 
     // Read the file back: coordinates must have survived bit for bit, features all there. A
@@ -564,23 +633,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             check_count(layer, shapes->size());
             for (std::size_t i = 0; i < shapes->size(); ++i) {
                 const ShapeRecord& shape = (*shapes)[i];
-                OGRMultiLineString parts;
-                for (std::size_t k = 0; k < shape.part_starts.size(); ++k) {
-                    const std::size_t first = shape.part_starts[k];
-                    const std::size_t end = k + 1 < shape.part_starts.size() ? shape.part_starts[k + 1] : shape.xy.size();
-                    auto part = std::make_unique<OGRLineString>();
-                    part->setNumPoints(static_cast<int>(end - first), FALSE);
-                    for (std::size_t j = first; j < end; ++j) {
-                        const auto at = static_cast<int>(j - first);
-                        if (shape.z.empty()) {
-                            part->setPoint(at, shape.xy[j].x, shape.xy[j].y);
-                        } else {
-                            part->setPoint(at, shape.xy[j].x, shape.xy[j].y, shape.z[j]);
-                        }
-                    }
-                    parts.addGeometryDirectly(part.release());
-                }
-                check_geometry(layer, i, shape.part_starts.empty() ? nullptr : &parts);
+                check_geometry(layer, i, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get());
             }
         } else {
             DatasetPtr written = open_vector(output.staging_path(), driver_name.c_str());

@@ -54,8 +54,11 @@ struct WriteOptions {
 class OgrDataset {
 public:
     // Reads the named layers of `path` (none named: every layer) into `map`. Throws InputError
-    // naming the file, layer and feature for anything it cannot accept.
-    static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map);
+    // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
+    // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
+    // (see read_layer).
+    static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
+                           bool prj_as_file = false);
 
     OgrDataset(OgrDataset&&) noexcept;
     ~OgrDataset();

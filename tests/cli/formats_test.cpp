@@ -56,6 +56,60 @@ TEST(Formats, GmlInButNotOut) {
     EXPECT_FALSE(std::filesystem::exists(dir / "out.gml"));
 }
 
+// Shapefile lines to a Shapefile: the shapes are decoded from the .shp and the .prj is carried
+// over byte for byte (no CRS parsing); the result is the one OGR's reading gives (the same input
+// to a GeoPackage, which parses the CRS).
+TEST(Formats, ShapefileLinesToShapefileKeepTheirPrjAsItIs) {
+    const auto dir = fresh_dir("shp-prj");
+    const std::string in = (dir / "roads.shp").string();
+    std::vector<FeatureSpec> features;
+    for (int i = 0; i < 40; ++i) {
+        std::string wkt = "LINESTRING (";
+        for (int k = 0; k < 12; ++k) {
+            if (k > 0) wkt += ',';
+            wkt += std::to_string(1000.0 * i + 10.0 * k + 0.1);
+            wkt += ' ';
+            wkt += std::to_string((k * k * 7 + i) % 13 + 0.3);
+        }
+        wkt += ")";
+        if (i % 5 == 1) wkt = "MULTILINESTRING ((" + std::to_string(1000.0 * i) + " 500,1 2,3 4,5 7),(9 9,10 12,13 9,16 12))";
+        features.push_back({i % 9 == 4 ? "" : wkt, "road " + std::to_string(i)});
+    }
+    write_layer(in, "ESRI Shapefile", wkbLineString, features, "roads");
+    // A .prj as some tool wrote it, line end included (OGR would rewrite it on a round trip).
+    const std::string prj =
+        "PROJCS[\"My_UTM_33\",GEOGCS[\"GCS_WGS_1984\",DATUM[\"D_WGS_1984\",SPHEROID[\"WGS_1984\",6378137.0,298.257223563]],"
+        "PRIMEM[\"Greenwich\",0.0],UNIT[\"Degree\",0.0174532925199433]],PROJECTION[\"Transverse_Mercator\"],"
+        "PARAMETER[\"False_Easting\",500000.0],PARAMETER[\"False_Northing\",0.0],PARAMETER[\"Central_Meridian\",15.0],"
+        "PARAMETER[\"Scale_Factor\",0.9996],PARAMETER[\"Latitude_Of_Origin\",0.0],UNIT[\"Meter\",1.0]]\r\n";
+    std::ofstream(dir / "roads.prj", std::ios::binary | std::ios::trunc) << prj;
+
+    const std::string shp = (dir / "out.shp").string(), gpkg = (dir / "out.gpkg").string();
+    for (const std::string& out : {shp, gpkg}) {
+        const CliResult result = run_cli({"map", in, "--keep", "50%", "-o", out});
+        ASSERT_EQ(result.code, 0) << result.err;
+    }
+    std::ifstream copied(dir / "out.prj", std::ios::binary);
+    EXPECT_EQ(std::string(std::istreambuf_iterator<char>(copied), {}), prj);
+    const ReadLayer from_shp = read_layer(shp), from_gpkg = read_layer(gpkg);
+    EXPECT_NE(from_gpkg.srs_wkt.find("Transverse_Mercator"), std::string::npos) << from_gpkg.srs_wkt;
+    ASSERT_EQ(from_shp.features.size(), features.size());
+    ASSERT_EQ(from_gpkg.features.size(), features.size());
+    std::size_t multi = 0, null = 0;
+    for (std::size_t i = 0; i < features.size(); ++i) {
+        const ReadFeature &a = from_shp.features[i], &b = from_gpkg.features[i];
+        EXPECT_EQ(a.name, b.name);
+        EXPECT_EQ(a.rank, static_cast<int>(i));
+        EXPECT_EQ(a.null_geometry, b.null_geometry) << i;
+        EXPECT_EQ(a.type, b.type) << i;
+        EXPECT_EQ(a.coordinates, b.coordinates) << i;
+        multi += a.type == wkbMultiLineString;
+        null += a.null_geometry;
+    }
+    EXPECT_EQ(multi, 7u);
+    EXPECT_EQ(null, 4u);
+}
+
 // A real pipeline: cat | toposimp … /vsistdin/ … /vsistdout/ | file.
 TEST(Formats, ShellPipelineThroughStdinAndStdout) {
     const auto dir = fresh_dir("pipeline");
