@@ -24,6 +24,12 @@ namespace {
 
 constexpr std::uint32_t kEmptyPart = std::numeric_limits<std::uint32_t>::max();
 
+// A .shp file on disk (not behind /vsi…), which the readers of shapefile.hpp can decode.
+bool is_local_shp(const std::string& path) {
+    const std::string extension = std::filesystem::path(path).extension().string();
+    return (extension == ".shp" || extension == ".SHP") && path.rfind("/vsi", 0) != 0;
+}
+
 }  // namespace
 
 std::uint64_t DatasetSummary::sum(std::uint64_t LayerSummary::*field) const {
@@ -189,8 +195,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // and the .prj file goes to the output as it is.
     std::optional<std::vector<ShapeRecord>> records;
     const std::filesystem::path shp(path);
-    if (prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
-        path.rfind("/vsi", 0) != 0 && (shp.extension() == ".shp" || shp.extension() == ".SHP")) {
+    if (prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString && is_local_shp(path)) {
         records = read_shapefile_shapes(path);
         if (records && (static_cast<GIntBig>(records->size()) != source.GetFeatureCount() ||
                         source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) != OGRERR_NONE)) {
@@ -720,8 +725,7 @@ std::vector<Point> read_control_points(const std::string& spec, unsigned threads
         if (std::optional<std::vector<Point>> points = read_gpkg_points(table, threads)) return std::move(*points);
     }
     // A Shapefile's records are decoded here too (shapefile.hpp): OGR would parse its .prj first.
-    const std::string extension = std::filesystem::path(path).extension().string();
-    if (driver == "ESRI Shapefile" && (extension == ".shp" || extension == ".SHP") && path.rfind("/vsi", 0) != 0) {
+    if (driver == "ESRI Shapefile" && is_local_shp(path)) {
         if (std::optional<std::vector<Point>> points = read_shapefile_points(path)) return std::move(*points);
     }
     std::vector<Point> points;

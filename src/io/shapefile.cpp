@@ -99,8 +99,8 @@ bool is_poly_type(std::uint32_t type) { return type == 3 || type == 5 || type ==
 
 // Calls visit(fid, deleted, content) for every record of the .shp at `path` whose file shape
 // type passes `accepts`, `content` being the record after its 8-byte header (at least the
-// 4-byte shape type, which is 0 or the file's unless the record is deleted). False when a sibling file is missing, the files
-// disagree, or visit returns false.
+// 4-byte shape type, which is 0 or the file's unless the record is deleted). False when a
+// sibling file is missing, the files disagree, or visit returns false.
 template <class Accepts, class Visit>
 bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
     const std::filesystem::path shp_path(path);
