@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <span>
 
@@ -25,12 +26,15 @@ constexpr std::uint8_t kDead = 4;      // merged into another vertex
 constexpr std::uint8_t kInside = 8;    // this level: it and all its neighbours lie in its block
 constexpr std::uint8_t kNewlyInside = 16;  // inside at this level but not at the one before
 
-// Stamps count the collapses a vertex has absorbed, in 31 bits (a candidate keeps one more bit).
+// Stamps count the changes of a vertex (a collapse it absorbed, its own death), in 31 bits (a
+// candidate keeps one more bit): a candidate whose ends' stamps changed is stale.
 constexpr std::uint32_t kStampMask = 0x7fffffff;
 
-// A symmetric 4×4 quadric (Garland & Heckbert 1997) plus the area it was built from.
+// A symmetric 4×4 quadric (Garland & Heckbert 1997) plus the area it was built from. Zero when
+// value-initialised (`Quadric q{}`); default-initialised, undefined, so that the per-vertex array
+// can be first written in parallel.
 struct Quadric {
-    double xx = 0, xy = 0, xz = 0, xw = 0, yy = 0, yz = 0, yw = 0, zz = 0, zw = 0, ww = 0, area = 0;
+    double xx, xy, xz, xw, yy, yz, yw, zz, zw, ww, area;
 
     void add_plane(double a, double b, double c, double d, double weight) {
         xx += weight * a * a, xy += weight * a * b, xz += weight * a * c, xw += weight * a * d;
@@ -301,7 +305,7 @@ private:
     std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block,
                                             const std::vector<std::vector<Candidate>*>& before);
     bool stale(const Candidate& c) const {
-        return (flags_[c.a] & kDead) != 0 || (flags_[c.b] & kDead) != 0 || stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b();
+        return stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b();
     }
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
         return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u)};
@@ -353,11 +357,8 @@ private:
                std::vector<std::uint32_t>& out) const;
     // The edges from v to its inside neighbours w for which wanted(w), placed, into `out`.
     template <class Wanted>
-    void place_edges(std::uint32_t v, const std::vector<std::uint32_t>& around, Wanted wanted, int level, std::uint64_t block,
+    void place_edges(std::uint32_t v, std::span<const std::uint32_t> around, Wanted wanted, int level, std::uint64_t block,
                      std::vector<Candidate>& out) const;
-    template <class Wanted>
-    void collect_edges(std::uint32_t v, Wanted wanted, int level, std::uint64_t block, std::vector<Candidate>& out,
-                       std::vector<std::uint32_t>& scratch);
     double error_of(const Placement& placement, std::uint32_t a, std::uint32_t b) const;
 
     Mesh& mesh_;
@@ -375,7 +376,7 @@ private:
     std::vector<std::uint8_t> flags_;
     std::vector<std::uint32_t> stamp_;
     std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
-    std::vector<Quadric> quadric_;
+    std::unique_ptr<Quadric[]> quadric_;  // per vertex
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
     std::vector<Box3> snapshot_;        // per face: its box when the index was built
@@ -408,7 +409,9 @@ void Simplifier::build_quadrics() {
         double a, b, c, d, length;
     };
     const auto m = static_cast<std::int64_t>(face_.size());
-    std::vector<Plane> planes(face_.size());
+    // Left uninitialised (written once below, in parallel): zeroing and faulting in ~40 bytes per
+    // face serially first took as long as the loop.
+    const std::unique_ptr<Plane[]> planes(new Plane[face_.size()]);
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < m; ++i) {
         const Face& f = face_[static_cast<std::size_t>(i)];
@@ -426,46 +429,57 @@ void Simplifier::build_quadrics() {
     // perpendicular to its face, weighted heavily (Garland & Heckbert §6) — computed from the
     // edge's lower id so both ends add the same quadric.
     const auto n = static_cast<std::int64_t>(pos_.size());
-    quadric_.resize(pos_.size());
+    quadric_ = std::make_unique_for_overwrite<Quadric[]>(pos_.size());  // each written once below
 #pragma omp parallel for schedule(static)
     for (std::int64_t v = 0; v < n; ++v) {
-        thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> seen;  // (neighbour, face)
+        // (neighbour, face, how many of v's faces have it); a vertex has a few: a scan, no sort.
+        struct Seen {
+            std::uint32_t vertex, face, count;
+        };
+        thread_local std::vector<Seen> seen;
+        thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> borders;  // (neighbour, face)
         seen.clear();
-        Quadric q;
+        auto meet = [](std::uint32_t w, std::uint32_t face) {
+            for (Seen& s : seen) {
+                if (s.vertex == w) {
+                    ++s.count;
+                    return;
+                }
+            }
+            seen.push_back({w, face, 1});
+        };
+        Quadric q{};
         for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
             const Face& f = face_[c / 3];
             const int k = static_cast<int>(c % 3);
-            seen.emplace_back(f[(k + 1) % 3], c / 3);
-            seen.emplace_back(f[(k + 2) % 3], c / 3);
+            meet(f[(k + 1) % 3], c / 3);
+            meet(f[(k + 2) % 3], c / 3);
             const Plane& plane = planes[c / 3];
             if (!(plane.length > 0)) continue;
             const double area = 0.5 * plane.length;
             q.add_plane(plane.a, plane.b, plane.c, plane.d, area);
             q.area += area;
         }
-        std::sort(seen.begin(), seen.end());
-        for (std::size_t i = 0; i < seen.size();) {
-            std::size_t j = i + 1;
-            while (j < seen.size() && seen[j].first == seen[i].first) ++j;
-            if (j - i == 1) {
-                flags_[v] |= options_.lock_boundary ? (kBoundary | kLocked) : kBoundary;
-                if (!options_.lock_boundary) {
-                    const auto w = seen[i].first;
-                    const auto lo = std::min(static_cast<std::uint32_t>(v), w), hi = std::max(static_cast<std::uint32_t>(v), w);
-                    const Face& f = face_[seen[i].second];
-                    const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
-                    const Point3 edge = minus(pos_[hi], pos_[lo]);
-                    const Point3 side = cross(edge, normal);
-                    const double length = norm(side);
-                    if (length > 0) {
-                        const Point3 unit{side.x / length, side.y / length, side.z / length};
-                        Quadric border;
-                        border.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
-                        q += border;
-                    }
-                }
+        borders.clear();
+        for (const Seen& s : seen) {
+            if (s.count == 1) borders.emplace_back(s.vertex, s.face);
+        }
+        std::sort(borders.begin(), borders.end());  // their planes added in neighbour order
+        for (const auto& [w, face] : borders) {
+            flags_[v] |= options_.lock_boundary ? (kBoundary | kLocked) : kBoundary;
+            if (options_.lock_boundary) continue;
+            const auto lo = std::min(static_cast<std::uint32_t>(v), w), hi = std::max(static_cast<std::uint32_t>(v), w);
+            const Face& f = face_[face];
+            const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+            const Point3 edge = minus(pos_[hi], pos_[lo]);
+            const Point3 side = cross(edge, normal);
+            const double length = norm(side);
+            if (length > 0) {
+                const Point3 unit{side.x / length, side.y / length, side.z / length};
+                Quadric border{};
+                border.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
+                q += border;
             }
-            i = j;
         }
         quadric_[v] = q;
     }
@@ -714,17 +728,7 @@ double Simplifier::error_of(const Placement& placement, std::uint32_t a, std::ui
 }
 
 template <class Wanted>
-void Simplifier::collect_edges(std::uint32_t v, Wanted wanted, int level, std::uint64_t block, std::vector<Candidate>& out,
-                               std::vector<std::uint32_t>& scratch) {
-    // Neighbours of v (it is inside: they all lie in its block).
-    thread_local std::vector<std::uint32_t> around;
-    faces_of(v, scratch);
-    corners_but(scratch, v, around);
-    place_edges(v, around, wanted, level, block, out);
-}
-
-template <class Wanted>
-void Simplifier::place_edges(std::uint32_t v, const std::vector<std::uint32_t>& around, Wanted wanted, int level,
+void Simplifier::place_edges(std::uint32_t v, std::span<const std::uint32_t> around, Wanted wanted, int level,
                              std::uint64_t block, std::vector<Candidate>& out) const {
     // The neighbours' quadrics are scattered: start loading them all before the first is needed.
     for (std::uint32_t w : around) {
@@ -743,19 +747,24 @@ void Simplifier::place_edges(std::uint32_t v, const std::vector<std::uint32_t>& 
 std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32_t* vertices, std::size_t count,
                                                      std::uint64_t block,
                                                      const std::vector<std::vector<Candidate>*>& before) {
-    std::vector<std::uint32_t> scratch;
+    std::vector<std::uint32_t> scratch, around;
     // Which vertices have their whole star in the block (fixed for the level: a collapse only
     // merges two inside vertices, so no neighbour outside the block appears or disappears). A
-    // vertex inside at the level before stays inside: its block holds the one it was in.
+    // vertex inside at the level before stays inside: its block holds the one it was in. The
+    // neighbours of those newly inside are kept for their edges below: (vertex, first, count).
+    std::vector<std::uint32_t> neighbours;
+    std::vector<std::array<std::uint32_t, 3>> newly;
     for (std::size_t i = 0; i < count; ++i) {
         const std::uint32_t v = vertices[i];
         if ((flags_[v] & (kDead | kInside)) != 0) continue;
         faces_of(v, scratch);
+        corners_but(scratch, v, around);
         bool inside = true;
-        for (std::uint32_t f : scratch) {
-            for (std::uint32_t w : face_[f]) inside = inside && grid_.block_of(cell_[w], level) == block;
-        }
-        if (inside) flags_[v] |= kInside | kNewlyInside;
+        for (std::uint32_t w : around) inside = inside && grid_.block_of(cell_[w], level) == block;
+        if (!inside) continue;
+        flags_[v] |= kInside | kNewlyInside;
+        newly.push_back({v, static_cast<std::uint32_t>(neighbours.size()), static_cast<std::uint32_t>(around.size())});
+        neighbours.insert(neighbours.end(), around.begin(), around.end());
     }
     // Edges between vertices inside before: their candidates from the finer blocks, which keep
     // one valid candidate for each (see collapse_block). The placement is the same in the bigger
@@ -774,10 +783,8 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
         std::vector<Candidate>().swap(*list);
     }
     // Edges with a newly inside end: each once.
-    for (std::size_t i = 0; i < count; ++i) {
-        const std::uint32_t v = vertices[i];
-        if ((flags_[v] & (kNewlyInside | kDead)) != kNewlyInside) continue;
-        collect_edges(v, [&](std::uint32_t w) { return (flags_[w] & kNewlyInside) == 0 || w > v; }, level, block, heap, scratch);
+    for (const auto& [v, first, size] : newly) {
+        place_edges(v, std::span(neighbours).subspan(first, size), [&](std::uint32_t w) { return (flags_[w] & kNewlyInside) == 0 || w > v; }, level, block, heap);
     }
     for (std::size_t i = 0; i < count; ++i) flags_[vertices[i]] &= static_cast<std::uint8_t>(~kNewlyInside);
     return heap;
@@ -1072,6 +1079,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     flags_[a] = static_cast<std::uint8_t>(flags_[a] | (flags_[b] & (kBoundary | kLocked)));
     flags_[b] = static_cast<std::uint8_t>(flags_[b] | kDead);
     stamp_[a] = (stamp_[a] + 1) & kStampMask;
+    stamp_[b] = (stamp_[b] + 1) & kStampMask;
     if (use_index_) {
         for (std::uint32_t f : star) {
             moved_[f] = 1;
