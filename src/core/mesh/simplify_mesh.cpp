@@ -821,6 +821,20 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
         } else {
             break;
         }
+        // The sorted ones come in cost order, their vertices anywhere in the block: start loading
+        // what the next one needs while this one is done.
+        if (next + 4 < cheap) {
+            __builtin_prefetch(&stamp_[candidates[next + 4].a]);
+            __builtin_prefetch(&stamp_[candidates[next + 4].b]);
+        }
+        if (next < cheap) {
+            for (const std::uint32_t v : {candidates[next].a, candidates[next].b}) {
+                __builtin_prefetch(&head_[v]);
+                __builtin_prefetch(&pos_[v]);
+                __builtin_prefetch(&quadric_[v]);
+                __builtin_prefetch(reinterpret_cast<const char*>(&quadric_[v]) + sizeof(Quadric) - 1);
+            }
+        }
         if (stale(c)) continue;
         if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
             candidates.push_back(c);
@@ -860,6 +874,11 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     thread_local std::vector<std::uint32_t> fa, fb, shared, opposite, star, found;
     faces_of(a, fa);
     faces_of(b, fb);
+    for (const auto* faces : {&fa, &fb}) {
+        for (std::uint32_t f : *faces) {
+            for (std::uint32_t w : face_[f]) __builtin_prefetch(&pos_[w]);  // read for the star below
+        }
+    }
     // a's list now holds the corners of fa, in order: b's are appended after the last.
     std::uint32_t last_of_a = kNone;
     if (!fa.empty()) {
