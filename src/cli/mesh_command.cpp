@@ -222,6 +222,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                 << ",\"output\":" << io::json_string(options.output) << ",\"vertices_in\":" << stats.vertices_in
                 << ",\"vertices_out\":" << stats.vertices_out << ",\"faces_in\":" << stats.faces_in
                 << ",\"faces_out\":" << stats.faces_out << ",\"collapses\":" << stats.collapses
+                << ",\"flat_collapses_unsearched\":" << stats.flat_unsearched
                 << ",\"target\":{\"criterion\":" << io::json_string(describe(*engine))
                 << ",\"target_faces\":" << stats.target_faces << ",\"reached\":" << (stats.target_reached ? "true" : "false")
                 << "},\"refused\":{\"total\":" << stats.refused() << ",\"link\":" << stats.refused_link

@@ -163,5 +163,135 @@ TEST(MeshProperties, SameResultForAnyThreadCount) {
     }
 }
 
+// A closed box, each side an n×n grid of unit cells (flat regions meeting at creases), faces
+// turned outward.
+Mesh grid_box(int n) {
+    Mesh m;
+    auto side = [&](Point3 origin, Point3 u, Point3 v) {
+        const auto first = static_cast<std::uint32_t>(m.points.size());
+        for (int j = 0; j <= n; ++j) {
+            for (int i = 0; i <= n; ++i) {
+                m.points.push_back({origin.x + i * u.x + j * v.x, origin.y + i * u.y + j * v.y, origin.z + i * u.z + j * v.z});
+            }
+        }
+        auto at = [&](int i, int j) { return first + static_cast<std::uint32_t>(j * (n + 1) + i); };
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) {
+                m.faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+                m.faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+            }
+        }
+    };
+    const double s = n;
+    side({0, 0, 0}, {0, 1, 0}, {1, 0, 0});  // z = 0, facing −z
+    side({0, 0, s}, {1, 0, 0}, {0, 1, 0});  // z = n, facing +z
+    side({0, 0, 0}, {1, 0, 0}, {0, 0, 1});  // y = 0, facing −y
+    side({0, s, 0}, {0, 0, 1}, {1, 0, 0});  // y = n, facing +y
+    side({0, 0, 0}, {0, 0, 1}, {0, 1, 0});  // x = 0, facing −x
+    side({s, 0, 0}, {0, 1, 0}, {0, 0, 1});  // x = n, facing +x
+    // Weld the sides' shared border vertices.
+    std::vector<std::uint32_t> index(m.points.size());
+    std::vector<Point3> kept;
+    for (std::size_t v = 0; v < m.points.size(); ++v) {
+        std::size_t k = 0;
+        while (k < kept.size() && !same_location(kept[k], m.points[v])) ++k;
+        if (k == kept.size()) kept.push_back(m.points[v]);
+        index[v] = static_cast<std::uint32_t>(k);
+    }
+    for (Face& f : m.faces) {
+        for (std::uint32_t& v : f) v = index[v];
+    }
+    m.points = kept;
+    return m;
+}
+
+// A flat n×n grid (z = 0) with a thin triangle standing on some interior grid points: its foot
+// is a separate vertex at the grid point's location, so the two touch only there (allowed), and
+// a collapse that moves the grid point from under it would make the foot touch a new face inside.
+Mesh grid_with_spikes(int n) {
+    Mesh m;
+    auto at = [n](int i, int j) { return static_cast<std::uint32_t>(j * (n + 1) + i); };
+    for (int j = 0; j <= n; ++j) {
+        for (int i = 0; i <= n; ++i) m.points.push_back({static_cast<double>(i), static_cast<double>(j), 0});
+    }
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            m.faces.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+            m.faces.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+        }
+    }
+    for (int j = 2; j < n - 1; j += 3) {
+        for (int i = 2; i < n - 1; i += 3) {
+            const auto foot = static_cast<std::uint32_t>(m.points.size());
+            const double x = i, y = j;
+            m.points.push_back({x, y, 0});
+            m.points.push_back({x + 0.3, y + 0.1, 2});
+            m.points.push_back({x - 0.2, y + 0.3, 2.5});
+            m.faces.push_back({foot, foot + 1, foot + 2});
+        }
+    }
+    return m;
+}
+
+// A flat grid with a square of two faces lying in it (its own vertices): coplanar overlaps, an
+// input that self-intersects already.
+Mesh grid_with_lying_square(int n) {
+    Mesh m = grid_with_spikes(n);
+    m.faces.resize(static_cast<std::size_t>(2 * n * n));
+    m.points.resize(static_cast<std::size_t>((n + 1) * (n + 1)));
+    const auto first = static_cast<std::uint32_t>(m.points.size());
+    m.points.insert(m.points.end(), {{5.5, 5.25, 0}, {8.5, 5.25, 0}, {8.5, 8.75, 0}, {5.5, 8.75, 0}});
+    m.faces.push_back({first, first + 1, first + 2});
+    m.faces.push_back({first, first + 2, first + 3});
+    return m;
+}
+
+TEST(MeshProperties, FlatRegionsSkipTheSearchButDecideTheSame) {
+    // Every collapse the flat-region argument accepts without a search must be one the search
+    // accepts too: the results with and without it are the same mesh, with no new contact.
+    struct Input {
+        const char* name;
+        Mesh mesh;
+        bool flat;
+    };
+    const Input inputs[] = {{"box", grid_box(12), true},
+                            {"grid with spikes", grid_with_spikes(18), true},
+                            {"grid with a square lying in it", grid_with_lying_square(18), true},
+                            {"sphere", testing::noisy_sphere(3, 0.02, 4), false}};
+    for (const Input& input : inputs) {
+        const auto before = find_defects(input.mesh);
+        for (double keep : {0.3, 0.1}) {
+            for (int threads : {1, 3}) {
+                const std::string what = std::string(input.name) + ", keep " + std::to_string(keep) + ", " +
+                                         std::to_string(threads) + " threads";
+                Mesh searched = input.mesh, shortcut = input.mesh;
+                MeshOptions options;
+                options.value = keep;
+                options.threads = threads;
+                options.parallel_threshold = 0;
+                options.flat_shortcut = false;
+                const MeshStats plain = simplify_mesh(searched, options);
+                options.flat_shortcut = true;
+                const MeshStats fast = simplify_mesh(shortcut, options);
+                EXPECT_EQ(plain.flat_unsearched, 0u) << what;
+                if (input.flat) {
+                    EXPECT_GT(fast.flat_unsearched, 0u) << what;
+                } else {
+                    EXPECT_EQ(fast.flat_unsearched, 0u) << what;
+                }
+                EXPECT_TRUE(same(searched, shortcut)) << what;
+                EXPECT_EQ(plain.refused_intersection, fast.refused_intersection) << what;
+                // No worse: only pairs of faces the input had can still meet.
+                const auto after = find_defects(shortcut);
+                EXPECT_LE(after.intersecting_pairs, before.intersecting_pairs) << what << ": " << after.first;
+                EXPECT_EQ(after.total() - after.intersecting_pairs, 0u) << what << ": " << after.first;
+            }
+        }
+    }
+    EXPECT_EQ(find_defects(inputs[0].mesh).total(), 0u);
+    EXPECT_EQ(find_defects(inputs[1].mesh).total(), 0u);
+    EXPECT_GT(find_defects(inputs[2].mesh).intersecting_pairs, 0u);
+}
+
 }  // namespace
 }  // namespace toposimp::mesh

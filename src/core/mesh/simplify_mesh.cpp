@@ -339,6 +339,16 @@ private:
                       std::vector<std::uint32_t>& around,
                       Overlay& overlay);
     bool place(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, Placement& out) const;
+    // Whether the collapse of the interior edge ab, whose changed faces `star` become `fresh` with
+    // a and b at p, provably makes no contact, without looking at other faces (see the definition).
+    bool flat_and_clean(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& fa, const std::vector<std::uint32_t>& fb,
+                        const std::vector<std::uint32_t>& star, Point3 p, const std::vector<exact::Triangle3>& fresh,
+                        Overlay& overlay, exact::PredicateStats& predicates);
+    // Does face f meet a face near it beyond their shared corners/edge (faces_conflict), or is it
+    // degenerate?
+    bool meets_another(std::uint32_t f, Overlay& overlay, exact::PredicateStats& predicates) const;
+    // Marks the vertices that share their location with another (3D meshes: see flat_and_clean).
+    void find_twins();
     bool in_block(Point3 p, int level, std::uint64_t block) const {
         return grid_.block_of(grid_.cell_key(p), level) == block;
     }
@@ -386,12 +396,20 @@ private:
     std::vector<Box3> snapshot_;        // per face: its box when the index was built
     std::vector<std::uint64_t> first_;  // per face: the index cell of its snapshot's low corner
     std::vector<std::uint8_t> moved_;   // per face: changed in this round (the overlay has it)
+    // Per face: made by a collapse, so checked against every face near it then, and every face
+    // made since was checked against it: it meets no other face beyond their shared corners/edge.
+    // (Input faces are not known to.)
+    std::vector<std::uint8_t> clean_;
+    static constexpr std::uint8_t kUnknown = 0, kClean = 1, kConflicting = 2;
+    // Per vertex (3D meshes): another live vertex may have its location.
+    std::vector<std::uint8_t> twin_;
     std::uint64_t live_faces_ = 0;
 };
 
 void Simplifier::build_topology() {
     const std::size_t n = pos_.size(), m = face_.size();
     alive_.assign(m, 1);
+    clean_.assign(m, kUnknown);
     next_.assign(3 * m, kNone);
     head_.assign(n, kNone);
     flags_.assign(n, 0);
@@ -576,6 +594,20 @@ void Simplifier::check_terrain() {
     for (std::int64_t f = 1; f < m; ++f) same = same && turn_of(face_[static_cast<std::size_t>(f)]) == turn;
     terrain_ = same;
     terrain_turn_ = turn;
+}
+
+void Simplifier::find_twins() {
+    std::vector<std::uint32_t> order(pos_.size());
+    std::iota(order.begin(), order.end(), 0u);
+    auto before = [this](std::uint32_t v, std::uint32_t w) {
+        const Point3 &p = pos_[v], &q = pos_[w];
+        return p.x != q.x ? p.x < q.x : p.y != q.y ? p.y < q.y : p.z < q.z;
+    };
+    std::sort(order.begin(), order.end(), before);
+    twin_.assign(pos_.size(), 0);
+    for (std::size_t i = 1; i < order.size(); ++i) {
+        if (same_location(pos_[order[i]], pos_[order[i - 1]])) twin_[order[i]] = twin_[order[i - 1]] = 1;
+    }
 }
 
 template <class Visit>
@@ -873,6 +905,125 @@ void Simplifier::reopen(std::vector<Candidate>& candidates) const {
     std::erase_if(candidates, [this](const Candidate& c) { return stale(c); });
 }
 
+// A collapse in a flat region, shown free of contacts without looking at other faces. Write S
+// for the faces of a and b (the two on ab die), Γ for the link: the edges of S opposite a or b.
+// Conditions, all exact: (1) ab is an interior edge (two faces, neither end on a border); (2)
+// every face of S is clean (made by an accepted collapse: it was checked against every face
+// near it then, and every face made since against it, so it meets no face beyond their shared
+// corner locations or the segment between two); (3) no other vertex has a's or b's location;
+// (4) around a and around b every neighbour is once the next corner and once the previous one
+// (the faces are consistently oriented) and Γ, oriented by its faces, is one cycle; (5) S and
+// p lie in one plane H (orient3d against a face of S is 0); (6) in a coordinate plane onto which
+// that face projects properly (an affine bijection from H: orientations kept or all flipped)
+// every face of S and every new face has the same orientation σ (orient2d).
+//
+// Why that is enough. Take S and the new faces as 2-chains of H. By (4) the edges at a cancel
+// in pairs, those at b too, and so do their images at p (the two dying faces held ab and its
+// edges to the opposite corners): both chains have boundary Γ. With every orientation σ, the
+// number of faces of each chain covering a point (off the edges) is σ times the winding number
+// of Γ around it, so the same for both; the old faces, clean, do not overlap, so neither do
+// the new ones and both cover the same set U. The new faces form a fan from p over the cycle Γ,
+// all turning one way without overlap: a single turn, so Γ is a simple polygon star-shaped from
+// p, bounding U, its corners at distinct locations, and two new faces meet only at p or along
+// their shared edge from p. Another face g meeting a new face at x meets U, so an old face there,
+// and since that one is clean, x is a location both have as a corner, or on the segment between
+// two such. By (3) those are corners of Γ (g has no corner at a's or b's location, nor at p,
+// which lies inside U where only an old face's corner at a or b could be), and on ∂U: x is then
+// a corner of the new faces there, or on their edge of Γ, which g also has at both ends. So every
+// new face meets every other face only as clean faces do, and the new faces are clean.
+bool Simplifier::flat_and_clean(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& fa,
+                                const std::vector<std::uint32_t>& fb, const std::vector<std::uint32_t>& star, Point3 p,
+                                const std::vector<exact::Triangle3>& fresh, Overlay& overlay, exact::PredicateStats& predicates) {
+    if (twin_[a] || twin_[b]) return false;
+    // One plane: p and every corner against the first face of a (first: on curved surfaces the
+    // filter settles p's side at once).
+    const exact::Triangle3 reference = triangle(face_[fa.front()]);
+    auto in_plane = [&](Point3 q) { return exact::orient3d(reference[0], reference[1], reference[2], q, predicates) == 0; };
+    if (!in_plane(p)) return false;
+    for (const auto* faces : {&fa, &fb}) {
+        for (std::uint32_t f : *faces) {
+            if (clean_[f] == kConflicting) return false;
+            for (std::uint32_t w : face_[f]) {
+                if (!in_plane(pos_[w])) return false;
+            }
+        }
+    }
+    // Consistent orientation around each end.
+    thread_local std::vector<std::uint32_t> next_corner, previous_corner;
+    for (const std::uint32_t v : {a, b}) {
+        next_corner.clear();
+        previous_corner.clear();
+        for (std::uint32_t f : v == a ? fa : fb) {
+            const Face& c = face_[f];
+            const int k = c[0] == v ? 0 : c[1] == v ? 1 : 2;
+            next_corner.push_back(c[(k + 1) % 3]);
+            previous_corner.push_back(c[(k + 2) % 3]);
+        }
+        std::sort(next_corner.begin(), next_corner.end());
+        std::sort(previous_corner.begin(), previous_corner.end());
+        if (next_corner != previous_corner || std::adjacent_find(next_corner.begin(), next_corner.end()) != next_corner.end()) {
+            return false;
+        }
+    }
+    // Γ one cycle: the edges opposite a or b in the faces that stay (each has one of them).
+    thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> link;
+    link.clear();
+    for (std::uint32_t f : star) {
+        const Face& c = face_[f];
+        const int k = c[0] == a || c[0] == b ? 0 : c[1] == a || c[1] == b ? 1 : 2;
+        link.emplace_back(c[(k + 1) % 3], c[(k + 2) % 3]);
+    }
+    std::sort(link.begin(), link.end());
+    for (std::size_t i = 1; i < link.size(); ++i) {
+        if (link[i].first == link[i - 1].first) return false;
+    }
+    std::uint32_t at = link.front().first;
+    for (std::size_t steps = 0; steps < link.size(); ++steps) {
+        const auto it = std::lower_bound(link.begin(), link.end(), std::pair{at, std::uint32_t{0}});
+        if (it == link.end() || it->first != at) return false;
+        at = it->second;
+        if (at == link.front().first && steps + 1 != link.size()) return false;
+    }
+    if (at != link.front().first) return false;
+    // One orientation in a coordinate plane where the reference face is proper.
+    int axis = 0, turn = 0;
+    for (; axis < 3 && turn == 0; ++axis) turn = exact::orient_projected(reference[0], reference[1], reference[2], axis, predicates);
+    if (turn == 0) return false;  // (a clean face is never degenerate)
+    --axis;
+    for (const auto* faces : {&fa, &fb}) {
+        for (std::uint32_t f : *faces) {
+            const exact::Triangle3 t = triangle(face_[f]);
+            if (exact::orient_projected(t[0], t[1], t[2], axis, predicates) != turn) return false;
+        }
+    }
+    for (const exact::Triangle3& t : fresh) {
+        if (exact::orient_projected(t[0], t[1], t[2], axis, predicates) != turn) return false;
+    }
+    // Last, the faces not yet known clean (input faces) are checked against the faces near them,
+    // once: clean from now on, or known to meet another.
+    for (const auto* faces : {&fa, &fb}) {
+        for (std::uint32_t f : *faces) {
+            if (clean_[f] == kUnknown) clean_[f] = meets_another(f, overlay, predicates) ? kConflicting : kClean;
+            if (clean_[f] != kClean) return false;
+        }
+    }
+    return true;
+}
+
+bool Simplifier::meets_another(std::uint32_t f, Overlay& overlay, exact::PredicateStats& predicates) const {
+    thread_local std::vector<std::uint32_t> found;
+    const exact::Triangle3 t = triangle(face_[f]);
+    if (exact::degenerate(t, predicates)) return true;
+    const Box3 box = triangle_box(t[0], t[1], t[2]);
+    query(box, overlay, found);
+    for (std::uint32_t g : found) {
+        if (g == f || !alive_[g]) continue;
+        const exact::Triangle3 u = triangle(face_[g]);
+        if (box.overlaps(triangle_box(u[0], u[1], u[2])) && exact::faces_conflict(t, u, predicates)) return true;
+    }
+    return false;
+}
+
 bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
                               std::vector<std::uint32_t>& around,
                               Overlay& overlay) {
@@ -992,7 +1143,11 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     // moves a border vertex of a terrain is checked in the map plane (faces flattened to z = 0).
     const bool moves_border = ((flags_[a] | flags_[b]) & kBoundary) != 0 && !options_.lock_boundary;
     const bool flatten = terrain_ && moves_border;
-    if (!terrain_ || flatten) {
+    const bool interior = ((flags_[a] | flags_[b]) & kBoundary) == 0 && shared.size() == 2;
+    bool twin_after = false;  // (3D) another vertex is at p
+    if (!terrain_ && interior && options_.flat_shortcut && flat_and_clean(a, b, fa, fb, star, placement.p, fresh, overlay, predicates)) {
+        ++stats.flat_unsearched;
+    } else if (!terrain_ || flatten) {
         auto flat = [&](exact::Triangle3 t) {
             if (flatten) {
                 for (Point3& p : t) p.z = 0;
@@ -1096,6 +1251,18 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                 }
             }
         }
+        // A vertex at p is a corner of a face holding p: found (a corner of the star there
+        // would have made a new face degenerate). It lies in this block, like p.
+        if (!terrain_) {
+            for (std::uint32_t g : near) {
+                for (std::uint32_t w : face_[g]) {
+                    if (same_location(pos_[w], placement.p)) {
+                        twin_[w] = 1;
+                        twin_after = true;
+                    }
+                }
+            }
+        }
     }
     // Apply: b merges into a at the placement.
     for (std::uint32_t f : shared) alive_[f] = 0;
@@ -1112,6 +1279,8 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     flags_[b] = static_cast<std::uint8_t>(flags_[b] | kDead);
     stamp_[a] = (stamp_[a] + 1) & kStampMask;
     stamp_[b] = (stamp_[b] + 1) & kStampMask;
+    for (std::uint32_t f : star) clean_[f] = kClean;
+    if (!terrain_) twin_[a] = twin_after;
     if (use_index_) {
         for (std::uint32_t f : star) {
             moved_[f] = 1;
@@ -1150,6 +1319,7 @@ MeshStats Simplifier::run() {
     build_quadrics();
     choose_grid();
     check_terrain();
+    if (!terrain_) find_twins();
     use_index_ = !terrain_ || !options_.lock_boundary;
     stats.seconds_setup = std::chrono::duration<double>(Clock::now() - start).count();
     const auto sweep = Clock::now();
@@ -1268,6 +1438,7 @@ MeshStats Simplifier::run() {
                 stats.refused_flip += s.refused_flip;
                 stats.refused_degenerate += s.refused_degenerate;
                 stats.refused_intersection += s.refused_intersection;
+                stats.flat_unsearched += s.flat_unsearched;
                 stats.max_error = std::max(stats.max_error, s.max_error);
                 stats.predicates += s.predicates;
                 removed += r.faces_removed;

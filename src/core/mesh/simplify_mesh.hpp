@@ -37,6 +37,10 @@ struct MeshOptions {
     // face's orientation in the x–y plane. The surface then stays a height field over a valid
     // planar triangulation, which cannot self-intersect, so no 3D intersection search is needed.
     bool terrain = false;
+    // A collapse inside a flat region whose faces are all known clean may be shown free of contacts
+    // without searching for nearby faces (same decision, same result; off: always search — for
+    // the tests that compare the two).
+    bool flat_shortcut = true;
     int threads = 0;  // 0: OpenMP's default
     // Meshes with fewer faces run on one thread (results are identical either way).
     std::size_t parallel_threshold = std::size_t{1} << 14;
@@ -60,6 +64,9 @@ struct MeshStats {
     std::uint64_t refused() const {
         return refused_link + refused_boundary + refused_flip + refused_degenerate + refused_intersection;
     }
+    // Collapses in flat regions proven free of contacts without searching for nearby faces
+    // (see flat_and_clean in simplify_mesh.cpp); included in `collapses`.
+    std::uint64_t flat_unsearched = 0;
     double max_error = 0.0;  // largest quadric error (distance) of a collapse made
     int levels = 0;
     int rounds = 0;  // heap builds over all levels (count targets repeat a level while it progresses)
