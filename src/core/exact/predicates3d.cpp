@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 
 namespace toposimp::exact {
@@ -233,6 +234,27 @@ int orient3d_expansion(Point3 a, Point3 b, Point3 c, Point3 d) {
     const Expansion<2> bx = difference(b.x, a.x), by = difference(b.y, a.y), bz = difference(b.z, a.z);
     const Expansion<2> cx = difference(c.x, a.x), cy = difference(c.y, a.y), cz = difference(c.z, a.z);
     const Expansion<2> dx = difference(d.x, a.x), dy = difference(d.y, a.y), dz = difference(d.z, a.z);
+    // Differences all exact (one double each; common where the filter fails: coplanar points
+    // with short coordinates): the same determinant over doubles, in expansions of at most 24
+    // terms instead of products of two-term expansions.
+    const Expansion<2>* differences[] = {&bx, &by, &bz, &cx, &cy, &cz, &dx, &dy, &dz};
+    if (std::all_of(std::begin(differences), std::end(differences), [](const Expansion<2>* e) { return e->n <= 1; })) {
+        auto lone = [](const Expansion<2>& e) { return e.n == 0 ? 0.0 : e.c[0]; };
+        auto times = [](double x, double y) {
+            Expansion<2> e;
+            double y_hi, y_lo, hi, lo;
+            split(y, y_hi, y_lo);
+            two_product_split(x, y, y_hi, y_lo, hi, lo);
+            if (lo != 0.0) e.c[e.n++] = lo;
+            if (hi != 0.0) e.c[e.n++] = hi;
+            return e;
+        };
+        const double Bx = lone(bx), By = lone(by), Bz = lone(bz), Cx = lone(cx), Cy = lone(cy), Cz = lone(cz);
+        const Expansion<4> nx = sum(times(By, Cz), negate(times(Bz, Cy)));
+        const Expansion<4> ny = sum(times(Bz, Cx), negate(times(Bx, Cz)));
+        const Expansion<4> nz = sum(times(Bx, Cy), negate(times(By, Cx)));
+        return sum(sum(scale(nx, lone(dx)), scale(ny, lone(dy))), scale(nz, lone(dz))).sign();
+    }
     const Expansion<16> nx = sum(product(by, cz), negate(product(bz, cy)));
     const Expansion<16> ny = sum(product(bz, cx), negate(product(bx, cz)));
     const Expansion<16> nz = sum(product(bx, cy), negate(product(by, cx)));
@@ -263,7 +285,9 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
             return 1;
         }
     }
-    int sign = certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
+    // The dynamic filter next, unless the determinant came out exactly zero: then the points are
+    // almost surely coplanar (flat regions), which no filter can certify.
+    int sign = det == 0.0 ? 2 : certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
     if (sign != 2) {
         ++stats.filter_decided;
         return sign;
