@@ -393,9 +393,15 @@ private:
     std::unique_ptr<Quadric[]> quadric_;  // per vertex
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
-    std::vector<Box3> snapshot_;        // per face: its box when the index was built
-    std::vector<std::uint64_t> first_;  // per face: the index cell of its snapshot's low corner
-    std::vector<std::uint8_t> moved_;   // per face: changed in this round (the overlay has it)
+    // Per face, what a query reads of it, in one cache line: its box when the index was built, the
+    // index cell of that box's low corner, and whether it changed in this round (then the
+    // overlay has it).
+    struct alignas(64) Snapshot {
+        Box3 box;
+        std::uint64_t first;
+        std::uint8_t moved;
+    };
+    std::vector<Snapshot> snapshot_;
     // Per face: made by a collapse, so checked against every face near it then, and every face
     // made since was checked against it: it meets no other face beyond their shared corners/edge.
     // (Input faces are not known to.)
@@ -631,8 +637,6 @@ void Simplifier::build_face_index() {
     // see query() for why that makes reading other blocks' faces unnecessary.
     index_grid_ = grid_over_faces(4.0, grid_.origin);
     snapshot_.resize(face_.size());
-    first_.resize(face_.size());
-    moved_.assign(face_.size(), 0);
     std::vector<std::vector<std::pair<std::uint64_t, std::uint32_t>>> parts(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel
     {
@@ -640,9 +644,9 @@ void Simplifier::build_face_index() {
 #pragma omp for schedule(static)
         for (std::int64_t f = 0; f < m; ++f) {
             if (!alive_[f]) continue;
-            snapshot_[f] = face_box(static_cast<std::uint32_t>(f));
-            first_[f] = index_grid_.cell_key(snapshot_[f].lo);
-            for_cells(snapshot_[f], [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
+            const Box3 box = face_box(static_cast<std::uint32_t>(f));
+            snapshot_[f] = {box, index_grid_.cell_key(box.lo), 0};
+            for_cells(box, [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
         }
     }
     std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
@@ -670,7 +674,8 @@ void Simplifier::query(const Box3& box, Overlay& overlay,
     };
     for_cells(box, [&](std::uint64_t key) {
         for (std::uint32_t f : index_.faces(key)) {
-            if (snapshot_[f].overlaps(box) && !moved_[f] && first_shared_cell(first_[f], key)) out.push_back(f);
+            const Snapshot& snapshot = snapshot_[f];
+            if (snapshot.box.overlaps(box) && !snapshot.moved && first_shared_cell(snapshot.first, key)) out.push_back(f);
         }
         std::vector<std::uint32_t>* found = overlay.find(key);
         if (found == nullptr) return;
@@ -1283,7 +1288,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     if (!terrain_) twin_[a] = twin_after;
     if (use_index_) {
         for (std::uint32_t f : star) {
-            moved_[f] = 1;
+            snapshot_[f].moved = 1;
             for_cells(face_box(f), [&](std::uint64_t key) {
                 std::vector<std::uint32_t>& list = overlay[key];
                 if (std::find(list.begin(), list.end(), f) == list.end()) list.push_back(f);
