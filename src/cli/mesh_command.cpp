@@ -186,6 +186,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         const double seconds_write = seconds_since(write_start);
 
         std::optional<mesh::HausdorffDistance> distance;
+        std::optional<mesh::VerticalError> vertical;  // terrains
         double seconds_hausdorff = 0;
         if (!options.no_hausdorff) {
             progress.phase("measuring the Hausdorff distance");
@@ -193,6 +194,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             // Four samples per input face, at least 50 000 and at most 400 000 per direction.
             const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
             distance = mesh::hausdorff(original, m, samples);
+            if (engine->terrain) vertical = mesh::vertical_error(original, m, samples);
             seconds_hausdorff = seconds_since(measure_start);
         }
         const double total = seconds_since(start);
@@ -214,6 +216,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
                                    distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
         }
+        if (vertical) summary += fmt::format("; vertical error {:.6g}", vertical->max());
         if (context.err_is_terminal || options.verbosity > 0) log->info("{}", summary);
         if (options.json) {
             // The summary never mixes with a mesh written to stdout.
@@ -241,6 +244,12 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                     << ",\"samples\":" << distance->forward.samples << "},\"output_to_input\":{\"max\":" << distance->backward.max
                     << ",\"mean\":" << distance->backward.mean << ",\"samples\":" << distance->backward.samples
                     << "},\"diagonal\":" << distance->diagonal << "}";
+            }
+            if (vertical) {
+                out << ",\"vertical_error\":{\"max\":" << vertical->max() << ",\"input_to_output\":{\"max\":"
+                    << vertical->forward.max << ",\"mean\":" << vertical->forward.mean << ",\"samples\":" << vertical->forward.samples
+                    << "},\"output_to_input\":{\"max\":" << vertical->backward.max << ",\"mean\":" << vertical->backward.mean
+                    << ",\"samples\":" << vertical->backward.samples << "},\"samples_outside\":" << vertical->outside << "}";
             }
             out << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
                 << "},\"predicates\":{\"filter_decided\":" << stats.predicates.filter_decided

@@ -33,6 +33,7 @@ TEST(MeshCli, SimplifiesTheSampleTorusCleanly) {
     EXPECT_NE(r.out.find("\"faces_in\":4800"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\"faces_out\":480"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\"hausdorff\""), std::string::npos);
+    EXPECT_EQ(r.out.find("\"vertical_error\""), std::string::npos) << "not a terrain";
     const mesh::Mesh m = read_back(out);
     EXPECT_EQ(m.faces.size(), 480u);
     const MeshDefects defects = find_defects(m);
@@ -53,6 +54,22 @@ TEST(MeshCli, TerrainWithLockedBorderKeepsItsBorderAndNeverFolds) {
     for (const Point3& p : m.points) border += p.x == 0 || p.y == 0 || p.x == 64 || p.y == 64;
     EXPECT_EQ(border, 256u);
     EXPECT_EQ(find_defects(m).total(), 0u);
+}
+
+TEST(MeshCli, TerrainsReportTheirVerticalError) {
+    const auto dir = fresh_dir("mesh");
+    const std::string out = (dir / "hills.ply").string();
+    const CliResult r = run_cli({"mesh", testdata("mesh/hills.obj"), "-o", out, "--keep", "5%", "--terrain", "--lock-boundary", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const auto at = r.out.find("\"vertical_error\":{\"max\":");
+    ASSERT_NE(at, std::string::npos) << r.out;
+    const double vertical = std::stod(r.out.substr(at + std::string("\"vertical_error\":{\"max\":").size()));
+    const auto hausdorff_at = r.out.find("\"hausdorff\":{\"max\":");
+    ASSERT_NE(hausdorff_at, std::string::npos) << r.out;
+    const double distance = std::stod(r.out.substr(hausdorff_at + std::string("\"hausdorff\":{\"max\":").size()));
+    EXPECT_GT(vertical, 0.0);
+    EXPECT_GE(vertical, distance);  // straight up or down is one way to the other surface
+    EXPECT_NE(r.out.find("\"samples_outside\":0"), std::string::npos) << "locked border: the same plan";
 }
 
 TEST(MeshCli, MeshToStdoutKeepsTheSummaryOnStderr) {

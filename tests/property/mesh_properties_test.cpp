@@ -1,6 +1,7 @@
 // UGSimp on generated meshes: no self-intersection, no non-manifold edge, no flipped face or
 // map-plane fold, whatever the target; the same result for any thread count. Every check is
 // the independent brute-force checker's (tests/support/mesh_checker), not the engine's.
+#include "core/mesh/distance.hpp"
 #include "core/mesh/simplify_mesh.hpp"
 #include "support/mesh_checker.hpp"
 #include "support/random_meshes.hpp"
@@ -291,6 +292,42 @@ TEST(MeshProperties, FlatRegionsSkipTheSearchButDecideTheSame) {
     EXPECT_EQ(find_defects(inputs[0].mesh).total(), 0u);
     EXPECT_EQ(find_defects(inputs[1].mesh).total(), 0u);
     EXPECT_GT(find_defects(inputs[2].mesh).intersecting_pairs, 0u);
+}
+
+TEST(MeshProperties, VerticalErrorIsTheHeightDifferenceAboveOrBelow) {
+    // A unit square flat at z = 0, and the same square with a centre vertex lifted to z = 1: the
+    // lifted vertex is 1 above the flat one's surface; the flat one's samples are below the
+    // pyramid by 2·(distance to the border), less than 1 but more than 0.
+    const Mesh flat{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}, {{0, 1, 2}, {0, 2, 3}}};
+    const Mesh lifted{{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0.5, 0.5, 1}}, {{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}}};
+    const VerticalError e = vertical_error(flat, lifted, 1000);
+    EXPECT_EQ(e.backward.max, 1.0);
+    EXPECT_GT(e.forward.max, 0.5);
+    EXPECT_LT(e.forward.max, 1.0);
+    EXPECT_EQ(e.outside, 0u);
+    // A sample outside the other's plan is counted, not measured.
+    Mesh wider = flat;
+    wider.points[1].x = wider.points[2].x = 2;
+    EXPECT_GT(vertical_error(wider, flat, 1000).outside, 0u);
+}
+
+TEST(MeshProperties, VerticalErrorOfASimplifiedTerrainBoundsItsHausdorffDistance) {
+    // Straight above or below is one way to reach the other surface: from the same samples the
+    // vertical error is never less than the distance. Locked border: the same plan, all inside.
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+        const Mesh input = testing::noisy_heightfield(30, 0.5, seed);
+        Mesh output = input;
+        simplified(output, MeshTarget::keep_fraction, 0.1, 2, true, true);
+        const VerticalError vertical = vertical_error(input, output, 20000);
+        const HausdorffDistance distance = hausdorff(input, output, 20000);
+        EXPECT_EQ(vertical.outside, 0u);
+        EXPECT_EQ(vertical.forward.samples, distance.forward.samples);
+        EXPECT_EQ(vertical.backward.samples, distance.backward.samples);
+        EXPECT_GE(vertical.forward.max, distance.forward.max);
+        EXPECT_GE(vertical.backward.max, distance.backward.max);
+        EXPECT_GE(vertical.forward.mean, distance.forward.mean);
+        EXPECT_GT(vertical.max(), 0.0);
+    }
 }
 
 }  // namespace

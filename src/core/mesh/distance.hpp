@@ -24,4 +24,16 @@ struct HausdorffDistance {
 // `face_samples`: about how many points to spread over each mesh's faces (plus its vertices).
 HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000);
 
+// Vertical error between two terrains (faces triangulating the x–y plane): from each sample of
+// one (the same samples as hausdorff's), |Δz| to the other's surface straight above or below it
+// (the face holding its x–y position, by exact orientation tests; z interpolated in doubles).
+// Samples with no face of the other above or below them are counted, not measured.
+struct VerticalError {
+    OneWayDistance forward;   // from the first terrain's samples to the second's surface
+    OneWayDistance backward;  // from the second's to the first's
+    std::size_t outside = 0;  // samples of either outside the other's x–y extent
+    double max() const { return forward.max > backward.max ? forward.max : backward.max; }
+};
+VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000);
+
 }  // namespace toposimp::mesh
