@@ -164,34 +164,48 @@ std::vector<V> samples_of(const Mesh& m, std::size_t face_samples) {
     return out;
 }
 
-OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_samples) {
-    const FaceGrid grid(to);
-    const std::vector<V> samples = samples_of(from, face_samples);
+// The largest and mean of measure(sample, d) over the samples that it measures (returns true
+// for), in parallel over fixed chunks, summed in order: the same for any thread count.
+template <class Measure>
+OneWayDistance over_samples(const std::vector<V>& samples, Measure measure) {
     constexpr std::size_t kChunk = 4096;
     const std::size_t chunks = (samples.size() + kChunk - 1) / kChunk;
     std::vector<double> sums(chunks, 0.0), maxima(chunks, 0.0);
+    std::vector<std::size_t> measured(chunks, 0);
     const auto count = static_cast<std::int64_t>(chunks);
 #pragma omp parallel for schedule(dynamic, 1)
     for (std::int64_t c = 0; c < count; ++c) {
         const std::size_t first = static_cast<std::size_t>(c) * kChunk, last = std::min(samples.size(), first + kChunk);
         double sum = 0, most = 0;
+        std::size_t n = 0;
         for (std::size_t i = first; i < last; ++i) {
-            const double d = grid.nearest(samples[i]);
+            double d = 0;
+            if (!measure(samples[i], d)) continue;
             sum += d;
             most = std::max(most, d);
+            ++n;
         }
         sums[static_cast<std::size_t>(c)] = sum;
         maxima[static_cast<std::size_t>(c)] = most;
+        measured[static_cast<std::size_t>(c)] = n;
     }
     OneWayDistance result;
     double sum = 0;
     for (std::size_t c = 0; c < chunks; ++c) {
         sum += sums[c];
         result.max = std::max(result.max, maxima[c]);
+        result.samples += measured[c];
     }
-    result.samples = samples.size();
-    result.mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
+    result.mean = result.samples == 0 ? 0.0 : sum / static_cast<double>(result.samples);
     return result;
+}
+
+OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_samples) {
+    const FaceGrid grid(to);
+    return over_samples(samples_of(from, face_samples), [&grid](V p, double& d) {
+        d = grid.nearest(p);
+        return true;
+    });
 }
 
 // Faces of a terrain by x–y grid cell, for finding the face above or below a point.
@@ -274,37 +288,13 @@ private:
 OneWayDistance one_way_vertical(const Mesh& from, const Mesh& to, std::size_t face_samples, std::size_t& outside) {
     const PlanGrid grid(to);
     const std::vector<V> samples = samples_of(from, face_samples);
-    constexpr std::size_t kChunk = 4096;
-    const std::size_t chunks = (samples.size() + kChunk - 1) / kChunk;
-    std::vector<double> sums(chunks, 0.0), maxima(chunks, 0.0);
-    std::vector<std::size_t> measured(chunks, 0);
-    const auto count = static_cast<std::int64_t>(chunks);
-#pragma omp parallel for schedule(dynamic, 1)
-    for (std::int64_t c = 0; c < count; ++c) {
-        const std::size_t first = static_cast<std::size_t>(c) * kChunk, last = std::min(samples.size(), first + kChunk);
-        double sum = 0, most = 0;
-        std::size_t n = 0;
-        for (std::size_t i = first; i < last; ++i) {
-            double z = 0;
-            if (!grid.height(samples[i].x, samples[i].y, z)) continue;
-            const double d = std::fabs(samples[i].z - z);
-            sum += d;
-            most = std::max(most, d);
-            ++n;
-        }
-        sums[static_cast<std::size_t>(c)] = sum;
-        maxima[static_cast<std::size_t>(c)] = most;
-        measured[static_cast<std::size_t>(c)] = n;
-    }
-    OneWayDistance result;
-    double sum = 0;
-    for (std::size_t c = 0; c < chunks; ++c) {
-        sum += sums[c];
-        result.max = std::max(result.max, maxima[c]);
-        result.samples += measured[c];
-    }
+    const OneWayDistance result = over_samples(samples, [&grid](V p, double& d) {
+        double z = 0;
+        if (!grid.height(p.x, p.y, z)) return false;
+        d = std::fabs(p.z - z);
+        return true;
+    });
     outside += samples.size() - result.samples;
-    result.mean = result.samples == 0 ? 0.0 : sum / static_cast<double>(result.samples);
     return result;
 }
 
