@@ -402,9 +402,10 @@ private:
         std::uint8_t moved;
     };
     std::vector<Snapshot> snapshot_;
-    // Per face: made by a collapse, so checked against every face near it then, and every face
-    // made since was checked against it: it meets no other face beyond their shared corners/edge.
-    // (Input faces are not known to.)
+    // Per face, whether it meets no other face beyond their shared corners/edge: kClean when made
+    // by a collapse (checked against every face near it then, and every face made since against
+    // it) or checked since (meets_another); kUnknown for an input face not checked yet;
+    // kConflicting when the check found a contact.
     std::vector<std::uint8_t> clean_;
     static constexpr std::uint8_t kUnknown = 0, kClean = 1, kConflicting = 2;
     // Per vertex (3D meshes): another live vertex may have its location.
