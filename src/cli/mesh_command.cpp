@@ -41,7 +41,8 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     auto* keep = mesh->add_option("--keep", options.keep, "Keep this share of the faces: 10% or 0.1 (default 10%)");
     auto* keep_faces = mesh->add_option("--keep-faces", options.keep_faces, "Keep at most N faces")->check(CLI::NonNegativeNumber);
     auto* max_error = mesh->add_option("--max-error", options.max_error,
-                                       "Collapse only while the quadric error (a distance, in the mesh's units) stays at most E")
+                                       "Collapse only while the error stays at most E: for a terrain, the vertical distance to the "
+                                       "input everywhere (guaranteed; the border is kept), else the quadric error (a distance)")
                           ->check(CLI::NonNegativeNumber);
     keep->excludes(keep_faces)->excludes(max_error);
     keep_faces->excludes(max_error);
@@ -84,12 +85,14 @@ std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, 
     return target;
 }
 
-std::string describe(const mesh::MeshOptions& target) {
+std::string describe(const mesh::MeshOptions& target, const mesh::MeshStats& stats) {
     std::ostringstream text;
     switch (target.target) {
         case mesh::MeshTarget::keep_fraction: text << "keep " << target.value * 100 << "% of the faces"; break;
         case mesh::MeshTarget::keep_faces: text << "keep " << target.value << " faces"; break;
-        case mesh::MeshTarget::max_error: text << "quadric error <= " << target.value; break;
+        case mesh::MeshTarget::max_error:
+            text << (stats.vertical_bound ? "vertical error <= " : "quadric error <= ") << target.value;
+            break;
     }
     return text.str();
 }
@@ -174,6 +177,13 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         const auto simplify_start = Clock::now();
         const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
         const double seconds_simplify = seconds_since(simplify_start);
+        if (engine->terrain && !stats.terrain) {
+            log->warn("{}: the faces are not all turned the same way in the x-y plane, so this is not a terrain TIN: "
+                      "simplified as a surface in space{}", options.input,
+                      engine->target == mesh::MeshTarget::max_error ? " (--max-error bounds the quadric error)" : "");
+        } else if (stats.vertical_bound && !engine->lock_boundary) {
+            log->info("border vertices kept where they are: the vertical bound is measured over the input's extent");
+        }
 
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
@@ -194,7 +204,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             // Four samples per input face, at least 50 000 and at most 400 000 per direction.
             const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
             distance = mesh::hausdorff(original, m, samples);
-            if (engine->terrain) vertical = mesh::vertical_error(original, m, samples);
+            if (stats.terrain) vertical = mesh::vertical_error(original, m, samples);
             seconds_hausdorff = seconds_since(measure_start);
         }
         const double total = seconds_since(start);
@@ -203,15 +213,16 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             log->warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks",
                       stats.faces_out, stats.target_faces);
         }
-        log->debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection",
+        log->debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection, "
+                   "{} vertical error",
                    stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
-                   stats.refused_intersection);
+                   stats.refused_intersection, stats.refused_vertical);
         log->debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP; peak memory {:.0f} MiB",
                    stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks,
                    peak_memory_mib());
         std::string summary = fmt::format("{} -> {} faces, {} -> {} vertices ({} collapses, {} refused), {}, {:.3f} s",
                                           stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out,
-                                          stats.collapses, stats.refused(), describe(*engine), total);
+                                          stats.collapses, stats.refused(), describe(*engine, stats), total);
         if (distance) {
             summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
                                    distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
@@ -226,13 +237,15 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                 << ",\"vertices_out\":" << stats.vertices_out << ",\"faces_in\":" << stats.faces_in
                 << ",\"faces_out\":" << stats.faces_out << ",\"collapses\":" << stats.collapses
                 << ",\"flat_collapses_unsearched\":" << stats.flat_unsearched
-                << ",\"target\":{\"criterion\":" << io::json_string(describe(*engine))
+                << ",\"target\":{\"criterion\":" << io::json_string(describe(*engine, stats))
                 << ",\"target_faces\":" << stats.target_faces << ",\"reached\":" << (stats.target_reached ? "true" : "false")
                 << "},\"refused\":{\"total\":" << stats.refused() << ",\"link\":" << stats.refused_link
                 << ",\"boundary\":" << stats.refused_boundary << ",\"flip\":" << stats.refused_flip
                 << ",\"degenerate\":" << stats.refused_degenerate << ",\"intersection\":" << stats.refused_intersection
-                << "},\"max_quadric_error\":" << stats.max_error << ",\"terrain\":" << (engine->terrain ? "true" : "false")
-                << ",\"lock_boundary\":" << (engine->lock_boundary ? "true" : "false");
+                << ",\"vertical\":" << stats.refused_vertical << "},\"max_quadric_error\":" << stats.max_error
+                << ",\"terrain\":" << (stats.terrain ? "true" : "false")
+                << ",\"lock_boundary\":" << (engine->lock_boundary || stats.vertical_bound ? "true" : "false");
+            if (stats.vertical_bound) out << ",\"guaranteed_vertical_error\":" << engine->value;
             if (dem) {
                 out << ",\"dem\":{\"width\":" << dem->width << ",\"height\":" << dem->height
                     << ",\"cells_without_data\":" << dem->nodata_cells << ",\"crs\":" << (dem->crs_wkt.empty() ? "false" : "true") << "}";

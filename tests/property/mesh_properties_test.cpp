@@ -330,5 +330,47 @@ TEST(MeshProperties, VerticalErrorOfASimplifiedTerrainBoundsItsHausdorffDistance
     }
 }
 
+TEST(MeshProperties, TerrainMaxErrorBoundsTheVerticalGapEverywhere) {
+    // The brute-force checker clips every output face to every input face: the gap is at most
+    // the bound at every corner of every piece, so everywhere. The border stays as it was.
+    std::uint64_t refused = 0;
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+        for (double noise : {0.2, 2.0}) {
+            for (double bound : {0.0, 0.05, 0.4, 1.5}) {
+                const Mesh input = testing::noisy_heightfield(16, noise, seed);
+                Mesh output = input;
+                const MeshStats stats = simplified(output, MeshTarget::max_error, bound, 2, true, false);
+                const std::string what =
+                    "seed " + std::to_string(seed) + ", noise " + std::to_string(noise) + ", bound " + std::to_string(bound);
+                EXPECT_TRUE(stats.vertical_bound) << what;
+                double largest = 0;
+                EXPECT_TRUE(testing::within_vertical_gap(input, output, bound, &largest)) << what << ": gap " << largest;
+                expect_clean(output, what);
+                EXPECT_EQ(testing::count_map_plane_folds(output, 1), 0u) << what;
+                std::size_t border = 0;
+                for (const Point3& p : output.points) border += p.x == 0 || p.y == 0 || p.x == 16 || p.y == 16;
+                EXPECT_EQ(border, 64u) << what;
+                if (bound >= 0.4) {
+                    // It does simplify, and up to near the bound, not timidly below it.
+                    EXPECT_GT(stats.collapses, 20u) << what;
+                    EXPECT_GT(largest, 0.5 * bound) << what;
+                }
+                refused += stats.refused_vertical;
+            }
+        }
+    }
+    EXPECT_GT(refused, 0u);
+}
+
+TEST(MeshProperties, TerrainMaxErrorSameResultForAnyThreadCount) {
+    const Mesh input = testing::noisy_heightfield(60, 1.0, 21);
+    Mesh one = input, three = input;
+    const MeshStats a = simplified(one, MeshTarget::max_error, 0.5, 1, true, true);
+    const MeshStats b = simplified(three, MeshTarget::max_error, 0.5, 3, true, true);
+    EXPECT_GT(a.collapses, 1000u);
+    EXPECT_EQ(a.collapses, b.collapses);
+    EXPECT_TRUE(same(one, three));
+}
+
 }  // namespace
 }  // namespace toposimp::mesh

@@ -238,4 +238,50 @@ int volume_sign(const mesh::Mesh& mesh) {
     return sgn(volume);
 }
 
+bool within_vertical_gap(const mesh::Mesh& input, const mesh::Mesh& output, double bound, double* largest) {
+    // Every output face clipped (in the x–y plane) to every input face whose box meets it: on
+    // the piece, both surfaces are planes, so the gap is largest at the piece's corners. The
+    // clipped corners keep the output face's height (clip interpolates along the polygon's
+    // edges); the input face's height there is solved from its plane, n·x = d.
+    struct Box2 {
+        double x0, y0, x1, y1;
+    };
+    auto box_of = [](const mesh::Mesh& m, const mesh::Face& c) {
+        Box2 b{m.points[c[0]].x, m.points[c[0]].y, m.points[c[0]].x, m.points[c[0]].y};
+        for (std::uint32_t w : c) {
+            b.x0 = std::min(b.x0, m.points[w].x), b.y0 = std::min(b.y0, m.points[w].y);
+            b.x1 = std::max(b.x1, m.points[w].x), b.y1 = std::max(b.y1, m.points[w].y);
+        }
+        return b;
+    };
+    std::vector<Box2> input_boxes;
+    for (const mesh::Face& c : input.faces) input_boxes.push_back(box_of(input, c));
+    const mpq_class limit(bound);
+    mpq_class most = 0;
+    for (const mesh::Face& oc : output.faces) {
+        const Box2 ob = box_of(output, oc);
+        const Poly t{q3(output.points[oc[0]]), q3(output.points[oc[1]]), q3(output.points[oc[2]])};
+        for (std::size_t f = 0; f < input.faces.size(); ++f) {
+            const Box2& ib = input_boxes[f];
+            if (ib.x0 > ob.x1 || ob.x0 > ib.x1 || ib.y0 > ob.y1 || ob.y0 > ib.y1) continue;
+            const mesh::Face& ic = input.faces[f];
+            const Tri u{q3(input.points[ic[0]]), q3(input.points[ic[1]]), q3(input.points[ic[2]])};
+            const int turn = orient_drop(u[0], u[1], u[2], 2);
+            if (turn == 0) continue;
+            Poly piece = t;
+            for (int k = 0; k < 3 && !piece.empty(); ++k) piece = clip(piece, u[k], u[(k + 1) % 3], turn, 2);
+            const Q3 n = crossq(sub(u[1], u[0]), sub(u[2], u[0]));  // n.z != 0: not vertical
+            const mpq_class d = dotq(n, u[0]);
+            for (const Q3& x : piece) {
+                const mpq_class z = (d - n.x * x.x - n.y * x.y) / n.z;
+                mpq_class gap = x.z - z;
+                if (sgn(gap) < 0) gap = -gap;
+                if (gap > most) most = gap;
+            }
+        }
+    }
+    if (largest != nullptr) *largest = most.get_d();
+    return most <= limit;
+}
+
 }  // namespace toposimp::testing

@@ -29,6 +29,12 @@ MeshDefects find_defects(const mesh::Mesh& mesh);
 // Faces whose orientation in the x–y plane is not `turn` (+1 or −1): folds of a terrain.
 std::size_t count_map_plane_folds(const mesh::Mesh& mesh, int turn);
 
+// Is every point of the output terrain within `bound` (exactly) of the input terrain straight
+// above or below it, wherever both have a face? Brute force: each output face clipped to each
+// input face in the x–y plane, the height difference compared at the pieces' corners. The
+// largest difference, rounded, goes to `largest`.
+bool within_vertical_gap(const mesh::Mesh& input, const mesh::Mesh& output, double bound, double* largest = nullptr);
+
 // Twice the signed volume enclosed (exact sign: +1, 0, −1) — for closed meshes.
 int volume_sign(const mesh::Mesh& mesh);
 

@@ -121,6 +121,55 @@ private:
     int lowest_ = std::numeric_limits<int>::max();
 };
 
+// A height difference as a fraction with the bound scaled alike: difference = value /
+// denominator, slack = bound · denominator. |difference| ≤ bound iff value − slack and value +
+// slack do not both lie on one side of zero in the denominator's direction.
+template <class T>
+struct Gap {
+    T value, denominator, slack;
+};
+
+// t's plane over v, relative to v: with A_i = orient2d(v, t_{i+1}, t_{i+2}) in the map plane,
+// the height there is Σ z_i·A_i / D, D = orient2d(t0, t1, t2), the barycentric weights' sum.
+template <class T, class To>
+Gap<T> vertical_gap_expr(const Triangle3& t, Point3 v, double bound, To to) {
+    const T x0 = to(t[0].x) - to(v.x), y0 = to(t[0].y) - to(v.y), z0 = to(t[0].z) - to(v.z);
+    const T x1 = to(t[1].x) - to(v.x), y1 = to(t[1].y) - to(v.y), z1 = to(t[1].z) - to(v.z);
+    const T x2 = to(t[2].x) - to(v.x), y2 = to(t[2].y) - to(v.y), z2 = to(t[2].z) - to(v.z);
+    const T value = z0 * (x1 * y2 - y1 * x2) + z1 * (x2 * y0 - y2 * x0) + z2 * (x0 * y1 - y0 * x1);
+    const T denominator = (to(t[1].x) - to(t[0].x)) * (to(t[2].y) - to(t[0].y)) -
+                          (to(t[1].y) - to(t[0].y)) * (to(t[2].x) - to(t[0].x));
+    return {value, denominator, to(bound) * denominator};
+}
+
+// At the crossing c of ab and uw, with K = (b − a) × (w − u), o_x = orient2d(u, w, x) and
+// q_x = orient2d(a, b, x): c = a + (o_a / K)(b − a) = u − (q_u / K)(w − u), so, heights taken
+// relative to a, h_ab(c) − h_uw(c) = (z_b·o_a + z_w·q_u − z_u·q_w) / K.
+template <class T, class To>
+Gap<T> crossing_gap_expr(Point3 a, Point3 b, Point3 u, Point3 w, double bound, To to) {
+    const T bx = to(b.x) - to(a.x), by = to(b.y) - to(a.y), bz = to(b.z) - to(a.z);
+    const T ux = to(u.x) - to(a.x), uy = to(u.y) - to(a.y), uz = to(u.z) - to(a.z);
+    const T wx = to(w.x) - to(a.x), wy = to(w.y) - to(a.y), wz = to(w.z) - to(a.z);
+    const T ex = to(w.x) - to(u.x), ey = to(w.y) - to(u.y);  // w − u
+    const T o_a = ey * ux - ex * uy;                         // (w − u) × (a − u), a − u = −u here
+    const T q_u = bx * uy - by * ux, q_w = bx * wy - by * wx;
+    const T denominator = bx * ey - by * ex;
+    const T value = bz * o_a + wz * q_u - uz * q_w;
+    return {value, denominator, to(bound) * denominator};
+}
+
+// 1 within, 0 not, 2 undecided (only from Bounded).
+template <class T>
+int gap_verdict(const Gap<T>& gap, int (*sign)(const T&)) {
+    const int d = sign(gap.denominator);
+    const int over = sign(gap.value - gap.slack), under = sign(gap.value + gap.slack);
+    if (d == 2 || over == 2 || under == 2) return 2;
+    return over * d <= 0 && under * d >= 0 ? 1 : 0;
+}
+
+int bounded_sign(const Bounded& x) { return certified_sign(x); }
+int integer_sign(const mpz_class& x) { return sgn(x); }
+
 int orient2(Point a, Point b, Point c, PredicateStats& stats) { return orient2d(a, b, c, stats); }
 
 bool in_segment_box(Point x, Point a, Point b) {
@@ -315,6 +364,28 @@ int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, 
     ++stats.gmp_fallbacks;
     const Point3 points[] = {a, b, c, d, e, f};
     return sgn(normal_dot_expr<mpz_class>(a, b, c, d, e, f, ToInteger(points)));
+}
+
+bool vertical_gap_within(const Triangle3& t, Point3 v, double bound, PredicateStats& stats) {
+    const int verdict = gap_verdict(vertical_gap_expr<Bounded>(t, v, bound, Plain<Bounded>{}), bounded_sign);
+    if (verdict != 2) {
+        ++stats.filter_decided;
+        return verdict == 1;
+    }
+    ++stats.gmp_fallbacks;
+    const Point3 points[] = {t[0], t[1], t[2], v, {bound, 0, 0}};
+    return gap_verdict(vertical_gap_expr<mpz_class>(t, v, bound, ToInteger(points)), integer_sign) == 1;
+}
+
+bool crossing_gap_within(Point3 a, Point3 b, Point3 u, Point3 w, double bound, PredicateStats& stats) {
+    const int verdict = gap_verdict(crossing_gap_expr<Bounded>(a, b, u, w, bound, Plain<Bounded>{}), bounded_sign);
+    if (verdict != 2) {
+        ++stats.filter_decided;
+        return verdict == 1;
+    }
+    ++stats.gmp_fallbacks;
+    const Point3 points[] = {a, b, u, w, {bound, 0, 0}};
+    return gap_verdict(crossing_gap_expr<mpz_class>(a, b, u, w, bound, ToInteger(points)), integer_sign) == 1;
 }
 
 int orient_projected(Point3 a, Point3 b, Point3 c, int axis, PredicateStats& stats) {

@@ -60,4 +60,16 @@ int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateSta
 // reported as a conflict too (the caller refuses rather than reasons about it).
 bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stats);
 
+// Vertical gaps between terrain faces (x–y is the map plane, z the height). Both decide
+// exactly whether a height difference is at most `bound` (≥ 0): the difference and the bound
+// times its denominator are polynomials in the inputs, signed by the dynamic filter or in GMP.
+//
+// |height of t's plane above v's map position − v.z| ≤ bound. t must not be degenerate in the
+// map plane (its projection has area).
+bool vertical_gap_within(const Triangle3& t, Point3 v, double bound, PredicateStats& stats);
+// The map-plane segments ab and uw cross at one point inside both (the caller has shown it with
+// orient2d): at that point, |height on ab − height on uw| ≤ bound (heights interpolated along
+// each segment).
+bool crossing_gap_within(Point3 a, Point3 b, Point3 u, Point3 w, double bound, PredicateStats& stats);
+
 }  // namespace toposimp::exact

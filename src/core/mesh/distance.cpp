@@ -1,6 +1,7 @@
 #include "core/mesh/distance.hpp"
 
 #include "core/exact/predicates.hpp"
+#include "core/mesh/plan_index.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -208,89 +209,38 @@ OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_sample
     });
 }
 
-// Faces of a terrain by x–y grid cell, for finding the face above or below a point.
-class PlanGrid {
-public:
-    explicit PlanGrid(const Mesh& m) : mesh_(m) {
-        if (m.faces.empty()) return;
-        lo_x_ = hi_x_ = m.points[m.faces[0][0]].x;
-        lo_y_ = hi_y_ = m.points[m.faces[0][0]].y;
-        for (const Face& f : m.faces) {
-            for (std::uint32_t w : f) {
-                lo_x_ = std::min(lo_x_, m.points[w].x), hi_x_ = std::max(hi_x_, m.points[w].x);
-                lo_y_ = std::min(lo_y_, m.points[w].y), hi_y_ = std::max(hi_y_, m.points[w].y);
-            }
+// The height of a terrain at (x, y), if a face holds that point (closed faces: on an edge either
+// neighbour gives the same height).
+bool height_at(const Mesh& mesh, const PlanIndex& index, double x, double y, double& z) {
+    exact::PredicateStats unused;
+    const Point p{x, y};
+    for (std::uint32_t face : index.at(x, y)) {
+        const Face& f = mesh.faces[face];
+        const Point3 &a = mesh.points[f[0]], &b = mesh.points[f[1]], &c = mesh.points[f[2]];
+        const Point a2{a.x, a.y}, b2{b.x, b.y}, c2{c.x, c.y};
+        const int turn = exact::orient2d(a2, b2, c2, unused);
+        if (turn == 0) continue;
+        if (exact::orient2d(a2, b2, p, unused) * turn < 0 || exact::orient2d(b2, c2, p, unused) * turn < 0 ||
+            exact::orient2d(c2, a2, p, unused) * turn < 0) {
+            continue;
         }
-        // About two faces per cell.
-        const double cells = std::max(1.0, static_cast<double>(m.faces.size()) / 2.0);
-        const double width = hi_x_ - lo_x_, height = hi_y_ - lo_y_;
-        size_ = width > 0 && height > 0 ? std::sqrt(width * height / cells) : std::max({width, height, 1.0});
-        n_x_ = std::min<std::int64_t>(static_cast<std::int64_t>(width / size_) + 1, 1 << 14);
-        n_y_ = std::min<std::int64_t>(static_cast<std::int64_t>(height / size_) + 1, 1 << 14);
-        std::vector<std::pair<std::int64_t, std::uint32_t>> entries;
-        for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
-            double x0 = m.points[m.faces[f][0]].x, x1 = x0, y0 = m.points[m.faces[f][0]].y, y1 = y0;
-            for (std::uint32_t w : m.faces[f]) {
-                x0 = std::min(x0, m.points[w].x), x1 = std::max(x1, m.points[w].x);
-                y0 = std::min(y0, m.points[w].y), y1 = std::max(y1, m.points[w].y);
-            }
-            for (std::int64_t x = cell(x0, lo_x_, n_x_); x <= cell(x1, lo_x_, n_x_); ++x) {
-                for (std::int64_t y = cell(y0, lo_y_, n_y_); y <= cell(y1, lo_y_, n_y_); ++y) entries.emplace_back(x * n_y_ + y, f);
-            }
-        }
-        std::sort(entries.begin(), entries.end());
-        keys_.resize(entries.size());
-        faces_.resize(entries.size());
-        for (std::size_t i = 0; i < entries.size(); ++i) keys_[i] = entries[i].first, faces_[i] = entries[i].second;
+        // Barycentric weights from areas in the plane.
+        const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+        if (area == 0) continue;  // (a sliver whose area rounds to zero)
+        const double wb = ((x - a.x) * (c.y - a.y) - (c.x - a.x) * (y - a.y)) / area;
+        const double wc = ((b.x - a.x) * (y - a.y) - (x - a.x) * (b.y - a.y)) / area;
+        z = a.z + wb * (b.z - a.z) + wc * (c.z - a.z);
+        return true;
     }
-
-    // The height of the surface at (x, y), if a face holds that point (closed faces: on an edge
-    // either neighbour gives the same height).
-    bool height(double x, double y, double& z) const {
-        if (mesh_.faces.empty() || !(x >= lo_x_ && x <= hi_x_ && y >= lo_y_ && y <= hi_y_)) return false;
-        const std::int64_t k = cell(x, lo_x_, n_x_) * n_y_ + cell(y, lo_y_, n_y_);
-        exact::PredicateStats unused;
-        const Point p{x, y};
-        for (auto it = std::lower_bound(keys_.begin(), keys_.end(), k); it != keys_.end() && *it == k; ++it) {
-            const Face& f = mesh_.faces[faces_[static_cast<std::size_t>(it - keys_.begin())]];
-            const Point3 &a = mesh_.points[f[0]], &b = mesh_.points[f[1]], &c = mesh_.points[f[2]];
-            const Point a2{a.x, a.y}, b2{b.x, b.y}, c2{c.x, c.y};
-            const int turn = exact::orient2d(a2, b2, c2, unused);
-            if (turn == 0) continue;
-            if (exact::orient2d(a2, b2, p, unused) * turn < 0 || exact::orient2d(b2, c2, p, unused) * turn < 0 ||
-                exact::orient2d(c2, a2, p, unused) * turn < 0) {
-                continue;
-            }
-            // Barycentric weights from areas in the plane.
-            const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-            if (area == 0) continue;  // (a sliver whose area rounds to zero)
-            const double wb = ((x - a.x) * (c.y - a.y) - (c.x - a.x) * (y - a.y)) / area;
-            const double wc = ((b.x - a.x) * (y - a.y) - (x - a.x) * (b.y - a.y)) / area;
-            z = a.z + wb * (b.z - a.z) + wc * (c.z - a.z);
-            return true;
-        }
-        return false;
-    }
-
-private:
-    std::int64_t cell(double value, double origin, std::int64_t n) const {
-        const double c = std::floor((value - origin) / size_);
-        return static_cast<std::int64_t>(std::clamp(c, 0.0, static_cast<double>(n - 1)));
-    }
-
-    const Mesh& mesh_;
-    double lo_x_ = 0, hi_x_ = 0, lo_y_ = 0, hi_y_ = 0, size_ = 1;
-    std::int64_t n_x_ = 1, n_y_ = 1;
-    std::vector<std::int64_t> keys_;
-    std::vector<std::uint32_t> faces_;
-};
+    return false;
+}
 
 OneWayDistance one_way_vertical(const Mesh& from, const Mesh& to, std::size_t face_samples, std::size_t& outside) {
-    const PlanGrid grid(to);
+    const PlanIndex index(to);
     const std::vector<V> samples = samples_of(from, face_samples);
-    const OneWayDistance result = over_samples(samples, [&grid](V p, double& d) {
+    const OneWayDistance result = over_samples(samples, [&](V p, double& d) {
         double z = 0;
-        if (!grid.height(p.x, p.y, z)) return false;
+        if (!height_at(to, index, p.x, p.y, z)) return false;
         d = std::fabs(p.z - z);
         return true;
     });

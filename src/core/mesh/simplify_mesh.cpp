@@ -1,6 +1,7 @@
 #include "core/mesh/simplify_mesh.hpp"
 
 #include "core/exact/predicates3d.hpp"
+#include "core/mesh/vertical_bound.hpp"
 
 #include <omp.h>
 
@@ -102,6 +103,9 @@ struct Candidate {
     std::uint32_t a, b;  // a < b
     std::uint32_t stamp_a;
     std::uint32_t stamp_b_bound;  // b's stamp; top bit: the placement was held back by the block
+    // Under a vertical bound: the touch counts of a and b (summed) when it was last refused, or
+    // kNone. Unchanged counts mean unchanged stars, so the same refusal: not tried again.
+    std::uint32_t refused_touches;
 
     std::uint32_t stamp_b() const { return stamp_b_bound & kStampMask; }
     // The optimal point or the midpoint lay outside the block: a coarser level's block, which
@@ -308,11 +312,15 @@ private:
     // was made of at the level before (`before`, emptied), the others computed afresh.
     std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block,
                                             const std::vector<std::vector<Candidate>*>& before);
+    // In a terrain under a vertical bound, every collapse counts a touch of each vertex of the
+    // faces it makes: a vertex's faces change only with its count (a refusal, which depends on
+    // nothing else, need not be tried again until then).
+    std::uint32_t touches(const Candidate& c) const { return touch_[c.a] + touch_[c.b]; }
     bool stale(const Candidate& c) const {
         return stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b();
     }
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
-        return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u)};
+        return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u), kNone};
     }
     // One round of a block, from its candidates (in any order; left in any order).
     BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& candidates, std::uint64_t budget,
@@ -379,6 +387,8 @@ private:
     const MeshOptions& options_;
     bool use_index_ = false;
     bool terrain_ = false;
+    bool lock_ = false;  // border vertices never move (asked for, or kept for the vertical bound)
+    std::unique_ptr<VerticalBound> vertical_;  // terrains under a max_error target
     int terrain_turn_ = 0;  // the map-plane orientation all terrain faces share
     Grid grid_;
 
@@ -389,6 +399,7 @@ private:
     std::vector<std::uint32_t> head_;  // per vertex: its first corner
     std::vector<std::uint8_t> flags_;
     std::vector<std::uint32_t> stamp_;
+    std::vector<std::uint32_t> touch_;  // per vertex, under a vertical bound (see touches())
     std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
     std::unique_ptr<Quadric[]> quadric_;  // per vertex
     CellIndex index_;
@@ -495,8 +506,8 @@ void Simplifier::build_quadrics() {
         }
         std::sort(borders.begin(), borders.end());  // their planes added in neighbour order
         for (const auto& [w, face] : borders) {
-            flags_[v] |= options_.lock_boundary ? (kBoundary | kLocked) : kBoundary;
-            if (options_.lock_boundary) continue;
+            flags_[v] |= lock_ ? (kBoundary | kLocked) : kBoundary;
+            if (lock_) continue;
             const auto lo = std::min(static_cast<std::uint32_t>(v), w), hi = std::max(static_cast<std::uint32_t>(v), w);
             const Face& f = face_[face];
             const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
@@ -887,7 +898,12 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
             }
         }
         if (stale(c)) continue;
+        if (vertical_ && c.refused_touches == touches(c)) {
+            candidates.push_back(c);
+            continue;
+        }
         if (!try_collapse(c.a, c.b, level, block, result, around, overlay)) {
+            if (vertical_) c.refused_touches = touches(c);
             candidates.push_back(c);
             continue;
         }
@@ -1040,7 +1056,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         return false;
     }
     const double error = error_of(placement, a, b);
-    if (options_.target == MeshTarget::max_error && error > options_.value) return false;
+    if (options_.target == MeshTarget::max_error && !vertical_ && error > options_.value) return false;
     thread_local std::vector<std::uint32_t> fa, fb, shared, opposite, star, found;
     faces_of(a, fa);
     faces_of(b, fb);
@@ -1105,8 +1121,9 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         return false;
     }
     exact::PredicateStats& predicates = stats.predicates;
-    thread_local std::vector<exact::Triangle3> fresh;
+    thread_local std::vector<exact::Triangle3> fresh, fan;
     fresh.clear();
+    fan.clear();
     Box3 reach = point_box(placement.p);
     for (std::size_t i = 0; i < star.size(); ++i) {
         const Face& c = face_[star[i]];
@@ -1144,10 +1161,18 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         }
         for (const Point3& corner : after) reach.add(corner);
         fresh.push_back(after);
+        if (vertical_) {
+            const int k = c[0] == a || c[0] == b ? 0 : c[1] == a || c[1] == b ? 1 : 2;
+            fan.push_back({after[k], after[(k + 1) % 3], after[(k + 2) % 3]});
+        }
+    }
+    if (vertical_ && !vertical_->holds(fan, predicates)) {
+        ++stats.refused_vertical;
+        return false;
     }
     // Contacts. In a terrain with a locked border the planar argument suffices; a collapse that
     // moves a border vertex of a terrain is checked in the map plane (faces flattened to z = 0).
-    const bool moves_border = ((flags_[a] | flags_[b]) & kBoundary) != 0 && !options_.lock_boundary;
+    const bool moves_border = ((flags_[a] | flags_[b]) & kBoundary) != 0 && !lock_;
     const bool flatten = terrain_ && moves_border;
     const bool interior = ((flags_[a] | flags_[b]) & kBoundary) == 0 && shared.size() == 2;
     bool twin_after = false;  // (3D) another vertex is at p
@@ -1297,6 +1322,10 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         }
     }
     corners_but(star, a, around);  // a's faces now: the star
+    if (vertical_) {
+        ++touch_[a];
+        for (std::uint32_t w : around) ++touch_[w];
+    }
     ++stats.collapses;
     stats.max_error = std::max(stats.max_error, error);
     result.faces_removed += shared.size();
@@ -1321,12 +1350,19 @@ MeshStats Simplifier::run() {
     stats.target_faces = target;
     const int saved_threads = omp_get_max_threads();
     omp_set_num_threads(threads);
+    check_terrain();
+    if (terrain_ && options_.target == MeshTarget::max_error && std::isfinite(options_.value)) {
+        vertical_ = std::make_unique<VerticalBound>(mesh_, options_.value);
+    }
+    lock_ = options_.lock_boundary || vertical_;
+    stats.terrain = terrain_;
+    stats.vertical_bound = vertical_ != nullptr;
+    if (vertical_) touch_.assign(pos_.size(), 0);
     build_topology();
     build_quadrics();
     choose_grid();
-    check_terrain();
     if (!terrain_) find_twins();
-    use_index_ = !terrain_ || !options_.lock_boundary;
+    use_index_ = !terrain_ || !lock_;
     stats.seconds_setup = std::chrono::duration<double>(Clock::now() - start).count();
     const auto sweep = Clock::now();
 
@@ -1444,6 +1480,7 @@ MeshStats Simplifier::run() {
                 stats.refused_flip += s.refused_flip;
                 stats.refused_degenerate += s.refused_degenerate;
                 stats.refused_intersection += s.refused_intersection;
+                stats.refused_vertical += s.refused_vertical;
                 stats.flat_unsearched += s.flat_unsearched;
                 stats.max_error = std::max(stats.max_error, s.max_error);
                 stats.predicates += s.predicates;

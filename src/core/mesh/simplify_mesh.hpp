@@ -25,7 +25,11 @@ namespace toposimp::mesh {
 enum class MeshTarget {
     keep_fraction,  // keep this share of the faces
     keep_faces,     // keep this many faces
-    max_error,      // collapse while the quadric error (a distance, map units) stays at most this
+    // Collapse while the error stays at most this. For a terrain (MeshOptions::terrain, and
+    // the faces do triangulate the map plane): the vertical distance between the input and the
+    // output surface, everywhere, guaranteed by exact tests (vertical_bound.hpp); the border is
+    // then kept as it is. Otherwise the quadric error (a distance in the mesh's units).
+    max_error,
 };
 
 struct MeshOptions {
@@ -61,9 +65,14 @@ struct MeshStats {
     std::uint64_t refused_flip = 0;          // a face would turn over (3D normal, or map-plane fold)
     std::uint64_t refused_degenerate = 0;    // a face would lose its area or duplicate another
     std::uint64_t refused_intersection = 0;  // a new face would touch or cross another face
+    std::uint64_t refused_vertical = 0;      // the terrain would move more than the vertical bound
     std::uint64_t refused() const {
-        return refused_link + refused_boundary + refused_flip + refused_degenerate + refused_intersection;
+        return refused_link + refused_boundary + refused_flip + refused_degenerate + refused_intersection + refused_vertical;
     }
+    // Simplified as a terrain (asked for, and every face turned the same way in the map plane).
+    bool terrain = false;
+    // The vertical distance to the input is at most the max_error target everywhere.
+    bool vertical_bound = false;
     // Collapses in flat regions proven free of contacts without searching for nearby faces
     // (see flat_and_clean in simplify_mesh.cpp); included in `collapses`.
     std::uint64_t flat_unsearched = 0;

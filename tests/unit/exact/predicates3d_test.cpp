@@ -260,5 +260,104 @@ TEST(FacesConflict, CoplanarFacesSharingOneCornerAgreeWithTheIndependentChecker)
     EXPECT_GT(clean, 300);
 }
 
+// Vertical gaps, by a different method: the point on the plane or the crossing point solved in
+// rationals, the heights interpolated there, the difference compared with the bound.
+bool reference_vertical_within(const Triangle3& t, Point3 v, double bound) {
+    auto q = [](double x) { return mpq_class(x); };
+    // z = z0 + α(x − x0) + β(y − y0) through the three corners (Cramer's rule).
+    const mpq_class x1 = q(t[1].x) - q(t[0].x), y1 = q(t[1].y) - q(t[0].y), z1 = q(t[1].z) - q(t[0].z);
+    const mpq_class x2 = q(t[2].x) - q(t[0].x), y2 = q(t[2].y) - q(t[0].y), z2 = q(t[2].z) - q(t[0].z);
+    const mpq_class det = x1 * y2 - x2 * y1;
+    const mpq_class alpha = (z1 * y2 - z2 * y1) / det, beta = (x1 * z2 - x2 * z1) / det;
+    const mpq_class z = q(t[0].z) + alpha * (q(v.x) - q(t[0].x)) + beta * (q(v.y) - q(t[0].y));
+    return abs(z - q(v.z)) <= q(bound);
+}
+
+bool reference_crossing_within(Point3 a, Point3 b, Point3 u, Point3 w, double bound) {
+    auto q = [](double x) { return mpq_class(x); };
+    // a + s(b − a) = u + r(w − u), solved for s and r.
+    const mpq_class dx = q(b.x) - q(a.x), dy = q(b.y) - q(a.y), ex = q(w.x) - q(u.x), ey = q(w.y) - q(u.y);
+    const mpq_class fx = q(u.x) - q(a.x), fy = q(u.y) - q(a.y);
+    const mpq_class det = dx * (-ey) - dy * (-ex);
+    const mpq_class s = (fx * (-ey) - fy * (-ex)) / det, r = (dx * fy - dy * fx) / det;
+    const mpq_class za = q(a.z) + s * (q(b.z) - q(a.z)), zu = q(u.z) + r * (q(w.z) - q(u.z));
+    return abs(za - zu) <= q(bound);
+}
+
+TEST(VerticalGap, ExactlyAtTheBound) {
+    PredicateStats stats;
+    const Triangle3 t{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}};
+    EXPECT_TRUE(vertical_gap_within(t, {0.25, 0.25, 3}, 3, stats));
+    EXPECT_FALSE(vertical_gap_within(t, {0.25, 0.25, 3}, std::nextafter(3.0, 0.0), stats));
+    EXPECT_TRUE(vertical_gap_within(t, {0.25, 0.25, -3}, 3, stats));
+    EXPECT_FALSE(vertical_gap_within(t, {0.25, 0.25, 0x1p-1074}, 0, stats));
+    EXPECT_TRUE(vertical_gap_within(t, {7, -5, 0}, 0, stats));  // outside the face: its plane
+    // Clockwise corners: the same heights.
+    const Triangle3 cw{{{0, 0, 0}, {0, 1, 0}, {1, 0, 0}}};
+    EXPECT_TRUE(vertical_gap_within(cw, {0.25, 0.25, 3}, 3, stats));
+    EXPECT_FALSE(vertical_gap_within(cw, {0.25, 0.25, 3}, 2.5, stats));
+    // Crossing diagonals of the unit square, one at height 0, the other rising from 0 to 2:
+    // 1 apart where they cross.
+    EXPECT_TRUE(crossing_gap_within({0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {0, 1, 2}, 1, stats));
+    EXPECT_FALSE(crossing_gap_within({0, 0, 0}, {1, 1, 0}, {1, 0, 0}, {0, 1, 2}, std::nextafter(1.0, 0.0), stats));
+    EXPECT_TRUE(crossing_gap_within({1, 0, 0}, {0, 1, 2}, {0, 0, 0}, {1, 1, 0}, 1, stats));
+}
+
+TEST(VerticalGap, AgreesWithRationalsWhenTheBoundIsTheRoundedGap) {
+    // Large offsets, the bound the gap computed in doubles and nudged by an ulp either way: the
+    // exact answers flip right at the true gap, which doubles cannot place.
+    std::mt19937_64 random(11);
+    std::uniform_real_distribution<double> unit(0, 1), height(-50, 50);
+    PredicateStats stats;
+    int float_wrong = 0, cases = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const double ox = 4e5 + 1e4 * unit(random), oy = 6e6 + 1e4 * unit(random);
+        const Triangle3 t{{{ox, oy, height(random)}, {ox + 30 * unit(random) + 1, oy, height(random)},
+                           {ox, oy + 30 * unit(random) + 1, height(random)}}};
+        const Point3 v{ox + 0.3 * unit(random), oy + 0.3 * unit(random), height(random)};
+        // The gap in doubles, as a naive implementation would compute it.
+        const double x1 = t[1].x - t[0].x, y1 = t[1].y - t[0].y, z1 = t[1].z - t[0].z;
+        const double x2 = t[2].x - t[0].x, y2 = t[2].y - t[0].y, z2 = t[2].z - t[0].z;
+        const double det = x1 * y2 - x2 * y1;
+        const double z = t[0].z + (z1 * y2 - z2 * y1) / det * (v.x - t[0].x) + (x1 * z2 - x2 * z1) / det * (v.y - t[0].y);
+        const double naive = std::fabs(z - v.z);
+        for (double bound : {std::nextafter(naive, 0.0), naive, std::nextafter(naive, INFINITY)}) {
+            const bool truth = reference_vertical_within(t, v, bound);
+            EXPECT_EQ(vertical_gap_within(t, v, bound, stats), truth) << trial;
+            if ((naive <= bound) != truth) ++float_wrong;
+            ++cases;
+        }
+        // A segment from v across the triangle's edge from corner 1 to 2, the bound its naive gap
+        // at the crossing (± an ulp).
+        const Point3 w{ox + 40 + 10 * unit(random), oy + 40 + 10 * unit(random), height(random)};
+        const Point3 a = t[1], b = t[2];
+        const double dx = b.x - a.x, dy = b.y - a.y, ex = w.x - v.x, ey = w.y - v.y, fx = v.x - a.x, fy = v.y - a.y;
+        const double cross = dx * ey - dy * ex;
+        const double along = (fx * ey - fy * ex) / cross, across = (fx * dy - fy * dx) / cross;
+        const double crossing_naive = std::fabs(a.z + along * (b.z - a.z) - (v.z + across * (w.z - v.z)));
+        for (double bound : {std::nextafter(crossing_naive, 0.0), crossing_naive, std::nextafter(crossing_naive, INFINITY)}) {
+            const bool truth = reference_crossing_within(a, b, v, w, bound);
+            EXPECT_EQ(crossing_gap_within(a, b, v, w, bound, stats), truth) << trial;
+            if ((crossing_naive <= bound) != truth) ++float_wrong;
+            cases += 1;
+        }
+    }
+    EXPECT_GT(float_wrong, 0) << "plain doubles should misplace some of " << cases << " bounds";
+    EXPECT_GT(stats.gmp_fallbacks, 0u);
+}
+
+TEST(VerticalGap, HugeAndTinyCoordinates) {
+    PredicateStats stats;
+    for (double scale : {0x1p-600, 0x1p-40, 1.0, 0x1p40, 0x1p500}) {
+        const Triangle3 t{{{0, 0, 0}, {scale, 0, 0}, {0, scale, 0}}};
+        const Point3 v{scale / 4, scale / 4, scale};
+        EXPECT_TRUE(vertical_gap_within(t, v, scale, stats)) << scale;
+        EXPECT_FALSE(vertical_gap_within(t, v, std::nextafter(scale, 0.0), stats)) << scale;
+        EXPECT_TRUE(crossing_gap_within({0, 0, 0}, {scale, scale, 0}, {scale, 0, 0}, {0, scale, 2 * scale}, scale, stats));
+        EXPECT_FALSE(crossing_gap_within({0, 0, 0}, {scale, scale, 0}, {scale, 0, 0}, {0, scale, 2 * scale},
+                                         std::nextafter(scale, 0.0), stats));
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::exact

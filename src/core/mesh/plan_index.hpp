@@ -1,0 +1,53 @@
+// The faces of a terrain bucketed by their x–y bounding boxes in a uniform grid (about two
+// faces per cell), for finding the faces over a point or near a region of the map plane.
+#pragma once
+
+#include "core/mesh/mesh.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace toposimp::mesh {
+
+class PlanIndex {
+public:
+    explicit PlanIndex(const Mesh& mesh);
+
+    // The faces whose boxes meet the cell holding (x, y) (clamped to the grid): every face over
+    // that point among them.
+    std::span<const std::uint32_t> at(double x, double y) const {
+        const std::size_t c = static_cast<std::size_t>(cell(x, lo_x_, n_x_) * n_y_ + cell(y, lo_y_, n_y_));
+        return {faces_.data() + first_[c], faces_.data() + first_[c + 1]};
+    }
+
+    // Calls visit(face) for the faces of every cell the box [x0, x1] × [y0, y1] meets: all faces
+    // whose boxes meet it among them, a face once per cell it shares with the box.
+    template <class Visit>
+    void visit(double x0, double y0, double x1, double y1, Visit visit) const {
+        const std::int64_t cx1 = cell(x1, lo_x_, n_x_), cy0 = cell(y0, lo_y_, n_y_), cy1 = cell(y1, lo_y_, n_y_);
+        for (std::int64_t x = cell(x0, lo_x_, n_x_); x <= cx1; ++x) {
+            const auto row = static_cast<std::size_t>(x * n_y_);
+            for (std::size_t i = first_[row + static_cast<std::size_t>(cy0)]; i < first_[row + static_cast<std::size_t>(cy1) + 1]; ++i) {
+                visit(faces_[i]);
+            }
+        }
+    }
+
+private:
+    std::int64_t cell(double value, double origin, std::int64_t n) const {
+        const double c = std::floor((value - origin) / size_);
+        if (!(c >= 0)) return 0;  // (NaN too)
+        return c >= static_cast<double>(n - 1) ? n - 1 : static_cast<std::int64_t>(c);
+    }
+
+    double lo_x_ = 0, lo_y_ = 0, size_ = 1;
+    std::int64_t n_x_ = 1, n_y_ = 1;
+    std::vector<std::size_t> first_;  // per cell (x-major), where its faces start; one more at the end
+    std::vector<std::uint32_t> faces_;
+};
+
+}  // namespace toposimp::mesh
