@@ -366,7 +366,54 @@ int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, 
     return sgn(normal_dot_expr<mpz_class>(a, b, c, d, e, f, ToInteger(points)));
 }
 
+// The semi-static stage of the gap predicates: value ≈ ṽ within value_error, denominator ≈ d̃
+// within denominator_error (Shewchuk's bounds for the orient3d and orient2d shapes), and the
+// two roundings of ṽ ∓ bound·d̃ on top, all widened by 2^-40 for the rounding of the bound's own
+// arithmetic. 1 within, 0 not, 2 undecided (a bound out of range, or too close to call).
+int gap_verdict_static(double value, double value_error, double denominator, double denominator_error, double bound) {
+    if (!(bound <= 0x1p1000) || !(std::fabs(denominator) > denominator_error)) return 2;
+    const double slack = bound * denominator;
+    if (bound != 0.0 && std::fabs(slack) < 0x1p-900) return 2;  // (may have underflowed)
+    const double base = value_error + bound * denominator_error + kUnitRoundoff * std::fabs(slack);
+    const double over = value - slack, under = value + slack;
+    const double over_error = (base + kUnitRoundoff * std::fabs(over)) * (1.0 + 0x1p-40);
+    const double under_error = (base + kUnitRoundoff * std::fabs(under)) * (1.0 + 0x1p-40);
+    if (!(std::fabs(over) > over_error) || !(std::fabs(under) > under_error)) return 2;
+    const int d = denominator > 0 ? 1 : -1;
+    const int over_sign = over > 0 ? 1 : -1, under_sign = under > 0 ? 1 : -1;
+    return over_sign * d < 0 && under_sign * d > 0 ? 1 : 0;
+}
+
+// Whether a permanent lies where Shewchuk's static bounds hold (no overflow, and underflow
+// below what the bound covers).
+bool permanent_in_range(double permanent) { return permanent >= 0x1p-800 && permanent <= 0x1p1000; }
+
 bool vertical_gap_within(const Triangle3& t, Point3 v, double bound, PredicateStats& stats) {
+    if (t[0].z == v.z && t[1].z == v.z && t[2].z == v.z) {
+        ++stats.filter_decided;  // all at v's height: a gap of exactly 0
+        return bound >= 0.0;
+    }
+    {
+        // The value is orient3d(t0, t1, t2, v) in Shewchuk's arrangement: (7 + 56ε)ε·permanent.
+        const double x0 = t[0].x - v.x, y0 = t[0].y - v.y, z0 = t[0].z - v.z;
+        const double x1 = t[1].x - v.x, y1 = t[1].y - v.y, z1 = t[1].z - v.z;
+        const double x2 = t[2].x - v.x, y2 = t[2].y - v.y, z2 = t[2].z - v.z;
+        const double x1y2 = x1 * y2, y1x2 = y1 * x2, x2y0 = x2 * y0, y2x0 = y2 * x0, x0y1 = x0 * y1, y0x1 = y0 * x1;
+        const double value = z0 * (x1y2 - y1x2) + z1 * (x2y0 - y2x0) + z2 * (x0y1 - y0x1);
+        const double permanent = std::fabs(z0) * (std::fabs(x1y2) + std::fabs(y1x2)) + std::fabs(z1) * (std::fabs(x2y0) + std::fabs(y2x0)) +
+                                 std::fabs(z2) * (std::fabs(x0y1) + std::fabs(y0x1));
+        // The denominator is orient2d(t0, t1, t2): (3 + 16ε)ε·(|left| + |right|).
+        const double left = (t[0].x - t[2].x) * (t[1].y - t[2].y), right = (t[0].y - t[2].y) * (t[1].x - t[2].x);
+        const double denominator = left - right, denominator_permanent = std::fabs(left) + std::fabs(right);
+        if (permanent_in_range(permanent) && permanent_in_range(denominator_permanent)) {
+            const int verdict = gap_verdict_static(value, (7.0 + 56.0 * kUnitRoundoff) * kUnitRoundoff * permanent, denominator,
+                                                   (3.0 + 16.0 * kUnitRoundoff) * kUnitRoundoff * denominator_permanent, bound);
+            if (verdict != 2) {
+                ++stats.filter_decided;
+                return verdict == 1;
+            }
+        }
+    }
     const int verdict = gap_verdict(vertical_gap_expr<Bounded>(t, v, bound, Plain<Bounded>{}), bounded_sign);
     if (verdict != 2) {
         ++stats.filter_decided;
@@ -378,6 +425,32 @@ bool vertical_gap_within(const Triangle3& t, Point3 v, double bound, PredicateSt
 }
 
 bool crossing_gap_within(Point3 a, Point3 b, Point3 u, Point3 w, double bound, PredicateStats& stats) {
+    {
+        // The orient3d shape again (three rounded differences times a 2×2 determinant of
+        // rounded differences, summed), and the orient2d shape for the denominator.
+        const double bx = b.x - a.x, by = b.y - a.y, bz = b.z - a.z;
+        const double ux = u.x - a.x, uy = u.y - a.y, uz = u.z - a.z;
+        const double wx = w.x - a.x, wy = w.y - a.y, wz = w.z - a.z;
+        const double ex = w.x - u.x, ey = w.y - u.y;
+        const double eyux = ey * ux, exuy = ex * uy, bxuy = bx * uy, byux = by * ux, bxwy = bx * wy, bywx = by * wx;
+        const double value = bz * (eyux - exuy) + wz * (bxuy - byux) - uz * (bxwy - bywx);
+        const double permanent = std::fabs(bz) * (std::fabs(eyux) + std::fabs(exuy)) + std::fabs(wz) * (std::fabs(bxuy) + std::fabs(byux)) +
+                                 std::fabs(uz) * (std::fabs(bxwy) + std::fabs(bywx));
+        const double left = bx * ey, right = by * ex;
+        const double denominator = left - right, denominator_permanent = std::fabs(left) + std::fabs(right);
+        if (bz == 0.0 && wz == 0.0 && uz == 0.0) {
+            ++stats.filter_decided;  // all four at one height: a gap of exactly 0
+            return bound >= 0.0;
+        }
+        if (permanent_in_range(permanent) && permanent_in_range(denominator_permanent)) {
+            const int verdict = gap_verdict_static(value, (7.0 + 56.0 * kUnitRoundoff) * kUnitRoundoff * permanent, denominator,
+                                                   (3.0 + 16.0 * kUnitRoundoff) * kUnitRoundoff * denominator_permanent, bound);
+            if (verdict != 2) {
+                ++stats.filter_decided;
+                return verdict == 1;
+            }
+        }
+    }
     const int verdict = gap_verdict(crossing_gap_expr<Bounded>(a, b, u, w, bound, Plain<Bounded>{}), bounded_sign);
     if (verdict != 2) {
         ++stats.filter_decided;

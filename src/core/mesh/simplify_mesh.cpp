@@ -1166,9 +1166,14 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             fan.push_back({after[k], after[(k + 1) % 3], after[(k + 2) % 3]});
         }
     }
-    if (vertical_ && !vertical_->holds(fan, predicates)) {
-        ++stats.refused_vertical;
-        return false;
+    thread_local std::vector<std::uint32_t> replaced;  // (under a vertical bound) the faces the collapse replaces
+    if (vertical_) {
+        replaced.assign(star.begin(), star.end());
+        replaced.insert(replaced.end(), shared.begin(), shared.end());
+        if (!vertical_->holds(fan, replaced, predicates)) {
+            ++stats.refused_vertical;
+            return false;
+        }
     }
     // Contacts. In a terrain with a locked border the planar argument suffices; a collapse that
     // moves a border vertex of a terrain is checked in the map plane (faces flattened to z = 0).
@@ -1323,6 +1328,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     }
     corners_but(star, a, around);  // a's faces now: the star
     if (vertical_) {
+        vertical_->collapsed(replaced, star);
         ++touch_[a];
         for (std::uint32_t w : around) ++touch_[w];
     }

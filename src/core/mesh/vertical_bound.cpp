@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <utility>
-#include <vector>
 
 namespace toposimp::mesh {
 namespace {
@@ -16,14 +15,7 @@ struct PlanBox {
         x0 = std::min(x0, p.x), y0 = std::min(y0, p.y), x1 = std::max(x1, p.x), y1 = std::max(y1, p.y);
     }
     bool holds(Point3 p) const { return p.x >= x0 && p.x <= x1 && p.y >= y0 && p.y <= y1; }
-    bool meets(const PlanBox& o) const { return x0 <= o.x1 && o.x0 <= x1 && y0 <= o.y1 && o.y0 <= y1; }
 };
-
-PlanBox box_of(Point3 a, Point3 b) {
-    PlanBox box(a);
-    box.add(b);
-    return box;
-}
 
 PlanBox box_of(const exact::Triangle3& t) {
     PlanBox box(t[0]);
@@ -40,131 +32,172 @@ bool in_closed(const exact::Triangle3& t, int turn, Point3 q, exact::PredicateSt
            exact::orient2d(plan(t[2]), plan(t[0]), x, stats) * turn >= 0;
 }
 
-// Per thread: which input faces and vertices this call has seen.
-struct Marks {
+// Per thread, for walks: the input faces a walk has visited and the sides of the input vertices
+// it has classified, stamped with the walk's number (no clearing between walks).
+struct WalkMarks {
     std::vector<std::uint32_t> face, vertex;
-    std::uint32_t generation = 0;
+    std::vector<std::int8_t> side;
+    std::uint32_t walk = 0;
 
     void start(std::size_t faces, std::size_t vertices) {
-        if (face.size() != faces || vertex.size() != vertices || ++generation == 0) {
+        if (face.size() != faces || vertex.size() != vertices || ++walk == 0) {
             face.assign(faces, 0);
             vertex.assign(vertices, 0);
-            generation = 1;
+            side.assign(vertices, 0);
+            walk = 1;
         }
     }
 };
 
-bool by_location(Point3 a, Point3 b) {
-    if (a.x != b.x) return a.x < b.x;
-    if (a.y != b.y) return a.y < b.y;
-    return a.z < b.z;
-}
+// What holds() found, for collapsed(): input vertex and the fan face over it.
+thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> placed;
 
 }  // namespace
 
 VerticalBound::VerticalBound(const Mesh& input, double bound)
-    : input_(input), index_(input_), border_(input_.faces.size(), 0), bound_(bound) {
-    // Border edges: those no other face has, from either end.
-    std::vector<std::pair<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>> edges;  // (lower, higher), face·3 + k
+    : input_(input), index_(input_), neighbour_(input_.faces.size(), {kNone, kNone, kNone}),
+      first_(input_.faces.size(), kNone), next_(input_.points.size(), kNone), bound_(bound) {
+    // Neighbours across edges: the faces of each edge, found by sorting (lower, higher, face·3 + k).
+    std::vector<std::pair<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t>> edges;
     edges.reserve(3 * input_.faces.size());
     for (std::uint32_t f = 0; f < input_.faces.size(); ++f) {
         const Face& c = input_.faces[f];
         for (std::uint32_t k = 0; k < 3; ++k) edges.push_back({std::minmax(c[k], c[(k + 1) % 3]), 3 * f + k});
     }
     std::sort(edges.begin(), edges.end());
-    for (std::size_t i = 0; i < edges.size();) {
-        std::size_t j = i + 1;
-        while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-        if (j == i + 1) border_[edges[i].second / 3] = static_cast<std::uint8_t>(border_[edges[i].second / 3] | (1u << (edges[i].second % 3)));
-        i = j;
+    for (std::size_t i = 0; i + 1 < edges.size(); ++i) {
+        if (edges[i].first != edges[i + 1].first) continue;
+        const std::uint32_t x = edges[i].second, y = edges[i + 1].second;  // (a manifold edge: two at most)
+        neighbour_[x / 3][x % 3] = y / 3;
+        neighbour_[y / 3][y % 3] = x / 3;
+    }
+    // Each input vertex listed in the first face it is a corner of.
+    std::vector<std::uint8_t> listed(input_.points.size(), 0);
+    for (std::uint32_t f = 0; f < input_.faces.size(); ++f) {
+        for (std::uint32_t v : input_.faces[f]) {
+            if (listed[v]) continue;
+            listed[v] = 1;
+            next_[v] = first_[f];
+            first_[f] = v;
+        }
     }
 }
 
-bool VerticalBound::holds(std::span<const exact::Triangle3> fan, exact::PredicateStats& stats) const {
+bool VerticalBound::holds(std::span<const exact::Triangle3> fan, std::span<const std::uint32_t> before,
+                          exact::PredicateStats& stats) {
+    placed.clear();
     if (fan.empty()) return true;
     const Point3 p = fan[0][0];
     const int turn = exact::orient2d(plan(fan[0][0]), plan(fan[0][1]), plan(fan[0][2]), stats);
-    const auto triangle = [this](std::uint32_t f) -> exact::Triangle3 {
-        const Face& c = input_.faces[f];
-        return {input_.points[c[0]], input_.points[c[1]], input_.points[c[2]]};
-    };
 
     // p against every input face under it.
+    thread_local std::vector<std::uint32_t> under;
+    under.clear();
     for (std::uint32_t f : index_.at(p.x, p.y)) {
-        const exact::Triangle3 t = triangle(f);
+        const Face& c = input_.faces[f];
+        const exact::Triangle3 t{input_.points[c[0]], input_.points[c[1]], input_.points[c[2]]};
         const int t_turn = exact::orient2d(plan(t[0]), plan(t[1]), plan(t[2]), stats);
         if (t_turn == 0 || !box_of(t).holds(p) || !in_closed(t, t_turn, p, stats)) continue;
         if (!exact::vertical_gap_within(t, p, bound_, stats)) return false;
+        under.push_back(f);
     }
+    if (under.empty()) return false;  // (p off the input: not a height field there)
 
-    // The input faces near the fan, each once (marked with this call's generation).
-    PlanBox region = box_of(fan[0]);
+    // Every input vertex listed in the faces replaced against the new face over it (on an edge
+    // between two new faces, either: they agree there).
     thread_local std::vector<PlanBox> boxes;
     boxes.clear();
-    for (const exact::Triangle3& t : fan) {
-        boxes.push_back(box_of(t));
-        region.add(t[1]);
-        region.add(t[2]);
-    }
-    thread_local Marks marks;
-    marks.start(input_.faces.size(), input_.points.size());
-    thread_local std::vector<std::uint32_t> faces;
-    faces.clear();
-    index_.visit(region.x0, region.y0, region.x1, region.y1, [](std::uint32_t f) {
-        if (marks.face[f] != marks.generation) {
-            marks.face[f] = marks.generation;
-            faces.push_back(f);
-        }
-    });
-
-    // Every input vertex in the fan against the new face over it (on an edge between two new
-    // faces, either: they agree there).
-    for (std::uint32_t f : faces) {
-        for (std::uint32_t v : input_.faces[f]) {
-            if (marks.vertex[v] == marks.generation) continue;
-            marks.vertex[v] = marks.generation;
+    for (const exact::Triangle3& t : fan) boxes.push_back(box_of(t));
+    for (std::uint32_t f : before) {
+        for (std::uint32_t v = first_[f]; v != kNone; v = next_[v]) {
             const Point3 q = input_.points[v];
-            if (!region.holds(q)) continue;
-            for (std::size_t i = 0; i < fan.size(); ++i) {
-                if (!boxes[i].holds(q) || !in_closed(fan[i], turn, q, stats)) continue;
-                if (!exact::vertical_gap_within(fan[i], q, bound_, stats)) return false;
-                break;
-            }
+            std::size_t i = 0;
+            while (i < fan.size() && !(boxes[i].holds(q) && in_closed(fan[i], turn, q, stats))) ++i;
+            if (i == fan.size()) return false;  // (not covered by the new faces: cannot happen without a fold)
+            if (!exact::vertical_gap_within(fan[i], q, bound_, stats)) return false;
+            placed.emplace_back(v, static_cast<std::uint32_t>(i));
         }
     }
 
-    // Every crossing of an edge from p with an input edge (a touch — an end of one on the other
-    // — is a vertex case above). An input edge is taken from the face that has it from its lower
-    // to its higher vertex (both faces of an edge that crosses one from p are near the fan), or
-    // from its only face.
+    // Every crossing of an edge from p with an input edge: a walk along each, once.
     thread_local std::vector<Point3> ends;
     ends.clear();
     for (const exact::Triangle3& t : fan) {
         ends.push_back(t[1]);
         ends.push_back(t[2]);
     }
-    std::sort(ends.begin(), ends.end(), by_location);
-    ends.erase(std::unique(ends.begin(), ends.end(), [](Point3 a, Point3 b) { return same_location(a, b); }), ends.end());
-    for (std::uint32_t f : faces) {
+    std::sort(ends.begin(), ends.end(), [](Point3 u, Point3 w) { return u.x != w.x ? u.x < w.x : u.y != w.y ? u.y < w.y : u.z < w.z; });
+    ends.erase(std::unique(ends.begin(), ends.end(), [](Point3 u, Point3 w) { return same_location(u, w); }), ends.end());
+    for (const Point3& l : ends) {
+        if (!crossings_hold(p, l, under, stats)) return false;
+    }
+    return true;
+}
+
+bool VerticalBound::crossings_hold(Point3 p, Point3 l, std::span<const std::uint32_t> start, exact::PredicateStats& stats) {
+    thread_local WalkMarks marks;
+    thread_local std::vector<std::uint32_t> queue;
+    marks.start(input_.faces.size(), input_.points.size());
+    const std::uint32_t walk = marks.walk;
+    const Point a = plan(p), b = plan(l);
+    const double x0 = std::min(a.x, b.x), x1 = std::max(a.x, b.x), y0 = std::min(a.y, b.y), y1 = std::max(a.y, b.y);
+    auto side = [&](std::uint32_t v) {
+        if (marks.vertex[v] != walk) {
+            marks.vertex[v] = walk;
+            marks.side[v] = static_cast<std::int8_t>(exact::orient2d(a, b, plan(input_.points[v]), stats));
+        }
+        return marks.side[v];
+    };
+    // On the line through p and l: on the closed segment iff in its box.
+    auto on_segment = [&](Point3 q) { return q.x >= x0 && q.x <= x1 && q.y >= y0 && q.y <= y1; };
+    queue.assign(start.begin(), start.end());
+    for (std::uint32_t f : start) marks.face[f] = walk;
+    // Breadth-first over the input faces meeting the closed segment, through the edges meeting it
+    // (the faces a segment meets are connected that way: it goes from one to the next through an
+    // edge, or through a vertex, all of whose edges meet it).
+    while (!queue.empty()) {
+        const std::uint32_t f = queue.back();
+        queue.pop_back();
         const Face& c = input_.faces[f];
         for (int k = 0; k < 3; ++k) {
             const std::uint32_t iu = c[k], iw = c[(k + 1) % 3];
-            if (iu > iw && (border_[f] & (1u << k)) == 0) continue;
+            const int su = side(iu), sw = side(iw);
+            if (su * sw > 0) continue;  // the edge is on one side of the line
             const Point3 u = input_.points[iu], w = input_.points[iw];
-            const PlanBox edge_box = box_of(u, w);
-            if (!edge_box.meets(region)) continue;
-            int side_p = 2;  // orient2d(u, w, p), once per edge
-            for (const Point3& l : ends) {
-                if (!edge_box.meets(box_of(p, l))) continue;
-                if (side_p == 2) side_p = exact::orient2d(plan(u), plan(w), plan(p), stats);
-                if (side_p == 0 || exact::orient2d(plan(u), plan(w), plan(l), stats) * side_p >= 0) continue;
-                const int side_u = exact::orient2d(plan(p), plan(l), plan(u), stats);
-                if (side_u == 0 || exact::orient2d(plan(p), plan(l), plan(w), stats) * side_u >= 0) continue;
-                if (!exact::crossing_gap_within(p, l, u, w, bound_, stats)) return false;
+            bool meets;
+            if (su != 0 && sw != 0) {
+                const int tp = exact::orient2d(plan(u), plan(w), a, stats), tl = exact::orient2d(plan(u), plan(w), b, stats);
+                if (tp * tl > 0) continue;  // the segment is on one side of the edge's line
+                meets = true;
+                // A proper crossing (an end of either on the other is a vertex case), checked
+                // from the face that has the edge from its lower vertex, or its only face.
+                if (tp != 0 && tl != 0 && (iu < iw || neighbour_[f][k] == kNone) &&
+                    !exact::crossing_gap_within(p, l, u, w, bound_, stats)) {
+                    return false;
+                }
+            } else {
+                meets = (su == 0 && on_segment(u)) || (sw == 0 && on_segment(w)) ||
+                        (su == 0 && sw == 0 && std::max(u.x, w.x) >= x0 && std::min(u.x, w.x) <= x1 &&
+                         std::max(u.y, w.y) >= y0 && std::min(u.y, w.y) <= y1);
+            }
+            const std::uint32_t g = neighbour_[f][k];
+            if (meets && g != kNone && marks.face[g] != walk) {
+                marks.face[g] = walk;
+                queue.push_back(g);
             }
         }
     }
     return true;
+}
+
+void VerticalBound::collapsed(std::span<const std::uint32_t> before, std::span<const std::uint32_t> after) {
+    for (std::uint32_t f : before) first_[f] = kNone;
+    for (const auto& [v, i] : placed) {
+        const std::uint32_t f = after[i];
+        next_[v] = first_[f];
+        first_[f] = v;
+    }
+    placed.clear();
 }
 
 }  // namespace toposimp::mesh

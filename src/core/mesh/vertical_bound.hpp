@@ -14,6 +14,11 @@
 // edge from p with an input edge. Each comparison is exact (vertical_gap_within,
 // crossing_gap_within).
 //
+// Finding them without searching: every input vertex is kept in the list of a current face over
+// it (at the start, a face it is a corner of), so those in R are in the lists of the faces the
+// collapse replaces, and after it they move to the new faces found over them. The input edges
+// crossing an edge from p are found by walking the input faces along it, from those under p.
+//
 // This assumes the input is a height field (its faces do not overlap in the map plane), as every
 // DEM-derived TIN is.
 #pragma once
@@ -22,6 +27,7 @@
 #include "core/mesh/mesh.hpp"
 #include "core/mesh/plan_index.hpp"
 
+#include <array>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -30,20 +36,31 @@ namespace toposimp::mesh {
 
 class VerticalBound {
 public:
-    // Keeps a copy of the input terrain.
+    // `input`: the terrain the simplifier starts from; its face ids are the simplifier's.
     VerticalBound(const Mesh& input, double bound);
 
     // `fan`: the faces a collapse makes, each with the merged vertex p as its first corner, all
-    // turned the same way in the map plane (none degenerate there), covering the region the
-    // collapse changes. Is the new surface there within the bound of the input's?
-    bool holds(std::span<const exact::Triangle3> fan, exact::PredicateStats& stats) const;
+    // turned the same way in the map plane (none degenerate there); `before`: the faces it
+    // removes or changes, which cover the same region. Is the new surface there within the bound
+    // of the input's? Safe to call from several threads for disjoint regions.
+    bool holds(std::span<const exact::Triangle3> fan, std::span<const std::uint32_t> before, exact::PredicateStats& stats);
+
+    // After holds() said yes on this thread and the collapse was made: `after[i]` is the face
+    // that fan[i] became. The input vertices of `before` move to the new faces over them.
+    void collapsed(std::span<const std::uint32_t> before, std::span<const std::uint32_t> after);
 
     double bound() const { return bound_; }
 
 private:
+    // Does the walk along the segment from p to l meet only crossings within the bound?
+    bool crossings_hold(Point3 p, Point3 l, std::span<const std::uint32_t> start, exact::PredicateStats& stats);
+
+    static constexpr std::uint32_t kNone = 0xffffffffu;
     Mesh input_;
     PlanIndex index_;
-    std::vector<std::uint8_t> border_;  // per input face, bit k: its edge from corner k has no other face
+    std::vector<std::array<std::uint32_t, 3>> neighbour_;  // per input face, across its edge from corner k (kNone: border)
+    std::vector<std::uint32_t> first_;  // per current face: the first input vertex listed in it
+    std::vector<std::uint32_t> next_;   // per input vertex: the next one in its face's list
     double bound_;
 };
 
