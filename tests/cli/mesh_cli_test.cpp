@@ -256,6 +256,45 @@ TEST(MeshCli, DemBecomesASimplifiedTinLayerInTheDemsCrs) {
     EXPECT_EQ(border, 2u * 30 + 2u * 22);
 }
 
+double json_number(const std::string& text, const std::string& key) {
+    const auto at = text.find("\"" + key + "\":");
+    if (at == std::string::npos) return -1;
+    return std::stod(text.substr(at + key.size() + 3));
+}
+
+TEST(MeshCli, DemMaxErrorIsAGuaranteedVerticalBound) {
+    // The DEM's TIN, simplified within 1.5 height units: the brute-force checker finds every
+    // point of the output within 1.5 of the input straight above or below; the JSON says so.
+    const auto dir = fresh_dir("mesh-dem");
+    const std::string dem = write_dem(dir);
+    const std::string full = (dir / "full.ply").string(), out = (dir / "bounded.ply").string();
+    ASSERT_EQ(run_cli({"mesh", dem, "-o", full, "--keep", "100%", "--no-hausdorff", "-q"}).code, 0);
+    const CliResult r = run_cli({"mesh", dem, "-o", out, "--max-error", "1.5", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("\"criterion\":\"vertical error <= 1.5\""), std::string::npos) << r.out;
+    EXPECT_EQ(json_number(r.out, "guaranteed_vertical_error"), 1.5) << r.out;
+    EXPECT_GT(json_number(r.out, "vertical"), 0) << "some collapses refused for the bound: " << r.out;
+    const double sampled = json_number(r.out, "vertical_error\":{\"max");
+    EXPECT_GT(sampled, 0.5);
+    EXPECT_LE(sampled, 1.5);
+    const mesh::Mesh input = read_back(full), output = read_back(out);
+    EXPECT_LT(output.faces.size(), input.faces.size() / 2);
+    double largest = 0;
+    EXPECT_TRUE(within_vertical_gap(input, output, 1.5, &largest)) << largest;
+    EXPECT_EQ(count_map_plane_folds(output, 1), 0u);
+}
+
+TEST(MeshCli, MaxErrorOnASurfaceThatIsNoTerrainSaysItBoundsTheQuadricError) {
+    const auto dir = fresh_dir("mesh");
+    const CliResult r =
+        run_cli({"mesh", testdata("mesh/torus.off"), "-o", (dir / "t.obj").string(), "--terrain", "--max-error", "0.05", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("not a terrain TIN"), std::string::npos) << r.err;
+    EXPECT_NE(r.out.find("\"criterion\":\"quadric error <= 0.05\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"terrain\":false"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("guaranteed_vertical_error"), std::string::npos) << r.out;
+}
+
 TEST(MeshCli, DemBandOutOfRangeIsAnError) {
     const auto dir = fresh_dir("mesh-dem");
     const std::string dem = write_dem(dir);

@@ -248,7 +248,7 @@ class _MeshTargets:
             "COUNT", "N: faces to keep", QgsProcessingParameterNumber.Integer, defaultValue=10000, minValue=0,
             optional=True))
         self.addParameter(QgsProcessingParameterNumber(
-            "MAX_ERROR", "E: quadric error (units)", QgsProcessingParameterNumber.Double, defaultValue=1.0,
+            "MAX_ERROR", "E: error bound (units; for terrain the vertical distance)", QgsProcessingParameterNumber.Double, defaultValue=1.0,
             minValue=0.0, optional=True))
         self.addParameter(QgsProcessingParameterBoolean(
             "HAUSDORFF", "Measure the Hausdorff distance", defaultValue=True))
@@ -319,7 +319,9 @@ class DemAlgorithm(_MeshTargets, ToposimpAlgorithm):
     HELP = ("Triangulates a DEM band over its cell centres (cells without data left out) and simplifies "
             "the TIN with quadric-error edge collapses; no triangle ever folds over in the map plane "
             "(exact orient2d). The border stays as it is unless you free it, so neighbouring tiles "
-            "still match. The result is a layer of triangles (Polygon Z) in the DEM's CRS.")
+            "still match. Stopping at an error E keeps the TIN within E of the DEM's surface straight "
+            "above or below, everywhere (exact tests; the border is then kept). The result is a layer "
+            "of triangles (Polygon Z) in the DEM's CRS.")
 
     def initAlgorithm(self, config=None):
         self.addParameter(QgsProcessingParameterRasterLayer("INPUT", "DEM"))

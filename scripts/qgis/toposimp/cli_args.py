@@ -24,7 +24,7 @@ ARITHMETIC = [
 MESH_TARGETS = [
     ("keep_percent", "Keep a share of the faces (%)"),
     ("keep_faces", "Keep N faces"),
-    ("max_error", "Quadric error up to E"),
+    ("max_error", "Error up to E (terrain: vertical distance, guaranteed; else quadric error)"),
 ]
 MESH_FORMATS = ("obj", "ply", "off")
 
@@ -178,7 +178,7 @@ def mesh_args(input_path, output_path, target=0, percent=10.0, count=None, max_e
     elif kind == "keep_faces":
         args += ["--keep-faces", _count(count, "faces to keep")]
     else:
-        args += ["--max-error", _non_negative(max_error, "quadric error")]
+        args += ["--max-error", _non_negative(max_error, "error bound")]
     if band:
         args += ["--band", _count(band, "band")]
     if terrain:
