@@ -131,22 +131,24 @@ struct Gap {
 
 // t's plane over v, relative to v: with A_i = orient2d(v, t_{i+1}, t_{i+2}) in the map plane,
 // the height there is Σ z_i·A_i / D, D = orient2d(t0, t1, t2), the barycentric weights' sum.
-template <class T, class To>
-Gap<T> vertical_gap_expr(const Triangle3& t, Point3 v, double bound, To to) {
+template <class To>
+auto vertical_gap_expr(const Triangle3& t, Point3 v, double bound, To to) {
+    using T = decltype(to(0.0));
     const T x0 = to(t[0].x) - to(v.x), y0 = to(t[0].y) - to(v.y), z0 = to(t[0].z) - to(v.z);
     const T x1 = to(t[1].x) - to(v.x), y1 = to(t[1].y) - to(v.y), z1 = to(t[1].z) - to(v.z);
     const T x2 = to(t[2].x) - to(v.x), y2 = to(t[2].y) - to(v.y), z2 = to(t[2].z) - to(v.z);
     const T value = z0 * (x1 * y2 - y1 * x2) + z1 * (x2 * y0 - y2 * x0) + z2 * (x0 * y1 - y0 * x1);
     const T denominator = (to(t[1].x) - to(t[0].x)) * (to(t[2].y) - to(t[0].y)) -
                           (to(t[1].y) - to(t[0].y)) * (to(t[2].x) - to(t[0].x));
-    return {value, denominator, to(bound) * denominator};
+    return Gap<T>{value, denominator, to(bound) * denominator};
 }
 
 // At the crossing c of ab and uw, with K = (b − a) × (w − u), o_x = orient2d(u, w, x) and
 // q_x = orient2d(a, b, x): c = a + (o_a / K)(b − a) = u − (q_u / K)(w − u), so, heights taken
 // relative to a, h_ab(c) − h_uw(c) = (z_b·o_a + z_w·q_u − z_u·q_w) / K.
-template <class T, class To>
-Gap<T> crossing_gap_expr(Point3 a, Point3 b, Point3 u, Point3 w, double bound, To to) {
+template <class To>
+auto crossing_gap_expr(Point3 a, Point3 b, Point3 u, Point3 w, double bound, To to) {
+    using T = decltype(to(0.0));
     const T bx = to(b.x) - to(a.x), by = to(b.y) - to(a.y), bz = to(b.z) - to(a.z);
     const T ux = to(u.x) - to(a.x), uy = to(u.y) - to(a.y), uz = to(u.z) - to(a.z);
     const T wx = to(w.x) - to(a.x), wy = to(w.y) - to(a.y), wz = to(w.z) - to(a.z);
@@ -155,7 +157,7 @@ Gap<T> crossing_gap_expr(Point3 a, Point3 b, Point3 u, Point3 w, double bound, T
     const T q_u = bx * uy - by * ux, q_w = bx * wy - by * wx;
     const T denominator = bx * ey - by * ex;
     const T value = bz * o_a + wz * q_u - uz * q_w;
-    return {value, denominator, to(bound) * denominator};
+    return Gap<T>{value, denominator, to(bound) * denominator};
 }
 
 // 1 within, 0 not, 2 undecided (only from Bounded).
@@ -388,77 +390,68 @@ int gap_verdict_static(double value, double value_error, double denominator, dou
 // below what the bound covers).
 bool permanent_in_range(double permanent) { return permanent >= 0x1p-800 && permanent <= 0x1p1000; }
 
+// The cascade of both gap predicates: the static stage from the value and the denominator
+// computed in doubles with their permanents (the orient3d and orient2d shapes), then the
+// dynamic filter, then GMP integers. `expression(to)` is the predicate's Gap over `to`'s number
+// type; `points` its inputs (the bound among them) for the integer scaling.
+template <class Expression>
+bool decide_gap(double value, double permanent, double denominator, double denominator_permanent, double bound,
+                const Point3 (&points)[5], Expression expression, PredicateStats& stats) {
+    if (permanent_in_range(permanent) && permanent_in_range(denominator_permanent)) {
+        const int verdict = gap_verdict_static(value, (7.0 + 56.0 * kUnitRoundoff) * kUnitRoundoff * permanent, denominator,
+                                               (3.0 + 16.0 * kUnitRoundoff) * kUnitRoundoff * denominator_permanent, bound);
+        if (verdict != 2) {
+            ++stats.filter_decided;
+            return verdict == 1;
+        }
+    }
+    const int verdict = gap_verdict(expression(Plain<Bounded>{}), bounded_sign);
+    if (verdict != 2) {
+        ++stats.filter_decided;
+        return verdict == 1;
+    }
+    ++stats.gmp_fallbacks;
+    return gap_verdict(expression(ToInteger(points)), integer_sign) == 1;
+}
+
 bool vertical_gap_within(const Triangle3& t, Point3 v, double bound, PredicateStats& stats) {
     if (t[0].z == v.z && t[1].z == v.z && t[2].z == v.z) {
         ++stats.filter_decided;  // all at v's height: a gap of exactly 0
         return bound >= 0.0;
     }
-    {
-        // The value is orient3d(t0, t1, t2, v) in Shewchuk's arrangement: (7 + 56ε)ε·permanent.
-        const double x0 = t[0].x - v.x, y0 = t[0].y - v.y, z0 = t[0].z - v.z;
-        const double x1 = t[1].x - v.x, y1 = t[1].y - v.y, z1 = t[1].z - v.z;
-        const double x2 = t[2].x - v.x, y2 = t[2].y - v.y, z2 = t[2].z - v.z;
-        const double x1y2 = x1 * y2, y1x2 = y1 * x2, x2y0 = x2 * y0, y2x0 = y2 * x0, x0y1 = x0 * y1, y0x1 = y0 * x1;
-        const double value = z0 * (x1y2 - y1x2) + z1 * (x2y0 - y2x0) + z2 * (x0y1 - y0x1);
-        const double permanent = std::fabs(z0) * (std::fabs(x1y2) + std::fabs(y1x2)) + std::fabs(z1) * (std::fabs(x2y0) + std::fabs(y2x0)) +
-                                 std::fabs(z2) * (std::fabs(x0y1) + std::fabs(y0x1));
-        // The denominator is orient2d(t0, t1, t2): (3 + 16ε)ε·(|left| + |right|).
-        const double left = (t[0].x - t[2].x) * (t[1].y - t[2].y), right = (t[0].y - t[2].y) * (t[1].x - t[2].x);
-        const double denominator = left - right, denominator_permanent = std::fabs(left) + std::fabs(right);
-        if (permanent_in_range(permanent) && permanent_in_range(denominator_permanent)) {
-            const int verdict = gap_verdict_static(value, (7.0 + 56.0 * kUnitRoundoff) * kUnitRoundoff * permanent, denominator,
-                                                   (3.0 + 16.0 * kUnitRoundoff) * kUnitRoundoff * denominator_permanent, bound);
-            if (verdict != 2) {
-                ++stats.filter_decided;
-                return verdict == 1;
-            }
-        }
-    }
-    const int verdict = gap_verdict(vertical_gap_expr<Bounded>(t, v, bound, Plain<Bounded>{}), bounded_sign);
-    if (verdict != 2) {
-        ++stats.filter_decided;
-        return verdict == 1;
-    }
-    ++stats.gmp_fallbacks;
+    // The value is orient3d(t0, t1, t2, v) in Shewchuk's arrangement, the denominator orient2d(t0, t1, t2).
+    const double x0 = t[0].x - v.x, y0 = t[0].y - v.y, z0 = t[0].z - v.z;
+    const double x1 = t[1].x - v.x, y1 = t[1].y - v.y, z1 = t[1].z - v.z;
+    const double x2 = t[2].x - v.x, y2 = t[2].y - v.y, z2 = t[2].z - v.z;
+    const double x1y2 = x1 * y2, y1x2 = y1 * x2, x2y0 = x2 * y0, y2x0 = y2 * x0, x0y1 = x0 * y1, y0x1 = y0 * x1;
+    const double value = z0 * (x1y2 - y1x2) + z1 * (x2y0 - y2x0) + z2 * (x0y1 - y0x1);
+    const double permanent = std::fabs(z0) * (std::fabs(x1y2) + std::fabs(y1x2)) + std::fabs(z1) * (std::fabs(x2y0) + std::fabs(y2x0)) +
+                             std::fabs(z2) * (std::fabs(x0y1) + std::fabs(y0x1));
+    const double left = (t[0].x - t[2].x) * (t[1].y - t[2].y), right = (t[0].y - t[2].y) * (t[1].x - t[2].x);
     const Point3 points[] = {t[0], t[1], t[2], v, {bound, 0, 0}};
-    return gap_verdict(vertical_gap_expr<mpz_class>(t, v, bound, ToInteger(points)), integer_sign) == 1;
+    return decide_gap(value, permanent, left - right, std::fabs(left) + std::fabs(right), bound, points,
+                      [&](auto to) { return vertical_gap_expr(t, v, bound, to); }, stats);
 }
 
 bool crossing_gap_within(Point3 a, Point3 b, Point3 u, Point3 w, double bound, PredicateStats& stats) {
-    {
-        // The orient3d shape again (three rounded differences times a 2×2 determinant of
-        // rounded differences, summed), and the orient2d shape for the denominator.
-        const double bx = b.x - a.x, by = b.y - a.y, bz = b.z - a.z;
-        const double ux = u.x - a.x, uy = u.y - a.y, uz = u.z - a.z;
-        const double wx = w.x - a.x, wy = w.y - a.y, wz = w.z - a.z;
-        const double ex = w.x - u.x, ey = w.y - u.y;
-        const double eyux = ey * ux, exuy = ex * uy, bxuy = bx * uy, byux = by * ux, bxwy = bx * wy, bywx = by * wx;
-        const double value = bz * (eyux - exuy) + wz * (bxuy - byux) - uz * (bxwy - bywx);
-        const double permanent = std::fabs(bz) * (std::fabs(eyux) + std::fabs(exuy)) + std::fabs(wz) * (std::fabs(bxuy) + std::fabs(byux)) +
-                                 std::fabs(uz) * (std::fabs(bxwy) + std::fabs(bywx));
-        const double left = bx * ey, right = by * ex;
-        const double denominator = left - right, denominator_permanent = std::fabs(left) + std::fabs(right);
-        if (bz == 0.0 && wz == 0.0 && uz == 0.0) {
-            ++stats.filter_decided;  // all four at one height: a gap of exactly 0
-            return bound >= 0.0;
-        }
-        if (permanent_in_range(permanent) && permanent_in_range(denominator_permanent)) {
-            const int verdict = gap_verdict_static(value, (7.0 + 56.0 * kUnitRoundoff) * kUnitRoundoff * permanent, denominator,
-                                                   (3.0 + 16.0 * kUnitRoundoff) * kUnitRoundoff * denominator_permanent, bound);
-            if (verdict != 2) {
-                ++stats.filter_decided;
-                return verdict == 1;
-            }
-        }
+    const double bx = b.x - a.x, by = b.y - a.y, bz = b.z - a.z;
+    const double ux = u.x - a.x, uy = u.y - a.y, uz = u.z - a.z;
+    const double wx = w.x - a.x, wy = w.y - a.y, wz = w.z - a.z;
+    if (bz == 0.0 && wz == 0.0 && uz == 0.0) {
+        ++stats.filter_decided;  // all four at one height: a gap of exactly 0
+        return bound >= 0.0;
     }
-    const int verdict = gap_verdict(crossing_gap_expr<Bounded>(a, b, u, w, bound, Plain<Bounded>{}), bounded_sign);
-    if (verdict != 2) {
-        ++stats.filter_decided;
-        return verdict == 1;
-    }
-    ++stats.gmp_fallbacks;
+    // The orient3d shape again (three rounded differences times a 2×2 determinant of rounded
+    // differences, summed), and the orient2d shape for the denominator.
+    const double ex = w.x - u.x, ey = w.y - u.y;
+    const double eyux = ey * ux, exuy = ex * uy, bxuy = bx * uy, byux = by * ux, bxwy = bx * wy, bywx = by * wx;
+    const double value = bz * (eyux - exuy) + wz * (bxuy - byux) - uz * (bxwy - bywx);
+    const double permanent = std::fabs(bz) * (std::fabs(eyux) + std::fabs(exuy)) + std::fabs(wz) * (std::fabs(bxuy) + std::fabs(byux)) +
+                             std::fabs(uz) * (std::fabs(bxwy) + std::fabs(bywx));
+    const double left = bx * ey, right = by * ex;
     const Point3 points[] = {a, b, u, w, {bound, 0, 0}};
-    return gap_verdict(crossing_gap_expr<mpz_class>(a, b, u, w, bound, ToInteger(points)), integer_sign) == 1;
+    return decide_gap(value, permanent, left - right, std::fabs(left) + std::fabs(right), bound, points,
+                      [&](auto to) { return crossing_gap_expr(a, b, u, w, bound, to); }, stats);
 }
 
 int orient_projected(Point3 a, Point3 b, Point3 c, int axis, PredicateStats& stats) {
