@@ -28,7 +28,7 @@ constexpr std::uint8_t kInside = 8;    // this level: it and all its neighbours 
 constexpr std::uint8_t kNewlyInside = 16;  // inside at this level but not at the one before
 
 // Stamps count the changes of a vertex (a collapse it absorbed, its own death), in 31 bits (a
-// candidate keeps one more bit): a candidate whose ends' stamps changed is stale.
+// candidate keeps their sum and one more bit): a candidate whose ends' stamps changed is stale.
 constexpr std::uint32_t kStampMask = 0x7fffffff;
 
 // A symmetric 4×4 quadric (Garland & Heckbert 1997) plus the area it was built from. Zero when
@@ -101,17 +101,20 @@ struct Grid {
 struct Candidate {
     double cost;
     std::uint32_t a, b;  // a < b
-    std::uint32_t stamp_a;
-    std::uint32_t stamp_b_bound;  // b's stamp; top bit: the placement was held back by the block
+    // The sum of a's and b's stamps (modulo 2^31: stamps only grow, so another sum means that
+    // one changed); top bit: the placement was held back by the block.
+    std::uint32_t stamps_bound;
     // Under a vertical bound: the touch counts of a and b (summed) when it was last refused, or
     // kNone. Unchanged counts mean unchanged stars, so the same refusal: not tried again.
     std::uint32_t refused_touches;
 
-    std::uint32_t stamp_b() const { return stamp_b_bound & kStampMask; }
+    std::uint32_t stamps() const { return stamps_bound & kStampMask; }
     // The optimal point or the midpoint lay outside the block: a coarser level's block, which
     // holds this one, may place the merged vertex differently.
-    bool bound() const { return (stamp_b_bound >> 31) != 0; }
+    bool bound() const { return (stamps_bound >> 31) != 0; }
 };
+
+static_assert(sizeof(Candidate) == 24, "candidates are sorted and moved by the million: keep them small");
 
 // Heap order: the smallest (cost, a, b) on top. (A lambda, not a function: the heap algorithms
 // inline it instead of calling through a pointer.)
@@ -317,10 +320,10 @@ private:
     // nothing else, need not be tried again until then).
     std::uint32_t touches(const Candidate& c) const { return touch_[c.a] + touch_[c.b]; }
     bool stale(const Candidate& c) const {
-        return stamp_[c.a] != c.stamp_a || stamp_[c.b] != c.stamp_b();
+        return ((stamp_[c.a] + stamp_[c.b]) & kStampMask) != c.stamps();
     }
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
-        return {placement.cost, a, b, stamp_[a], stamp_[b] | (placement.bound ? ~kStampMask : 0u), kNone};
+        return {placement.cost, a, b, ((stamp_[a] + stamp_[b]) & kStampMask) | (placement.bound ? ~kStampMask : 0u), kNone};
     }
     // One round of a block, from its candidates (in any order; left in any order).
     BlockResult collapse_block(int level, std::uint64_t block, std::vector<Candidate>& candidates, std::uint64_t budget,
