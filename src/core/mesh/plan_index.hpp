@@ -1,5 +1,5 @@
 // The faces of a terrain bucketed by their x–y bounding boxes in a uniform grid (about two
-// faces per cell), for finding the faces over a point or near a region of the map plane.
+// faces per cell), for finding the faces over a point of the map plane.
 #pragma once
 
 #include "core/mesh/mesh.hpp"
@@ -22,19 +22,6 @@ public:
     std::span<const std::uint32_t> at(double x, double y) const {
         const std::size_t c = static_cast<std::size_t>(cell(x, lo_x_, n_x_) * n_y_ + cell(y, lo_y_, n_y_));
         return {faces_.data() + first_[c], faces_.data() + first_[c + 1]};
-    }
-
-    // Calls visit(face) for the faces of every cell the box [x0, x1] × [y0, y1] meets: all faces
-    // whose boxes meet it among them, a face once per cell it shares with the box.
-    template <class Visit>
-    void visit(double x0, double y0, double x1, double y1, Visit visit) const {
-        const std::int64_t cx1 = cell(x1, lo_x_, n_x_), cy0 = cell(y0, lo_y_, n_y_), cy1 = cell(y1, lo_y_, n_y_);
-        for (std::int64_t x = cell(x0, lo_x_, n_x_); x <= cx1; ++x) {
-            const auto row = static_cast<std::size_t>(x * n_y_);
-            for (std::size_t i = first_[row + static_cast<std::size_t>(cy0)]; i < first_[row + static_cast<std::size_t>(cy1) + 1]; ++i) {
-                visit(faces_[i]);
-            }
-        }
     }
 
 private:

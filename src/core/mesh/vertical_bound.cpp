@@ -152,9 +152,9 @@ bool VerticalBound::crossings_hold(Point3 p, Point3 l, std::span<const std::uint
     auto on_segment = [&](Point3 q) { return q.x >= x0 && q.x <= x1 && q.y >= y0 && q.y <= y1; };
     queue.assign(start.begin(), start.end());
     for (std::uint32_t f : start) marks.face[f] = walk;
-    // Breadth-first over the input faces meeting the closed segment, through the edges meeting it
-    // (the faces a segment meets are connected that way: it goes from one to the next through an
-    // edge, or through a vertex, all of whose edges meet it).
+    // A search (last in, first out) over the input faces meeting the closed segment, through the
+    // edges meeting it (the faces a segment meets are connected that way: it goes from one to the
+    // next through an edge, or through a vertex, all of whose edges meet it).
     while (!queue.empty()) {
         const std::uint32_t f = queue.back();
         queue.pop_back();
