@@ -76,6 +76,8 @@ struct Grid {
         if (!(c >= 1)) return 0;
         return c >= cells[axis] - 1.0 ? cells[axis] - 1 : static_cast<std::uint32_t>(c);
     }
+    // A coordinate in cells from the origin (unclamped, not floored).
+    double units(double value, int axis) const { return (value - origin[axis]) * inverse_size; }
     std::uint64_t cell_key(Point3 p) const {
         return pack(cell(p.x, origin.x, 0), cell(p.y, origin.y, 1), cell(p.z, origin.z, 2));
     }
@@ -254,46 +256,49 @@ private:
     int shift_ = 58;
 };
 
-// Faces by grid cell for one round: the faces grouped by cell, and a table from a cell to its
+// A face's box in an index cell's list, in float grid units rounded outward (a superset of its
+// box: a filter, never a decision), with which of the cell's coordinates are the first the face
+// spans (bit per axis). 32 bytes: a query scans a cell's list in order instead of reading the
+// faces' data one cache line each, and the next lists' lines are on their way meanwhile.
+struct IndexEntry {
+    float lo[3], hi[3];
+    std::uint32_t face;
+    std::uint8_t first_here;
+};
+
+// Faces by grid cell for one round: the entries grouped by cell, and a table from a cell to its
 // group.
 class CellIndex {
 public:
-    // `pairs`: (cell, face), sorted.
-    void build(const std::vector<std::pair<std::uint64_t, std::uint32_t>>& pairs) {
-        faces_.resize(pairs.size());
-        std::size_t groups = 0;
-        for (std::size_t i = 0; i < pairs.size(); ++i) {
-            faces_[i] = pairs[i].second;
-            groups += i == 0 || pairs[i].first != pairs[i - 1].first;
-        }
-        groups_.reserve(groups);
-        for (std::size_t i = 0; i < pairs.size();) {
-            std::size_t j = i;
-            while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
-            groups_[pairs[i].first] = {i, j - i};
-            i = j;
+    void build(std::vector<IndexEntry>&& entries, const std::vector<std::pair<std::uint64_t, std::size_t>>& groups) {
+        entries_ = std::move(entries);
+        groups_.reserve(groups.size());
+        for (std::size_t i = 0; i < groups.size(); ++i) {
+            const std::size_t end = i + 1 < groups.size() ? groups[i + 1].second : entries_.size();
+            groups_[groups[i].first] = {groups[i].second, end - groups[i].second};
         }
     }
     void clear() {
-        faces_.clear();
+        entries_.clear();
         groups_.clear();
     }
-    // The faces listed in a cell.
-    std::span<const std::uint32_t> faces(std::uint64_t key) const {
+    // The entries listed in a cell.
+    std::span<const IndexEntry> entries(std::uint64_t key) const {
         const Group* group = groups_.find(key);
-        return group == nullptr ? std::span<const std::uint32_t>{} : std::span(faces_.data() + group->first, group->count);
+        return group == nullptr ? std::span<const IndexEntry>{} : std::span(entries_.data() + group->first, group->count);
     }
 
 private:
     struct Group {
         std::size_t first = 0, count = 0;
     };
-    std::vector<std::uint32_t> faces_;
+    std::vector<IndexEntry> entries_;
     CellMap<Group> groups_;
 };
 
-// The faces a block changed in the current round, by index cell.
-using Overlay = CellMap<std::vector<std::uint32_t>>;
+// The faces a block changed in the current round and that live, by index cell: an entry in each
+// cell their box spans now, as in the index.
+using Overlay = CellMap<std::vector<IndexEntry>>;
 
 class Simplifier {
 public:
@@ -357,7 +362,7 @@ private:
                         Overlay& overlay, exact::PredicateStats& predicates);
     // Does face f meet a face near it beyond their shared corners/edge (faces_conflict), or is it
     // degenerate?
-    bool meets_another(std::uint32_t f, Overlay& overlay, exact::PredicateStats& predicates) const;
+    bool meets_another(std::uint32_t f, const Overlay& overlay, exact::PredicateStats& predicates) const;
     // Marks the vertices that share their location with another (3D meshes: see flat_and_clean).
     void find_twins();
     bool in_block(Point3 p, int level, std::uint64_t block) const {
@@ -378,7 +383,8 @@ private:
     }
     template <class Visit>
     void for_cells(const Box3& box, Visit visit) const;
-    void query(const Box3& box, Overlay& overlay,
+    IndexEntry index_entry(std::uint32_t f, const Box3& box, std::uint64_t key) const;
+    void query(const Box3& box, const Overlay& overlay,
                std::vector<std::uint32_t>& out) const;
     // The edges from v to its inside neighbours w for which wanted(w), placed, into `out`.
     template <class Wanted>
@@ -407,15 +413,9 @@ private:
     std::unique_ptr<Quadric[]> quadric_;  // per vertex
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
-    // Per face, what a query reads of it, in one cache line: its box when the index was built, the
-    // index cell of that box's low corner, and whether it changed in this round (then the
-    // overlay has it).
-    struct alignas(64) Snapshot {
-        Box3 box;
-        std::uint64_t first;
-        std::uint8_t moved;
-    };
-    std::vector<Snapshot> snapshot_;
+    // Per face: changed (moved or removed) by its block in this round; the overlay has it if it
+    // lives.
+    std::vector<std::uint8_t> changed_;
     // Per face, whether it meets no other face beyond their shared corners/edge: kClean when made
     // by a collapse (checked against every face near it then, and every face made since against
     // it) or checked since (meets_another); kUnknown for an input face not checked yet;
@@ -641,6 +641,34 @@ void Simplifier::for_cells(const Box3& box, Visit visit) const {
     }
 }
 
+// A coordinate in grid units, as a float at most (below) or at least (above) it. The double
+// scaling is monotone, so is the rounding: boxes that overlap keep overlapping.
+float float_below(double value) {
+    if (!(value > -std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
+    if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
+    const auto f = static_cast<float>(value);
+    return f > value ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+float float_above(double value) {
+    if (!(value < std::numeric_limits<float>::max())) return std::numeric_limits<float>::infinity();
+    if (value < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::max();
+    const auto f = static_cast<float>(value);
+    return f < value ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+IndexEntry Simplifier::index_entry(std::uint32_t f, const Box3& box, std::uint64_t key) const {
+    IndexEntry entry;
+    const std::uint64_t first = index_grid_.cell_key(box.lo);
+    entry.first_here = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        entry.lo[axis] = float_below(index_grid_.units(box.lo[axis], axis));
+        entry.hi[axis] = float_above(index_grid_.units(box.hi[axis], axis));
+        entry.first_here = static_cast<std::uint8_t>(entry.first_here | (Grid::unpack(key, axis) == Grid::unpack(first, axis)) << axis);
+    }
+    entry.face = f;
+    return entry;
+}
+
 void Simplifier::build_face_index() {
     index_.clear();
     if (!use_index_) return;
@@ -651,7 +679,8 @@ void Simplifier::build_face_index() {
     // than 2 on the elephant, 1 ~50 % slower). Each face's box is kept as it is now;
     // see query() for why that makes reading other blocks' faces unnecessary.
     index_grid_ = grid_over_faces(4.0, grid_.origin);
-    snapshot_.resize(face_.size());
+    changed_.assign(face_.size(), 0);
+    // (cell, face), then sorted.
     std::vector<std::vector<std::pair<std::uint64_t, std::uint32_t>>> parts(static_cast<std::size_t>(omp_get_max_threads()));
 #pragma omp parallel
     {
@@ -659,66 +688,58 @@ void Simplifier::build_face_index() {
 #pragma omp for schedule(static)
         for (std::int64_t f = 0; f < m; ++f) {
             if (!alive_[f]) continue;
-            const Box3 box = face_box(static_cast<std::uint32_t>(f));
-            snapshot_[f] = {box, index_grid_.cell_key(box.lo), 0};
-            for_cells(box, [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
+            for_cells(face_box(static_cast<std::uint32_t>(f)), [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
         }
     }
     std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
     for (auto& part : parts) pairs.insert(pairs.end(), part.begin(), part.end());
     parts.clear();
     std::sort(pairs.begin(), pairs.end());
-    index_.build(pairs);
+    std::vector<IndexEntry> entries(pairs.size());
+    std::vector<std::pair<std::uint64_t, std::size_t>> groups;  // (cell, its first entry)
+    const auto count = static_cast<std::int64_t>(pairs.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < count; ++i) {
+        entries[i] = index_entry(pairs[i].second, face_box(pairs[i].second), pairs[i].first);
+    }
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+        if (i == 0 || pairs[i].first != pairs[i - 1].first) groups.emplace_back(pairs[i].first, i);
+    }
+    index_.build(std::move(entries), groups);
 }
 
 // Faces that may touch `box` (inside the calling block), each once: from the round's index
 // those whose box at the start of the round overlaps it — a face another block changes lay, and
 // lies, inside that block, so its start box cannot overlap and it is never read — unless this
 // block changed them, and the faces this block changed, from its overlay, if their box now
-// overlaps it. A face spanning several of the box's cells is taken in the first (lowest on every
-// axis) of them.
-void Simplifier::query(const Box3& box, Overlay& overlay,
+// overlaps it. Boxes are compared rounded outward (a few more faces, never fewer). A face
+// spanning several of the box's cells is taken in the first (lowest on every axis) of them.
+void Simplifier::query(const Box3& box, const Overlay& overlay,
                        std::vector<std::uint32_t>& out) const {
     out.clear();
     const std::uint64_t box_lo = index_grid_.cell_key(box.lo);
-    auto first_shared_cell = [box_lo](std::uint64_t face_lo, std::uint64_t key) {
-        for (int axis = 0; axis < 3; ++axis) {
-            if (std::max(Grid::unpack(face_lo, axis), Grid::unpack(box_lo, axis)) != Grid::unpack(key, axis)) return false;
-        }
-        return true;
-    };
+    float unit_lo[3], unit_hi[3];
+    for (int axis = 0; axis < 3; ++axis) {
+        unit_lo[axis] = float_below(index_grid_.units(box.lo[axis], axis));
+        unit_hi[axis] = float_above(index_grid_.units(box.hi[axis], axis));
+    }
     for_cells(box, [&](std::uint64_t key) {
-        for (std::uint32_t f : index_.faces(key)) {
-            const Snapshot& snapshot = snapshot_[f];
-            if (snapshot.box.overlaps(box) && !snapshot.moved && first_shared_cell(snapshot.first, key)) out.push_back(f);
-        }
-        std::vector<std::uint32_t>* found = overlay.find(key);
-        if (found == nullptr) return;
-        // This block's own faces: drop those that died or moved out of the cell, keep the rest
-        // that reach the box.
-        std::vector<std::uint32_t>& list = *found;
-        for (std::size_t i = 0; i < list.size();) {
-            const std::uint32_t f = list[i];
-            bool keep = alive_[f] != 0;
-            Box3 now{};
-            std::uint64_t lo = 0;
-            if (keep) {
-                now = face_box(f);
-                lo = index_grid_.cell_key(now.lo);
-                const std::uint64_t hi = index_grid_.cell_key(now.hi);
-                for (int axis = 0; axis < 3 && keep; ++axis) {
-                    const std::uint32_t c = Grid::unpack(key, axis);
-                    keep = Grid::unpack(lo, axis) <= c && c <= Grid::unpack(hi, axis);
+        // The first cell a face and the box share is, on each axis, the later of their first
+        // ones; the cell visited is in both: it is that one where it is the face's first or the
+        // box's on every axis.
+        std::uint8_t box_first = 0;
+        for (int axis = 0; axis < 3; ++axis) box_first |= static_cast<std::uint8_t>((Grid::unpack(key, axis) == Grid::unpack(box_lo, axis)) << axis);
+        auto scan = [&](std::span<const IndexEntry> entries, bool from_index) {
+            for (const IndexEntry& entry : entries) {
+                if (entry.lo[0] <= unit_hi[0] && unit_lo[0] <= entry.hi[0] && entry.lo[1] <= unit_hi[1] &&
+                    unit_lo[1] <= entry.hi[1] && entry.lo[2] <= unit_hi[2] && unit_lo[2] <= entry.hi[2] &&
+                    (entry.first_here | box_first) == 7 && !(from_index && changed_[entry.face])) {
+                    out.push_back(entry.face);
                 }
             }
-            if (!keep) {
-                list[i] = list.back();
-                list.pop_back();
-                continue;
-            }
-            if (now.overlaps(box) && first_shared_cell(lo, key)) out.push_back(f);
-            ++i;
-        }
+        };
+        scan(index_.entries(key), true);
+        if (const std::vector<IndexEntry>* mine = overlay.find(key)) scan(*mine, false);
     });
 }
 
@@ -1035,7 +1056,7 @@ bool Simplifier::flat_and_clean(std::uint32_t a, std::uint32_t b, const std::vec
     return true;
 }
 
-bool Simplifier::meets_another(std::uint32_t f, Overlay& overlay, exact::PredicateStats& predicates) const {
+bool Simplifier::meets_another(std::uint32_t f, const Overlay& overlay, exact::PredicateStats& predicates) const {
     thread_local std::vector<std::uint32_t> found;
     const exact::Triangle3 t = triangle(face_[f]);
     if (exact::degenerate(t, predicates)) return true;
@@ -1303,7 +1324,21 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             }
         }
     }
-    // Apply: b merges into a at the placement.
+    // Apply: b merges into a at the placement. First the faces that change leave the overlay
+    // cells of their old boxes, if they are there.
+    if (use_index_) {
+        for (const auto* faces : {&shared, &star}) {
+            for (std::uint32_t f : *faces) {
+                if (!changed_[f]) continue;
+                for_cells(face_box(f), [&](std::uint64_t key) {
+                    std::vector<IndexEntry>& list = *overlay.find(key);
+                    auto it = std::find_if(list.begin(), list.end(), [f](const IndexEntry& e) { return e.face == f; });
+                    *it = list.back();
+                    list.pop_back();
+                });
+            }
+        }
+    }
     for (std::uint32_t f : shared) alive_[f] = 0;
     std::uint32_t* tail = &next_[last_of_a];
     for (std::uint32_t c = head_[b]; c != kNone; c = next_[c]) {
@@ -1321,12 +1356,11 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     for (std::uint32_t f : star) clean_[f] = kClean;
     if (!terrain_) twin_[a] = twin_after;
     if (use_index_) {
+        for (std::uint32_t f : shared) changed_[f] = 1;
         for (std::uint32_t f : star) {
-            snapshot_[f].moved = 1;
-            for_cells(face_box(f), [&](std::uint64_t key) {
-                std::vector<std::uint32_t>& list = overlay[key];
-                if (std::find(list.begin(), list.end(), f) == list.end()) list.push_back(f);
-            });
+            changed_[f] = 1;
+            const Box3 box = face_box(f);
+            for_cells(box, [&](std::uint64_t key) { overlay[key].push_back(index_entry(f, box, key)); });
         }
     }
     corners_but(star, a, around);  // a's faces now: the star
