@@ -3,6 +3,7 @@
 
 #include "cli/cli.hpp"
 #include "core/geometry.hpp"
+#include "support/temp_path.hpp"
 
 #include <gdal_priv.h>
 #include <gtest/gtest.h>
@@ -39,7 +40,7 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
     for (char& c : unique) {
         if (c == '/') c = '_';
     }
-    const auto dir = std::filesystem::temp_directory_path() / ("toposimp-test-" + unique);
+    const auto dir = testing::temp_path("test-" + unique);
     std::filesystem::remove_all(dir);
     std::filesystem::create_directories(dir);
     return dir;

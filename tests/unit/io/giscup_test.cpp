@@ -1,6 +1,7 @@
 #include "io/giscup.hpp"
 
 #include "io/errors.hpp"
+#include "support/temp_path.hpp"
 
 #include <gtest/gtest.h>
 
@@ -12,7 +13,7 @@ namespace toposimp::io {
 namespace {
 
 std::string write_temp(const std::string& name, const std::string& text) {
-    const auto path = std::filesystem::temp_directory_path() / ("toposimp-giscup-" + name);
+    const auto path = testing::temp_path("giscup-" + name);
     std::ofstream(path) << text;
     return path.string();
 }

@@ -5,6 +5,7 @@
 #include "io/errors.hpp"
 #include "io/gdal_support.hpp"
 #include "io/ogr_dataset.hpp"
+#include "support/temp_path.hpp"
 #include "unit/io/ogr_points_reference.hpp"
 
 #include <gtest/gtest.h>
@@ -60,7 +61,7 @@ Bytes gp_blob(bool little_header, unsigned envelope, const Bytes& wkb, bool empt
 class GpkgFile {
 public:
     explicit GpkgFile(const std::string& name) {
-        path_ = (std::filesystem::temp_directory_path() / ("toposimp-gpkg-" + name + ".gpkg")).string();
+        path_ = testing::temp_path("gpkg-" + name + ".gpkg").string();
         std::filesystem::remove(path_);
         register_drivers();
         GDALDataset* dataset = GetGDALDriverManager()->GetDriverByName("GPKG")->Create(path_.c_str(), 0, 0, 0, GDT_Unknown, nullptr);

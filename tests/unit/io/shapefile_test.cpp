@@ -6,6 +6,7 @@
 #include "io/errors.hpp"
 #include "io/gdal_support.hpp"
 #include "io/ogr_dataset.hpp"
+#include "support/temp_path.hpp"
 #include "unit/io/ogr_points_reference.hpp"
 
 #include <gtest/gtest.h>
@@ -24,7 +25,7 @@ class ShapeFile {
 public:
     ShapeFile(const std::string& name, OGRwkbGeometryType type, const std::vector<std::string>& wkts,
               const std::vector<GIntBig>& deleted = {}) {
-        directory_ = std::filesystem::temp_directory_path() / ("toposimp-shp-" + name);
+        directory_ = testing::temp_path("shp-" + name);
         std::filesystem::remove_all(directory_);
         std::filesystem::create_directories(directory_);
         path_ = (directory_ / (name + ".shp")).string();
