@@ -155,6 +155,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             dem = io::read_dem(options.input, options.band);
             m = std::move(dem->tin);
             engine->terrain = true;
+            engine->height_field = true;  // a grid's triangles: none overlap
             engine->lock_boundary = !options.free_boundary;
             log->debug("read DEM {} ({} x {} cells, {} without data): TIN of {} vertices, {} triangles", options.input,
                        dem->width, dem->height, dem->nodata_cells, m.points.size(), m.faces.size());
@@ -178,8 +179,11 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
         const double seconds_simplify = seconds_since(simplify_start);
         if (engine->terrain && !stats.terrain) {
-            log->warn("{}: the faces are not all turned the same way in the x-y plane, so this is not a terrain TIN: "
-                      "simplified as a surface in space{}", options.input,
+            const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
+                                                             std::to_string((*stats.plan_overlap)[1]) +
+                                                             " (counted from 0) overlap in the x-y plane"
+                                                       : "the faces are not all turned the same way in the x-y plane";
+            log->warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, why,
                       engine->target == mesh::MeshTarget::max_error ? " (--max-error bounds the quadric error)" : "");
         } else if (stats.vertical_bound && !engine->lock_boundary) {
             log->info("border vertices kept where they are: the vertical bound is measured over the input's extent");

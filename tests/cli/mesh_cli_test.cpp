@@ -295,6 +295,22 @@ TEST(MeshCli, MaxErrorOnASurfaceThatIsNoTerrainSaysItBoundsTheQuadricError) {
     EXPECT_EQ(r.out.find("guaranteed_vertical_error"), std::string::npos) << r.out;
 }
 
+// --terrain on a mesh whose faces overlap in the map plane (a deck over the ground): simplified
+// in space, with the 3D contact tests. Taken as a terrain, it skipped them, and 20 % of this
+// mesh had 5 intersecting face pairs.
+TEST(MeshCli, TerrainOverlappingItselfInTheMapPlaneIsSimplifiedInSpace) {
+    const auto dir = fresh_dir("mesh");
+    const std::string out = (dir / "deck.obj").string();
+    const CliResult r = run_cli({"mesh", testdata("mesh/bridge-deck.obj"), "-o", out, "--keep", "20%", "--terrain", "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("overlap in the x-y plane, so this is not a terrain TIN"), std::string::npos) << r.err;
+    EXPECT_NE(r.out.find("\"terrain\":false"), std::string::npos) << r.out;
+    const mesh::Mesh m = read_back(out);
+    EXPECT_LT(m.faces.size(), 300u);
+    const MeshDefects defects = find_defects(m);
+    EXPECT_EQ(defects.total(), 0u) << defects.first;
+}
+
 TEST(MeshCli, DemBandOutOfRangeIsAnError) {
     const auto dir = fresh_dir("mesh-dem");
     const std::string dem = write_dem(dir);

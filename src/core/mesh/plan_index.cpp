@@ -1,5 +1,9 @@
 #include "core/mesh/plan_index.hpp"
 
+#include "core/exact/predicates.hpp"
+
+#include <omp.h>
+
 namespace toposimp::mesh {
 
 PlanIndex::PlanIndex(const Mesh& mesh) {
@@ -36,6 +40,90 @@ PlanIndex::PlanIndex(const Mesh& mesh) {
     faces_.resize(first_.back());
     std::vector<std::size_t> next(first_.begin(), first_.end() - 1);
     for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) for_cells(mesh.faces[f], [&](std::size_t c) { faces_[next[c]++] = f; });
+}
+
+namespace {
+
+// Do two triangles, both turned `turn` in the map plane, overlap there beyond their borders?
+// Convex sets with disjoint interiors are separated by a line through an edge of one of them
+// (the separating axis theorem: the edges of their Minkowski difference are theirs), so they
+// overlap exactly when no edge has the other triangle on its outer side or on its line. Faces
+// sharing an edge are decided by its directions: traversed both ways, they lie on either side.
+bool overlap_in_plan(const Mesh& mesh, const Face& f, const Face& g, int turn, exact::PredicateStats& stats) {
+    int shared = 0;
+    for (std::uint32_t v : f) shared += v == g[0] || v == g[1] || v == g[2];
+    if (shared == 3) return true;  // the same triangle twice
+    if (shared == 2) {
+        for (int k = 0; k < 3; ++k) {
+            for (int j = 0; j < 3; ++j) {
+                if (f[k] == g[j] && f[(k + 1) % 3] == g[(j + 1) % 3]) return true;  // both go the same way
+            }
+        }
+        return false;
+    }
+    auto plan = [&](std::uint32_t v) { return Point{mesh.points[v].x, mesh.points[v].y}; };
+    auto separates = [&](const Face& t, int k, const Face& other) {
+        const std::uint32_t p = t[k], q = t[(k + 1) % 3];
+        for (std::uint32_t r : other) {
+            if (r != p && r != q && turn * exact::orient2d(plan(p), plan(q), plan(r), stats) > 0) return false;
+        }
+        return true;
+    };
+    for (int k = 0; k < 3; ++k) {
+        if (separates(f, k, g) || separates(g, k, f)) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn) const {
+    // Each pair whose boxes meet is tested once, in the first cell both list (on each axis the
+    // later of their first cells). Every pair is looked at, so the smallest overlapping one is
+    // found whatever the thread count.
+    struct Plan {
+        std::uint32_t face;
+        double x0, x1, y0, y1;
+        std::int64_t cx, cy;  // first cell
+    };
+    constexpr std::uint32_t kNone = 0xffffffffu;
+    std::vector<std::array<std::uint32_t, 2>> found(static_cast<std::size_t>(omp_get_max_threads()), {kNone, kNone});
+#pragma omp parallel
+    {
+        std::vector<Plan> here;
+        exact::PredicateStats stats;
+        std::array<std::uint32_t, 2>& best = found[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(dynamic, 64)
+        for (std::int64_t x = 0; x < n_x_; ++x) {
+            for (std::int64_t y = 0; y < n_y_; ++y) {
+                const auto c = static_cast<std::size_t>(x * n_y_ + y);
+                here.clear();
+                for (std::size_t i = first_[c]; i < first_[c + 1]; ++i) {
+                    const std::uint32_t f = faces_[i];
+                    Plan plan{f, mesh.points[mesh.faces[f][0]].x, 0, mesh.points[mesh.faces[f][0]].y, 0, 0, 0};
+                    plan.x1 = plan.x0, plan.y1 = plan.y0;
+                    for (std::uint32_t w : mesh.faces[f]) {
+                        plan.x0 = std::min(plan.x0, mesh.points[w].x), plan.x1 = std::max(plan.x1, mesh.points[w].x);
+                        plan.y0 = std::min(plan.y0, mesh.points[w].y), plan.y1 = std::max(plan.y1, mesh.points[w].y);
+                    }
+                    plan.cx = cell(plan.x0, lo_x_, n_x_), plan.cy = cell(plan.y0, lo_y_, n_y_);
+                    here.push_back(plan);
+                }
+                for (std::size_t i = 0; i < here.size(); ++i) {
+                    for (std::size_t j = i + 1; j < here.size(); ++j) {
+                        const Plan &a = here[i], &b = here[j];
+                        if (a.x0 > b.x1 || b.x0 > a.x1 || a.y0 > b.y1 || b.y0 > a.y1) continue;
+                        if (std::max(a.cx, b.cx) != x || std::max(a.cy, b.cy) != y) continue;
+                        const std::array<std::uint32_t, 2> pair{std::min(a.face, b.face), std::max(a.face, b.face)};
+                        if (pair < best && overlap_in_plan(mesh, mesh.faces[a.face], mesh.faces[b.face], turn, stats)) best = pair;
+                    }
+                }
+            }
+        }
+    }
+    const auto best = *std::min_element(found.begin(), found.end());
+    if (best[0] == kNone) return std::nullopt;
+    return best;
 }
 
 }  // namespace toposimp::mesh

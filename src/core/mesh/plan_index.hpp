@@ -1,13 +1,16 @@
 // The faces of a terrain bucketed by their x–y bounding boxes in a uniform grid (about two
-// faces per cell), for finding the faces over a point of the map plane.
+// faces per cell), for finding the faces over a point of the map plane, and for checking that
+// no two of them overlap there.
 #pragma once
 
 #include "core/mesh/mesh.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -23,6 +26,14 @@ public:
         const std::size_t c = static_cast<std::size_t>(cell(x, lo_x_, n_x_) * n_y_ + cell(y, lo_y_, n_y_));
         return {faces_.data() + first_[c], faces_.data() + first_[c + 1]};
     }
+
+    // Two faces whose interiors overlap in the map plane, the first such pair (f < g, ordered),
+    // if any. `mesh`: the one indexed, its faces all turned `turn` (±1) in the map plane, none
+    // degenerate there. None overlapping means the faces cover each point at most once: the mesh
+    // is a height field over a planar triangulation, and stays one under collapses that keep
+    // every face's turn and its border (the number of faces over a point is the winding number
+    // of the border around it).
+    std::optional<std::array<std::uint32_t, 2>> overlapping_faces(const Mesh& mesh, int turn) const;
 
 private:
     std::int64_t cell(double value, double origin, std::int64_t n) const {

@@ -1,6 +1,7 @@
 #include "core/mesh/simplify_mesh.hpp"
 
 #include "core/exact/predicates3d.hpp"
+#include "core/mesh/height_field.hpp"
 #include "core/mesh/vertical_bound.hpp"
 
 #include <omp.h>
@@ -399,6 +400,7 @@ private:
     bool lock_ = false;  // border vertices never move (asked for, or kept for the vertical bound)
     std::unique_ptr<VerticalBound> vertical_;  // terrains under a max_error target
     int terrain_turn_ = 0;  // the map-plane orientation all terrain faces share
+    std::optional<std::array<std::uint32_t, 2>> plan_overlap_;  // see MeshStats
     Grid grid_;
 
     std::vector<Point3>& pos_ = mesh_.points;
@@ -601,8 +603,8 @@ void Simplifier::check_terrain() {
     terrain_ = false;
     if (!options_.terrain) return;
     if (face_.empty()) return;
-    // Every face turned the same way in the map plane, none degenerate there; otherwise not a
-    // planar triangulation: 3D tests.
+    // Every face turned the same way in the map plane, none degenerate there, and no two
+    // overlapping there (height_field.hpp); otherwise not a planar triangulation: 3D tests.
     auto turn_of = [this](const Face& f) {
         exact::PredicateStats unused;
         return exact::orient_projected(pos_[f[0]], pos_[f[1]], pos_[f[2]], 2, unused);
@@ -613,8 +615,13 @@ void Simplifier::check_terrain() {
     bool same = true;
 #pragma omp parallel for schedule(static) reduction(&& : same)
     for (std::int64_t f = 1; f < m; ++f) same = same && turn_of(face_[static_cast<std::size_t>(f)]) == turn;
-    terrain_ = same;
     terrain_turn_ = turn;
+    if (!same) return;
+    if (!options_.height_field) {
+        plan_overlap_ = plan_overlap(mesh_, turn);
+        if (plan_overlap_) return;
+    }
+    terrain_ = true;
 }
 
 void Simplifier::find_twins() {
@@ -1378,6 +1385,14 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
 MeshStats Simplifier::run() {
     const auto start = Clock::now();
     MeshStats stats;
+    // Each kept face's number in the input, if drop_unused drops some (for messages).
+    std::vector<std::uint32_t> input_face;
+    if (count_repeated_corner_faces(mesh_) > 0) {
+        for (std::uint32_t f = 0; f < face_.size(); ++f) {
+            const Face& c = face_[f];
+            if (c[0] != c[1] && c[1] != c[2] && c[0] != c[2]) input_face.push_back(f);
+        }
+    }
     drop_unused(mesh_);
     stats.vertices_in = pos_.size();
     stats.faces_in = face_.size();
@@ -1399,6 +1414,12 @@ MeshStats Simplifier::run() {
     }
     lock_ = options_.lock_boundary || vertical_;
     stats.terrain = terrain_;
+    if (plan_overlap_) {
+        stats.plan_overlap = plan_overlap_;
+        if (!input_face.empty()) {
+            for (std::uint32_t& f : *stats.plan_overlap) f = input_face[f];
+        }
+    }
     stats.vertical_bound = vertical_ != nullptr;
     if (vertical_) touch_.assign(pos_.size(), 0);
     build_topology();

@@ -16,9 +16,11 @@
 #include "core/exact/predicates.hpp"
 #include "core/mesh/mesh.hpp"
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <optional>
 
 namespace toposimp::mesh {
 
@@ -41,6 +43,10 @@ struct MeshOptions {
     // face's orientation in the x–y plane. The surface then stays a height field over a valid
     // planar triangulation, which cannot self-intersect, so no 3D intersection search is needed.
     bool terrain = false;
+    // The terrain is known to be a height field (a DEM's TIN): no two faces overlap in the map
+    // plane. Otherwise that is checked (exactly, about a tenth of the simplification's time), and a
+    // mesh that fails it is simplified as a surface in space.
+    bool height_field = false;
     // A collapse inside a flat region whose faces are all known clean may be shown free of contacts
     // without searching for nearby faces (same decision, same result; off: always search — for
     // the tests that compare the two).
@@ -69,8 +75,12 @@ struct MeshStats {
     std::uint64_t refused() const {
         return refused_link + refused_boundary + refused_flip + refused_degenerate + refused_intersection + refused_vertical;
     }
-    // Simplified as a terrain (asked for, and every face turned the same way in the map plane).
+    // Simplified as a terrain (asked for, every face turned the same way in the map plane, and no
+    // two overlapping there).
     bool terrain = false;
+    // A terrain was asked for, but these two faces (numbered as in the input) overlap in the map
+    // plane.
+    std::optional<std::array<std::uint32_t, 2>> plan_overlap;
     // The vertical distance to the input is at most the max_error target everywhere.
     bool vertical_bound = false;
     // Collapses in flat regions proven free of contacts without searching for nearby faces

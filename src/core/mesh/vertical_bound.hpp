@@ -20,7 +20,7 @@
 // crossing an edge from p are found by walking the input faces along it, from those under p.
 //
 // This assumes the input is a height field (its faces do not overlap in the map plane), as every
-// DEM-derived TIN is.
+// DEM-derived TIN is; the simplifier checks it of any other (height_field.hpp).
 #pragma once
 
 #include "core/exact/predicates3d.hpp"
