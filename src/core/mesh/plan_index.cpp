@@ -5,44 +5,21 @@
 #include <omp.h>
 
 namespace toposimp::mesh {
-
-PlanIndex::PlanIndex(const Mesh& mesh) {
-    first_.assign(2, 0);
-    if (mesh.faces.empty()) return;
-    const Point3& start = mesh.points[mesh.faces[0][0]];
-    double lo_x = start.x, hi_x = start.x, lo_y = start.y, hi_y = start.y;
-    for (const Face& f : mesh.faces) {
-        for (std::uint32_t w : f) {
-            lo_x = std::min(lo_x, mesh.points[w].x), hi_x = std::max(hi_x, mesh.points[w].x);
-            lo_y = std::min(lo_y, mesh.points[w].y), hi_y = std::max(hi_y, mesh.points[w].y);
-        }
-    }
-    lo_x_ = lo_x, lo_y_ = lo_y;
-    const double cells = std::max(1.0, static_cast<double>(mesh.faces.size()) / 2.0);
-    const double width = hi_x - lo_x, height = hi_y - lo_y;
-    size_ = width > 0 && height > 0 ? std::sqrt(width * height / cells) : std::max({width, height, 1.0});
-    n_x_ = std::min<std::int64_t>(static_cast<std::int64_t>(width / size_) + 1, 1 << 14);
-    n_y_ = std::min<std::int64_t>(static_cast<std::int64_t>(height / size_) + 1, 1 << 14);
-    // Two passes over the faces' cell ranges: count per cell, then fill (a counting sort).
-    auto for_cells = [&](const Face& f, auto each) {
-        double x0 = mesh.points[f[0]].x, x1 = x0, y0 = mesh.points[f[0]].y, y1 = y0;
-        for (std::uint32_t w : f) {
-            x0 = std::min(x0, mesh.points[w].x), x1 = std::max(x1, mesh.points[w].x);
-            y0 = std::min(y0, mesh.points[w].y), y1 = std::max(y1, mesh.points[w].y);
-        }
-        for (std::int64_t x = cell(x0, lo_x_, n_x_); x <= cell(x1, lo_x_, n_x_); ++x) {
-            for (std::int64_t y = cell(y0, lo_y_, n_y_); y <= cell(y1, lo_y_, n_y_); ++y) each(static_cast<std::size_t>(x * n_y_ + y));
-        }
-    };
-    first_.assign(static_cast<std::size_t>(n_x_ * n_y_) + 1, 0);
-    for (const Face& f : mesh.faces) for_cells(f, [&](std::size_t c) { ++first_[c + 1]; });
-    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
-    faces_.resize(first_.back());
-    std::vector<std::size_t> next(first_.begin(), first_.end() - 1);
-    for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) for_cells(mesh.faces[f], [&](std::size_t c) { faces_[next[c]++] = f; });
-}
-
 namespace {
+
+// A face's box in the map plane.
+struct PlanBox {
+    double x0, x1, y0, y1;
+};
+
+PlanBox plan_box(const Mesh& mesh, const Face& f) {
+    PlanBox box{mesh.points[f[0]].x, mesh.points[f[0]].x, mesh.points[f[0]].y, mesh.points[f[0]].y};
+    for (std::uint32_t w : f) {
+        box.x0 = std::min(box.x0, mesh.points[w].x), box.x1 = std::max(box.x1, mesh.points[w].x);
+        box.y0 = std::min(box.y0, mesh.points[w].y), box.y1 = std::max(box.y1, mesh.points[w].y);
+    }
+    return box;
+}
 
 // Do two triangles, both turned `turn` in the map plane, overlap there beyond their borders?
 // Convex sets with disjoint interiors are separated by a line through an edge of one of them
@@ -77,13 +54,45 @@ bool overlap_in_plan(const Mesh& mesh, const Face& f, const Face& g, int turn, e
 
 }  // namespace
 
+PlanIndex::PlanIndex(const Mesh& mesh) {
+    first_.assign(2, 0);
+    if (mesh.faces.empty()) return;
+    const Point3& start = mesh.points[mesh.faces[0][0]];
+    double lo_x = start.x, hi_x = start.x, lo_y = start.y, hi_y = start.y;
+    for (const Face& f : mesh.faces) {
+        for (std::uint32_t w : f) {
+            lo_x = std::min(lo_x, mesh.points[w].x), hi_x = std::max(hi_x, mesh.points[w].x);
+            lo_y = std::min(lo_y, mesh.points[w].y), hi_y = std::max(hi_y, mesh.points[w].y);
+        }
+    }
+    lo_x_ = lo_x, lo_y_ = lo_y;
+    const double cells = std::max(1.0, static_cast<double>(mesh.faces.size()) / 2.0);
+    const double width = hi_x - lo_x, height = hi_y - lo_y;
+    size_ = width > 0 && height > 0 ? std::sqrt(width * height / cells) : std::max({width, height, 1.0});
+    n_x_ = std::min<std::int64_t>(static_cast<std::int64_t>(width / size_) + 1, 1 << 14);
+    n_y_ = std::min<std::int64_t>(static_cast<std::int64_t>(height / size_) + 1, 1 << 14);
+    // Two passes over the faces' cell ranges: count per cell, then fill (a counting sort).
+    auto for_cells = [&](const Face& f, auto each) {
+        const PlanBox box = plan_box(mesh, f);
+        for (std::int64_t x = cell(box.x0, lo_x_, n_x_); x <= cell(box.x1, lo_x_, n_x_); ++x) {
+            for (std::int64_t y = cell(box.y0, lo_y_, n_y_); y <= cell(box.y1, lo_y_, n_y_); ++y) each(static_cast<std::size_t>(x * n_y_ + y));
+        }
+    };
+    first_.assign(static_cast<std::size_t>(n_x_ * n_y_) + 1, 0);
+    for (const Face& f : mesh.faces) for_cells(f, [&](std::size_t c) { ++first_[c + 1]; });
+    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
+    faces_.resize(first_.back());
+    std::vector<std::size_t> next(first_.begin(), first_.end() - 1);
+    for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) for_cells(mesh.faces[f], [&](std::size_t c) { faces_[next[c]++] = f; });
+}
+
 std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn) const {
     // Each pair whose boxes meet is tested once, in the first cell both list (on each axis the
     // later of their first cells). Every pair is looked at, so the smallest overlapping one is
     // found whatever the thread count.
     struct Plan {
         std::uint32_t face;
-        double x0, x1, y0, y1;
+        PlanBox box;
         std::int64_t cx, cy;  // first cell
     };
     constexpr std::uint32_t kNone = 0xffffffffu;
@@ -100,19 +109,13 @@ std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const M
                 here.clear();
                 for (std::size_t i = first_[c]; i < first_[c + 1]; ++i) {
                     const std::uint32_t f = faces_[i];
-                    Plan plan{f, mesh.points[mesh.faces[f][0]].x, 0, mesh.points[mesh.faces[f][0]].y, 0, 0, 0};
-                    plan.x1 = plan.x0, plan.y1 = plan.y0;
-                    for (std::uint32_t w : mesh.faces[f]) {
-                        plan.x0 = std::min(plan.x0, mesh.points[w].x), plan.x1 = std::max(plan.x1, mesh.points[w].x);
-                        plan.y0 = std::min(plan.y0, mesh.points[w].y), plan.y1 = std::max(plan.y1, mesh.points[w].y);
-                    }
-                    plan.cx = cell(plan.x0, lo_x_, n_x_), plan.cy = cell(plan.y0, lo_y_, n_y_);
-                    here.push_back(plan);
+                    const PlanBox box = plan_box(mesh, mesh.faces[f]);
+                    here.push_back({f, box, cell(box.x0, lo_x_, n_x_), cell(box.y0, lo_y_, n_y_)});
                 }
                 for (std::size_t i = 0; i < here.size(); ++i) {
                     for (std::size_t j = i + 1; j < here.size(); ++j) {
                         const Plan &a = here[i], &b = here[j];
-                        if (a.x0 > b.x1 || b.x0 > a.x1 || a.y0 > b.y1 || b.y0 > a.y1) continue;
+                        if (a.box.x0 > b.box.x1 || b.box.x0 > a.box.x1 || a.box.y0 > b.box.y1 || b.box.y0 > a.box.y1) continue;
                         if (std::max(a.cx, b.cx) != x || std::max(a.cy, b.cy) != y) continue;
                         const std::array<std::uint32_t, 2> pair{std::min(a.face, b.face), std::max(a.face, b.face)};
                         if (pair < best && overlap_in_plan(mesh, mesh.faces[a.face], mesh.faces[b.face], turn, stats)) best = pair;
