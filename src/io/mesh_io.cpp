@@ -9,6 +9,7 @@
 #include <cerrno>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <sstream>
@@ -28,6 +29,19 @@ std::string read_all(const std::string& path) {
     // In big chunks (a character at a time took a tenth of a second on a 2 M-triangle PLY).
     std::string data;
     std::size_t size = 0;
+    // At once when the size is known (a regular file): no growing, no copying.
+    std::error_code error;
+    const std::uintmax_t known = std::filesystem::is_regular_file(path, error) ? std::filesystem::file_size(path, error) : 0;
+    if (!error && known > 0) {
+        data.resize(known);
+        in.read(data.data(), static_cast<std::streamsize>(known));
+        size = static_cast<std::size_t>(in.gcount());
+        if (size < known || in.peek() != std::char_traits<char>::eof()) {
+            in.clear();  // (it changed meanwhile: read on as for a stream)
+        } else {
+            return data;
+        }
+    }
     for (;;) {
         data.resize(size + (std::size_t{1} << 22));
         in.read(data.data() + size, static_cast<std::streamsize>(data.size() - size));
@@ -282,6 +296,31 @@ struct Element {
     std::vector<Property> properties;
 };
 
+// The scalar of type T at `bytes`, byte-swapped first if `swap`.
+template <class T>
+double load(const char* bytes, bool swap) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, bytes, sizeof(T));
+    if (swap) std::reverse(b, b + sizeof(T));
+    T value;
+    std::memcpy(&value, b, sizeof(T));
+    return static_cast<double>(value);
+}
+
+inline double decode(Scalar type, const char* bytes, bool swap) {
+    switch (type) {
+        case Scalar::i8: return load<std::int8_t>(bytes, swap);
+        case Scalar::u8: return load<std::uint8_t>(bytes, swap);
+        case Scalar::i16: return load<std::int16_t>(bytes, swap);
+        case Scalar::u16: return load<std::uint16_t>(bytes, swap);
+        case Scalar::i32: return load<std::int32_t>(bytes, swap);
+        case Scalar::u32: return load<std::uint32_t>(bytes, swap);
+        case Scalar::f32: return load<float>(bytes, swap);
+        case Scalar::f64: return load<double>(bytes, swap);
+    }
+    return 0;
+}
+
 // Reads scalars from a binary body, with the file's byte order.
 class BinaryReader {
 public:
@@ -293,22 +332,14 @@ public:
     double read(Scalar type, What what) {
         const std::size_t n = size_of(type);
         if (at_ + n > data_.size()) throw InputError(path_ + ": truncated binary PLY: the file ends inside " + what());
-        unsigned char bytes[8];
-        std::memcpy(bytes, data_.data() + at_, n);
+        const double value = decode(type, data_.data() + at_, swap_);
         at_ += n;
-        if (swap_) std::reverse(bytes, bytes + n);
-        switch (type) {
-            case Scalar::i8: { std::int8_t v; std::memcpy(&v, bytes, 1); return v; }
-            case Scalar::u8: return bytes[0];
-            case Scalar::i16: { std::int16_t v; std::memcpy(&v, bytes, 2); return v; }
-            case Scalar::u16: { std::uint16_t v; std::memcpy(&v, bytes, 2); return v; }
-            case Scalar::i32: { std::int32_t v; std::memcpy(&v, bytes, 4); return v; }
-            case Scalar::u32: { std::uint32_t v; std::memcpy(&v, bytes, 4); return v; }
-            case Scalar::f32: { float v; std::memcpy(&v, bytes, 4); return v; }
-            case Scalar::f64: { double v; std::memcpy(&v, bytes, 8); return v; }
-        }
-        return 0;
+        return value;
     }
+    // The bytes not read yet, and a way past some of them.
+    std::string_view rest() const { return data_.substr(at_); }
+    void skip(std::size_t n) { at_ += n; }
+    bool swap() const { return swap_; }
 
 private:
     const std::string& path_;
@@ -316,6 +347,55 @@ private:
     bool swap_;
     std::size_t at_ = 0;
 };
+
+// The fast paths of a binary body. Each reads records while they are regular and stops at the
+// first that is not (truncated, a non-finite coordinate, a face not a triangle, an index out of
+// range), which the general reader then reads and reports: the result and the errors are the
+// general reader's. Returns how many records it read.
+//
+// An element of scalars only, whose x, y and z are at `offset` with `type` in records of
+// `record` bytes.
+std::size_t read_points(BinaryReader& binary, std::size_t count, std::size_t record, const std::size_t offset[3],
+                        const Scalar type[3], std::vector<Point3>& points) {
+    const std::string_view rest = binary.rest();
+    const std::size_t whole = std::min(count, rest.size() / record);
+    const bool swap = binary.swap();
+    std::size_t i = 0;
+    for (; i < whole; ++i) {
+        const char* r = rest.data() + i * record;
+        const Point3 p{decode(type[0], r + offset[0], swap), decode(type[1], r + offset[1], swap), decode(type[2], r + offset[2], swap)};
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) break;
+        points.push_back(p);
+    }
+    binary.skip(i * record);
+    return i;
+}
+
+// An element whose one property is the vertex list, of triangles.
+std::size_t read_triangles(BinaryReader& binary, std::size_t count, Scalar count_type, Scalar index_type, std::size_t vertices,
+                           std::vector<mesh::Face>& faces) {
+    const std::string_view rest = binary.rest();
+    const std::size_t head = size_of(count_type), size = size_of(index_type), record = head + 3 * size;
+    const std::size_t whole = std::min(count, rest.size() / record);  // (if every record is a triangle)
+    const bool swap = binary.swap();
+    const auto limit = static_cast<double>(vertices);
+    std::size_t i = 0;
+    for (; i < whole; ++i) {
+        const char* r = rest.data() + i * record;
+        if (decode(count_type, r, swap) != 3) break;
+        mesh::Face f;
+        bool ok = true;
+        for (int k = 0; k < 3; ++k) {
+            const double index = decode(index_type, r + head + k * size, swap);
+            ok = ok && index >= 0 && index < limit;
+            f[k] = ok ? static_cast<std::uint32_t>(index) : 0;
+        }
+        if (!ok) break;
+        faces.push_back(f);
+    }
+    binary.skip(i * record);
+    return i;
+}
 
 mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshReadOptions& options, MeshReadReport& report) {
     Lines lines(text);
@@ -398,7 +478,21 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
         // (A header cannot make this reserve more than the file could hold: an element takes a byte at least.)
         if (is_vertex) m.points.reserve(m.points.size() + std::min(element.count, text.size()));
         if (is_face) m.faces.reserve(m.faces.size() + std::min(element.count, text.size()));
-        for (std::size_t i = 0; i < element.count; ++i) {
+        std::size_t i = 0;
+        if (!ascii && is_vertex && std::none_of(element.properties.begin(), element.properties.end(), [](const Property& p) { return p.list; })) {
+            std::size_t record = 0, offset[3] = {0, 0, 0};
+            Scalar type[3] = {Scalar::f64, Scalar::f64, Scalar::f64};
+            for (std::size_t k = 0; k < element.properties.size(); ++k) {
+                const Scalar t = element.properties[k].type;
+                if (axis_of[k] >= 0) offset[axis_of[k]] = record, type[axis_of[k]] = t;
+                record += size_of(t);
+            }
+            i = read_points(binary, element.count, record, offset, type, m.points);
+        } else if (!ascii && is_face && element.properties.size() == 1) {
+            const Property& list = element.properties[0];
+            i = read_triangles(binary, element.count, list.count_type, list.type, m.points.size(), m.faces);
+        }
+        for (; i < element.count; ++i) {
             // The element's name for messages, made only for one.
             const auto what = [&element, i] { return element.name + " " + std::to_string(i); };
             std::size_t token = 0;
