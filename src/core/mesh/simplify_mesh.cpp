@@ -340,6 +340,20 @@ private:
 
     // Live faces around v, unlinking dead corners from v's list as it goes.
     void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out);
+    // Those of v and those of w: the two lists walked side by side, so that the loads of one
+    // (scattered: a corner at a time) overlap those of the other.
+    void faces_of(std::uint32_t v, std::vector<std::uint32_t>& out_v, std::uint32_t w, std::vector<std::uint32_t>& out_w);
+    // One step along a corner list at `link`: past a dead corner (unlinked) or a live one (its
+    // face to `out`).
+    void step(std::uint32_t*& link, std::vector<std::uint32_t>& out) {
+        const std::uint32_t c = *link;
+        if (!alive_[c / 3]) {
+            *link = next_[c];
+            return;
+        }
+        out.push_back(c / 3);
+        link = &next_[c];
+    }
     // The corners of `faces` other than v, sorted, each once: v's neighbours when they are its faces.
     void corners_but(const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) const {
         out.clear();
@@ -753,15 +767,19 @@ void Simplifier::query(const Box3& box, const Overlay& overlay,
 void Simplifier::faces_of(std::uint32_t v, std::vector<std::uint32_t>& out) {
     out.clear();
     std::uint32_t* link = &head_[v];
-    while (*link != kNone) {
-        const std::uint32_t c = *link;
-        if (!alive_[c / 3]) {
-            *link = next_[c];  // unlink the dead corner
-            continue;
-        }
-        out.push_back(c / 3);
-        link = &next_[c];
+    while (*link != kNone) step(link, out);
+}
+
+void Simplifier::faces_of(std::uint32_t v, std::vector<std::uint32_t>& out_v, std::uint32_t w, std::vector<std::uint32_t>& out_w) {
+    out_v.clear();
+    out_w.clear();
+    std::uint32_t *link_v = &head_[v], *link_w = &head_[w];
+    while (*link_v != kNone && *link_w != kNone) {
+        step(link_v, out_v);
+        step(link_w, out_w);
     }
+    while (*link_v != kNone) step(link_v, out_v);
+    while (*link_w != kNone) step(link_w, out_w);
 }
 
 bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, Placement& out) const {
@@ -899,13 +917,23 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
     auto dear = [cost_limit](const Candidate& c) { return c.cost > cost_limit; };
     const auto cheap = static_cast<std::size_t>(
         std::partition(candidates.begin(), candidates.end(), [&](const Candidate& c) { return !dear(c); }) - candidates.begin());
-    std::sort(candidates.begin(), candidates.begin() + static_cast<std::ptrdiff_t>(cheap),
-              [](const Candidate& x, const Candidate& y) { return later(y, x); });
+    // Sorted a part at a time: a block with a small budget among many candidates (the last
+    // level's one block) needs the first few only.
+    const auto earlier = [](const Candidate& x, const Candidate& y) { return later(y, x); };
+    const auto at = [&](std::size_t i) { return candidates.begin() + static_cast<std::ptrdiff_t>(i); };
+    std::size_t sorted = 0;  // candidates[0, sorted) are the cheapest, in order
     std::vector<Candidate> heap;
     std::size_t next = 0;  // the first sorted one not taken
     while (result.faces_removed < budget) {
+        if (next == sorted && sorted < cheap) {
+            const std::uint64_t step = budget >= cheap ? cheap : 4 * budget + 256;  // (a budget may be unlimited)
+            const std::size_t until = std::min<std::uint64_t>(cheap, std::max<std::uint64_t>(2 * sorted, sorted + step));
+            if (until < cheap) std::nth_element(at(sorted), at(until), at(cheap), earlier);
+            std::sort(at(sorted), at(until), earlier);
+            sorted = until;
+        }
         Candidate c;
-        if (next < cheap && (heap.empty() || !later(candidates[next], heap.front()))) {
+        if (next < sorted && (heap.empty() || !later(candidates[next], heap.front()))) {
             c = candidates[next++];
         } else if (!heap.empty()) {
             std::pop_heap(heap.begin(), heap.end(), later);
@@ -916,11 +944,11 @@ BlockResult Simplifier::collapse_block(int level, std::uint64_t block, std::vect
         }
         // The sorted ones come in cost order, their vertices anywhere in the block: start loading
         // what the next one needs while this one is done.
-        if (next + 4 < cheap) {
+        if (next + 4 < sorted) {
             __builtin_prefetch(&stamp_[candidates[next + 4].a]);
             __builtin_prefetch(&stamp_[candidates[next + 4].b]);
         }
-        if (next < cheap) {
+        if (next < sorted) {
             for (const std::uint32_t v : {candidates[next].a, candidates[next].b}) {
                 __builtin_prefetch(&head_[v]);
                 __builtin_prefetch(&pos_[v]);
@@ -1089,8 +1117,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     const double error = error_of(placement, a, b);
     if (options_.target == MeshTarget::max_error && !vertical_ && error > options_.value) return false;
     thread_local std::vector<std::uint32_t> fa, fb, shared, opposite, star, found;
-    faces_of(a, fa);
-    faces_of(b, fb);
+    faces_of(a, fa, b, fb);
     for (const auto* faces : {&fa, &fb}) {
         for (std::uint32_t f : *faces) {
             for (std::uint32_t w : face_[f]) __builtin_prefetch(&pos_[w]);  // read for the star below
