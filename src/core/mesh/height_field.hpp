@@ -10,16 +10,61 @@
 
 #include "core/mesh/mesh.hpp"
 
+#include <omp.h>
+
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <utility>
+#include <vector>
 
 namespace toposimp::mesh {
 
+using DirectedEdge = std::pair<std::uint32_t, std::uint32_t>;
+
+// The border edges (v, w), sorted: a face has the edge from v to w and none the edge from w to v
+// (one such pair per face that has it). `corners_of(v, out)` puts v's corners (3 × face + k, face
+// f's corner k being v) into `out`: the caller's adjacency, whatever its form.
+template <class CornersOf>
+std::vector<DirectedEdge> border_edges(const Mesh& mesh, CornersOf corners_of) {
+    // Around each vertex v: its faces' edges out of v (v, w) and into it (u, v), a few: scans.
+    std::vector<std::vector<DirectedEdge>> parts(static_cast<std::size_t>(omp_get_max_threads()));
+    const auto vertices = static_cast<std::int64_t>(mesh.points.size());
+#pragma omp parallel
+    {
+        auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
+        std::vector<std::uint32_t> corners;
+#pragma omp for schedule(static)
+        for (std::int64_t v = 0; v < vertices; ++v) {
+            corners.clear();
+            corners_of(static_cast<std::uint32_t>(v), corners);
+            auto out_of = [&](std::uint32_t c) { return mesh.faces[c / 3][(c % 3 + 1) % 3]; };
+            auto into = [&](std::uint32_t c) { return mesh.faces[c / 3][(c % 3 + 2) % 3]; };
+            for (std::uint32_t c : corners) {
+                const std::uint32_t w = out_of(c);
+                bool inner = false;
+                for (std::uint32_t d : corners) inner = inner || into(d) == w;
+                if (!inner) part.emplace_back(static_cast<std::uint32_t>(v), w);
+            }
+        }
+    }
+    std::vector<DirectedEdge> edges;
+    for (const auto& part : parts) edges.insert(edges.end(), part.begin(), part.end());
+    std::sort(edges.begin(), edges.end());
+    return edges;
+}
+
+// The same, from the faces alone.
+std::vector<DirectedEdge> border_edges(const Mesh& mesh);
+
 // `mesh`: faces all turned `turn` (±1) in the map plane, none degenerate there, no edge with
-// more than two faces. Two faces whose interiors overlap in the map plane, the smallest such
-// pair of face numbers, or none: it is a height field.
-std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn);
+// more than two faces; `border`: its border_edges. Two faces whose interiors overlap in the map
+// plane, the smallest such pair of face numbers, or none: it is a height field.
+std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& border);
+inline std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn) {
+    return plan_overlap(mesh, turn, border_edges(mesh));
+}
 
 // The fast test plan_overlap tries first, exposed for the tests. True: no two faces overlap.
 // False: not shown (they may or may not).
@@ -35,6 +80,7 @@ std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int t
 // of its corners. Costs a pass over the vertices' faces and work on the border only; false
 // (the slow test decides) when the border is not such loops, or has so many loops that the
 // windings would cost more than the slow test.
-bool covers_once_by_border(const Mesh& mesh, int turn);
+bool covers_once_by_border(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& border);
+inline bool covers_once_by_border(const Mesh& mesh, int turn) { return covers_once_by_border(mesh, turn, border_edges(mesh)); }
 
 }  // namespace toposimp::mesh

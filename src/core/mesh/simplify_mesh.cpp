@@ -632,7 +632,9 @@ void Simplifier::check_terrain() {
     terrain_turn_ = turn;
     if (!same) return;
     if (!options_.height_field) {
-        plan_overlap_ = plan_overlap(mesh_, turn);
+        plan_overlap_ = plan_overlap(mesh_, turn, border_edges(mesh_, [this](std::uint32_t v, std::vector<std::uint32_t>& out) {
+                                         for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) out.push_back(c);
+                                     }));
         if (plan_overlap_) return;
     }
     terrain_ = true;
@@ -1435,6 +1437,7 @@ MeshStats Simplifier::run() {
     stats.target_faces = target;
     const int saved_threads = omp_get_max_threads();
     omp_set_num_threads(threads);
+    build_topology();
     check_terrain();
     if (terrain_ && options_.target == MeshTarget::max_error && std::isfinite(options_.value)) {
         vertical_ = std::make_unique<VerticalBound>(mesh_, options_.value);
@@ -1449,7 +1452,6 @@ MeshStats Simplifier::run() {
     }
     stats.vertical_bound = vertical_ != nullptr;
     if (vertical_) touch_.assign(pos_.size(), 0);
-    build_topology();
     build_quadrics();
     choose_grid();
     if (!terrain_) find_twins();
