@@ -1468,6 +1468,8 @@ MeshStats Simplifier::run() {
     // A level's blocks with their candidates, handed down to the next level's blocks.
     std::vector<Block> blocks, finer;
     std::vector<std::vector<Candidate>> candidates;
+    std::vector<std::uint32_t> live(pos_.size());  // the live vertices, in id order
+    std::iota(live.begin(), live.end(), 0u);
     const int top = grid_.top_level();
     for (int level = 0; level <= top; ++level) {
         if (by_count && live_faces_ <= target) break;
@@ -1481,10 +1483,9 @@ MeshStats Simplifier::run() {
             const std::uint64_t key = grid_.block_of(cell, level);
             return (Grid::unpack(key, 0) * span[1] + Grid::unpack(key, 1)) * span[2] + Grid::unpack(key, 2);
         };
+        std::erase_if(live, [this](std::uint32_t v) { return (flags_[v] & kDead) != 0; });
         std::vector<std::size_t> first(span[0] * span[1] * span[2] + 1, 0);
-        for (std::uint32_t v = 0; v < pos_.size(); ++v) {
-            if ((flags_[v] & kDead) == 0) ++first[dense(cell_[v]) + 1];
-        }
+        for (const std::uint32_t v : live) ++first[dense(cell_[v]) + 1];
         std::partial_sum(first.begin(), first.end(), first.begin());
         std::vector<std::uint32_t> vertices(first.back());
         finer.swap(blocks);
@@ -1494,9 +1495,7 @@ MeshStats Simplifier::run() {
             const std::size_t z = id % span[2], y = id / span[2] % span[1], x = id / span[2] / span[1];
             blocks.push_back({Grid::pack(x, y, z), first[id], first[id + 1] - first[id], 0});
         }
-        for (std::uint32_t v = 0; v < pos_.size(); ++v) {
-            if ((flags_[v] & kDead) == 0) vertices[first[dense(cell_[v])]++] = v;
-        }
+        for (const std::uint32_t v : live) vertices[first[dense(cell_[v])]++] = v;
         // Rounds. Every block builds its heap; with a count target (below the last level) a
         // global cost threshold is the cost of the k-th cheapest candidate of all blocks, k the
         // collapses still needed, and each block gets a share of the faces still to go in
