@@ -162,13 +162,6 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         }
         const double seconds_read = seconds_since(start);
         if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");
-        if (const auto edge = mesh::find_non_manifold_edge(m)) {
-            std::string faces;
-            for (std::uint32_t f : edge->faces) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
-            throw io::InputError(options.input + ": the edge between vertices " + std::to_string(edge->a) + " and " +
-                                 std::to_string(edge->b) + " (counted from 0) has more than two faces (" + faces +
-                                 ", ...): non-manifold meshes are not supported");
-        }
         if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
             log->warn("{} faces repeat a corner (no area) and are dropped", repeated);
         }
@@ -178,6 +171,13 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         const auto simplify_start = Clock::now();
         const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
         const double seconds_simplify = seconds_since(simplify_start);
+        if (const auto& edge = stats.non_manifold) {
+            std::string faces;
+            for (std::uint32_t f : edge->faces) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
+            throw io::InputError(options.input + ": the edge between vertices " + std::to_string(edge->a) + " and " +
+                                 std::to_string(edge->b) + " (counted from 0) has more than two faces (" + faces +
+                                 ", ...): non-manifold meshes are not supported");
+        }
         if (engine->terrain && !stats.terrain) {
             const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
                                                              std::to_string((*stats.plan_overlap)[1]) +

@@ -153,6 +153,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadMesh{"NotANumber", "x.obj", "v 0 zero 0\n", "is not a number"},
         BadMesh{"NonManifold", "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
                 "the edge between vertices 0 and 1 (counted from 0) has more than two faces (0, 1, 2"},
+        // Numbered as in the file, though the unused vertex 0 and the face 0 repeating a corner are dropped.
+        BadMesh{"NonManifoldAfterDroppedParts", "m.obj",
+                "v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 2 2 3\nf 2 3 4\nf 3 2 5\nf 2 3 6\nf 2 4 5\n",
+                "the edge between vertices 1 and 2 (counted from 0) has more than two faces (1, 2, 3, ...)"},
         BadMesh{"NoFaces", "e.obj", kTetra, "no faces"},
         BadMesh{"UnknownExtension", "u.stl", "solid x\n", "neither a mesh"}),
     [](const ::testing::TestParamInfo<BadMesh>& p) { return std::string(p.param.name); });

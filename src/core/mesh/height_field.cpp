@@ -33,9 +33,29 @@ std::vector<DirectedEdge> border_edges(const Mesh& mesh) {
             for (std::uint32_t k = 0; k < 3; ++k) corners[next[mesh.faces[f][k]]++] = 3 * f + k;
         }
     }
-    return border_edges(mesh, [&](std::uint32_t v, std::vector<std::uint32_t>& out) {
-        out.assign(corners.begin() + static_cast<std::ptrdiff_t>(first[v]), corners.begin() + static_cast<std::ptrdiff_t>(first[v + 1]));
-    });
+    // Around each vertex v: its faces' edges out of v (v, w) and into it (u, v), a few: scans. An
+    // edge out of v with no edge into v from the same neighbour is a border edge.
+    std::vector<std::vector<DirectedEdge>> parts(static_cast<std::size_t>(omp_get_max_threads()));
+    const auto vertices = static_cast<std::int64_t>(n);
+#pragma omp parallel
+    {
+        auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
+#pragma omp for schedule(static)
+        for (std::int64_t v = 0; v < vertices; ++v) {
+            auto out_of = [&](std::size_t i) { return mesh.faces[corners[i] / 3][(corners[i] % 3 + 1) % 3]; };
+            auto into = [&](std::size_t i) { return mesh.faces[corners[i] / 3][(corners[i] % 3 + 2) % 3]; };
+            for (std::size_t i = first[v]; i < first[v + 1]; ++i) {
+                const std::uint32_t w = out_of(i);
+                bool inner = false;
+                for (std::size_t j = first[v]; j < first[v + 1]; ++j) inner = inner || into(j) == w;
+                if (!inner) part.emplace_back(static_cast<std::uint32_t>(v), w);
+            }
+        }
+    }
+    std::vector<DirectedEdge> edges;
+    for (const auto& part : parts) edges.insert(edges.end(), part.begin(), part.end());
+    std::sort(edges.begin(), edges.end());
+    return edges;
 }
 
 bool covers_once_by_border(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& edges) {

@@ -10,9 +10,6 @@
 
 #include "core/mesh/mesh.hpp"
 
-#include <omp.h>
-
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -24,38 +21,7 @@ namespace toposimp::mesh {
 using DirectedEdge = std::pair<std::uint32_t, std::uint32_t>;
 
 // The border edges (v, w), sorted: a face has the edge from v to w and none the edge from w to v
-// (one such pair per face that has it). `corners_of(v, out)` puts v's corners (3 × face + k, face
-// f's corner k being v) into `out`: the caller's adjacency, whatever its form.
-template <class CornersOf>
-std::vector<DirectedEdge> border_edges(const Mesh& mesh, CornersOf corners_of) {
-    // Around each vertex v: its faces' edges out of v (v, w) and into it (u, v), a few: scans.
-    std::vector<std::vector<DirectedEdge>> parts(static_cast<std::size_t>(omp_get_max_threads()));
-    const auto vertices = static_cast<std::int64_t>(mesh.points.size());
-#pragma omp parallel
-    {
-        auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
-        std::vector<std::uint32_t> corners;
-#pragma omp for schedule(static)
-        for (std::int64_t v = 0; v < vertices; ++v) {
-            corners.clear();
-            corners_of(static_cast<std::uint32_t>(v), corners);
-            auto out_of = [&](std::uint32_t c) { return mesh.faces[c / 3][(c % 3 + 1) % 3]; };
-            auto into = [&](std::uint32_t c) { return mesh.faces[c / 3][(c % 3 + 2) % 3]; };
-            for (std::uint32_t c : corners) {
-                const std::uint32_t w = out_of(c);
-                bool inner = false;
-                for (std::uint32_t d : corners) inner = inner || into(d) == w;
-                if (!inner) part.emplace_back(static_cast<std::uint32_t>(v), w);
-            }
-        }
-    }
-    std::vector<DirectedEdge> edges;
-    for (const auto& part : parts) edges.insert(edges.end(), part.begin(), part.end());
-    std::sort(edges.begin(), edges.end());
-    return edges;
-}
-
-// The same, from the faces alone.
+// (one such pair per face that has it).
 std::vector<DirectedEdge> border_edges(const Mesh& mesh);
 
 // `mesh`: faces all turned `turn` (±1) in the map plane, none degenerate there, no edge with

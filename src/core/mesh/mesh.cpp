@@ -65,18 +65,21 @@ std::size_t count_repeated_corner_faces(const Mesh& mesh) {
     return static_cast<std::size_t>(std::count_if(mesh.faces.begin(), mesh.faces.end(), repeats_corner));
 }
 
-std::size_t drop_unused(Mesh& mesh) {
+std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept) {
     const std::size_t before = mesh.faces.size();
     std::erase_if(mesh.faces, repeats_corner);
     std::vector<std::uint32_t> index(mesh.points.size(), 0);
     for (const Face& f : mesh.faces) {
         for (std::uint32_t v : f) index[v] = 1;
     }
+    if (kept != nullptr) kept->clear();
+    const auto used = static_cast<std::size_t>(std::count(index.begin(), index.end(), 1u));
     std::uint32_t next = 0;
-    for (std::size_t v = 0; v < mesh.points.size(); ++v) {
+    for (std::uint32_t v = 0; v < mesh.points.size(); ++v) {
         if (index[v] != 0) {
             mesh.points[next] = mesh.points[v];
             index[v] = next++;
+            if (kept != nullptr && used < mesh.points.size()) kept->push_back(v);
         }
     }
     mesh.points.resize(next);

@@ -31,7 +31,8 @@ std::optional<NonManifoldEdge> find_non_manifold_edge(const Mesh& mesh);
 std::size_t count_repeated_corner_faces(const Mesh& mesh);
 
 // Drops faces that repeat a corner index and vertices no face uses; keeps the order of the rest.
-// Returns how many faces were dropped.
-std::size_t drop_unused(Mesh& mesh);
+// Returns how many faces were dropped. If `kept` is given and vertices were dropped, it receives
+// each kept vertex's number before (otherwise it is left empty).
+std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept = nullptr);
 
 }  // namespace toposimp::mesh

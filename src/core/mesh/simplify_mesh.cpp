@@ -309,7 +309,12 @@ public:
 
 private:
     void build_topology();
+    // Per vertex: the sum of its faces' planes, and kBoundary if it is on an edge with one face.
+    // Also the first non-manifold edge, if any (non_manifold_), and, when the terrain check needs
+    // them, the directed border edges (border_): all from one pass over each vertex's faces.
     void build_quadrics();
+    // Border vertices: locked (lock_), or their border planes added.
+    void add_border_planes();
     // A grid over the live faces' corners and `seed`, cells `factor` times the mean edge (at
     // most 2^20 per side). Edge lengths are summed in fixed chunks of faces, the chunks' sums in
     // order: the same grid for any thread count.
@@ -415,6 +420,8 @@ private:
     std::unique_ptr<VerticalBound> vertical_;  // terrains under a max_error target
     int terrain_turn_ = 0;  // the map-plane orientation all terrain faces share
     std::optional<std::array<std::uint32_t, 2>> plan_overlap_;  // see MeshStats
+    std::optional<NonManifoldEdge> non_manifold_;                // see MeshStats
+    std::vector<DirectedEdge> border_;                           // see build_quadrics
     Grid grid_;
 
     std::vector<Point3>& pos_ = mesh_.points;
@@ -483,64 +490,118 @@ void Simplifier::build_quadrics() {
         plane = {unit.x, unit.y, unit.z, -dot(unit, pos_[f[0]]), length};
     }
     // Each vertex sums the planes of its faces in list order: deterministic for any thread count.
-    // Then its border edges (one face): it finds its own (a neighbour met in only one of its
-    // faces), marks itself, and unless locked adds for each a plane through the edge
-    // perpendicular to its face, weighted heavily (Garland & Heckbert §6) — computed from the
-    // edge's lower id so both ends add the same quadric.
+    // Its neighbours are counted as it goes, by the faces it shares with each and the way those
+    // turn (w after v, or before it): one face, a border edge; more than two, a non-manifold edge.
     const auto n = static_cast<std::int64_t>(pos_.size());
     quadric_ = std::make_unique_for_overwrite<Quadric[]>(pos_.size());  // each written once below
-#pragma omp parallel for schedule(static)
-    for (std::int64_t v = 0; v < n; ++v) {
-        // (neighbour, face, how many of v's faces have it); a vertex has a few: a scan, no sort.
+    const bool want_border = options_.terrain && !options_.height_field;
+    const auto parts = static_cast<std::size_t>(omp_get_max_threads());
+    std::vector<std::vector<DirectedEdge>> border_parts(parts);
+    std::vector<DirectedEdge> first_bad(parts, {kNone, kNone});  // each thread's least non-manifold edge
+#pragma omp parallel
+    {
+        // (neighbour, how many of v's faces have it, of those how many have it after v): a vertex
+        // has a few, a scan, no sort.
         struct Seen {
-            std::uint32_t vertex, face, count;
+            std::uint32_t vertex, count, after;
         };
-        thread_local std::vector<Seen> seen;
-        thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> borders;  // (neighbour, face)
-        seen.clear();
-        auto meet = [](std::uint32_t w, std::uint32_t face) {
+        std::vector<Seen> seen;
+        const auto me = static_cast<std::size_t>(omp_get_thread_num());
+        auto meet = [&seen](std::uint32_t w, bool after) {
             for (Seen& s : seen) {
                 if (s.vertex == w) {
                     ++s.count;
+                    s.after += after;
                     return;
                 }
             }
-            seen.push_back({w, face, 1});
+            seen.push_back({w, 1, after});
         };
-        Quadric q{};
-        for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
-            const Face& f = face_[c / 3];
-            const int k = static_cast<int>(c % 3);
-            meet(f[(k + 1) % 3], c / 3);
-            meet(f[(k + 2) % 3], c / 3);
-            const Plane& plane = planes[c / 3];
-            if (!(plane.length > 0)) continue;
-            const double area = 0.5 * plane.length;
-            q.add_plane(plane.a, plane.b, plane.c, plane.d, area);
-            q.area += area;
-        }
-        borders.clear();
-        for (const Seen& s : seen) {
-            if (s.count == 1) borders.emplace_back(s.vertex, s.face);
-        }
-        std::sort(borders.begin(), borders.end());  // their planes added in neighbour order
-        for (const auto& [w, face] : borders) {
-            flags_[v] |= lock_ ? (kBoundary | kLocked) : kBoundary;
-            if (lock_) continue;
-            const auto lo = std::min(static_cast<std::uint32_t>(v), w), hi = std::max(static_cast<std::uint32_t>(v), w);
-            const Face& f = face_[face];
-            const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
-            const Point3 edge = minus(pos_[hi], pos_[lo]);
-            const Point3 side = cross(edge, normal);
-            const double length = norm(side);
-            if (length > 0) {
-                const Point3 unit{side.x / length, side.y / length, side.z / length};
-                Quadric border{};
-                border.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
-                q += border;
+#pragma omp for schedule(static)
+        for (std::int64_t i = 0; i < n; ++i) {
+            const auto v = static_cast<std::uint32_t>(i);
+            seen.clear();
+            Quadric q{};
+            for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
+                const Face& f = face_[c / 3];
+                const auto k = c % 3;
+                meet(f[(k + 1) % 3], true);
+                meet(f[(k + 2) % 3], false);
+                const Plane& plane = planes[c / 3];
+                if (!(plane.length > 0)) continue;
+                const double area = 0.5 * plane.length;
+                q.add_plane(plane.a, plane.b, plane.c, plane.d, area);
+                q.area += area;
+            }
+            quadric_[v] = q;
+            for (const Seen& s : seen) {
+                if (s.count == 1) flags_[v] |= kBoundary;
+                if (s.count > 2 && s.vertex > v && DirectedEdge{v, s.vertex} < first_bad[me]) first_bad[me] = {v, s.vertex};
+                // A face has v → w and none w → v: once per such face.
+                if (want_border && s.after == s.count) border_parts[me].insert(border_parts[me].end(), s.after, {v, s.vertex});
             }
         }
-        quadric_[v] = q;
+    }
+    const DirectedEdge bad = *std::min_element(first_bad.begin(), first_bad.end());
+    if (bad.first != kNone) {
+        NonManifoldEdge edge{bad.first, bad.second, {}};
+        for (std::uint32_t c = head_[bad.first]; c != kNone && edge.faces.size() < 4; c = next_[c]) {
+            const Face& f = face_[c / 3];
+            if (f[0] == bad.second || f[1] == bad.second || f[2] == bad.second) edge.faces.push_back(c / 3);
+        }
+        non_manifold_ = std::move(edge);
+    }
+    border_.clear();
+    for (const auto& part : border_parts) border_.insert(border_.end(), part.begin(), part.end());
+    std::sort(border_.begin(), border_.end());
+}
+
+void Simplifier::add_border_planes() {
+    // Each border vertex finds its border edges (a neighbour met in only one of its faces) and
+    // unless locked adds for each a plane through the edge perpendicular to its face, weighted
+    // heavily (Garland & Heckbert §6), in neighbour order; computed from the edge's lower id so
+    // both ends add the same quadric.
+    const auto n = static_cast<std::int64_t>(pos_.size());
+#pragma omp parallel
+    {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> seen;     // (neighbour, face), with repeats
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> borders;  // (neighbour, face)
+#pragma omp for schedule(static)
+        for (std::int64_t i = 0; i < n; ++i) {
+            const auto v = static_cast<std::uint32_t>(i);
+            if ((flags_[v] & kBoundary) == 0) continue;
+            if (lock_) {
+                flags_[v] |= kLocked;
+                continue;
+            }
+            seen.clear();
+            for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) {
+                const Face& f = face_[c / 3];
+                seen.emplace_back(f[(c % 3 + 1) % 3], c / 3);
+                seen.emplace_back(f[(c % 3 + 2) % 3], c / 3);
+            }
+            borders.clear();
+            for (const auto& [w, face] : seen) {
+                const auto times = std::count_if(seen.begin(), seen.end(), [w](const auto& s) { return s.first == w; });
+                if (times == 1) borders.emplace_back(w, face);
+            }
+            std::sort(borders.begin(), borders.end());
+            Quadric& q = quadric_[v];
+            for (const auto& [w, face] : borders) {
+                const auto lo = std::min(v, w), hi = std::max(v, w);
+                const Face& f = face_[face];
+                const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+                const Point3 edge = minus(pos_[hi], pos_[lo]);
+                const Point3 side = cross(edge, normal);
+                const double length = norm(side);
+                if (length > 0) {
+                    const Point3 unit{side.x / length, side.y / length, side.z / length};
+                    Quadric border{};
+                    border.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
+                    q += border;
+                }
+            }
+        }
     }
 }
 
@@ -632,9 +693,7 @@ void Simplifier::check_terrain() {
     terrain_turn_ = turn;
     if (!same) return;
     if (!options_.height_field) {
-        plan_overlap_ = plan_overlap(mesh_, turn, border_edges(mesh_, [this](std::uint32_t v, std::vector<std::uint32_t>& out) {
-                                         for (std::uint32_t c = head_[v]; c != kNone; c = next_[c]) out.push_back(c);
-                                     }));
+        plan_overlap_ = plan_overlap(mesh_, turn, border_);
         if (plan_overlap_) return;
     }
     terrain_ = true;
@@ -1422,7 +1481,8 @@ MeshStats Simplifier::run() {
             if (c[0] != c[1] && c[1] != c[2] && c[0] != c[2]) input_face.push_back(f);
         }
     }
-    drop_unused(mesh_);
+    std::vector<std::uint32_t> input_vertex;  // likewise for vertices
+    drop_unused(mesh_, &input_vertex);
     stats.vertices_in = pos_.size();
     stats.faces_in = face_.size();
     int threads = options_.threads > 0 ? options_.threads : omp_get_max_threads();
@@ -1438,6 +1498,17 @@ MeshStats Simplifier::run() {
     const int saved_threads = omp_get_max_threads();
     omp_set_num_threads(threads);
     build_topology();
+    build_quadrics();
+    if (non_manifold_) {
+        NonManifoldEdge& edge = *non_manifold_;
+        if (!input_vertex.empty()) edge.a = input_vertex[edge.a], edge.b = input_vertex[edge.b];
+        if (!input_face.empty()) {
+            for (std::uint32_t& f : edge.faces) f = input_face[f];
+        }
+        stats.non_manifold = std::move(non_manifold_);
+        omp_set_num_threads(saved_threads);
+        return stats;
+    }
     check_terrain();
     if (terrain_ && options_.target == MeshTarget::max_error && std::isfinite(options_.value)) {
         vertical_ = std::make_unique<VerticalBound>(mesh_, options_.value);
@@ -1452,7 +1523,7 @@ MeshStats Simplifier::run() {
     }
     stats.vertical_bound = vertical_ != nullptr;
     if (vertical_) touch_.assign(pos_.size(), 0);
-    build_quadrics();
+    add_border_planes();
     choose_grid();
     if (!terrain_) find_twins();
     use_index_ = !terrain_ || !lock_;

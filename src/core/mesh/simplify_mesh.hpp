@@ -82,6 +82,9 @@ struct MeshStats {
     // A terrain was asked for, but these two faces (numbered as in the input) overlap in the map
     // plane.
     std::optional<std::array<std::uint32_t, 2>> plan_overlap;
+    // The input has an edge with more than two faces, the first in vertex order (numbered as in
+    // the input; see find_non_manifold_edge): it was not simplified.
+    std::optional<NonManifoldEdge> non_manifold;
     // The vertical distance to the input is at most the max_error target everywhere.
     bool vertical_bound = false;
     // Collapses in flat regions proven free of contacts without searching for nearby faces
@@ -95,8 +98,8 @@ struct MeshStats {
     exact::PredicateStats predicates;
 };
 
-// Simplifies `mesh` in place. The input must have no non-manifold edge (find_non_manifold_edge)
-// and no face repeating a corner (drop_unused); vertices that no face uses are dropped. The
+// Simplifies `mesh` in place. Faces repeating a corner and vertices that no face uses are
+// dropped. An input with a non-manifold edge is not simplified (MeshStats::non_manifold). The
 // result keeps the surviving vertices in input order and the surviving faces in input order.
 MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options);
 

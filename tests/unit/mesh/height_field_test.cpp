@@ -6,6 +6,7 @@
 #include "core/mesh/height_field.hpp"
 
 #include "core/mesh/plan_index.hpp"
+#include "core/mesh/simplify_mesh.hpp"
 #include "support/exact_checker.hpp"
 
 #include <gtest/gtest.h>
@@ -90,6 +91,15 @@ bool expect_agreement(const Mesh& m, bool height_field) {
     if (!height_field) {
         EXPECT_FALSE(fast);
     }
+    // The simplifier decides the same from its own border edges (counted in its pass over each
+    // vertex's faces).
+    Mesh copy = m;
+    MeshOptions options;
+    options.terrain = true;
+    options.value = 1.0;
+    const MeshStats stats = simplify_mesh(copy, options);
+    EXPECT_EQ(stats.terrain, height_field);
+    EXPECT_EQ(stats.plan_overlap, pair);
     return fast;
 }
 
