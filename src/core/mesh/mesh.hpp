@@ -24,9 +24,6 @@ struct NonManifoldEdge {
     std::vector<std::uint32_t> faces;  // the first few faces on it
 };
 
-// The first non-manifold edge in vertex order, if any.
-std::optional<NonManifoldEdge> find_non_manifold_edge(const Mesh& mesh);
-
 // Faces that repeat a corner index (a, a, b): they have no area and no place in a surface.
 std::size_t count_repeated_corner_faces(const Mesh& mesh);
 

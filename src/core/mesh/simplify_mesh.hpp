@@ -82,8 +82,8 @@ struct MeshStats {
     // A terrain was asked for, but these two faces (numbered as in the input) overlap in the map
     // plane.
     std::optional<std::array<std::uint32_t, 2>> plan_overlap;
-    // The input has an edge with more than two faces, the first in vertex order (numbered as in
-    // the input; see find_non_manifold_edge): it was not simplified.
+    // The input has an edge with more than two faces: the least (a < b, then by b), with its first
+    // few faces in order, numbered as in the input. It was not simplified.
     std::optional<NonManifoldEdge> non_manifold;
     // The vertical distance to the input is at most the max_error target everywhere.
     bool vertical_bound = false;

@@ -1,16 +1,38 @@
 // The simplifier finds a non-manifold edge in its own pass over each vertex's faces: it must name
-// the edge find_non_manifold_edge names on the input as given (vertex and face numbers of the
-// input, though faces repeating a corner and unused vertices are dropped first), and leave the
-// mesh unsimplified.
+// the edge a plain count of every edge's faces names on the input as given (vertex and face
+// numbers of the input, though faces repeating a corner and unused vertices are dropped first),
+// and leave the mesh unsimplified.
 #include "core/mesh/mesh.hpp"
 #include "core/mesh/simplify_mesh.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <map>
+#include <optional>
 #include <random>
+#include <utility>
+#include <vector>
 
 namespace toposimp::mesh {
 namespace {
+
+// The least edge (a < b) with more than two faces, and its first four faces: each edge's faces
+// listed in a map.
+std::optional<NonManifoldEdge> find_non_manifold_edge(const Mesh& m) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<std::uint32_t>> faces_of;
+    for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
+        const Face& c = m.faces[f];
+        if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0]) continue;
+        for (int k = 0; k < 3; ++k) faces_of[std::minmax(c[k], c[(k + 1) % 3])].push_back(f);
+    }
+    for (const auto& [edge, faces] : faces_of) {
+        if (faces.size() > 2) {
+            return NonManifoldEdge{edge.first, edge.second, std::vector<std::uint32_t>(faces.begin(), faces.begin() + std::min<std::size_t>(faces.size(), 4))};
+        }
+    }
+    return std::nullopt;
+}
 
 // Random triangles over a few vertices: non-manifold edges likely, some faces repeating a
 // corner, some vertices unused.
