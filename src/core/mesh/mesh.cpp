@@ -21,14 +21,15 @@ std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept) {
     for (const Face& f : mesh.faces) {
         for (std::uint32_t v : f) index[v] = 1;
     }
+    // The old numbers are listed only when some vertex goes.
+    const bool list = kept != nullptr && std::find(index.begin(), index.end(), 0u) != index.end();
     if (kept != nullptr) kept->clear();
-    const auto used = static_cast<std::size_t>(std::count(index.begin(), index.end(), 1u));
     std::uint32_t next = 0;
     for (std::uint32_t v = 0; v < mesh.points.size(); ++v) {
         if (index[v] != 0) {
             mesh.points[next] = mesh.points[v];
             index[v] = next++;
-            if (kept != nullptr && used < mesh.points.size()) kept->push_back(v);
+            if (list) kept->push_back(v);
         }
     }
     mesh.points.resize(next);
