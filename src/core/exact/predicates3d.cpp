@@ -510,13 +510,32 @@ int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateSta
     return in_closed_triangle(flat(u[0]), flat(u[1]), flat(u[2]), flat(t[0]), Arithmetic::exact, stats) ? 1 : 0;
 }
 
-bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
+namespace {
+
+// The sides of u's corners with respect to t's plane, each computed when first asked unless
+// given.
+class Sides {
+public:
+    Sides(const Triangle3& t, const Triangle3& u, std::array<int, 3> known, PredicateStats& stats)
+        : t_(t), u_(u), side_(known), stats_(stats) {}
+    int operator()(int k) {
+        if (side_[static_cast<std::size_t>(k)] == kSideUnknown) side_[static_cast<std::size_t>(k)] = orient3d(t_[0], t_[1], t_[2], u_[static_cast<std::size_t>(k)], stats_);
+        return side_[static_cast<std::size_t>(k)];
+    }
+
+private:
+    const Triangle3& t_;
+    const Triangle3& u_;
+    std::array<int, 3> side_;
+    PredicateStats& stats_;
+};
+
+bool triangles_meet(const Triangle3& t, const Triangle3& u, Sides& side, PredicateStats& stats) {
     if (!triangle_box(t[0], t[1], t[2]).overlaps(triangle_box(u[0], u[1], u[2]))) return false;
     // u strictly on one side of t's plane: apart (the usual quick rejection).
-    const int u0 = orient3d(t[0], t[1], t[2], u[0], stats);
-    const int u1 = orient3d(t[0], t[1], t[2], u[1], stats);
-    if (u0 != 0 && u1 == u0 && orient3d(t[0], t[1], t[2], u[2], stats) == u0) return false;
-    if (u0 == 0 && u1 == 0 && orient3d(t[0], t[1], t[2], u[2], stats) == 0) {
+    const int u0 = side(0), u1 = side(1);
+    if (u0 != 0 && u1 == u0 && side(2) == u0) return false;
+    if (u0 == 0 && u1 == 0 && side(2) == 0) {
         // u lies in the plane of t (in flat regions, most pairs).
         if (const int met = coplanar_triangles_meet(t, u, stats); met >= 0) return met == 1;
     }
@@ -537,7 +556,18 @@ bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stat
     return false;
 }
 
+}  // namespace
+
+bool triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
+    Sides side(t, u, {kSideUnknown, kSideUnknown, kSideUnknown}, stats);
+    return triangles_meet(t, u, side, stats);
+}
+
 bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stats) {
+    return faces_conflict(f, g, {kSideUnknown, kSideUnknown, kSideUnknown}, stats);
+}
+
+bool faces_conflict(const Triangle3& f, const Triangle3& g, std::array<int, 3> g_sides, PredicateStats& stats) {
     if (!triangle_box(f[0], f[1], f[2]).overlaps(triangle_box(g[0], g[1], g[2]))) return false;
     int shared = 0;
     int f_at[3], g_at[3];
@@ -551,18 +581,33 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stat
             }
         }
     }
-    if (shared == 0) return triangles_meet(f, g, stats);
+    Sides side(f, g, g_sides, stats);
+    if (shared == 0) return triangles_meet(f, g, side, stats);
     if (shared == 3 || degenerate(g, stats)) return true;
     if (shared == 1) {
         // Quick acceptance: the other two corners of one face strictly on one side of the
         // other's plane — that face then meets the other's plane only at s.
         const int i0 = f_at[0], j0 = g_at[0];
-        const int g1 = orient3d(f[0], f[1], f[2], g[(j0 + 1) % 3], stats);
-        const int g2 = orient3d(f[0], f[1], f[2], g[(j0 + 2) % 3], stats);
+        const int g1 = side((j0 + 1) % 3), g2 = side((j0 + 2) % 3);
         if (g1 != 0 && g2 == g1) return false;
         if (g1 == 0 && g2 == 0 && coplanar_apart_at_corner(f, i0, g, j0, stats)) return false;
         const int f1 = orient3d(g[0], g[1], g[2], f[(i0 + 1) % 3], stats);
-        if (f1 != 0 && orient3d(g[0], g[1], g[2], f[(i0 + 2) % 3], stats) == f1) return false;
+        const int f2 = f1 == 0 ? 0 : orient3d(g[0], g[1], g[2], f[(i0 + 2) % 3], stats);
+        if (f1 != 0 && f2 == f1) return false;
+        if (g1 * g2 < 0 && f1 * f2 < 0) {
+            // Each face crosses the other's plane: it meets the line L where the planes meet in
+            // a segment from s to a point strictly inside its angle at s (on its opposite edge).
+            // They meet beyond s iff the two segments leave s the same way along L, iff the
+            // point Y where g's opposite edge pq crosses f's plane lies inside f's angle at s,
+            // not in the opposite angle (L runs through one and the other). With f = (s, f1,
+            // f2) turned, orient3d(p, q, s, f1) = orient3d(Y, q, s, f1) (Y lies between p and
+            // q) = orient3d(Y, s, f1, q): q's side of f's plane (g2) when Y, s, f1 turn as f
+            // does — Y on f2's side of the line s→f1 — and −g2 when Y is on the other side
+            // (never on it: f1 is off g's plane, which holds p, q and s). Likewise for f2→s.
+            const Point3 p = g[(j0 + 1) % 3], q = g[(j0 + 2) % 3];
+            const Point3 corner = f[i0], f1_at = f[(i0 + 1) % 3], f2_at = f[(i0 + 2) % 3];
+            return orient3d(p, q, corner, f1_at, stats) == g2 && orient3d(p, q, f2_at, corner, stats) == g2;
+        }
         // Meeting beyond the shared corner s means an edge opposite s meets the other face, or
         // an edge leaving s runs into the other face's angle at s (coplanar faces).
         const int i = f_at[0], j = g_at[0];
@@ -575,8 +620,8 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stat
     // Two shared corners s, t: non-coplanar faces meet exactly along st; coplanar ones overlap
     // iff their third corners lie on the same side of st.
     const int x_at = 3 - f_at[0] - f_at[1], y_at = 3 - g_at[0] - g_at[1];
+    if (side(y_at) != 0) return false;
     const Point3 s = f[f_at[0]], t = f[f_at[1]], x = f[x_at], y = g[y_at];
-    if (orient3d(s, t, x, y, stats) != 0) return false;
     const auto [axis, turn] = area_axis(f, stats);
     (void)turn;
     const int side_x = orient2(drop_axis(s, axis), drop_axis(t, axis), drop_axis(x, axis), stats);

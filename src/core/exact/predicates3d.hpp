@@ -59,6 +59,10 @@ int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateSta
 // shared corner (a duplicate face) — is a conflict. A degenerate `g` that shares a corner is
 // reported as a conflict too (the caller refuses rather than reasons about it).
 bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stats);
+// The same when some of g's corners' sides of f's plane are known: g_sides[k] is
+// orient3d(f[0], f[1], f[2], g[k]), or kSideUnknown (then computed if needed).
+constexpr int kSideUnknown = 2;
+bool faces_conflict(const Triangle3& f, const Triangle3& g, std::array<int, 3> g_sides, PredicateStats& stats);
 
 // Vertical gaps between terrain faces (x–y is the map plane, z the height). Both decide
 // exactly whether a height difference is at most `bound` (≥ 0): the difference and the bound

@@ -1352,13 +1352,16 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             const exact::Triangle3 mine = flat(fresh[i]);
             const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
             ++generation;
-            auto verdict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other) {
+            // The sides of the other face's corners (`side`, for faces_conflict) and what they
+            // settle.
+            auto verdict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other, std::array<int, 3>& side) {
                 int sign = 0;
                 bool on_corner = false, unshared_in_plane = false;
                 for (int k = 0; k < 3; ++k) {
                     if (same_location(other[k], mine[0]) || same_location(other[k], mine[1]) ||
                         same_location(other[k], mine[2])) {
                         on_corner = true;  // in the plane, no predicate needed
+                        side[k] = 0;
                         continue;
                     }
                     const std::uint32_t v = ids[k];
@@ -1366,27 +1369,29 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                     if (entry.vertex != v || entry.generation != generation) {
                         entry = {v, exact::orient3d(mine[0], mine[1], mine[2], other[k], predicates), generation};
                     }
+                    side[k] = entry.side;
                     if (entry.side == 0) {
                         unshared_in_plane = true;
                     } else if (sign == 0) {
                         sign = entry.side;
                     } else if (entry.side != sign) {
-                        return Verdict::unknown;
+                        unshared_in_plane = true;  // (crossing the plane: unknown too)
                     }
                 }
                 if (sign != 0) return unshared_in_plane ? Verdict::unknown : Verdict::apart;
                 return on_corner ? Verdict::unknown : Verdict::coplanar;
             };
             auto conflict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other) {
+                std::array<int, 3> side{exact::kSideUnknown, exact::kSideUnknown, exact::kSideUnknown};
                 if (!flatten) {
-                    const Verdict v = verdict(ids, other);
+                    const Verdict v = verdict(ids, other, side);
                     if (v == Verdict::apart) return false;
                     if (v == Verdict::coplanar) {
                         const int met = exact::coplanar_triangles_meet(mine, other, predicates);
                         if (met >= 0) return met == 1;  // (−1, a degenerate new face: the general test)
                     }
                 }
-                return exact::faces_conflict(mine, other, predicates);
+                return exact::faces_conflict(mine, other, side, predicates);
             };
             for (std::size_t n = 0; n < near.size(); ++n) {
                 if (!mine_box.overlaps(near_box[n])) continue;

@@ -260,6 +260,49 @@ TEST(FacesConflict, CoplanarFacesSharingOneCornerAgreeWithTheIndependentChecker)
     EXPECT_GT(clean, 300);
 }
 
+// Faces sharing one corner in space (the pairs around a collapsed star), small integer
+// coordinates so that corners in the other's plane, edges through the other face and crossings
+// exactly at an edge all occur: faces_conflict agrees with the checker, with and without the
+// sides of g's corners given (given, some as kSideUnknown).
+TEST(FacesConflict, FacesSharingOneCornerInSpaceAgreeWithTheIndependentChecker) {
+    std::mt19937_64 random(13);
+    std::uniform_int_distribution<int> small(-3, 3);
+    auto point = [&] { return Point3{static_cast<double>(small(random)), static_cast<double>(small(random)), static_cast<double>(small(random))}; };
+    PredicateStats stats;
+    int conflicts = 0, clean = 0, crossing_each_other = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const Point3 s = point();
+        const Triangle3 f{point(), s, point()};
+        const Triangle3 g{point(), point(), s};
+        if (degenerate(f, stats) || degenerate(g, stats)) continue;
+        int shared = 0;
+        for (const Point3& p : f) {
+            for (const Point3& q : g) shared += same_location(p, q);
+        }
+        if (shared != 1) continue;
+        mesh::Mesh pair;
+        pair.points = {f[0], f[1], f[2], g[0], g[1]};
+        pair.faces = {{0, 1, 2}, {3, 4, 1}};
+        const bool checker = testing::find_defects(pair).intersecting_pairs > 0;
+        std::array<int, 3> g_sides{}, f_sides{};
+        for (int k = 0; k < 3; ++k) {
+            g_sides[k] = reference_orient3d(f[0], f[1], f[2], g[k]);
+            f_sides[k] = reference_orient3d(g[0], g[1], g[2], f[k]);
+        }
+        if (g_sides[0] * g_sides[1] < 0 && f_sides[0] * f_sides[2] < 0) ++crossing_each_other;
+        std::array<int, 3> partly = g_sides;
+        partly[trial % 3] = kSideUnknown;
+        EXPECT_EQ(faces_conflict(f, g, stats), checker) << "trial " << trial;
+        EXPECT_EQ(faces_conflict(f, g, g_sides, stats), checker) << "trial " << trial << " (sides given)";
+        EXPECT_EQ(faces_conflict(f, g, partly, stats), checker) << "trial " << trial << " (some sides given)";
+        EXPECT_EQ(faces_conflict(g, f, f_sides, stats), checker) << "trial " << trial << " (swapped)";
+        (checker ? conflicts : clean) += 1;
+    }
+    EXPECT_GT(conflicts, 1000);
+    EXPECT_GT(clean, 1000);
+    EXPECT_GT(crossing_each_other, 1000);
+}
+
 // Vertical gaps, by a different method: the point on the plane or the crossing point solved in
 // rationals, the heights interpolated there, the difference compared with the bound.
 bool reference_vertical_within(const Triangle3& t, Point3 v, double bound) {
