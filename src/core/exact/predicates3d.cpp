@@ -518,9 +518,9 @@ class Sides {
 public:
     Sides(const Triangle3& t, const Triangle3& u, std::array<int, 3> known, PredicateStats& stats)
         : t_(t), u_(u), side_(known), stats_(stats) {}
-    int operator()(int k) {
-        if (side_[static_cast<std::size_t>(k)] == kSideUnknown) side_[static_cast<std::size_t>(k)] = orient3d(t_[0], t_[1], t_[2], u_[static_cast<std::size_t>(k)], stats_);
-        return side_[static_cast<std::size_t>(k)];
+    int operator()(std::size_t k) {
+        if (side_[k] == kSideUnknown) side_[k] = orient3d(t_[0], t_[1], t_[2], u_[k], stats_);
+        return side_[k];
     }
 
 private:
@@ -599,14 +599,14 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, std::array<int, 3> g
             // a segment from s to a point strictly inside its angle at s (on its opposite edge).
             // They meet beyond s iff the two segments leave s the same way along L, iff the
             // point Y where g's opposite edge pq crosses f's plane lies inside f's angle at s,
-            // not in the opposite angle (L runs through one and the other). With f = (s, f1,
-            // f2) turned, orient3d(p, q, s, f1) = orient3d(Y, q, s, f1) (Y lies between p and
-            // q) = orient3d(Y, s, f1, q): q's side of f's plane (g2) when Y, s, f1 turn as f
-            // does — Y on f2's side of the line s→f1 — and −g2 when Y is on the other side
-            // (never on it: f1 is off g's plane, which holds p, q and s). Likewise for f2→s.
+            // not in the opposite angle (L runs through one and the other). Write f = (s, u, v)
+            // in its turn. orient3d(p, q, s, u) has the sign of orient3d(Y, q, s, u) (Y lies
+            // between p and q), which is orient3d(Y, s, u, q): q's side of f's plane (g2) when
+            // Y, s, u turn as f does — Y on v's side of the line su — and −g2 on the other side
+            // (never on the line: u is off g's plane, which holds p, q and s). Likewise for vs.
             const Point3 p = g[(j0 + 1) % 3], q = g[(j0 + 2) % 3];
-            const Point3 corner = f[i0], f1_at = f[(i0 + 1) % 3], f2_at = f[(i0 + 2) % 3];
-            return orient3d(p, q, corner, f1_at, stats) == g2 && orient3d(p, q, f2_at, corner, stats) == g2;
+            const Point3 u = f[(i0 + 1) % 3], v = f[(i0 + 2) % 3];
+            return orient3d(p, q, f[i0], u, stats) == g2 && orient3d(p, q, v, f[i0], stats) == g2;
         }
         // Meeting beyond the shared corner s means an edge opposite s meets the other face, or
         // an edge leaving s runs into the other face's angle at s (coplanar faces).

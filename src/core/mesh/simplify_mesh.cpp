@@ -1358,7 +1358,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             // settle.
             auto verdict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other, std::array<int, 3>& side) {
                 int sign = 0;
-                bool on_corner = false, unshared_in_plane = false;
+                bool on_corner = false, unshared_in_plane = false, both_sides = false;
                 for (int k = 0; k < 3; ++k) {
                     if (same_location(other[k], mine[0]) || same_location(other[k], mine[1]) ||
                         same_location(other[k], mine[2])) {
@@ -1377,10 +1377,10 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                     } else if (sign == 0) {
                         sign = entry.side;
                     } else if (entry.side != sign) {
-                        unshared_in_plane = true;  // (crossing the plane: unknown too)
+                        both_sides = true;
                     }
                 }
-                if (sign != 0) return unshared_in_plane ? Verdict::unknown : Verdict::apart;
+                if (sign != 0) return unshared_in_plane || both_sides ? Verdict::unknown : Verdict::apart;
                 return on_corner ? Verdict::unknown : Verdict::coplanar;
             };
             auto conflict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other) {
