@@ -231,6 +231,27 @@ TEST(TrianglesMeet, CoplanarPairsAgreeWithTheIndependentChecker) {
     EXPECT_GT(apart, 300);
 }
 
+// How many corners of f share their location with one of g's.
+int shared_corners(const Triangle3& f, const Triangle3& g) {
+    int shared = 0;
+    for (const Point3& p : f) {
+        for (const Point3& q : g) shared += same_location(p, q);
+    }
+    return shared;
+}
+
+// The checker's verdict on faces sharing the corner f[i] = g[j] (one vertex of the pair).
+bool checker_finds_contact(const Triangle3& f, int i, const Triangle3& g, int j) {
+    mesh::Mesh pair;
+    pair.points = {f[0], f[1], f[2], g[(j + 1) % 3], g[(j + 2) % 3]};
+    mesh::Face second{};
+    second[j] = static_cast<std::uint32_t>(i);
+    second[(j + 1) % 3] = 3;
+    second[(j + 2) % 3] = 4;
+    pair.faces = {{0, 1, 2}, second};
+    return testing::find_defects(pair).intersecting_pairs > 0;
+}
+
 // Coplanar faces sharing one corner (fans of a flat region, where faces_conflict first looks for
 // a line through the corner that separates them): its answer agrees with the checker's.
 TEST(FacesConflict, CoplanarFacesSharingOneCornerAgreeWithTheIndependentChecker) {
@@ -242,16 +263,8 @@ TEST(FacesConflict, CoplanarFacesSharingOneCornerAgreeWithTheIndependentChecker)
         const Point3 s = on_plane();
         const Triangle3 f{s, on_plane(), on_plane()};
         const Triangle3 g{on_plane(), s, on_plane()};
-        if (degenerate(f, stats) || degenerate(g, stats)) continue;
-        int shared = 0;
-        for (const Point3& p : f) {
-            for (const Point3& q : g) shared += same_location(p, q);
-        }
-        if (shared != 1) continue;
-        mesh::Mesh pair;
-        pair.points = {f[0], f[1], f[2], g[0], g[2]};
-        pair.faces = {{0, 1, 2}, {3, 0, 4}};
-        const bool checker = testing::find_defects(pair).intersecting_pairs > 0;
+        if (degenerate(f, stats) || degenerate(g, stats) || shared_corners(f, g) != 1) continue;
+        const bool checker = checker_finds_contact(f, 0, g, 1);
         EXPECT_EQ(faces_conflict(f, g, stats), checker) << "trial " << trial;
         EXPECT_EQ(faces_conflict(g, f, stats), checker) << "trial " << trial << " (swapped)";
         (checker ? conflicts : clean) += 1;
@@ -274,16 +287,8 @@ TEST(FacesConflict, FacesSharingOneCornerInSpaceAgreeWithTheIndependentChecker) 
         const Point3 s = point();
         const Triangle3 f{point(), s, point()};
         const Triangle3 g{point(), point(), s};
-        if (degenerate(f, stats) || degenerate(g, stats)) continue;
-        int shared = 0;
-        for (const Point3& p : f) {
-            for (const Point3& q : g) shared += same_location(p, q);
-        }
-        if (shared != 1) continue;
-        mesh::Mesh pair;
-        pair.points = {f[0], f[1], f[2], g[0], g[1]};
-        pair.faces = {{0, 1, 2}, {3, 4, 1}};
-        const bool checker = testing::find_defects(pair).intersecting_pairs > 0;
+        if (degenerate(f, stats) || degenerate(g, stats) || shared_corners(f, g) != 1) continue;
+        const bool checker = checker_finds_contact(f, 1, g, 2);
         std::array<int, 3> g_sides{}, f_sides{};
         for (int k = 0; k < 3; ++k) {
             g_sides[k] = reference_orient3d(f[0], f[1], f[2], g[k]);
