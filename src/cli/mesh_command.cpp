@@ -28,7 +28,8 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
         "Stopping criteria (one; default --keep 10%): --keep, --keep-faces, --max-error.\n"
         "Edges collapse in order of quadric error (Garland-Heckbert, optimal placement); a collapse is made only if\n"
         "exact predicates show it keeps the surface manifold, turns no face over, and makes no face touch or cross\n"
-        "another. Formats: OBJ, PLY (ASCII or binary), OFF; normals, colours and texture coordinates are dropped.\n"
+        "another. Formats: OBJ, PLY (ASCII or binary), OFF. Normals, colours, texture coordinates and other vertex\n"
+        "properties are kept (a merged vertex blends its two ends' values); faces keep theirs.\n"
         "Exit status: 0 ok, 2 usage or input error.");
     mesh->add_option("input", options.input, "Input mesh (.obj, .ply, .off) or a DEM raster (GeoTIFF or any GDAL raster)")
         ->required();
@@ -136,6 +137,8 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         // Input: a mesh file, or a DEM raster triangulated into a TIN.
         progress.phase("reading " + options.input);
         mesh::Mesh m;
+        io::AttributeLayout layout;                   // what m's attribute columns are
+        std::vector<std::string> dropped, unwritten;  // attributes not kept, and not written
         std::optional<io::Dem> dem;
         if (io::has_mesh_extension(options.input)) {
             io::MeshReadOptions read_options;
@@ -144,8 +147,13 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             m = io::read_mesh(options.input, read_options, report);
             log->debug("read {} ({}{}): {} vertices, {} faces", options.input, io::to_string(report.format),
                        report.encoding.empty() ? "" : " " + report.encoding, m.points.size(), m.faces.size());
-            for (const std::string& dropped : report.dropped) {
-                log->warn("{}: {} dropped (not carried to the simplified mesh)", options.input, dropped);
+            layout = report.layout;
+            dropped = report.dropped;
+            for (const std::string& what : dropped) {
+                log->warn("{}: {}: dropped (not carried to the simplified mesh)", options.input, what);
+            }
+            if (!layout.vertex.empty() || !layout.face.empty()) {
+                log->debug("attributes kept: {} per vertex, {} per face", layout.vertex.size(), layout.face.size());
             }
             if (report.polygons_triangulated > 0) log->info("{} polygons split into triangle fans", report.polygons_triangulated);
             if (report.ignored_elements > 0) {
@@ -165,7 +173,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
             log->warn("{} faces repeat a corner (no area) and are dropped", repeated);
         }
-        const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : m;
+        const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : mesh::Mesh{m.points, m.faces};
 
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
@@ -192,8 +200,14 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
         if (mesh_output) {
-            io::write_mesh(m, output.staging_path(), format, options.ascii);
+            unwritten = io::write_mesh(m, layout, output.staging_path(), format, options.ascii);
+            for (const std::string& column : unwritten) {
+                log->warn("{}: {} not written: {} has no place for it", options.output, column, io::to_string(format));
+            }
         } else {
+            if (!layout.vertex.empty() || !layout.face.empty()) {
+                log->warn("{}: vertex and face attributes not written: a layer of triangles has no place for them", options.output);
+            }
             io::write_tin_layer(m, output.staging_path(), options.format, dem ? dem->crs_wkt : std::string(), options.layer_name);
         }
         output.commit();
@@ -250,6 +264,19 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                 << ",\"terrain\":" << (stats.terrain ? "true" : "false")
                 << ",\"lock_boundary\":" << (engine->lock_boundary || stats.vertical_bound ? "true" : "false");
             if (stats.vertical_bound) out << ",\"guaranteed_vertical_error\":" << engine->value;
+            // Attribute columns kept, dropped on reading (with the reason), left out on writing.
+            auto names = [](const auto& list, auto name_of) {
+                std::string text = "[";
+                for (const auto& item : list) {
+                    if (text.size() > 1) text += ',';
+                    io::append_json_string(text, name_of(item));
+                }
+                return text + "]";
+            };
+            const auto column_name = [](const io::AttributeColumn& c) -> const std::string& { return c.name; };
+            const auto itself = [](const std::string& text) -> const std::string& { return text; };
+            out << ",\"attributes\":{\"vertex\":" << names(layout.vertex, column_name) << ",\"face\":" << names(layout.face, column_name)
+                << ",\"dropped\":" << names(dropped, itself) << ",\"not_written\":" << names(unwritten, itself) << "}";
             if (dem) {
                 out << ",\"dem\":{\"width\":" << dem->width << ",\"height\":" << dem->height
                     << ",\"cells_without_data\":" << dem->nodata_cells << ",\"crs\":" << (dem->crs_wkt.empty() ? "false" : "true") << "}";

@@ -4,6 +4,7 @@
 #include "io/number_format.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cctype>
 #include <cerrno>
@@ -11,7 +12,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
+#include <limits>
+#include <optional>
 #include <sstream>
 #include <string_view>
 
@@ -105,9 +109,16 @@ Point3 parse_point(const std::string& path, std::size_t line, std::string_view x
     return {c[0], c[1], c[2]};
 }
 
-// Adds a polygon's corners as triangles (a fan), or refuses a polygon.
-void add_polygon(mesh::Mesh& m, const std::vector<std::uint32_t>& corners, const MeshReadOptions& options,
-                 MeshReadReport& report, const std::string& path, std::size_t line, std::size_t face) {
+bool parse_integer(std::string_view text, long long& value) {
+    if (!text.empty() && text.front() == '+') text.remove_prefix(1);
+    const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
+    return result.ec == std::errc() && result.ptr == text.data() + text.size();
+}
+
+// Adds a polygon's corners as triangles (a fan), or refuses a polygon. Returns how many
+// triangles it added (a face's attribute row goes with each).
+std::size_t add_polygon(mesh::Mesh& m, const std::vector<std::uint32_t>& corners, const MeshReadOptions& options,
+                        MeshReadReport& report, const std::string& path, std::size_t line, std::size_t face) {
     if (corners.size() < 3) {
         throw InputError(where(path, line) + "face " + std::to_string(face) + " has " + std::to_string(corners.size()) +
                          " corners; a face needs 3");
@@ -120,6 +131,22 @@ void add_polygon(mesh::Mesh& m, const std::vector<std::uint32_t>& corners, const
         ++report.polygons_triangulated;
     }
     for (std::size_t k = 1; k + 1 < corners.size(); ++k) m.faces.push_back({corners[0], corners[k], corners[k + 1]});
+    return corners.size() - 2;
+}
+
+// Appends `row` to `rows` `times` times.
+void append_rows(std::vector<double>& rows, const std::vector<double>& row, std::size_t times) {
+    for (std::size_t i = 0; i < times; ++i) rows.insert(rows.end(), row.begin(), row.end());
+}
+
+// Adds columns of one type under the given names.
+void add_columns(std::vector<AttributeColumn>& columns, std::initializer_list<const char*> names, ValueType type) {
+    for (const char* name : names) columns.push_back({name, type});
+}
+
+bool is_integer_text(std::string_view text) {
+    long long unused = 0;
+    return parse_integer(text, unused);
 }
 
 void check_index(const std::string& path, std::size_t line, std::size_t face, long long index, std::size_t vertices) {
@@ -129,10 +156,95 @@ void check_index(const std::string& path, std::size_t line, std::size_t face, lo
     }
 }
 
-bool parse_integer(std::string_view text, long long& value) {
-    if (!text.empty() && text.front() == '+') text.remove_prefix(1);
-    const auto result = std::from_chars(text.data(), text.data() + text.size(), value);
-    return result.ec == std::errc() && result.ptr == text.data() + text.size();
+// OBJ names texture coordinates (vt) and normals (vn) per face corner. They become a vertex's
+// attributes when every corner names one and the corners of a vertex agree on its value;
+// otherwise (a seam, or corners without) they are dropped.
+class CornerValues {
+public:
+    CornerValues(const char* what, std::size_t width) : what_(what), width_(width) {}
+    void list(const std::vector<double>& values) { listed_.insert(listed_.end(), values.begin(), values.end()); }
+    std::size_t listed() const { return listed_.size() / width_; }
+    // A corner of `vertex` naming `reference` (empty: none).
+    void corner(std::uint32_t vertex, std::string_view reference, std::size_t vertices, const std::string& path,
+                std::size_t line, std::size_t face) {
+        if (reference.empty()) {
+            missing_ = missing_ || listed() > 0;
+            return;
+        }
+        long long index = 0;
+        if (!parse_integer(reference, index) || index == 0) {
+            throw InputError(where(path, line) + "face " + std::to_string(face) + ": '" + std::string(reference) +
+                             "' is not a reference to " + what_);
+        }
+        const long long zero_based = index > 0 ? index - 1 : static_cast<long long>(listed()) + index;
+        if (listed() == 0) {  // (all defined after the faces that use them: not read)
+            forward_ = true;
+            return;
+        }
+        if (zero_based < 0 || static_cast<std::size_t>(zero_based) >= listed()) {
+            throw InputError(where(path, line) + "face " + std::to_string(face) + " refers to " + what_ + " " +
+                             std::to_string(index) + ", but there are " + std::to_string(listed()));
+        }
+        if (chosen_.size() < vertices) chosen_.resize(vertices, 0);
+        const auto entry = static_cast<std::uint32_t>(zero_based) + 1;
+        std::uint32_t& mine = chosen_[vertex];
+        if (mine == 0) {
+            mine = entry;
+        } else if (mine != entry && !std::equal(value(mine), value(mine) + width_, value(entry)) && !seam_) {
+            seam_ = vertex;
+        }
+    }
+    // Keeps the values as columns, or says why not.
+    void finish(mesh::Mesh& m, std::vector<AttributeColumn>& layout, std::vector<double>& columns,
+                std::initializer_list<const char*> names, MeshReadReport& report) const {
+        if (forward_) {
+            report.dropped.push_back(std::string(what_) + ": faces refer to them before they are listed");
+            return;
+        }
+        if (listed_.empty()) return;
+        if (seam_) {
+            report.dropped.push_back(std::string(what_) + " (vt/vn): vertex " + std::to_string(*seam_ + 1) +
+                                     " has different ones in different faces (a seam)");
+            return;
+        }
+        if (missing_) {
+            report.dropped.push_back(std::string(what_) + ": some face corners have none");
+            return;
+        }
+        add_columns(layout, names, ValueType::f32);
+        const std::size_t before = columns.size() / std::max<std::size_t>(m.points.size(), 1);
+        std::vector<double> merged;
+        merged.reserve(m.points.size() * (before + width_));
+        for (std::size_t v = 0; v < m.points.size(); ++v) {
+            merged.insert(merged.end(), columns.begin() + static_cast<std::ptrdiff_t>(v * before),
+                          columns.begin() + static_cast<std::ptrdiff_t>((v + 1) * before));
+            const std::uint32_t entry = v < chosen_.size() ? chosen_[v] : 0;  // (0: in no face, dropped)
+            for (std::size_t k = 0; k < width_; ++k) merged.push_back(entry == 0 ? 0.0 : value(entry)[k]);
+        }
+        columns.swap(merged);
+    }
+
+private:
+    const double* value(std::uint32_t entry) const { return listed_.data() + (entry - 1) * width_; }
+    const char* what_;
+    std::size_t width_;
+    std::vector<double> listed_;
+    std::vector<std::uint32_t> chosen_;  // per vertex: the entry its corners name, plus 1; 0: none yet
+    bool missing_ = false, forward_ = false;
+    std::optional<std::uint32_t> seam_;
+};
+
+// Parses tokens[first, first + count) as numbers into `out`.
+void parse_numbers(const std::vector<std::string_view>& tokens, std::size_t first, std::size_t count,
+                   std::vector<double>& out, const std::string& path, std::size_t line) {
+    out.clear();
+    for (std::size_t k = first; k < first + count; ++k) {
+        double value = 0;
+        if (!parse_number(tokens[k], value) || !std::isfinite(value)) {
+            throw InputError(where(path, line) + "'" + std::string(tokens[k]) + "' is not a finite number");
+        }
+        out.push_back(value);
+    }
 }
 
 mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshReadOptions& options, MeshReadReport& report) {
@@ -141,7 +253,9 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
     std::string_view line;
     std::vector<std::string_view> tokens;
     std::vector<std::uint32_t> corners;
-    bool normals = false, uvs = false, colours = false;
+    std::vector<double> numbers, colours;
+    std::size_t coloured = 0;  // vertices with a colour (v x y z r g b)
+    CornerValues uvs("texture coordinates", 2), normals("normals", 3);
     std::size_t face = 0;
     while (lines.next(line)) {
         split(line, tokens);
@@ -150,16 +264,29 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
         if (kind == "v") {
             if (tokens.size() < 4) throw InputError(where(path, lines.number()) + "a vertex needs x y z");
             m.points.push_back(parse_point(path, lines.number(), tokens[1], tokens[2], tokens[3], m.points.size() + 1));
-            if (tokens.size() >= 7) colours = true;
+            if (tokens.size() >= 7) {
+                parse_numbers(tokens, 4, 3, numbers, path, lines.number());
+                colours.resize(3 * (m.points.size() - 1), 0.0);
+                colours.insert(colours.end(), numbers.begin(), numbers.end());
+                ++coloured;
+            }
         } else if (kind == "vn") {
-            normals = true;
+            if (tokens.size() < 4) throw InputError(where(path, lines.number()) + "a normal needs x y z");
+            parse_numbers(tokens, 1, 3, numbers, path, lines.number());
+            normals.list(numbers);
         } else if (kind == "vt") {
-            uvs = true;
+            if (tokens.size() < 2) throw InputError(where(path, lines.number()) + "texture coordinates need u (and v)");
+            parse_numbers(tokens, 1, std::min<std::size_t>(tokens.size() - 1, 2), numbers, path, lines.number());
+            numbers.resize(2, 0.0);
+            uvs.list(numbers);
         } else if (kind == "f") {
             ++face;
             corners.clear();
             for (std::size_t k = 1; k < tokens.size(); ++k) {
-                const std::string_view ref = tokens[k].substr(0, tokens[k].find('/'));
+                // v, v/vt, v//vn or v/vt/vn.
+                const std::string_view token = tokens[k];
+                const std::size_t slash = token.find('/');
+                const std::string_view ref = token.substr(0, slash);
                 long long index = 0;
                 if (!parse_integer(ref, index) || index == 0) {
                     throw InputError(where(path, lines.number()) + "face " + std::to_string(face) + ": '" +
@@ -168,20 +295,90 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
                 // OBJ counts from 1; negative references count back from the last vertex read.
                 const long long zero_based = index > 0 ? index - 1 : static_cast<long long>(m.points.size()) + index;
                 check_index(path, lines.number(), face, zero_based, m.points.size());
-                corners.push_back(static_cast<std::uint32_t>(zero_based));
+                const auto vertex = static_cast<std::uint32_t>(zero_based);
+                corners.push_back(vertex);
+                std::string_view uv, normal;
+                if (slash != std::string_view::npos) {
+                    const std::string_view rest = token.substr(slash + 1);
+                    const std::size_t second = rest.find('/');
+                    uv = rest.substr(0, second);
+                    if (second != std::string_view::npos) normal = rest.substr(second + 1);
+                }
+                uvs.corner(vertex, uv, m.points.size(), path, lines.number(), face);
+                normals.corner(vertex, normal, m.points.size(), path, lines.number(), face);
             }
             add_polygon(m, corners, options, report, path, lines.number(), face);
         } else if (kind == "l" || kind == "p") {
             ++report.ignored_elements;
         }
     }
-    if (normals) report.dropped.push_back("normals (vn)");
-    if (uvs) report.dropped.push_back("texture coordinates (vt)");
-    if (colours) report.dropped.push_back("vertex colours");
+    std::vector<double>& columns = m.vertex_attributes.values;
+    std::vector<AttributeColumn>& layout = report.layout.vertex;
+    if (coloured == m.points.size() && coloured > 0) {
+        add_columns(layout, {"red", "green", "blue"}, ValueType::f32);
+        columns.swap(colours);
+    } else if (coloured > 0) {
+        report.dropped.push_back("vertex colours: only " + std::to_string(coloured) + " of " + std::to_string(m.points.size()) +
+                                 " vertices have one");
+    }
+    uvs.finish(m, layout, columns, {"u", "v"}, report);
+    normals.finish(m, layout, columns, {"nx", "ny", "nz"}, report);
+    m.vertex_attributes.width = layout.size();
     return m;
 }
 
-// OFF: "OFF" (or COFF, NOFF, ...), counts, vertices, faces; '#' comments anywhere.
+// OFF colours: integers from 0 to 255, or numbers from 0 to 1 (Geomview's rule, taken per file:
+// integers throughout, or not). Counts how many elements have 3 or 4 components.
+struct OffColours {
+    std::vector<double> values;  // 4 per element (alpha 1, or 255, where absent)
+    std::size_t with = 0, with_alpha = 0;
+    bool integers = true;
+    // tokens[first, end): the element's colour, or nothing (no colour, the default, colour-map
+    // index: `with` is not counted).
+    bool add(const std::vector<std::string_view>& tokens, std::size_t first, std::size_t elements, const std::string& path,
+             std::size_t line) {
+        const std::size_t count = tokens.size() - first;
+        if (count != 3 && count != 4) return false;
+        std::vector<double> numbers;
+        parse_numbers(tokens, first, count, numbers, path, line);
+        for (std::size_t k = first; k < tokens.size(); ++k) integers = integers && is_integer_text(tokens[k]);
+        values.resize(4 * elements, std::numeric_limits<double>::quiet_NaN());  // (NaN: alpha absent)
+        values.insert(values.end(), numbers.begin(), numbers.end());
+        if (count == 3) values.push_back(std::numeric_limits<double>::quiet_NaN());
+        ++with;
+        with_alpha += count == 4;
+        return true;
+    }
+    // Keeps them as columns of `attributes` (after those it has) if every element has one.
+    void finish(const char* what, std::size_t elements, mesh::Attributes& attributes, std::vector<AttributeColumn>& layout,
+                MeshReadReport& report) const {
+        if (with == 0) return;
+        if (with < elements) {
+            report.dropped.push_back(std::string(what) + ": only " + std::to_string(with) + " of " + std::to_string(elements) +
+                                     " have one");
+            return;
+        }
+        const std::size_t width = with_alpha > 0 ? 4 : 3;
+        const ValueType type = integers ? ValueType::u8 : ValueType::f32;
+        add_columns(layout, {"red", "green", "blue"}, type);
+        if (width == 4) add_columns(layout, {"alpha"}, type);
+        std::vector<double> merged;
+        merged.reserve(elements * (attributes.width + width));
+        for (std::size_t i = 0; i < elements; ++i) {
+            merged.insert(merged.end(), attributes.values.begin() + static_cast<std::ptrdiff_t>(i * attributes.width),
+                          attributes.values.begin() + static_cast<std::ptrdiff_t>((i + 1) * attributes.width));
+            for (std::size_t k = 0; k < width; ++k) {
+                const double value = values[4 * i + k];
+                merged.push_back(std::isnan(value) ? (integers ? 255.0 : 1.0) : value);
+            }
+        }
+        attributes.values.swap(merged);
+        attributes.width += width;
+    }
+};
+
+// OFF: "[ST][C][N]OFF", counts, vertices (x y z, then nx ny nz, r g b [a], s t as the header
+// says), faces (a corner count, the corners, a colour maybe); '#' comments anywhere.
 mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshReadOptions& options, MeshReadReport& report) {
     mesh::Mesh m;
     Lines lines(text);
@@ -201,9 +398,16 @@ mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshRe
     if (header.size() < 3 || header.substr(header.size() - 3) != "OFF") {
         throw InputError(where(path, lines.number()) + "not an OFF file (first word '" + header + "')");
     }
-    if (header.find('C') != std::string::npos) report.dropped.push_back("vertex colours");
-    if (header.find('N') != std::string::npos) report.dropped.push_back("normals");
-    if (header.find("ST") != std::string::npos) report.dropped.push_back("texture coordinates");
+    std::string_view prefix = std::string_view(header).substr(0, header.size() - 3);
+    auto take = [&prefix](std::string_view part) {
+        if (!prefix.starts_with(part)) return false;
+        prefix.remove_prefix(part.size());
+        return true;
+    };
+    const bool texture = take("ST"), coloured = take("C"), with_normals = take("N");
+    if (!prefix.empty()) {
+        throw InputError(where(path, lines.number()) + "'" + header + "': only OFF with ST, C and N (3D vertices) is read");
+    }
     std::size_t first = 1;
     if (tokens.size() < 4) {
         if (!next_tokens()) throw InputError(path + ": file ends before the vertex and face counts");
@@ -217,15 +421,36 @@ mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshRe
     }
     const auto vertices = static_cast<std::size_t>(counts[0]), faces = static_cast<std::size_t>(counts[1]);
     m.points.reserve(std::min<std::size_t>(vertices, 1u << 26));
+    const std::size_t before_colour = 3 + (with_normals ? 3 : 0), after_colour = texture ? 2 : 0;
+    std::vector<double> normal_values, uv_values, numbers;
+    OffColours vertex_colours, face_colours;
     for (std::size_t v = 0; v < vertices; ++v) {
         if (!next_tokens()) {
             throw InputError(path + ": truncated: the header promises " + std::to_string(vertices) +
                              " vertices, the file ends after " + std::to_string(v));
         }
-        if (tokens.size() < 3) throw InputError(where(path, lines.number()) + "a vertex needs x y z");
+        if (tokens.size() < before_colour + after_colour) {
+            throw InputError(where(path, lines.number()) + "vertex " + std::to_string(v) + " needs " +
+                             std::to_string(before_colour + after_colour) + " numbers ('" + header + "')");
+        }
         m.points.push_back(parse_point(path, lines.number(), tokens[0], tokens[1], tokens[2], v));
+        if (with_normals) {
+            parse_numbers(tokens, 3, 3, numbers, path, lines.number());
+            normal_values.insert(normal_values.end(), numbers.begin(), numbers.end());
+        }
+        if (texture) {
+            parse_numbers(tokens, tokens.size() - 2, 2, numbers, path, lines.number());
+            uv_values.insert(uv_values.end(), numbers.begin(), numbers.end());
+            tokens.resize(tokens.size() - 2);
+        }
+        if (coloured && !vertex_colours.add(tokens, before_colour, v, path, lines.number())) {
+            throw InputError(where(path, lines.number()) + "vertex " + std::to_string(v) +
+                             ": expected a colour of 3 or 4 numbers ('" + header + "')");
+        }
     }
     std::vector<std::uint32_t> corners;
+    std::size_t triangles = 0;
+    std::vector<std::size_t> triangles_of;  // per face of the file, when some face has a colour
     for (std::size_t f = 0; f < faces; ++f) {
         if (!next_tokens()) {
             throw InputError(path + ": truncated: the header promises " + std::to_string(faces) + " faces, the file ends after " +
@@ -245,18 +470,49 @@ mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshRe
             check_index(path, lines.number(), f, index, m.points.size());
             corners.push_back(static_cast<std::uint32_t>(index));
         }
-        if (tokens.size() > static_cast<std::size_t>(n) + 1 &&
-            std::find(report.dropped.begin(), report.dropped.end(), "face colours") == report.dropped.end()) {
-            report.dropped.push_back("face colours");
+        const std::size_t colour_at = static_cast<std::size_t>(n) + 1;
+        if (tokens.size() > colour_at && !face_colours.add(tokens, colour_at, f, path, lines.number()) &&
+            std::find(report.dropped.begin(), report.dropped.end(), "face colour-map indices") == report.dropped.end()) {
+            report.dropped.push_back("face colour-map indices");
         }
-        add_polygon(m, corners, options, report, path, lines.number(), f);
+        triangles_of.push_back(add_polygon(m, corners, options, report, path, lines.number(), f));
+        triangles += triangles_of.back();
+    }
+    // Vertex columns: normals, colour, texture coordinates.
+    std::vector<AttributeColumn>& layout = report.layout.vertex;
+    mesh::Attributes& rows = m.vertex_attributes;
+    if (with_normals) {
+        add_columns(layout, {"nx", "ny", "nz"}, ValueType::f32);
+        rows = {3, std::move(normal_values)};
+    }
+    vertex_colours.finish("vertex colours", vertices, rows, layout, report);
+    if (texture) {
+        add_columns(layout, {"s", "t"}, ValueType::f32);
+        mesh::Attributes merged{rows.width + 2, {}};
+        for (std::size_t v = 0; v < vertices; ++v) {
+            merged.values.insert(merged.values.end(), rows.row(v), rows.row(v) + rows.width);
+            merged.values.insert(merged.values.end(), uv_values.begin() + static_cast<std::ptrdiff_t>(2 * v),
+                                 uv_values.begin() + static_cast<std::ptrdiff_t>(2 * v + 2));
+        }
+        rows = std::move(merged);
+    }
+    // A face's colour goes with each of its triangles.
+    mesh::Attributes per_face;
+    face_colours.finish("face colours", faces, per_face, report.layout.face, report);
+    if (per_face.width > 0) {
+        m.face_attributes.width = per_face.width;
+        m.face_attributes.values.reserve(triangles * per_face.width);
+        for (std::size_t f = 0; f < faces; ++f) {
+            const std::vector<double> row(per_face.row(f), per_face.row(f) + per_face.width);
+            append_rows(m.face_attributes.values, row, triangles_of[f]);
+        }
     }
     return m;
 }
 
 // ---- PLY ----
 
-enum class Scalar { i8, u8, i16, u16, i32, u32, f32, f64 };
+using Scalar = ValueType;
 
 bool scalar_of(std::string_view name, Scalar& type) {
     static const std::pair<std::string_view, Scalar> names[] = {
@@ -355,8 +611,10 @@ private:
 //
 // An element of scalars only, whose x, y and z are at `offset` with `type` in records of
 // `record` bytes.
+// Its other properties, (offset, type) each, are attribute columns.
 std::size_t read_points(BinaryReader& binary, std::size_t count, std::size_t record, const std::size_t offset[3],
-                        const Scalar type[3], std::vector<Point3>& points) {
+                        const Scalar type[3], const std::vector<std::pair<std::size_t, Scalar>>& columns,
+                        std::vector<Point3>& points, std::vector<double>& values) {
     const std::string_view rest = binary.rest();
     const std::size_t whole = std::min(count, rest.size() / record);
     const bool swap = binary.swap();
@@ -366,6 +624,7 @@ std::size_t read_points(BinaryReader& binary, std::size_t count, std::size_t rec
         const Point3 p{decode(type[0], r + offset[0], swap), decode(type[1], r + offset[1], swap), decode(type[2], r + offset[2], swap)};
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) break;
         points.push_back(p);
+        for (const auto& [at, column_type] : columns) values.push_back(decode(column_type, r + at, swap));
     }
     binary.skip(i * record);
     return i;
@@ -451,23 +710,31 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
     std::vector<double> values;
     for (const Element& element : elements) {
         const bool is_vertex = element.name == "vertex", is_face = element.name == "face";
-        int axis_of[64];
+        if (element.properties.size() > 64) throw InputError(path + ": too many properties in element " + element.name);
+        // Each property: a coordinate (axis_of), the corner list, an attribute column (column_of),
+        // or neither (a list: dropped).
+        int axis_of[64], column_of[64];
         int list_index = -1;
-        for (std::size_t k = 0; k < element.properties.size() && k < 64; ++k) {
+        mesh::Attributes* rows = is_vertex ? &m.vertex_attributes : is_face ? &m.face_attributes : nullptr;
+        std::vector<AttributeColumn>* layout = is_vertex ? &report.layout.vertex : is_face ? &report.layout.face : nullptr;
+        for (std::size_t k = 0; k < element.properties.size(); ++k) {
             const Property& p = element.properties[k];
-            axis_of[k] = -1;
+            axis_of[k] = column_of[k] = -1;
             if (is_vertex && !p.list && (p.name == "x" || p.name == "y" || p.name == "z")) {
                 axis_of[k] = p.name[0] - 'x';
             } else if (is_face && p.list && (p.name == "vertex_indices" || p.name == "vertex_index")) {
                 list_index = static_cast<int>(k);
-            } else if (is_vertex || is_face) {
-                const std::string what = element.name + " property '" + p.name + "'";
+            } else if (rows != nullptr && !p.list) {
+                column_of[k] = static_cast<int>(layout->size());
+                layout->push_back({p.name, p.type});
+            } else if (rows != nullptr) {
+                const std::string what = element.name + " property '" + p.name + "' (a list)";
                 if (std::find(report.dropped.begin(), report.dropped.end(), what) == report.dropped.end()) {
                     report.dropped.push_back(what);
                 }
             }
         }
-        if (element.properties.size() > 64) throw InputError(path + ": too many properties in element " + element.name);
+        if (rows != nullptr) rows->width = layout->size();
         if (is_vertex) {
             int seen = 0;
             for (std::size_t k = 0; k < element.properties.size(); ++k) seen += axis_of[k] >= 0;
@@ -482,12 +749,15 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
         if (!ascii && is_vertex && std::none_of(element.properties.begin(), element.properties.end(), [](const Property& p) { return p.list; })) {
             std::size_t record = 0, offset[3] = {0, 0, 0};
             Scalar type[3] = {Scalar::f64, Scalar::f64, Scalar::f64};
+            std::vector<std::pair<std::size_t, Scalar>> columns;
             for (std::size_t k = 0; k < element.properties.size(); ++k) {
                 const Scalar t = element.properties[k].type;
                 if (axis_of[k] >= 0) offset[axis_of[k]] = record, type[axis_of[k]] = t;
+                if (column_of[k] >= 0) columns.emplace_back(record, t);
                 record += size_of(t);
             }
-            i = read_points(binary, element.count, record, offset, type, m.points);
+            m.vertex_attributes.values.reserve(std::min(element.count, text.size()) * columns.size());
+            i = read_points(binary, element.count, record, offset, type, columns, m.points, m.vertex_attributes.values);
         } else if (!ascii && is_face && element.properties.size() == 1) {
             const Property& list = element.properties[0];
             i = read_triangles(binary, element.count, list.count_type, list.type, m.points.size(), m.faces);
@@ -517,6 +787,7 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
             };
             Point3 p{0, 0, 0};
             corners.clear();
+            values.clear();
             for (std::size_t k = 0; k < element.properties.size(); ++k) {
                 const Property& property = element.properties[k];
                 if (property.list) {
@@ -538,10 +809,17 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
                         if (!std::isfinite(value)) throw InputError(path + ": " + what() + " has a non-finite coordinate");
                         (axis_of[k] == 0 ? p.x : (axis_of[k] == 1 ? p.y : p.z)) = value;
                     }
+                    if (column_of[k] >= 0) values.push_back(value);
                 }
             }
-            if (is_vertex) m.points.push_back(p);
-            if (is_face) add_polygon(m, corners, options, report, path, ascii ? lines.number() : 0, i);
+            if (is_vertex) {
+                m.points.push_back(p);
+                rows->values.insert(rows->values.end(), values.begin(), values.end());
+            }
+            if (is_face) {
+                const std::size_t added = add_polygon(m, corners, options, report, path, ascii ? lines.number() : 0, i);
+                append_rows(rows->values, values, added);
+            }
         }
     }
     return m;
@@ -554,6 +832,133 @@ void append_face_line(std::string& out, const char* prefix, const mesh::Face& f,
         out += std::to_string(v + base);
     }
     out += '\n';
+}
+
+// The columns of a colour (red, green, blue, alpha; -1 where absent).
+struct ColourColumns {
+    std::array<int, 4> index{-1, -1, -1, -1};
+    bool present() const { return index[0] >= 0 && index[1] >= 0 && index[2] >= 0; }
+    bool holds(std::size_t k) const {
+        return present() && std::find(index.begin(), index.end(), static_cast<int>(k)) != index.end();
+    }
+    bool all_of(const std::vector<AttributeColumn>& columns, ValueType type) const {
+        for (int k : index) {
+            if (k >= 0 && columns[static_cast<std::size_t>(k)].type != type) return false;
+        }
+        return true;
+    }
+};
+
+int column_named(const std::vector<AttributeColumn>& columns, std::string_view name) {
+    for (std::size_t k = 0; k < columns.size(); ++k) {
+        if (columns[k].name == name) return static_cast<int>(k);
+    }
+    return -1;
+}
+
+ColourColumns find_colour(const std::vector<AttributeColumn>& columns) {
+    ColourColumns colour;
+    const char* names[4] = {"red", "green", "blue", "alpha"};
+    for (int k = 0; k < 4; ++k) colour.index[static_cast<std::size_t>(k)] = column_named(columns, names[k]);
+    return colour;
+}
+
+// The vertex columns OBJ and OFF have a place for.
+struct VertexGroups {
+    std::array<int, 3> normal{-1, -1, -1};  // nx ny nz
+    std::array<int, 2> texture{-1, -1};     // u v, s t or texture_u texture_v
+    ColourColumns colour;
+    bool holds(std::size_t k) const {
+        const int i = static_cast<int>(k);
+        return (normal[0] >= 0 && std::find(normal.begin(), normal.end(), i) != normal.end()) ||
+               (texture[0] >= 0 && std::find(texture.begin(), texture.end(), i) != texture.end()) || colour.holds(k);
+    }
+};
+
+VertexGroups find_groups(const std::vector<AttributeColumn>& columns) {
+    VertexGroups groups;
+    const std::array<int, 3> normal{column_named(columns, "nx"), column_named(columns, "ny"), column_named(columns, "nz")};
+    if (normal[0] >= 0 && normal[1] >= 0 && normal[2] >= 0) groups.normal = normal;
+    for (const auto& [u, v] : {std::pair{"u", "v"}, std::pair{"s", "t"}, std::pair{"texture_u", "texture_v"}}) {
+        const std::array<int, 2> texture{column_named(columns, u), column_named(columns, v)};
+        if (texture[0] >= 0 && texture[1] >= 0) {
+            groups.texture = texture;
+            break;
+        }
+    }
+    groups.colour = find_colour(columns);
+    return groups;
+}
+
+// The largest value of an integer type (a colour's full intensity), 1 for a float type.
+double colour_scale(ValueType type) {
+    switch (type) {
+        case ValueType::i8: return 127;
+        case ValueType::u8: return 255;
+        case ValueType::i16: return 32767;
+        case ValueType::u16: return 65535;
+        case ValueType::i32: return 2147483647.0;
+        case ValueType::u32: return 4294967295.0;
+        case ValueType::f32: case ValueType::f64: return 1;
+    }
+    return 1;
+}
+
+// The rows as written: integer columns rounded and clamped to their type (a blend of two
+// integers is seldom one), the normal (columns `normal`, or none if -1) scaled to unit length (a
+// blend of two unit vectors is shorter).
+mesh::Attributes written_values(const mesh::Attributes& rows, const std::vector<AttributeColumn>& columns,
+                                std::array<int, 3> normal) {
+    mesh::Attributes out = rows;
+    for (std::size_t i = 0; out.width > 0 && i < out.values.size() / out.width; ++i) {
+        double* row = out.row(i);
+        for (std::size_t k = 0; k < out.width; ++k) {
+            const ValueType type = columns[k].type;
+            if (type == ValueType::f32 || type == ValueType::f64) continue;
+            const double top = colour_scale(type), bottom = type == ValueType::u8 || type == ValueType::u16 || type == ValueType::u32
+                                                                 ? 0.0
+                                                                 : -top - 1;
+            row[k] = std::isnan(row[k]) ? 0.0 : std::clamp(std::nearbyint(row[k]), bottom, top);
+        }
+        if (normal[0] >= 0) {
+            double& x = row[normal[0]];
+            double& y = row[normal[1]];
+            double& z = row[normal[2]];
+            const double length = std::sqrt(x * x + y * y + z * z);
+            if (length > 0 && std::isfinite(length)) x /= length, y /= length, z /= length;
+        }
+    }
+    return out;
+}
+
+std::string ply_type_name(ValueType type) {
+    switch (type) {
+        case ValueType::i8: return "char";
+        case ValueType::u8: return "uchar";
+        case ValueType::i16: return "short";
+        case ValueType::u16: return "ushort";
+        case ValueType::i32: return "int";
+        case ValueType::u32: return "uint";
+        case ValueType::f32: return "float";
+        case ValueType::f64: return "double";
+    }
+    return "double";
+}
+
+// `value` (already in range for an integer type) as `type`, through `put(bytes, size)`.
+template <class Put>
+void put_scalar(Put& put, ValueType type, double value) {
+    auto as = [&]<class T>(T converted) { put(&converted, sizeof(T)); };
+    switch (type) {
+        case ValueType::i8: as(static_cast<std::int8_t>(value)); break;
+        case ValueType::u8: as(static_cast<std::uint8_t>(value)); break;
+        case ValueType::i16: as(static_cast<std::int16_t>(value)); break;
+        case ValueType::u16: as(static_cast<std::uint16_t>(value)); break;
+        case ValueType::i32: as(static_cast<std::int32_t>(value)); break;
+        case ValueType::u32: as(static_cast<std::uint32_t>(value)); break;
+        case ValueType::f32: as(static_cast<float>(value)); break;
+        case ValueType::f64: as(value); break;
+    }
 }
 
 }  // namespace
@@ -610,7 +1015,22 @@ mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, Me
     return {};
 }
 
-void write_mesh(const mesh::Mesh& m, const std::string& path, MeshFormat format, bool ascii) {
+std::vector<std::string> write_mesh(const mesh::Mesh& m, const AttributeLayout& layout, const std::string& path,
+                                    MeshFormat format, bool ascii) {
+    const VertexGroups groups = find_groups(layout.vertex);
+    const ColourColumns face_colour = find_colour(layout.face);
+    std::vector<std::string> unwritable;
+    if (format != MeshFormat::ply) {
+        for (std::size_t k = 0; k < layout.vertex.size(); ++k) {
+            if (!groups.holds(k)) unwritable.push_back("vertex " + layout.vertex[k].name);
+        }
+        for (std::size_t k = 0; k < layout.face.size(); ++k) {
+            if (format == MeshFormat::obj || !face_colour.holds(k)) unwritable.push_back("face " + layout.face[k].name);
+        }
+    }
+    const mesh::Attributes vertex_rows = written_values(m.vertex_attributes, layout.vertex, groups.normal);
+    const mesh::Attributes face_rows = written_values(m.face_attributes, layout.face, {-1, -1, -1});  // (no normal)
+
     std::ofstream out(path, std::ios::binary);
     if (!out) throw OutputError(path + ": cannot create: " + std::strerror(errno));
     std::string buffer;
@@ -620,43 +1040,128 @@ void write_mesh(const mesh::Mesh& m, const std::string& path, MeshFormat format,
             buffer.clear();
         }
     };
-    auto point_line = [&](const char* prefix, const Point3& p) {
+    // Numbers separated by spaces, after `prefix` (a line is flushed only when it is whole).
+    auto numbers = [&](std::string_view prefix, std::initializer_list<double> values) {
         buffer += prefix;
-        append_number(buffer, p.x);
-        buffer += ' ';
-        append_number(buffer, p.y);
-        buffer += ' ';
-        append_number(buffer, p.z);
-        buffer += '\n';
-        flush(false);
+        for (double value : values) {
+            if (!buffer.empty() && buffer.back() != '\n') buffer += ' ';
+            append_number(buffer, value);
+        }
     };
+    // A colour as OFF or OBJ writes it: from 0 to 1, or OFF's integers if all its columns are
+    // uchar; in OFF a number from 0 to 1 always shows a decimal point, so that it reads as such.
+    auto colour = [&](const mesh::Attributes& rows, std::size_t i, const ColourColumns& columns,
+                      const std::vector<AttributeColumn>& types, bool with_alpha) {
+        const std::size_t count = with_alpha ? 4 : 3;
+        const bool integers = format == MeshFormat::off && columns.all_of(types, ValueType::u8);
+        for (std::size_t k = 0; k < count; ++k) {
+            const int column = columns.index[k];
+            double value = column >= 0 ? rows.row(i)[column] : -1.0;
+            if (column < 0) {
+                value = integers ? 255.0 : 1.0;  // (no alpha: opaque)
+            } else if (!integers) {
+                value /= colour_scale(types[static_cast<std::size_t>(column)].type);
+            }
+            buffer += ' ';
+            const std::size_t at = buffer.size();
+            append_number(buffer, value);
+            if (format == MeshFormat::off && !integers && buffer.find_first_of(".eEn", at) == std::string::npos) buffer += ".0";
+        }
+    };
+    const std::size_t nv = m.points.size();
     switch (format) {
-        case MeshFormat::obj:
+        case MeshFormat::obj: {
             buffer += "# toposimp mesh\n";
-            for (const Point3& p : m.points) point_line("v ", p);
+            for (std::size_t v = 0; v < nv; ++v) {
+                numbers("v", {m.points[v].x, m.points[v].y, m.points[v].z});
+                if (groups.colour.present()) colour(vertex_rows, v, groups.colour, layout.vertex, false);
+                buffer += '\n';
+                flush(false);
+            }
+            for (std::size_t v = 0; groups.texture[0] >= 0 && v < nv; ++v) {
+                const double* row = vertex_rows.row(v);
+                numbers("vt", {row[groups.texture[0]], row[groups.texture[1]]});
+                buffer += '\n';
+                flush(false);
+            }
+            for (std::size_t v = 0; groups.normal[0] >= 0 && v < nv; ++v) {
+                const double* row = vertex_rows.row(v);
+                numbers("vn", {row[groups.normal[0]], row[groups.normal[1]], row[groups.normal[2]]});
+                buffer += '\n';
+                flush(false);
+            }
+            // v, v/vt, v//vn or v/vt/vn: one texture coordinate and one normal per vertex.
+            const std::string suffix = groups.texture[0] >= 0 ? (groups.normal[0] >= 0 ? "/@/@" : "/@")
+                                       : groups.normal[0] >= 0 ? "//@" : "";
             for (const mesh::Face& f : m.faces) {
-                append_face_line(buffer, "f", f, 1);
+                buffer += 'f';
+                for (std::uint32_t v : f) {
+                    const std::string number = std::to_string(v + 1);
+                    buffer += ' ';
+                    buffer += number;
+                    for (char c : suffix) {
+                        if (c == '@') {
+                            buffer += number;
+                        } else {
+                            buffer += c;
+                        }
+                    }
+                }
+                buffer += '\n';
                 flush(false);
             }
             break;
-        case MeshFormat::off:
-            buffer += "OFF\n" + std::to_string(m.points.size()) + " " + std::to_string(m.faces.size()) + " 0\n";
-            for (const Point3& p : m.points) point_line("", p);
-            for (const mesh::Face& f : m.faces) {
-                append_face_line(buffer, "3", f, 0);
+        }
+        case MeshFormat::off: {
+            const bool texture = groups.texture[0] >= 0, normals = groups.normal[0] >= 0, colours = groups.colour.present();
+            const bool face_colours = face_colour.present();
+            buffer += std::string(texture ? "ST" : "") + (colours ? "C" : "") + (normals ? "N" : "") + "OFF\n" +
+                      std::to_string(nv) + " " + std::to_string(m.faces.size()) + " 0\n";
+            for (std::size_t v = 0; v < nv; ++v) {
+                const double* row = vertex_rows.row(v);
+                numbers("", {m.points[v].x, m.points[v].y, m.points[v].z});
+                if (normals) numbers("", {row[groups.normal[0]], row[groups.normal[1]], row[groups.normal[2]]});
+                if (colours) colour(vertex_rows, v, groups.colour, layout.vertex, true);
+                if (texture) numbers("", {row[groups.texture[0]], row[groups.texture[1]]});
+                buffer += '\n';
+                flush(false);
+            }
+            for (std::size_t f = 0; f < m.faces.size(); ++f) {
+                append_face_line(buffer, "3", m.faces[f], 0);
+                if (face_colours) {
+                    buffer.pop_back();
+                    colour(face_rows, f, face_colour, layout.face, face_colour.index[3] >= 0);
+                    buffer += '\n';
+                }
                 flush(false);
             }
             break;
+        }
         case MeshFormat::ply: {
             buffer += std::string("ply\nformat ") + (ascii ? "ascii" : "binary_little_endian") +
-                      " 1.0\ncomment toposimp mesh\nelement vertex " + std::to_string(m.points.size()) +
-                      "\nproperty double x\nproperty double y\nproperty double z\nelement face " +
-                      std::to_string(m.faces.size()) + "\nproperty list uchar uint vertex_indices\nend_header\n";
+                      " 1.0\ncomment toposimp mesh\nelement vertex " + std::to_string(nv) +
+                      "\nproperty double x\nproperty double y\nproperty double z\n";
+            for (const AttributeColumn& column : layout.vertex) buffer += "property " + ply_type_name(column.type) + " " + column.name + "\n";
+            buffer += "element face " + std::to_string(m.faces.size()) + "\nproperty list uchar uint vertex_indices\n";
+            for (const AttributeColumn& column : layout.face) buffer += "property " + ply_type_name(column.type) + " " + column.name + "\n";
+            buffer += "end_header\n";
             if (ascii) {
-                for (const Point3& p : m.points) point_line("", p);
-                for (const mesh::Face& f : m.faces) {
-                    append_face_line(buffer, "3", f, 0);
+                auto columns = [&](const mesh::Attributes& rows, std::size_t i) {
+                    for (std::size_t k = 0; k < rows.width; ++k) {
+                        buffer += ' ';
+                        append_number(buffer, rows.row(i)[k]);
+                    }
+                    buffer += '\n';
                     flush(false);
+                };
+                for (std::size_t v = 0; v < nv; ++v) {
+                    numbers("", {m.points[v].x, m.points[v].y, m.points[v].z});
+                    columns(vertex_rows, v);
+                }
+                for (std::size_t f = 0; f < m.faces.size(); ++f) {
+                    append_face_line(buffer, "3", m.faces[f], 0);
+                    buffer.pop_back();
+                    columns(face_rows, f);
                 }
                 break;
             }
@@ -666,15 +1171,21 @@ void write_mesh(const mesh::Mesh& m, const std::string& path, MeshFormat format,
                 if constexpr (std::endian::native == std::endian::big) std::reverse(little, little + n);
                 buffer.append(little, n);
             };
-            for (const Point3& p : m.points) {
+            auto columns = [&](const mesh::Attributes& rows, const std::vector<AttributeColumn>& types, std::size_t i) {
+                for (std::size_t k = 0; k < rows.width; ++k) put_scalar(put, types[k].type, rows.row(i)[k]);
+            };
+            for (std::size_t v = 0; v < nv; ++v) {
+                const Point3& p = m.points[v];
                 put(&p.x, 8);
                 put(&p.y, 8);
                 put(&p.z, 8);
+                columns(vertex_rows, layout.vertex, v);
                 flush(false);
             }
-            for (const mesh::Face& f : m.faces) {
+            for (std::size_t f = 0; f < m.faces.size(); ++f) {
                 buffer += '\3';
-                for (std::uint32_t v : f) put(&v, 4);
+                for (std::uint32_t v : m.faces[f]) put(&v, 4);
+                columns(face_rows, layout.face, f);
                 flush(false);
             }
             break;
@@ -683,6 +1194,7 @@ void write_mesh(const mesh::Mesh& m, const std::string& path, MeshFormat format,
     flush(true);
     out.close();
     if (!out) throw OutputError(path + ": write error");
+    return unwritable;
 }
 
 }  // namespace toposimp::io

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -99,6 +100,49 @@ TEST(MeshCli, EveryFormatRoundTripsExactly) {
     }
 }
 
+TEST(MeshCli, ColoursNormalsAndFaceValuesSurviveSimplification) {
+    const auto dir = fresh_dir("mesh");
+    // The torus with a uchar colour and a unit normal per vertex (from its position) and a
+    // "quality" per face.
+    io::MeshReadReport report;
+    mesh::Mesh m = io::read_mesh(testdata("mesh/torus.off"), {}, report);
+    io::AttributeLayout layout;
+    layout.vertex = {{"red", io::ValueType::u8}, {"green", io::ValueType::u8}, {"blue", io::ValueType::u8},
+                     {"nx", io::ValueType::f32}, {"ny", io::ValueType::f32}, {"nz", io::ValueType::f32}};
+    layout.face = {{"quality", io::ValueType::f64}};
+    m.vertex_attributes.width = 6;
+    for (const Point3& p : m.points) {
+        const double length = std::sqrt(p.x * p.x + p.y * p.y + p.z * p.z);
+        m.vertex_attributes.values.insert(m.vertex_attributes.values.end(),
+                                          {p.x > 0 ? 255.0 : 0.0, 128.0, 0.0, p.x / length, p.y / length, p.z / length});
+    }
+    m.face_attributes = {1, std::vector<double>(m.faces.size(), 0.5)};
+    const std::string in = (dir / "coloured.ply").string(), out = (dir / "out.ply").string();
+    ASSERT_TRUE(io::write_mesh(m, layout, in, io::MeshFormat::ply, false).empty());
+    const CliResult r = run_cli({"mesh", in, "-o", out, "--keep", "20%", "--no-hausdorff"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("dropped"), std::string::npos) << r.err;
+    io::MeshReadReport back_report;
+    const mesh::Mesh back = io::read_mesh(out, {}, back_report);
+    EXPECT_EQ(back_report.layout.vertex, layout.vertex);
+    EXPECT_EQ(back_report.layout.face, layout.face);
+    ASSERT_EQ(back.vertex_attributes.values.size(), 6 * back.points.size());
+    for (std::size_t v = 0; v < back.points.size(); ++v) {
+        const double* row = back.vertex_attributes.row(v);
+        EXPECT_EQ(row[1], 128);  // shared by all: unchanged
+        EXPECT_NEAR(row[3] * row[3] + row[4] * row[4] + row[5] * row[5], 1.0, 1e-6);  // (float columns)
+    }
+    EXPECT_EQ(back.face_attributes.values, std::vector<double>(back.faces.size(), 0.5));
+    // OBJ has no place for a face's quality: written without it, and said so.
+    const CliResult obj = run_cli({"mesh", in, "-o", (dir / "out.obj").string(), "--keep", "20%", "--no-hausdorff", "--json"});
+    ASSERT_EQ(obj.code, 0) << obj.err;
+    EXPECT_NE(obj.err.find("face quality not written: OBJ has no place for it"), std::string::npos) << obj.err;
+    EXPECT_NE(obj.out.find("\"attributes\":{\"vertex\":[\"red\",\"green\",\"blue\",\"nx\",\"ny\",\"nz\"],\"face\":[\"quality\"],"
+                           "\"dropped\":[],\"not_written\":[\"face quality\"]}"),
+              std::string::npos)
+        << obj.out;
+}
+
 TEST(MeshCli, ThreadCountDoesNotChangeTheFile) {
     const auto dir = fresh_dir("mesh");
     const std::string one = (dir / "one.ply").string(), two = (dir / "two.ply").string();
@@ -151,6 +195,14 @@ INSTANTIATE_TEST_SUITE_P(
         BadMesh{"IndexOutOfRange", "i.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n", "refers to vertex"},
         BadMesh{"OffIndexOutOfRange", "i.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "refers to vertex"},
         BadMesh{"NotANumber", "x.obj", "v 0 zero 0\n", "is not a number"},
+        BadMesh{"TextureReferenceOutOfRange", "t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/5 2/1 3/1\n",
+                "face 1 refers to texture coordinates 5, but there are 1"},
+        BadMesh{"NormalNotANumber", "n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 up 1\nf 1//1 2//1 3//1\n",
+                "'up' is not a finite number"},
+        BadMesh{"OffColourMissing", "c.off", "COFF\n3 1 0\n0 0 0 1 0 0\n1 0 0\n0 1 0 0 0 1\n3 0 1 2\n",
+                "vertex 1: expected a colour of 3 or 4 numbers"},
+        BadMesh{"FourDimensionalOff", "h.off", "4OFF\n3 1 0\n0 0 0 1\n1 0 0 1\n0 1 0 1\n3 0 1 2\n",
+                "only OFF with ST, C and N (3D vertices) is read"},
         BadMesh{"NonManifold", "m.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
                 "the edge between vertices 0 and 1 (counted from 0) has more than two faces (0, 1, 2"},
         // Numbered as in the file, though the unused vertex 0 and the face 0 repeating a corner are dropped.

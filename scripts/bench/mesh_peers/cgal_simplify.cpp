@@ -56,7 +56,7 @@ int main(int argc, char** argv) {
         out.faces.push_back(face);
     }
     mesh::drop_unused(out);
-    io::write_mesh(out, argv[2], io::mesh_format_of(argv[2]), false);
+    io::write_mesh(out, {}, argv[2], io::mesh_format_of(argv[2]), false);
     std::cout << "{\"simplify_seconds\":" << seconds << ",\"faces_out\":" << out.faces.size() << ",\"faces_not_added\":" << skipped
               << "}\n";
     return 0;

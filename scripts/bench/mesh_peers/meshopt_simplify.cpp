@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
     m.faces.clear();
     for (std::size_t i = 0; i < count; i += 3) m.faces.push_back({out[i], out[i + 1], out[i + 2]});
     mesh::drop_unused(m);  // vertices keep their original double positions
-    io::write_mesh(m, argv[2], io::mesh_format_of(argv[2]), false);
+    io::write_mesh(m, {}, argv[2], io::mesh_format_of(argv[2]), false);
     std::cout << "{\"simplify_seconds\":" << seconds << ",\"faces_out\":" << m.faces.size() << "}\n";
     return 0;
 }

@@ -4,6 +4,7 @@
 #include "core/geometry.hpp"
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -12,9 +13,24 @@ namespace toposimp::mesh {
 
 using Face = std::array<std::uint32_t, 3>;
 
+// Numbers each vertex or face carries besides its geometry: normals, colours, texture
+// coordinates, any per-element property of a file. `width` per element, one row after another;
+// the engine does not interpret them (the reader and writer know what each column is).
+struct Attributes {
+    std::size_t width = 0;
+    std::vector<double> values;  // elements × width
+
+    double* row(std::size_t i) { return values.data() + i * width; }
+    const double* row(std::size_t i) const { return values.data() + i * width; }
+};
+
 struct Mesh {
     std::vector<Point3> points;
     std::vector<Face> faces;
+    // Simplification gives a merged vertex the blend of its two ends' rows, weighted by where the
+    // merged vertex lies along the edge (simplify_mesh.hpp); a face keeps its row.
+    Attributes vertex_attributes{};
+    Attributes face_attributes{};
 };
 
 // An edge shared by more than two faces: the surface is not a manifold there.
@@ -27,7 +43,8 @@ struct NonManifoldEdge {
 // Faces that repeat a corner index (a, a, b): they have no area and no place in a surface.
 std::size_t count_repeated_corner_faces(const Mesh& mesh);
 
-// Drops faces that repeat a corner index and vertices no face uses; keeps the order of the rest.
+// Drops faces that repeat a corner index and vertices no face uses, with their attribute rows;
+// keeps the order of the rest.
 // Returns how many faces were dropped. If `kept` is given and vertices were dropped, it receives
 // each kept vertex's number before (otherwise it is left empty).
 std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept = nullptr);

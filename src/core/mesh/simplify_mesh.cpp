@@ -389,6 +389,20 @@ private:
         return grid_.block_of(grid_.cell_key(p), level) == block;
     }
     exact::Triangle3 triangle(const Face& f) const { return {pos_[f[0]], pos_[f[1]], pos_[f[2]]}; }
+    // b merges into a at p: a's attribute row becomes the blend of both rows at the point of
+    // segment ab nearest p (the placement often lies off the edge; an end when the other is
+    // locked keeps that end's row).
+    void blend_attributes(std::uint32_t a, std::uint32_t b, Point3 p) {
+        Attributes& rows = mesh_.vertex_attributes;
+        if (rows.width == 0) return;
+        const Point3 edge = minus(pos_[b], pos_[a]);
+        const double length2 = dot(edge, edge);
+        const double t = length2 > 0 ? std::clamp(dot(minus(p, pos_[a]), edge) / length2, 0.0, 1.0) : 0.5;
+        double* to = rows.row(a);
+        const double* from = rows.row(b);
+        // Exact at both ends and for a value both rows share.
+        for (std::size_t k = 0; k < rows.width; ++k) to[k] = t == 1 ? from[k] : to[k] + t * (from[k] - to[k]);
+    }
     static bool shares_a_location(const exact::Triangle3& f, const exact::Triangle3& g) {
         for (const Point3& p : f) {
             for (const Point3& q : g) {
@@ -1448,6 +1462,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     }
     *tail = head_[b];
     head_[b] = kNone;
+    blend_attributes(a, b, placement.p);
     pos_[a] = placement.p;
     cell_[a] = grid_.cell_key(placement.p);
     quadric_[a] += quadric_[b];
@@ -1671,11 +1686,16 @@ MeshStats Simplifier::run() {
     stats.target_reached = by_count ? live_faces_ <= target : true;
 
     // Compact: surviving faces and vertices in input order.
+    Attributes& face_rows = mesh_.face_attributes;
     std::size_t kept = 0;
     for (std::size_t f = 0; f < face_.size(); ++f) {
-        if (alive_[f]) face_[kept++] = face_[f];
+        if (!alive_[f]) continue;
+        face_[kept] = face_[f];
+        std::copy_n(face_rows.row(f), face_rows.width, face_rows.row(kept));
+        ++kept;
     }
     face_.resize(kept);
+    face_rows.values.resize(kept * face_rows.width);
     drop_unused(mesh_);
 
     stats.vertices_out = pos_.size();
