@@ -450,7 +450,7 @@ mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshRe
     }
     std::vector<std::uint32_t> corners;
     std::size_t triangles = 0;
-    std::vector<std::size_t> triangles_of;  // per face of the file, when some face has a colour
+    std::vector<std::size_t> triangles_of;  // per face of the file: its triangles (its colour goes to each)
     for (std::size_t f = 0; f < faces; ++f) {
         if (!next_tokens()) {
             throw InputError(path + ": truncated: the header promises " + std::to_string(faces) + " faces, the file ends after " +
@@ -610,8 +610,7 @@ private:
 // general reader's. Returns how many records it read.
 //
 // An element of scalars only, whose x, y and z are at `offset` with `type` in records of
-// `record` bytes.
-// Its other properties, (offset, type) each, are attribute columns.
+// `record` bytes; its other properties, (offset, type) each, are attribute columns.
 std::size_t read_points(BinaryReader& binary, std::size_t count, std::size_t record, const std::size_t offset[3],
                         const Scalar type[3], const std::vector<std::pair<std::size_t, Scalar>>& columns,
                         std::vector<Point3>& points, std::vector<double>& values) {
@@ -1022,7 +1021,8 @@ std::vector<std::string> write_mesh(const mesh::Mesh& m, const AttributeLayout& 
     std::vector<std::string> unwritable;
     if (format != MeshFormat::ply) {
         for (std::size_t k = 0; k < layout.vertex.size(); ++k) {
-            if (!groups.holds(k)) unwritable.push_back("vertex " + layout.vertex[k].name);
+            const bool alpha_in_obj = format == MeshFormat::obj && static_cast<int>(k) == groups.colour.index[3];  // (v x y z r g b)
+            if (!groups.holds(k) || alpha_in_obj) unwritable.push_back("vertex " + layout.vertex[k].name);
         }
         for (std::size_t k = 0; k < layout.face.size(); ++k) {
             if (format == MeshFormat::obj || !face_colour.holds(k)) unwritable.push_back("face " + layout.face[k].name);

@@ -159,6 +159,8 @@ TEST(MeshAttributes, OffColoursAreIntegersOrFractionsByTheFile) {
     EXPECT_EQ(names(ints.report.layout.vertex), (std::vector<std::string>{"red", "green", "blue", "alpha"}));
     EXPECT_EQ(ints.report.layout.vertex[0].type, io::ValueType::u8);
     EXPECT_EQ(ints.mesh.vertex_attributes.row(1)[3], 128);
+    const std::string obj = temp_path("attributes-alpha.obj").string();  // OBJ colours have no alpha
+    EXPECT_EQ(io::write_mesh(ints.mesh, ints.report.layout, obj, io::MeshFormat::obj, false), (std::vector<std::string>{"vertex alpha"}));
     // Normals, a colour without alpha, texture coordinates, a colour per face split with its quad.
     const Read all = read(write_file("stcn.off",
                                      "STCNOFF\n4 1 0\n0 0 0 0 0 1 1 0 0 0 0\n1 0 0 0 0 1 0 1 0.0 1 0\n"
@@ -200,7 +202,7 @@ TEST(MeshAttributes, ObjAndOffWriteWhatTheyHoldAndNameTheRest) {
     EXPECT_EQ(fractions.mesh.vertex_attributes.row(1)[4], 1.0);
     // A face colour, split with its quad, written per triangle.
     const Read quad = read(write_file("quad.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3 10 20 30 40\n"), true);
-    const std::string triangles = temp_path("attributes-quad.off").string();
+    const std::string triangles = temp_path("attributes-quad-out.off").string();
     EXPECT_TRUE(io::write_mesh(quad.mesh, quad.report.layout, triangles, io::MeshFormat::off, false).empty());
     EXPECT_NE(read_text(triangles).find("3 0 1 2 10 20 30 40\n3 0 2 3 10 20 30 40\n"), std::string::npos) << read_text(triangles);
 }

@@ -25,7 +25,9 @@ class ShapeFile {
 public:
     ShapeFile(const std::string& name, OGRwkbGeometryType type, const std::vector<std::string>& wkts,
               const std::vector<GIntBig>& deleted = {}) {
-        directory_ = testing::temp_path("shp-" + name);
+        // Named for the test too: tests run in parallel, and two of them write a "line" file.
+        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        directory_ = testing::temp_path("shp-" + std::string(test->test_suite_name()) + "-" + test->name() + "-" + name);
         std::filesystem::remove_all(directory_);
         std::filesystem::create_directories(directory_);
         path_ = (directory_ / (name + ".shp")).string();
