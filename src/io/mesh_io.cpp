@@ -144,6 +144,20 @@ void add_columns(std::vector<AttributeColumn>& columns, std::initializer_list<co
     for (const char* name : names) columns.push_back({name, type});
 }
 
+// Widens each of `elements` rows by the `width` values of `source` for it (width per element,
+// in element order): a reader's columns, gathered apart, joined to those it has.
+void append_columns(mesh::Attributes& rows, std::size_t elements, std::size_t width, const std::vector<double>& source) {
+    std::vector<double> joined;
+    joined.reserve(elements * (rows.width + width));
+    for (std::size_t i = 0; i < elements; ++i) {
+        joined.insert(joined.end(), rows.row(i), rows.row(i) + rows.width);
+        joined.insert(joined.end(), source.begin() + static_cast<std::ptrdiff_t>(i * width),
+                      source.begin() + static_cast<std::ptrdiff_t>((i + 1) * width));
+    }
+    rows.values.swap(joined);
+    rows.width += width;
+}
+
 bool is_integer_text(std::string_view text) {
     long long unused = 0;
     return parse_integer(text, unused);
@@ -195,8 +209,8 @@ public:
         }
     }
     // Keeps the values as columns, or says why not.
-    void finish(mesh::Mesh& m, std::vector<AttributeColumn>& layout, std::vector<double>& columns,
-                std::initializer_list<const char*> names, MeshReadReport& report) const {
+    void finish(mesh::Mesh& m, std::vector<AttributeColumn>& layout, std::initializer_list<const char*> names,
+                MeshReadReport& report) const {
         if (forward_) {
             report.dropped.push_back(std::string(what_) + ": faces refer to them before they are listed");
             return;
@@ -212,16 +226,13 @@ public:
             return;
         }
         add_columns(layout, names, ValueType::f32);
-        const std::size_t before = columns.size() / std::max<std::size_t>(m.points.size(), 1);
-        std::vector<double> merged;
-        merged.reserve(m.points.size() * (before + width_));
+        std::vector<double> per_vertex;
+        per_vertex.reserve(m.points.size() * width_);
         for (std::size_t v = 0; v < m.points.size(); ++v) {
-            merged.insert(merged.end(), columns.begin() + static_cast<std::ptrdiff_t>(v * before),
-                          columns.begin() + static_cast<std::ptrdiff_t>((v + 1) * before));
             const std::uint32_t entry = v < chosen_.size() ? chosen_[v] : 0;  // (0: in no face, dropped)
-            for (std::size_t k = 0; k < width_; ++k) merged.push_back(entry == 0 ? 0.0 : value(entry)[k]);
+            for (std::size_t k = 0; k < width_; ++k) per_vertex.push_back(entry == 0 ? 0.0 : value(entry)[k]);
         }
-        columns.swap(merged);
+        append_columns(m.vertex_attributes, m.points.size(), width_, per_vertex);
     }
 
 private:
@@ -312,18 +323,16 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
             ++report.ignored_elements;
         }
     }
-    std::vector<double>& columns = m.vertex_attributes.values;
     std::vector<AttributeColumn>& layout = report.layout.vertex;
     if (coloured == m.points.size() && coloured > 0) {
         add_columns(layout, {"red", "green", "blue"}, ValueType::f32);
-        columns.swap(colours);
+        append_columns(m.vertex_attributes, m.points.size(), 3, colours);
     } else if (coloured > 0) {
         report.dropped.push_back("vertex colours: only " + std::to_string(coloured) + " of " + std::to_string(m.points.size()) +
                                  " vertices have one");
     }
-    uvs.finish(m, layout, columns, {"u", "v"}, report);
-    normals.finish(m, layout, columns, {"nx", "ny", "nz"}, report);
-    m.vertex_attributes.width = layout.size();
+    uvs.finish(m, layout, {"u", "v"}, report);
+    normals.finish(m, layout, {"nx", "ny", "nz"}, report);
     return m;
 }
 
@@ -362,18 +371,15 @@ struct OffColours {
         const ValueType type = integers ? ValueType::u8 : ValueType::f32;
         add_columns(layout, {"red", "green", "blue"}, type);
         if (width == 4) add_columns(layout, {"alpha"}, type);
-        std::vector<double> merged;
-        merged.reserve(elements * (attributes.width + width));
+        std::vector<double> colours;
+        colours.reserve(elements * width);
         for (std::size_t i = 0; i < elements; ++i) {
-            merged.insert(merged.end(), attributes.values.begin() + static_cast<std::ptrdiff_t>(i * attributes.width),
-                          attributes.values.begin() + static_cast<std::ptrdiff_t>((i + 1) * attributes.width));
             for (std::size_t k = 0; k < width; ++k) {
                 const double value = values[4 * i + k];
-                merged.push_back(std::isnan(value) ? (integers ? 255.0 : 1.0) : value);
+                colours.push_back(std::isnan(value) ? (integers ? 255.0 : 1.0) : value);
             }
         }
-        attributes.values.swap(merged);
-        attributes.width += width;
+        append_columns(attributes, elements, width, colours);
     }
 };
 
@@ -483,18 +489,12 @@ mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshRe
     mesh::Attributes& rows = m.vertex_attributes;
     if (with_normals) {
         add_columns(layout, {"nx", "ny", "nz"}, ValueType::f32);
-        rows = {3, std::move(normal_values)};
+        append_columns(rows, vertices, 3, normal_values);
     }
     vertex_colours.finish("vertex colours", vertices, rows, layout, report);
     if (texture) {
         add_columns(layout, {"s", "t"}, ValueType::f32);
-        mesh::Attributes merged{rows.width + 2, {}};
-        for (std::size_t v = 0; v < vertices; ++v) {
-            merged.values.insert(merged.values.end(), rows.row(v), rows.row(v) + rows.width);
-            merged.values.insert(merged.values.end(), uv_values.begin() + static_cast<std::ptrdiff_t>(2 * v),
-                                 uv_values.begin() + static_cast<std::ptrdiff_t>(2 * v + 2));
-        }
-        rows = std::move(merged);
+        append_columns(rows, vertices, 2, uv_values);
     }
     // A face's colour goes with each of its triangles.
     mesh::Attributes per_face;
