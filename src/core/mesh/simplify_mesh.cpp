@@ -27,6 +27,10 @@ constexpr std::uint8_t kLocked = 2;    // never moves, never removed
 constexpr std::uint8_t kDead = 4;      // merged into another vertex
 constexpr std::uint8_t kInside = 8;    // this level: it and all its neighbours lie in its block
 constexpr std::uint8_t kNewlyInside = 16;  // inside at this level but not at the one before
+// Marks a collapse's link test sets and clears on the corners of the star (vertices of the
+// block, which one thread alone touches).
+constexpr std::uint8_t kNearA = 32;   // a corner of a face of a
+constexpr std::uint8_t kCounted = 64;  // a corner of a face of a and of one of b, counted
 
 // Stamps count the changes of a vertex (a collapse it absorbed, its own death), in 31 bits (a
 // candidate keeps their sum and one more bit): a candidate whose ends' stamps changed is stale.
@@ -309,6 +313,13 @@ public:
 
 private:
     void build_topology();
+    // Each vertex's list of corners, in face order.
+    void link_corners();
+    // The dead faces dropped, the others kept in order with their attribute rows (their old
+    // numbers to `kept`).
+    void drop_dead_faces(std::vector<std::uint32_t>* kept);
+    // Dead faces dropped, corner lists rebuilt.
+    void compact_faces();
     // Per vertex: the sum of its faces' planes, and kBoundary if it is on an edge with one face.
     // Also the first non-manifold edge, if any (non_manifold_), and, when the terrain check needs
     // them, the directed border edges (border_): all from one pass over each vertex's faces.
@@ -359,16 +370,21 @@ private:
         out.push_back(c / 3);
         link = &next_[c];
     }
-    // The corners of `faces` other than v, sorted, each once: v's neighbours when they are its faces.
+    // The corners of `faces` other than v, each once, in no set order: v's neighbours when they
+    // are its faces. A vertex has a few: each corner is compared with those found so far; the
+    // corners of a long fan are sorted instead.
     void corners_but(const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) const {
         out.clear();
+        const bool few = faces.size() <= 16;
         for (std::uint32_t f : faces) {
             for (std::uint32_t w : face_[f]) {
-                if (w != v) out.push_back(w);
+                if (w != v && (!few || std::find(out.begin(), out.end(), w) == out.end())) out.push_back(w);
             }
         }
-        std::sort(out.begin(), out.end());
-        out.erase(std::unique(out.begin(), out.end()), out.end());
+        if (!few) {
+            std::sort(out.begin(), out.end());
+            out.erase(std::unique(out.begin(), out.end()), out.end());
+        }
     }
     // On success, `around` holds a's neighbours after the collapse.
     bool try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
@@ -472,6 +488,14 @@ void Simplifier::build_topology() {
     head_.assign(n, kNone);
     flags_.assign(n, 0);
     stamp_.assign(n, 0);
+    link_corners();
+    live_faces_ = m;
+}
+
+void Simplifier::link_corners() {
+    const std::size_t m = face_.size();
+    next_.assign(3 * m, kNone);
+    head_.assign(pos_.size(), kNone);
     for (std::size_t f = m; f-- > 0;) {
         for (int k = 2; k >= 0; --k) {
             const std::uint32_t v = face_[f][k];
@@ -480,7 +504,30 @@ void Simplifier::build_topology() {
             head_[v] = corner;
         }
     }
-    live_faces_ = m;
+}
+
+void Simplifier::drop_dead_faces(std::vector<std::uint32_t>* kept) {
+    Attributes& rows = mesh_.face_attributes;
+    std::size_t count = 0;
+    for (std::size_t f = 0; f < face_.size(); ++f) {
+        if (!alive_[f]) continue;
+        face_[count] = face_[f];
+        clean_[count] = clean_[f];
+        std::copy_n(rows.row(f), rows.width, rows.row(count));
+        if (kept) kept->push_back(static_cast<std::uint32_t>(f));
+        ++count;
+    }
+    face_.resize(count);
+    clean_.resize(count);
+    rows.values.resize(count * rows.width);
+    alive_.assign(count, 1);
+}
+
+void Simplifier::compact_faces() {
+    std::vector<std::uint32_t> kept;
+    drop_dead_faces(vertical_ ? &kept : nullptr);
+    link_corners();
+    if (vertical_) vertical_->renumber_faces(kept);
 }
 
 void Simplifier::build_quadrics() {
@@ -1215,7 +1262,8 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     // Link condition (Dey et al. 1999): the common neighbours of a and b are exactly the corners
     // opposite the edge, each once; a border vertex pair joined through the interior would pinch.
     // The opposite corners are common neighbours, so it is enough that they are distinct and that
-    // no other corner of b's faces is a corner of a's (a few dozen comparisons: no sorting).
+    // a and b have no other: the corners of a's faces are marked, those of b's faces found marked
+    // are counted once each (a, b and the common neighbours), and the marks cleared.
     opposite.clear();
     for (std::uint32_t f : shared) {
         for (std::uint32_t w : face_[f]) {
@@ -1224,14 +1272,23 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     }
     std::sort(opposite.begin(), opposite.end());
     bool linked = std::adjacent_find(opposite.begin(), opposite.end()) == opposite.end();
-    for (std::size_t i = 0; linked && i < fb.size(); ++i) {
-        for (std::uint32_t w : face_[fb[i]]) {
-            if (w == a || w == b || std::find(opposite.begin(), opposite.end(), w) != opposite.end()) continue;
-            for (std::uint32_t f : fa) {
-                const Face& c = face_[f];
-                if (c[0] == w || c[1] == w || c[2] == w) linked = false;
+    if (linked) {
+        for (std::uint32_t f : fa) {
+            for (std::uint32_t w : face_[f]) flags_[w] |= kNearA;
+        }
+        std::size_t common = 0;
+        for (std::uint32_t f : fb) {
+            for (std::uint32_t w : face_[f]) {
+                if ((flags_[w] & (kNearA | kCounted)) == kNearA) {
+                    flags_[w] |= kCounted;
+                    ++common;
+                }
             }
         }
+        for (std::uint32_t f : fa) {
+            for (std::uint32_t w : face_[f]) flags_[w] &= static_cast<std::uint8_t>(~(kNearA | kCounted));
+        }
+        linked = common == opposite.size() + 2;
     }
     if (!linked) {
         ++stats.refused_link;
@@ -1279,14 +1336,16 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
             ++stats.refused_flip;
             return false;
         }
-        if (i >= from_a) {
-            // A face (b, x, y) becomes (a, x, y): refuse if a already has a face on x and y.
+        if (i >= from_a && opposite.size() == 2) {
+            // A face (b, x, y) becomes (a, x, y): refuse if a already has a face on x and y. Then x
+            // and y are common neighbours of a and b: by the link test, the two opposite corners.
             std::uint32_t x = kNone, y = kNone;
             for (std::uint32_t w : c) {
                 if (w != b) (x == kNone ? x : y) = w;
             }
-            for (std::uint32_t f : fa) {
-                const Face& d = face_[f];
+            const bool both_opposite = std::min(x, y) == opposite[0] && std::max(x, y) == opposite[1];
+            for (std::size_t k = 0; both_opposite && k < fa.size(); ++k) {
+                const Face& d = face_[fa[k]];
                 const bool has_x = d[0] == x || d[1] == x || d[2] == x, has_y = d[0] == y || d[1] == y || d[2] == y;
                 if (has_x && has_y) {
                     ++stats.refused_degenerate;
@@ -1576,6 +1635,12 @@ MeshStats Simplifier::run() {
             const std::uint64_t key = grid_.block_of(cell, level);
             return (Grid::unpack(key, 0) * span[1] + Grid::unpack(key, 1)) * span[2] + Grid::unpack(key, 2);
         };
+        // After a level's collapses a vertex's corners lie far apart (a merge appends the other
+        // end's): walking them would miss the cache at every step.
+        // After a level's collapses a vertex's corners lie far apart (a merge appends the other
+        // end's): walking them would miss the cache at every step. (Measured: compacting at every
+        // round, not only every level, saves nothing more.)
+        if (level > 0) compact_faces();
         std::erase_if(live, [this](std::uint32_t v) { return (flags_[v] & kDead) != 0; });
         std::vector<std::size_t> first(span[0] * span[1] * span[2] + 1, 0);
         for (const std::uint32_t v : live) ++first[dense(cell_[v]) + 1];
@@ -1686,16 +1751,7 @@ MeshStats Simplifier::run() {
     stats.target_reached = by_count ? live_faces_ <= target : true;
 
     // Compact: surviving faces and vertices in input order.
-    Attributes& face_rows = mesh_.face_attributes;
-    std::size_t kept = 0;
-    for (std::size_t f = 0; f < face_.size(); ++f) {
-        if (!alive_[f]) continue;
-        face_[kept] = face_[f];
-        std::copy_n(face_rows.row(f), face_rows.width, face_rows.row(kept));
-        ++kept;
-    }
-    face_.resize(kept);
-    face_rows.values.resize(kept * face_rows.width);
+    drop_dead_faces(nullptr);
     drop_unused(mesh_);
 
     stats.vertices_out = pos_.size();

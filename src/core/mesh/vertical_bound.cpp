@@ -200,4 +200,9 @@ void VerticalBound::collapsed(std::span<const std::uint32_t> before, std::span<c
     placed.clear();
 }
 
+void VerticalBound::renumber_faces(std::span<const std::uint32_t> kept) {
+    for (std::size_t i = 0; i < kept.size(); ++i) first_[i] = first_[kept[i]];
+    first_.resize(kept.size());
+}
+
 }  // namespace toposimp::mesh

@@ -49,6 +49,9 @@ public:
     // that fan[i] became. The input vertices of `before` move to the new faces over them.
     void collapsed(std::span<const std::uint32_t> before, std::span<const std::uint32_t> after);
 
+    // The simplifier renumbered its faces: face kept[i] is now face i, the others are gone.
+    void renumber_faces(std::span<const std::uint32_t> kept);
+
 private:
     // Does the walk along the segment from p to l meet only crossings within the bound?
     bool crossings_hold(Point3 p, Point3 l, std::span<const std::uint32_t> start, exact::PredicateStats& stats);
