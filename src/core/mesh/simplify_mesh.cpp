@@ -27,9 +27,9 @@ constexpr std::uint8_t kLocked = 2;    // never moves, never removed
 constexpr std::uint8_t kDead = 4;      // merged into another vertex
 constexpr std::uint8_t kInside = 8;    // this level: it and all its neighbours lie in its block
 constexpr std::uint8_t kNewlyInside = 16;  // inside at this level but not at the one before
-// Marks a collapse's link test sets and clears on the corners of the star (vertices of the
-// block, which one thread alone touches).
-constexpr std::uint8_t kNearA = 32;   // a corner of a face of a
+// Marks set and cleared again on the corners of an inside vertex's faces by the link test and
+// corners_but (vertices of the block, which one thread alone touches).
+constexpr std::uint8_t kMarked = 32;   // gathered already, or (link test) a corner of a face of a
 constexpr std::uint8_t kCounted = 64;  // a corner of a face of a and of one of b, counted
 
 // Stamps count the changes of a vertex (a collapse it absorbed, its own death), in 31 bits (a
@@ -371,20 +371,21 @@ private:
         link = &next_[c];
     }
     // The corners of `faces` other than v, each once, in no set order: v's neighbours when they
-    // are its faces. A vertex has a few: each corner is compared with those found so far; the
-    // corners of a long fan are sorted instead.
-    void corners_but(const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) const {
+    // are its faces. Each is marked while they are gathered: all must be vertices of the
+    // calling thread's block.
+    void corners_but(const std::vector<std::uint32_t>& faces, std::uint32_t v, std::vector<std::uint32_t>& out) {
         out.clear();
-        const bool few = faces.size() <= 16;
+        flags_[v] |= kMarked;
         for (std::uint32_t f : faces) {
             for (std::uint32_t w : face_[f]) {
-                if (w != v && (!few || std::find(out.begin(), out.end(), w) == out.end())) out.push_back(w);
+                if ((flags_[w] & kMarked) == 0) {
+                    flags_[w] |= kMarked;
+                    out.push_back(w);
+                }
             }
         }
-        if (!few) {
-            std::sort(out.begin(), out.end());
-            out.erase(std::unique(out.begin(), out.end()), out.end());
-        }
+        flags_[v] &= static_cast<std::uint8_t>(~kMarked);
+        for (std::uint32_t w : out) flags_[w] &= static_cast<std::uint8_t>(~kMarked);
     }
     // On success, `around` holds a's neighbours after the collapse.
     bool try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
@@ -993,10 +994,12 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
         const std::uint32_t v = vertices[i];
         if ((flags_[v] & (kDead | kInside)) != 0) continue;
         faces_of(v, scratch);
-        corners_but(scratch, v, around);
         bool inside = true;
-        for (std::uint32_t w : around) inside = inside && grid_.block_of(cell_[w], level) == block;
+        for (std::uint32_t f : scratch) {
+            for (std::uint32_t w : face_[f]) inside = inside && grid_.block_of(cell_[w], level) == block;
+        }
         if (!inside) continue;
+        corners_but(scratch, v, around);
         flags_[v] |= kInside | kNewlyInside;
         newly.push_back({v, static_cast<std::uint32_t>(neighbours.size()), static_cast<std::uint32_t>(around.size())});
         neighbours.insert(neighbours.end(), around.begin(), around.end());
@@ -1274,19 +1277,19 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
     bool linked = std::adjacent_find(opposite.begin(), opposite.end()) == opposite.end();
     if (linked) {
         for (std::uint32_t f : fa) {
-            for (std::uint32_t w : face_[f]) flags_[w] |= kNearA;
+            for (std::uint32_t w : face_[f]) flags_[w] |= kMarked;
         }
         std::size_t common = 0;
         for (std::uint32_t f : fb) {
             for (std::uint32_t w : face_[f]) {
-                if ((flags_[w] & (kNearA | kCounted)) == kNearA) {
+                if ((flags_[w] & (kMarked | kCounted)) == kMarked) {
                     flags_[w] |= kCounted;
                     ++common;
                 }
             }
         }
         for (std::uint32_t f : fa) {
-            for (std::uint32_t w : face_[f]) flags_[w] &= static_cast<std::uint8_t>(~(kNearA | kCounted));
+            for (std::uint32_t w : face_[f]) flags_[w] &= static_cast<std::uint8_t>(~(kMarked | kCounted));
         }
         linked = common == opposite.size() + 2;
     }
