@@ -1,20 +1,53 @@
-#include "cli/cli.hpp"
+// The `toposimp` command. It runs the mesh jobs that need no GDAL (a mesh file in, a mesh file
+// out) itself, and hands every other command line to toposimp-gdal, the whole tool, by exec:
+// loading GDAL's ~115 shared libraries costs ~50 ms at every start, a third of a small mesh
+// job. This executable links no GDAL or GEOS (built with --as-needed; tests/cli checks it).
 #include "cli/interrupt.hpp"
+#include "cli/mesh_command.hpp"
 
 #include <malloc.h>
 #include <unistd.h>
 
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <string>
+#include <vector>
+
+namespace {
+
+// toposimp-gdal beside this executable (a build tree), or where `cmake --install` puts it
+// (TOPOSIMP_GDAL_DIR, relative to the bin folder: ../libexec/toposimp by default).
+std::filesystem::path whole_tool() {
+    std::error_code error;
+    const std::filesystem::path self = std::filesystem::read_symlink("/proc/self/exe", error);
+    const std::filesystem::path dir = error ? std::filesystem::path(".") : self.parent_path();
+    const std::filesystem::path beside = dir / "toposimp-gdal", installed = dir / TOPOSIMP_GDAL_DIR / "toposimp-gdal";
+    return ::access(beside.c_str(), X_OK) == 0 ? beside : installed;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
-    // Big maps allocate and free arrays of hundreds of MB phase after phase. By default glibc
-    // maps each such array fresh from the kernel and unmaps it when freed, so every phase pays
-    // for zeroing new pages again (an eighth of the run on a 10 M-vertex map). Keep freed
-    // memory in the heap instead; peak memory is unchanged.
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    toposimp::cli::MeshCommandOptions options;
+    if (!toposimp::cli::parse_mesh_command(args, options) || toposimp::cli::mesh_needs_gdal(options)) {
+        const std::filesystem::path tool = whole_tool();
+        std::vector<char*> tool_argv{const_cast<char*>(tool.c_str())};
+        for (int i = 1; i < argc; ++i) tool_argv.push_back(argv[i]);
+        tool_argv.push_back(nullptr);
+        ::execv(tool.c_str(), tool_argv.data());
+        std::cerr << "toposimp: error: cannot run " << tool.string() << ": " << std::strerror(errno)
+                  << " (toposimp-gdal, the part of toposimp that reads GIS formats, is not installed there)\n";
+        return toposimp::cli::kUsageError;
+    }
+    // As in toposimp-gdal's main: freed big arrays stay in the heap, not unmapped and faulted
+    // in again phase after phase.
     mallopt(M_MMAP_THRESHOLD, 1 << 30);
     mallopt(M_TRIM_THRESHOLD, 1 << 30);
     toposimp::cli::clean_up_on_interrupt();
     std::ios::sync_with_stdio(false);
     toposimp::cli::Context context{std::cout, std::cerr, ::isatty(STDERR_FILENO) == 1};
-    return toposimp::cli::run({argv + 1, argv + argc}, context);
+    return toposimp::cli::run_mesh(options, context, {});
 }

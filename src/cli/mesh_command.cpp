@@ -5,11 +5,12 @@
 #include "cli/logging.hpp"
 #include "core/mesh/distance.hpp"
 #include "core/mesh/simplify_mesh.hpp"
-#include "io/dem.hpp"
 #include "io/errors.hpp"
 #include "io/json_text.hpp"
 #include "io/mesh_io.hpp"
 #include "io/output_file.hpp"
+
+#include <CLI/CLI.hpp>  // (all of CLI11, for parse_mesh_command's own App: the launcher has no other)
 
 #include <algorithm>
 #include <cctype>
@@ -70,6 +71,18 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
 
 namespace {
 
+// The output format's name as given with -f, in lower case ("" if none).
+std::string format_name(const MeshCommandOptions& options) {
+    std::string f = options.format;
+    for (char& c : f) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return f;
+}
+
+bool mesh_output(const MeshCommandOptions& options) {
+    const std::string name = format_name(options);
+    return name.empty() ? io::has_mesh_extension(options.output) : (name == "obj" || name == "ply" || name == "off");
+}
+
 std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
     mesh::MeshOptions target;
     if (options.keep_faces >= 0) {
@@ -100,7 +113,24 @@ std::string describe(const mesh::MeshOptions& target, const mesh::MeshStats& sta
 
 }  // namespace
 
-int run_mesh(const MeshCommandOptions& options, Context& context) {
+bool mesh_needs_gdal(const MeshCommandOptions& options) {
+    return !io::has_mesh_extension(options.input) || !mesh_output(options);
+}
+
+bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions& options) {
+    if (args.empty() || args.front() != "mesh") return false;
+    CLI::App app;
+    add_mesh_command(app, options);
+    std::vector<std::string> reversed(args.rbegin(), args.rend());
+    try {
+        app.parse(reversed);
+    } catch (const CLI::Error&) {
+        return false;
+    }
+    return true;
+}
+
+int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
     std::optional<mesh::MeshOptions> engine = mesh_target(options, problem);
@@ -117,19 +147,14 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         engine->progress = [&progress](double done) { progress.update(done); };
         // Output: a mesh file, or an OGR layer of triangles.
-        const std::string format_name = [&] {
-            std::string f = options.format;
-            for (char& c : f) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-            return f;
-        }();
-        const bool mesh_output = format_name.empty() ? io::has_mesh_extension(options.output)
-                                                     : (format_name == "obj" || format_name == "ply" || format_name == "off");
+        const std::string name = format_name(options);
+        const bool to_mesh_file = mesh_output(options);
         io::MeshFormat format = io::MeshFormat::obj;
-        if (mesh_output) {
-            format = format_name.empty() ? io::mesh_format_of(options.output)
-                     : format_name == "ply" ? io::MeshFormat::ply
-                     : format_name == "off" ? io::MeshFormat::off
-                                            : io::MeshFormat::obj;
+        if (to_mesh_file) {
+            format = name.empty() ? io::mesh_format_of(options.output)
+                     : name == "ply" ? io::MeshFormat::ply
+                     : name == "off" ? io::MeshFormat::off
+                                     : io::MeshFormat::obj;
         }
         // Refuse an existing output before any work.
         io::OutputFile output(options.output, options.overwrite, &context.out);
@@ -160,7 +185,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
                 log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
             }
         } else {
-            dem = io::read_dem(options.input, options.band);
+            dem = gdal.read_dem(options.input, options.band);
             m = std::move(dem->tin);
             engine->terrain = true;
             engine->height_field = true;  // a grid's triangles: none overlap
@@ -199,7 +224,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
 
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
-        if (mesh_output) {
+        if (to_mesh_file) {
             unwritten = io::write_mesh(m, layout, output.staging_path(), format, options.ascii);
             for (const std::string& column : unwritten) {
                 log->warn("{}: {} not written: {} has no place for it", options.output, column, io::to_string(format));
@@ -208,7 +233,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context) {
             if (!layout.vertex.empty() || !layout.face.empty()) {
                 log->warn("{}: vertex and face attributes not written: a layer of triangles has no place for them", options.output);
             }
-            io::write_tin_layer(m, output.staging_path(), options.format, dem ? dem->crs_wkt : std::string(), options.layer_name);
+            gdal.write_tin_layer(m, output.staging_path(), options.format, dem ? dem->crs_wkt : std::string(), options.layer_name);
         }
         output.commit();
         const double seconds_write = seconds_since(write_start);

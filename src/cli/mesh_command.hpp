@@ -2,10 +2,12 @@
 #pragma once
 
 #include "cli/cli.hpp"
+#include "io/dem.hpp"
 
 #include <CLI/App.hpp>
 
 #include <string>
+#include <vector>
 
 namespace toposimp::cli {
 
@@ -34,6 +36,22 @@ struct MeshCommandOptions {
 
 CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options);
 
-int run_mesh(const MeshCommandOptions& options, Context& context);
+// What the mesh command needs GDAL for: DEM rasters in, OGR layers of triangles out. The whole
+// tool passes io's functions; the launcher (apps/toposimp) links no GDAL and runs only the jobs
+// that need neither (mesh_needs_gdal).
+struct MeshGdal {
+    io::Dem (*read_dem)(const std::string& path, int band) = nullptr;
+    void (*write_tin_layer)(const mesh::Mesh& tin, const std::string& path, const std::string& driver,
+                            const std::string& crs_wkt, const std::string& layer_name) = nullptr;
+};
+
+// Does the job read a DEM or write an OGR layer?
+bool mesh_needs_gdal(const MeshCommandOptions& options);
+
+// `args` (without the program name) as a mesh command alone, or false if they are anything else
+// (another command, --help, a usage error): the whole tool then answers them.
+bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions& options);
+
+int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal);
 
 }  // namespace toposimp::cli

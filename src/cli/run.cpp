@@ -3,6 +3,7 @@
 #include "cli/check_command.hpp"
 #include "cli/map_command.hpp"
 #include "cli/mesh_command.hpp"
+#include "io/dem.hpp"
 #include "io/ogr_dataset.hpp"
 
 #include <CLI/CLI.hpp>
@@ -72,7 +73,7 @@ int run(const std::vector<std::string>& args, Context& context) {
         return kUsageError;
     }
     if (app.got_subcommand(map)) return run_map(map_options, context);
-    if (app.got_subcommand(mesh)) return run_mesh(mesh_options, context);
+    if (app.got_subcommand(mesh)) return run_mesh(mesh_options, context, {&io::read_dem, &io::write_tin_layer});
     if (app.got_subcommand(check)) return run_check(check_options, context);
     context.err << app.help();
     return kUsageError;

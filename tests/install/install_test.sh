@@ -13,6 +13,8 @@ cmake --install "$build" --prefix "$prefix" >/dev/null
 fail() { echo "FAIL: $*"; exit 1; }
 
 [ -x "$prefix/bin/toposimp" ] || fail "no bin/toposimp"
+# bin/toposimp hands every job that needs GDAL (here --version, map, check) to this one.
+[ -x "$prefix/libexec/toposimp/toposimp-gdal" ] || fail "no libexec/toposimp/toposimp-gdal"
 "$prefix/bin/toposimp" --version | grep -q '^toposimp 0\.1\.0 (GDAL ' || fail "--version: $("$prefix/bin/toposimp" --version)"
 
 # The installed executable does the main job and its output checks clean.

@@ -16,7 +16,7 @@ for library in libgdal libgeos-c libgmp libgomp libspdlog libstdc++; do
     echo "$depends" | grep -q "$library" || fail "Depends lacks $library: $depends"
 done
 contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
-for path in ./usr/bin/toposimp ./usr/share/man/man1/toposimp.1 ./usr/share/man/man1/toposimp-map.1 \
+for path in ./usr/bin/toposimp ./usr/libexec/toposimp/toposimp-gdal ./usr/share/man/man1/toposimp.1 ./usr/share/man/man1/toposimp-map.1 \
             ./usr/share/man/man1/toposimp-mesh.1 ./usr/share/man/man1/toposimp-check.1 \
             ./usr/share/qgis/python/plugins/toposimp/metadata.txt ./usr/share/qgis/python/plugins/toposimp/algorithms.py; do
     echo "$contents" | grep -qx "$path" || fail "$path not in the package"

@@ -1,0 +1,74 @@
+// The `toposimp` executable itself: mesh jobs on mesh files run without loading GDAL, every
+// other command line is handed to toposimp-gdal (apps/toposimp/main.cpp).
+#include "cli_fixtures.hpp"
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+namespace toposimp::testing {
+namespace {
+
+std::string slurp(const std::filesystem::path& path) {
+    std::ifstream in(path);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Runs `binary args` through the shell with the dynamic loader listing every library it loads
+// (LD_DEBUG=files, on stderr); returns the exit status, stderr in `err`.
+int run_traced(const std::string& binary, const std::string& args, const std::filesystem::path& dir, std::string& err) {
+    const std::string command = "LD_DEBUG=files '" + binary + "' " + args + " >'" + (dir / "out.txt").string() + "' 2>'" +
+                                (dir / "err.txt").string() + "'";
+    const int status = std::system(command.c_str());
+    err = slurp(dir / "err.txt");
+    return WEXITSTATUS(status);
+}
+
+TEST(Launcher, MeshFilesRunWithoutGdal) {
+    const auto dir = fresh_dir("launcher");
+    const std::string out = (dir / "torus.ply").string();
+    std::string err;
+    ASSERT_EQ(run_traced(TOPOSIMP_BINARY, "mesh '" + testdata("mesh/torus.off") + "' -o '" + out + "' --keep 20% -q", dir, err), 0) << err;
+    EXPECT_TRUE(std::filesystem::exists(out));
+    EXPECT_NE(err.find("libgmp"), std::string::npos) << "no loader trace: " << err.substr(0, 2000);
+    EXPECT_EQ(err.find("libgdal"), std::string::npos) << "GDAL loaded for a mesh file job";
+    // The same output as the whole tool in-process.
+    const std::string in_process = (dir / "in_process.ply").string();
+    ASSERT_EQ(run_cli({"mesh", testdata("mesh/torus.off"), "-o", in_process, "--keep", "20%", "-q"}).code, 0);
+    EXPECT_EQ(slurp(out), slurp(in_process));
+}
+
+TEST(Launcher, GisJobsGoToTheWholeTool) {
+    const auto dir = fresh_dir("launcher");
+    std::string err;
+    // An OGR layer out: GDAL is loaded, the layer written.
+    const std::string gpkg = (dir / "tin.gpkg").string();
+    ASSERT_EQ(run_traced(TOPOSIMP_BINARY, "mesh '" + testdata("mesh/hills.obj") + "' --terrain -o '" + gpkg + "' -q", dir, err), 0) << err;
+    EXPECT_NE(err.find("libgdal"), std::string::npos);
+    EXPECT_TRUE(std::filesystem::exists(gpkg));
+    // --version names GDAL's version; a map job's usage error keeps its message and exit status.
+    ASSERT_EQ(run_traced(TOPOSIMP_BINARY, "--version", dir, err), 0);
+    EXPECT_NE(slurp(dir / "out.txt").find("(GDAL "), std::string::npos);
+    const int status = std::system(("'" + std::string(TOPOSIMP_BINARY) + "' map 2>'" + (dir / "usage.txt").string() + "'").c_str());
+    EXPECT_EQ(WEXITSTATUS(status), 2);
+    EXPECT_NE(slurp(dir / "usage.txt").find("toposimp: error: input is required"), std::string::npos);
+}
+
+TEST(Launcher, MissingWholeToolIsAClearError) {
+    const auto dir = fresh_dir("launcher");
+    const auto alone = dir / "toposimp";
+    std::filesystem::copy_file(TOPOSIMP_BINARY, alone);
+    std::string err;
+    EXPECT_EQ(run_traced(alone.string(), "map in.gpkg -o out.gpkg", dir, err), 2);
+    EXPECT_NE(err.find("toposimp: error: cannot run " + (dir / "../libexec/toposimp/toposimp-gdal").string()), std::string::npos)
+        << err.substr(err.size() > 2000 ? err.size() - 2000 : 0);
+    // A mesh file job does not need it.
+    EXPECT_EQ(run_traced(alone.string(), "mesh '" + testdata("mesh/torus.off") + "' -o '" + (dir / "t.obj").string() + "' -q", dir, err), 0);
+}
+
+}  // namespace
+}  // namespace toposimp::testing
