@@ -486,8 +486,6 @@ void Simplifier::build_topology() {
     const std::size_t n = pos_.size(), m = face_.size();
     alive_.assign(m, 1);
     clean_.assign(m, kUnknown);
-    next_.assign(3 * m, kNone);
-    head_.assign(n, kNone);
     flags_.assign(n, 0);
     stamp_.assign(n, 0);
     link_corners();
@@ -1639,8 +1637,6 @@ MeshStats Simplifier::run() {
             const std::uint64_t key = grid_.block_of(cell, level);
             return (Grid::unpack(key, 0) * span[1] + Grid::unpack(key, 1)) * span[2] + Grid::unpack(key, 2);
         };
-        // After a level's collapses a vertex's corners lie far apart (a merge appends the other
-        // end's): walking them would miss the cache at every step.
         // After a level's collapses a vertex's corners lie far apart (a merge appends the other
         // end's): walking them would miss the cache at every step. (Measured: compacting at every
         // round, not only every level, saves nothing more.)
