@@ -1,7 +1,8 @@
 // The `toposimp` command. It runs the mesh jobs that need no GDAL (a mesh file in, a mesh file
 // out) itself, and hands every other command line to toposimp-gdal, the whole tool, by exec:
-// loading GDAL's ~115 shared libraries costs ~50 ms at every start, a third of a small mesh
-// job. This executable links no GDAL or GEOS (built with --as-needed; tests/cli checks it).
+// loading GDAL's ~115 shared libraries costs ~50 ms at every start, half of a small mesh job.
+// This executable links no GDAL or GEOS (toposimp_mesh_cli has neither; tests/cli/launcher_test.cpp
+// checks that a mesh file job loads none).
 #include "cli/interrupt.hpp"
 #include "cli/mesh_command.hpp"
 
