@@ -138,6 +138,10 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
         log->error("{}", problem);
         return kUsageError;
     }
+    if (mesh_needs_gdal(options) && (!gdal.read_dem || !gdal.write_tin_layer)) {
+        log->error("{} -> {}: a DEM or an OGR layer needs GDAL, which this caller did not provide", options.input, options.output);
+        return kUsageError;
+    }
     engine->lock_boundary = options.lock_boundary;
     engine->terrain = options.terrain;
     engine->threads = options.threads;

@@ -1,5 +1,6 @@
 // The `toposimp` executable itself: mesh jobs on mesh files run without loading GDAL, every
 // other command line is handed to toposimp-gdal (apps/toposimp/main.cpp).
+#include "cli/mesh_command.hpp"
 #include "cli_fixtures.hpp"
 
 #include <sys/wait.h>
@@ -55,6 +56,17 @@ TEST(Launcher, GisJobsGoToTheWholeTool) {
     EXPECT_NE(slurp(dir / "out.txt").find("(GDAL "), std::string::npos);
     EXPECT_EQ(run_traced(TOPOSIMP_BINARY, "map", dir, err), 2);
     EXPECT_NE(err.find("toposimp: error: input is required"), std::string::npos);
+}
+
+TEST(Launcher, MeshCommandWithoutGdalRefusesGisJobs) {
+    cli::MeshCommandOptions options;
+    options.input = testdata("mesh/hills.obj");
+    options.output = (fresh_dir("launcher") / "tin.gpkg").string();
+    std::ostringstream out, err;
+    cli::Context context{out, err, false};
+    EXPECT_EQ(cli::run_mesh(options, context, {}), 2);
+    EXPECT_NE(err.str().find("needs GDAL"), std::string::npos) << err.str();
+    EXPECT_FALSE(std::filesystem::exists(options.output));
 }
 
 TEST(Launcher, MissingWholeToolIsAClearError) {
