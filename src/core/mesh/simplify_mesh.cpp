@@ -228,6 +228,13 @@ public:
         slots_.clear();
         size_ = 0;
     }
+    // Each cell's value, in slot order (fixed by the keys and their order of insertion).
+    template <class Visit>
+    void for_each(Visit visit) {
+        for (Slot& slot : slots_) {
+            if (slot.key != kEmpty) visit(slot.value);
+        }
+    }
 
 private:
     static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no cell key: they use 63 bits
@@ -271,21 +278,35 @@ struct IndexEntry {
     std::uint8_t first_here;
 };
 
+// A face's box in index grid units, rounded outward to floats, and the cells holding its corners
+// (lowest and highest on every axis).
+struct UnitBox {
+    float lo[3], hi[3];
+    std::uint64_t first, last;
+};
+
 // Faces by grid cell for one round: the entries grouped by cell, and a table from a cell to its
-// group.
+// group. Built by a counting sort: count() each (cell, entry) pair, allocate(), then place() the
+// same pairs in the same order; a cell lists its entries in that order.
 class CellIndex {
 public:
-    void build(std::vector<IndexEntry>&& entries, const std::vector<std::pair<std::uint64_t, std::size_t>>& groups) {
-        entries_ = std::move(entries);
-        groups_.reserve(groups.size());
-        for (std::size_t i = 0; i < groups.size(); ++i) {
-            const std::size_t end = i + 1 < groups.size() ? groups[i + 1].second : entries_.size();
-            groups_[groups[i].first] = {groups[i].second, end - groups[i].second};
-        }
-    }
     void clear() {
         entries_.clear();
         groups_.clear();
+    }
+    void count(std::uint64_t key) { ++groups_[key].count; }
+    void allocate() {
+        std::size_t total = 0;
+        groups_.for_each([&](Group& group) {
+            group.first = total;
+            total += group.count;
+            group.count = 0;
+        });
+        entries_.resize(total);
+    }
+    void place(std::uint64_t key, const IndexEntry& entry) {
+        Group& group = *groups_.find(key);
+        entries_[group.first + group.count++] = entry;
     }
     // The entries listed in a cell.
     std::span<const IndexEntry> entries(std::uint64_t key) const {
@@ -434,8 +455,12 @@ private:
         return triangle_box(pos_[c[0]], pos_[c[1]], pos_[c[2]]);
     }
     template <class Visit>
-    void for_cells(const Box3& box, Visit visit) const;
-    IndexEntry index_entry(std::uint32_t f, const Box3& box, std::uint64_t key) const;
+    void for_cells(const Box3& box, Visit visit) const {
+        for_cells(index_grid_.cell_key(box.lo), index_grid_.cell_key(box.hi), visit);
+    }
+    template <class Visit>
+    void for_cells(std::uint64_t first, std::uint64_t last, Visit visit) const;
+    UnitBox unit_box(const Box3& box) const;
     void query(const Box3& box, const Overlay& overlay,
                std::vector<std::uint32_t>& out) const;
     // The edges from v to its inside neighbours w for which wanted(w), placed, into `out`.
@@ -468,6 +493,7 @@ private:
     std::unique_ptr<Quadric[]> quadric_;  // per vertex
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
+    std::vector<UnitBox> unit_boxes_;  // per live face, while the index is built
     // Per face: changed (moved or removed) by its block in this round; the overlay has it if it
     // lives.
     std::vector<std::uint8_t> changed_;
@@ -777,14 +803,22 @@ void Simplifier::find_twins() {
 }
 
 template <class Visit>
-void Simplifier::for_cells(const Box3& box, Visit visit) const {
-    const std::uint64_t lo = index_grid_.cell_key(box.lo), hi = index_grid_.cell_key(box.hi);
-    for (std::uint32_t x = Grid::unpack(lo, 0); x <= Grid::unpack(hi, 0); ++x) {
-        for (std::uint32_t y = Grid::unpack(lo, 1); y <= Grid::unpack(hi, 1); ++y) {
-            for (std::uint32_t z = Grid::unpack(lo, 2); z <= Grid::unpack(hi, 2); ++z) visit(Grid::pack(x, y, z));
+void Simplifier::for_cells(std::uint64_t first, std::uint64_t last, Visit visit) const {
+    for (std::uint32_t x = Grid::unpack(first, 0); x <= Grid::unpack(last, 0); ++x) {
+        for (std::uint32_t y = Grid::unpack(first, 1); y <= Grid::unpack(last, 1); ++y) {
+            for (std::uint32_t z = Grid::unpack(first, 2); z <= Grid::unpack(last, 2); ++z) visit(Grid::pack(x, y, z));
         }
     }
 }
+
+// The float next to a finite f, below or above it (std::nextafter, without the library call:
+// a neighbouring float is the neighbouring bit pattern of the same sign).
+float float_down(float f) {
+    if (f == 0) return -std::numeric_limits<float>::denorm_min();
+    const auto bits = std::bit_cast<std::uint32_t>(f);
+    return std::bit_cast<float>(f > 0 ? bits - 1 : bits + 1);
+}
+float float_up(float f) { return -float_down(-f); }
 
 // A coordinate in grid units, as a float at most (below) or at least (above) it. The double
 // scaling is monotone, so is the rounding: boxes that overlap keep overlapping.
@@ -792,23 +826,34 @@ float float_below(double value) {
     if (!(value > -std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
     if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
     const auto f = static_cast<float>(value);
-    return f > value ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+    return f > value ? float_down(f) : f;
 }
 float float_above(double value) {
     if (!(value < std::numeric_limits<float>::max())) return std::numeric_limits<float>::infinity();
     if (value < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::max();
     const auto f = static_cast<float>(value);
-    return f < value ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+    return f < value ? float_up(f) : f;
 }
 
-IndexEntry Simplifier::index_entry(std::uint32_t f, const Box3& box, std::uint64_t key) const {
+UnitBox Simplifier::unit_box(const Box3& box) const {
+    UnitBox unit;
+    for (int axis = 0; axis < 3; ++axis) {
+        unit.lo[axis] = float_below(index_grid_.units(box.lo[axis], axis));
+        unit.hi[axis] = float_above(index_grid_.units(box.hi[axis], axis));
+    }
+    unit.first = index_grid_.cell_key(box.lo);
+    unit.last = index_grid_.cell_key(box.hi);
+    return unit;
+}
+
+// A face's entry in the list of one of its cells.
+IndexEntry index_entry(std::uint32_t f, const UnitBox& unit, std::uint64_t key) {
     IndexEntry entry;
-    const std::uint64_t first = index_grid_.cell_key(box.lo);
     entry.first_here = 0;
     for (int axis = 0; axis < 3; ++axis) {
-        entry.lo[axis] = float_below(index_grid_.units(box.lo[axis], axis));
-        entry.hi[axis] = float_above(index_grid_.units(box.hi[axis], axis));
-        entry.first_here = static_cast<std::uint8_t>(entry.first_here | (Grid::unpack(key, axis) == Grid::unpack(first, axis)) << axis);
+        entry.lo[axis] = unit.lo[axis];
+        entry.hi[axis] = unit.hi[axis];
+        entry.first_here = static_cast<std::uint8_t>(entry.first_here | (Grid::unpack(key, axis) == Grid::unpack(unit.first, axis)) << axis);
     }
     entry.face = f;
     return entry;
@@ -825,32 +870,21 @@ void Simplifier::build_face_index() {
     // see query() for why that makes reading other blocks' faces unnecessary.
     index_grid_ = grid_over_faces(4.0, grid_.origin);
     changed_.assign(face_.size(), 0);
-    // (cell, face), then sorted.
-    std::vector<std::vector<std::pair<std::uint64_t, std::uint32_t>>> parts(static_cast<std::size_t>(omp_get_max_threads()));
-#pragma omp parallel
-    {
-        auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
-#pragma omp for schedule(static)
-        for (std::int64_t f = 0; f < m; ++f) {
-            if (!alive_[f]) continue;
-            for_cells(face_box(static_cast<std::uint32_t>(f)), [&](std::uint64_t key) { part.emplace_back(key, static_cast<std::uint32_t>(f)); });
-        }
-    }
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
-    for (auto& part : parts) pairs.insert(pairs.end(), part.begin(), part.end());
-    parts.clear();
-    std::sort(pairs.begin(), pairs.end());
-    std::vector<IndexEntry> entries(pairs.size());
-    std::vector<std::pair<std::uint64_t, std::size_t>> groups;  // (cell, its first entry)
-    const auto count = static_cast<std::int64_t>(pairs.size());
+    unit_boxes_.resize(face_.size());
 #pragma omp parallel for schedule(static)
-    for (std::int64_t i = 0; i < count; ++i) {
-        entries[i] = index_entry(pairs[i].second, face_box(pairs[i].second), pairs[i].first);
+    for (std::int64_t f = 0; f < m; ++f) {
+        if (alive_[f]) unit_boxes_[f] = unit_box(face_box(static_cast<std::uint32_t>(f)));
     }
-    for (std::size_t i = 0; i < pairs.size(); ++i) {
-        if (i == 0 || pairs[i].first != pairs[i - 1].first) groups.emplace_back(pairs[i].first, i);
+    // Each cell lists its faces in face order.
+    for (std::int64_t f = 0; f < m; ++f) {
+        if (alive_[f]) for_cells(unit_boxes_[f].first, unit_boxes_[f].last, [&](std::uint64_t key) { index_.count(key); });
     }
-    index_.build(std::move(entries), groups);
+    index_.allocate();
+    for (std::int64_t f = 0; f < m; ++f) {
+        if (!alive_[f]) continue;
+        const UnitBox& unit = unit_boxes_[f];
+        for_cells(unit.first, unit.last, [&](std::uint64_t key) { index_.place(key, index_entry(static_cast<std::uint32_t>(f), unit, key)); });
+    }
 }
 
 // Faces that may touch `box` (inside the calling block), each once: from the round's index
@@ -862,13 +896,11 @@ void Simplifier::build_face_index() {
 void Simplifier::query(const Box3& box, const Overlay& overlay,
                        std::vector<std::uint32_t>& out) const {
     out.clear();
-    const std::uint64_t box_lo = index_grid_.cell_key(box.lo);
-    float unit_lo[3], unit_hi[3];
-    for (int axis = 0; axis < 3; ++axis) {
-        unit_lo[axis] = float_below(index_grid_.units(box.lo[axis], axis));
-        unit_hi[axis] = float_above(index_grid_.units(box.hi[axis], axis));
-    }
-    for_cells(box, [&](std::uint64_t key) {
+    const UnitBox unit = unit_box(box);
+    const std::uint64_t box_lo = unit.first;
+    const float* unit_lo = unit.lo;
+    const float* unit_hi = unit.hi;
+    for_cells(unit.first, unit.last, [&](std::uint64_t key) {
         // The first cell a face and the box share is, on each axis, the later of their first
         // ones; the cell visited is in both: it is that one where it is the face's first or the
         // box's on every axis.
@@ -1537,8 +1569,8 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         for (std::uint32_t f : shared) changed_[f] = 1;
         for (std::uint32_t f : star) {
             changed_[f] = 1;
-            const Box3 box = face_box(f);
-            for_cells(box, [&](std::uint64_t key) { overlay[key].push_back(index_entry(f, box, key)); });
+            const UnitBox unit = unit_box(face_box(f));
+            for_cells(unit.first, unit.last, [&](std::uint64_t key) { overlay[key].push_back(index_entry(f, unit, key)); });
         }
     }
     corners_but(star, a, around);  // a's faces now: the star
