@@ -1460,6 +1460,8 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         for (std::size_t i = 0; i < fresh.size(); ++i) {
             const exact::Triangle3 mine = flat(fresh[i]);
             const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
+            std::array<std::uint32_t, 3> mine_ids = face_[star[i]];
+            for (std::uint32_t& v : mine_ids) v = v == b ? a : v;
             ++generation;
             // The sides of the other face's corners (`side`, for faces_conflict) and what they
             // settle.
@@ -1467,13 +1469,18 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                 int sign = 0;
                 bool on_corner = false, unshared_in_plane = false, both_sides = false;
                 for (int k = 0; k < 3; ++k) {
-                    if (same_location(other[k], mine[0]) || same_location(other[k], mine[1]) ||
-                        same_location(other[k], mine[2])) {
+                    // At a corner of the new face: the same vertex, or one with twin_ set (a
+                    // vertex at x's location has it, and so has x), or one at p (not yet marked).
+                    const std::uint32_t v = ids[k];
+                    bool here = (v == mine_ids[0]) | (v == mine_ids[1]) | (v == mine_ids[2]);
+                    if (!here && (twin_[v] || same_location(other[k], placement.p))) {
+                        here = same_location(other[k], mine[0]) || same_location(other[k], mine[1]) || same_location(other[k], mine[2]);
+                    }
+                    if (here) {
                         on_corner = true;  // in the plane, no predicate needed
                         side[k] = 0;
                         continue;
                     }
-                    const std::uint32_t v = ids[k];
                     SideEntry& entry = sides[v % sides.size()];
                     if (entry.vertex != v || entry.generation != generation) {
                         entry = {v, exact::orient3d(mine[0], mine[1], mine[2], other[k], predicates), generation};
