@@ -906,14 +906,20 @@ void Simplifier::query(const Box3& box, const Overlay& overlay,
         // box's on every axis.
         std::uint8_t box_first = 0;
         for (int axis = 0; axis < 3; ++axis) box_first |= static_cast<std::uint8_t>((Grid::unpack(key, axis) == Grid::unpack(box_lo, axis)) << axis);
+        // Without branches (a hit is written always, kept or overwritten), as the tests are
+        // hard to predict; the index's hits then lose the faces this block changed.
         auto scan = [&](std::span<const IndexEntry> entries, bool from_index) {
+            const std::size_t start = out.size();
+            out.resize(start + entries.size());
+            std::uint32_t* at = out.data() + start;
             for (const IndexEntry& entry : entries) {
-                if (entry.lo[0] <= unit_hi[0] && unit_lo[0] <= entry.hi[0] && entry.lo[1] <= unit_hi[1] &&
-                    unit_lo[1] <= entry.hi[1] && entry.lo[2] <= unit_hi[2] && unit_lo[2] <= entry.hi[2] &&
-                    (entry.first_here | box_first) == 7 && !(from_index && changed_[entry.face])) {
-                    out.push_back(entry.face);
-                }
+                *at = entry.face;
+                at += (entry.lo[0] <= unit_hi[0]) & (unit_lo[0] <= entry.hi[0]) & (entry.lo[1] <= unit_hi[1]) &
+                      (unit_lo[1] <= entry.hi[1]) & (entry.lo[2] <= unit_hi[2]) & (unit_lo[2] <= entry.hi[2]) &
+                      ((entry.first_here | box_first) == 7);
             }
+            if (from_index) at = std::remove_if(out.data() + start, at, [this](std::uint32_t f) { return changed_[f] != 0; });
+            out.resize(static_cast<std::size_t>(at - out.data()));
         };
         scan(index_.entries(key), true);
         if (const std::vector<IndexEntry>* mine = overlay.find(key)) scan(*mine, false);
