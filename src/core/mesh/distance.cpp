@@ -115,9 +115,17 @@ public:
                     }
                 }
             }
-            // Everything farther than r cells from p's cell is at least r·size away.
-            const double reach = static_cast<double>(r) * size_;
-            if (best <= reach * reach) break;
+            // A face listed in no cell searched has its box, so all its points, in the grid
+            // outside the block of cells within r of p's: at least as far from p as the nearest
+            // side of that block with grid beyond it (p lies within such a side's slab; a side
+            // with no grid beyond it bounds nothing). No such side: every face was searched.
+            double reach = std::numeric_limits<double>::infinity();
+            for (int k = 0; k < 3; ++k) {
+                const double at = k == 0 ? p.x : (k == 1 ? p.y : p.z), origin = k == 0 ? lo_.x : (k == 1 ? lo_.y : lo_.z);
+                if (c[k] - r > 0) reach = std::min(reach, at - (origin + static_cast<double>(c[k] - r) * size_));
+                if (c[k] + r + 1 < n_[k]) reach = std::min(reach, origin + static_cast<double>(c[k] + r + 1) * size_ - at);
+            }
+            if (best <= reach * reach) break;  // (reach infinite: all searched)
         }
         return std::sqrt(best);
     }

@@ -1,0 +1,122 @@
+// The sampled Hausdorff distance searches a grid of faces and stops when no unsearched cell can
+// hold a nearer face: it must find what a search of every face finds. With no face samples asked
+// for, the samples are the vertices and one point per face (a + (b − a)/3 + (c − a)/3), which
+// this test rebuilds and measures against every face with its own point–triangle distance.
+#include "core/mesh/distance.hpp"
+#include "support/random_meshes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace toposimp::mesh {
+namespace {
+
+struct V3 {
+    double x, y, z;
+};
+V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+V3 operator*(double s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+V3 at(const Mesh& m, std::uint32_t v) { return {m.points[v].x, m.points[v].y, m.points[v].z}; }
+
+// Distance from p to the segment ab.
+double to_segment(V3 p, V3 a, V3 b) {
+    const V3 d = b - a;
+    const double length2 = dot(d, d);
+    const double t = length2 > 0 ? std::clamp(dot(p - a, d) / length2, 0.0, 1.0) : 0.0;
+    const V3 q = a + t * d - p;
+    return std::sqrt(dot(q, q));
+}
+
+// Distance from p to the triangle abc: to its plane if p projects inside it, else to its nearest
+// edge (by barycentric signs of the projection).
+double to_triangle(V3 p, V3 a, V3 b, V3 c) {
+    const double edges = std::min({to_segment(p, a, b), to_segment(p, b, c), to_segment(p, c, a)});
+    const V3 u = b - a, v = c - a;
+    const V3 n{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+    const double n2 = dot(n, n);
+    if (!(n2 > 0)) return edges;
+    const double height = dot(p - a, n) / n2;
+    const V3 q = p - height * n;  // p's projection on the plane
+    auto side = [&](V3 s, V3 t) {
+        const V3 e = t - s, w = q - s;
+        return dot(V3{e.y * w.z - e.z * w.y, e.z * w.x - e.x * w.z, e.x * w.y - e.y * w.x}, n);
+    };
+    if (side(a, b) >= 0 && side(b, c) >= 0 && side(c, a) >= 0) return std::min(edges, std::fabs(height) * std::sqrt(n2));
+    return edges;
+}
+
+// Largest and mean distance from from's vertices and face points to the nearest face of to.
+OneWayDistance brute_force(const Mesh& from, const Mesh& to) {
+    std::vector<V3> samples;
+    for (std::uint32_t v = 0; v < from.points.size(); ++v) samples.push_back(at(from, v));
+    for (const Face& f : from.faces) {
+        const V3 a = at(from, f[0]), b = at(from, f[1]), c = at(from, f[2]);
+        samples.push_back(a + (1.0 / 3.0) * (b - a) + (1.0 / 3.0) * (c - a));
+    }
+    OneWayDistance result;
+    double sum = 0;
+    for (const V3& p : samples) {
+        double nearest = std::numeric_limits<double>::infinity();
+        for (const Face& g : to.faces) nearest = std::min(nearest, to_triangle(p, at(to, g[0]), at(to, g[1]), at(to, g[2])));
+        result.max = std::max(result.max, nearest);
+        sum += nearest;
+    }
+    result.samples = samples.size();
+    result.mean = sum / static_cast<double>(samples.size());
+    return result;
+}
+
+void expect_close(double grid, double brute) { EXPECT_NEAR(grid, brute, 1e-12 * std::max(1.0, std::fabs(brute))); }
+
+void expect_same(const Mesh& a, const Mesh& b) {
+    const HausdorffDistance d = hausdorff(a, b, 0);
+    const OneWayDistance forward = brute_force(a, b), backward = brute_force(b, a);
+    EXPECT_EQ(d.forward.samples, forward.samples);
+    EXPECT_EQ(d.backward.samples, backward.samples);
+    expect_close(d.forward.max, forward.max);
+    expect_close(d.forward.mean, forward.mean);
+    expect_close(d.backward.max, backward.max);
+    expect_close(d.backward.mean, backward.mean);
+}
+
+// Random triangles of very different sizes scattered in a box: big ones span many cells, small
+// ones one; samples fall near cell sides and far from any face.
+Mesh scattered(std::mt19937& random, int count, double extent) {
+    std::uniform_real_distribution<double> where(0, extent), size(0.001, 0.4 * extent), offset(-1, 1);
+    Mesh m;
+    for (int i = 0; i < count; ++i) {
+        const Point3 c{where(random), where(random), where(random)};
+        const double s = i % 5 == 0 ? size(random) : 0.01 * size(random);
+        const auto first = static_cast<std::uint32_t>(m.points.size());
+        for (int k = 0; k < 3; ++k) m.points.push_back({c.x + s * offset(random), c.y + s * offset(random), c.z + s * offset(random)});
+        m.faces.push_back({first, first + 1, first + 2});
+    }
+    return m;
+}
+
+TEST(Hausdorff, GridSearchFindsTheNearestFaceOfScatteredTriangles) {
+    std::mt19937 random(7);
+    for (int round = 0; round < 6; ++round) {
+        const Mesh a = scattered(random, 150, 10.0);
+        const Mesh b = scattered(random, 120, round % 2 == 0 ? 10.0 : 3.0);  // b inside or around a
+        expect_same(a, b);
+    }
+}
+
+TEST(Hausdorff, GridSearchFindsTheNearestFaceOfNearbySurfaces) {
+    // A sphere against a coarser, noisier and shifted one: the nearest face is usually in the
+    // sample's own cell or the next.
+    const Mesh fine = toposimp::testing::noisy_sphere(3, 0.0, 1);
+    const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
+    expect_same(fine, coarse);
+}
+
+}  // namespace
+}  // namespace toposimp::mesh
