@@ -238,36 +238,99 @@ std::pair<int, int> area_axis(const Triangle3& t, PredicateStats& stats) {
     return {-1, 0};
 }
 
-// Does the half-open segment (s, x] enter the closed, non-degenerate triangle t, which has its
-// corner `at` at s? Only if x lies in t's plane, inside the angle of t at s.
-bool enters(Point3 s, Point3 x, const Triangle3& t, int at, PredicateStats& stats) {
-    if (orient3d(t[0], t[1], t[2], x, stats) != 0) return false;
-    const auto [axis, turn] = area_axis(t, stats);
+// Is x, a point of the plane of the non-degenerate triangle t, inside t's closed angle at its
+// corner `at` (at s)? Decided in the projection dropping `axis`, where t keeps its area and
+// turns `turn` (area_axis): one-to-one on t's plane. The half-open segment (s, x] then enters t
+// (the angle is below π, t holds the points of the angle near s); otherwise it never meets t.
+bool in_angle(Point3 s, Point3 x, const Triangle3& t, int at, int axis, int turn, PredicateStats& stats) {
     const Point ps = drop_axis(s, axis), px = drop_axis(x, axis);
     const Point pa = drop_axis(t[(at + 1) % 3], axis), pb = drop_axis(t[(at + 2) % 3], axis);
     return orient2(ps, pa, px, stats) * turn >= 0 && orient2(ps, pb, px, stats) * turn <= 0;
 }
 
-// Coplanar faces f and g (f proper, g not degenerate) sharing the corner f[i] = g[j]: true when
-// a line through that corner along one of the four edges leaving it has the other face's two
-// other corners strictly beyond it — the faces then meet only at the corner. False says nothing
-// (the caller decides exactly by other means). Decided in the projection where f keeps its
-// area, which is one-to-one on the common plane.
-bool coplanar_apart_at_corner(const Triangle3& f, int i, const Triangle3& g, int j, PredicateStats& stats) {
+// Does the half-open segment (s, x] enter the closed, non-degenerate triangle t, which has its
+// corner `at` at s? Only if x lies in t's plane, inside the angle of t at s.
+bool enters(Point3 s, Point3 x, const Triangle3& t, int at, PredicateStats& stats) {
+    if (orient3d(t[0], t[1], t[2], x, stats) != 0) return false;
+    const auto [axis, turn] = area_axis(t, stats);
+    return in_angle(s, x, t, at, axis, turn, stats);
+}
+
+// Do the coplanar, non-degenerate triangles f and g, sharing the corner f[i] = g[j] (at s),
+// meet beyond it? Exactly when their closed angles F and G at s share a ray: near s each
+// triangle is its angle, and each lies in it. Their intersection, if more than s, is a convex
+// angle whose edge rays are edge rays of F or G: if neither of G's lies in F, both are F's, so
+// F lies in G and so does either edge ray of F. Decided in the projection where f keeps its
+// area, one-to-one on the common plane.
+bool coplanar_meet_beyond_corner(const Triangle3& f, int i, const Triangle3& g, int j, PredicateStats& stats) {
     const auto [axis, turn_f] = area_axis(f, stats);
-    if (axis < 0) return false;
-    auto flat = [axis = axis](Point3 p) { return drop_axis(p, axis); };
-    const Point s = flat(f[i]);
-    const Point f1 = flat(f[(i + 1) % 3]), f2 = flat(f[(i + 2) % 3]);
-    const Point g1 = flat(g[(j + 1) % 3]), g2 = flat(g[(j + 2) % 3]);
-    const int turn_g = orient2(s, g1, g2, stats);
-    if (turn_g == 0) return false;
-    // Both x and y strictly on the other side of the line s→edge from `inner`'s side (sign).
-    auto beyond = [&](Point edge, int inner, Point x, Point y) {
-        return orient2(s, edge, x, stats) * inner < 0 && orient2(s, edge, y, stats) * inner < 0;
-    };
-    return beyond(f1, turn_f, g1, g2) || beyond(f2, -turn_f, g1, g2) || beyond(g1, turn_g, f1, f2) ||
-           beyond(g2, -turn_g, f1, f2);
+    const Point3 s = f[i];
+    if (in_angle(s, g[(j + 1) % 3], f, i, axis, turn_f, stats) || in_angle(s, g[(j + 2) % 3], f, i, axis, turn_f, stats)) {
+        return true;
+    }
+    const int turn_g = orient2(drop_axis(s, axis), drop_axis(g[(j + 1) % 3], axis), drop_axis(g[(j + 2) % 3], axis), stats);
+    return in_angle(s, f[(i + 1) % 3], g, j, axis, turn_g, stats);
+}
+
+// Triangle u touches the plane of triangle t without crossing it: its corners' sides `side`
+// (orient3d against t) are all ≥ 0 or all ≤ 0, some 0, not all. The points of u on the plane
+// are then the hull of its corners there (a point's side is the weighted sum of the corners'),
+// so u meets t iff that corner or segment meets t: decided in the projection where t keeps its
+// area. −1 when t is degenerate (undecided).
+int touching_meets(const Triangle3& t, const Triangle3& u, const std::array<int, 3>& side, PredicateStats& stats) {
+    const auto [axis, turn] = area_axis(t, stats);
+    if (axis < 0) return -1;
+    (void)turn;
+    Point on[2];
+    int count = 0;
+    for (int k = 0; k < 3; ++k) {
+        if (side[k] == 0) on[count++] = drop_axis(u[k], axis);
+    }
+    const Point a = drop_axis(t[0], axis), b = drop_axis(t[1], axis), c = drop_axis(t[2], axis);
+    if (count == 1) return in_closed_triangle(a, b, c, on[0], Arithmetic::exact, stats) ? 1 : 0;
+    return segment_meets_triangle_2d(on[0], on[1], a, b, c, stats) ? 1 : 0;
+}
+
+// Whether three sides (orient3d signs) cross a plane strictly: none zero, not all alike. One
+// corner is then alone on its side.
+bool crosses(const std::array<int, 3>& side) {
+    return side[0] != 0 && side[1] != 0 && side[2] != 0 && !(side[0] == side[1] && side[1] == side[2]);
+}
+
+// Triangles t and u, each strictly across the other's plane (`t_sides`: t's corners against
+// u's plane; `u_sides`: u's against t's; see crosses). After Guigue & Devillers (2003), derived
+// here in our orientation. Rotate each so that p1 = t[i] and q1 = u[j] are alone on their sides
+// (rotation keeps the planes' orientations); P and Q their sides. The planes meet in a line L
+// with direction d = n_t × n_u, where t meets it in the segment A2A3 (A_k on p1p_k) and u in C2C3
+// (C_m on q1q_m); t ∩ u is the overlap of the two. Writing p_k − p1 and q_m − q1 as positive
+// multiples of A_k − p1 and C_m − q1 and expanding (x × y)·(n_t × n_u),
+//   sign d·(C_m − A_k) = orient3d(p1, p_k, q1, q_m) · P · Q,
+// and in t's plane d = n_t × (n_u's part there), which points from L to p1's side when P > 0:
+// d·(A3 − A2) has the sign of −P; likewise d·(C3 − C2) that of +Q. So t's segment runs from
+// A_lo to A_hi along d (lo = 3, hi = 2 when P > 0, else the reverse), u's from C_lo to C_hi
+// (lo = 2, hi = 3 when Q > 0), and they overlap iff C_lo is not beyond A_hi nor A_lo beyond
+// C_hi.
+bool crossing_triangles_meet(const Triangle3& t, const std::array<int, 3>& t_sides, const Triangle3& u,
+                             const std::array<int, 3>& u_sides, PredicateStats& stats) {
+    auto lone = [](const std::array<int, 3>& side) { return side[0] == side[1] ? 2 : side[0] == side[2] ? 1 : 0; };
+    const int i = lone(t_sides), j = lone(u_sides);
+    const int pq = t_sides[i] * u_sides[j];  // P · Q
+    auto p = [&](int k) { return t[(i + k - 1) % 3]; };  // p(1) = p1, p(2), p(3) in t's turn
+    auto q = [&](int m) { return u[(j + m - 1) % 3]; };
+    const int a_lo = t_sides[i] > 0 ? 3 : 2, a_hi = 5 - a_lo;
+    const int c_lo = u_sides[j] > 0 ? 2 : 3, c_hi = 5 - c_lo;
+    // Sign of d·(C_m − A_k).
+    auto after = [&](int m, int k) { return orient3d(p(1), p(k), q(1), q(m), stats) * pq; };
+    return after(c_lo, a_hi) <= 0 && after(c_hi, a_lo) >= 0;
+}
+
+// Whether three sides (orient3d signs) touch a plane without crossing it: none opposite, some
+// zero, not all.
+bool touches(const std::array<int, 3>& side) {
+    const bool zero = side[0] == 0 || side[1] == 0 || side[2] == 0;
+    const bool positive = side[0] > 0 || side[1] > 0 || side[2] > 0;
+    const bool negative = side[0] < 0 || side[1] < 0 || side[2] < 0;
+    return zero && positive != negative;
 }
 
 }  // namespace
@@ -534,17 +597,26 @@ bool triangles_meet(const Triangle3& t, const Triangle3& u, Sides& side, Predica
     if (!triangle_box(t[0], t[1], t[2]).overlaps(triangle_box(u[0], u[1], u[2]))) return false;
     // u strictly on one side of t's plane: apart (the usual quick rejection).
     const int u0 = side(0), u1 = side(1);
-    if (u0 != 0 && u1 == u0 && side(2) == u0) return false;
-    if (u0 == 0 && u1 == 0 && side(2) == 0) {
-        // u lies in the plane of t (in flat regions, most pairs).
-        if (const int met = coplanar_triangles_meet(t, u, stats); met >= 0) return met == 1;
+    if (u0 * u1 >= 0) {
+        const std::array<int, 3> sides{u0, u1, side(2)};
+        if (u0 != 0 && sides[1] == u0 && sides[2] == u0) return false;
+        if (u0 == 0 && u1 == 0 && sides[2] == 0) {
+            // u lies in the plane of t (in flat regions, most pairs).
+            if (const int met = coplanar_triangles_meet(t, u, stats); met >= 0) return met == 1;
+        } else if (touches(sides)) {
+            // u rests on t's plane at a corner or an edge (along creases of CAD models).
+            if (const int met = touching_meets(t, u, sides, stats); met >= 0) return met == 1;
+        }
     }
-    auto apart = [&](const Triangle3& a, const Triangle3& b) {
-        const int s0 = orient3d(a[0], a[1], a[2], b[0], stats);
-        if (s0 == 0) return false;
-        return orient3d(a[0], a[1], a[2], b[1], stats) == s0 && orient3d(a[0], a[1], a[2], b[2], stats) == s0;
-    };
-    if (apart(u, t)) return false;
+    // The same with the roles swapped: t strictly on one side of u's plane, or resting on it.
+    std::array<int, 3> t_sides{};
+    for (int k = 0; k < 3; ++k) t_sides[k] = orient3d(u[0], u[1], u[2], t[k], stats);
+    if (t_sides[0] != 0 && t_sides[1] == t_sides[0] && t_sides[2] == t_sides[0]) return false;
+    if (touches(t_sides)) {
+        if (const int met = touching_meets(u, t, t_sides, stats); met >= 0) return met == 1;
+    }
+    const std::array<int, 3> u_sides{u0, u1, side(2)};
+    if (crosses(t_sides) && crosses(u_sides)) return crossing_triangles_meet(t, t_sides, u, u_sides, stats);
     // Closed triangles meet iff an edge of one meets the other: the boundary of their
     // intersection (a point, segment or convex polygon) lies on their edges.
     for (int i = 0; i < 3; ++i) {
@@ -590,10 +662,27 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, std::array<int, 3> g
         const int i0 = f_at[0], j0 = g_at[0];
         const int g1 = side((j0 + 1) % 3), g2 = side((j0 + 2) % 3);
         if (g1 != 0 && g2 == g1) return false;
-        if (g1 == 0 && g2 == 0 && coplanar_apart_at_corner(f, i0, g, j0, stats)) return false;
+        if (g1 == 0 || g2 == 0) {
+            const auto [f_axis, f_turn] = area_axis(f, stats);
+            if (f_axis >= 0) {
+                // Coplanar: do their angles at s share a ray?
+                if (g1 == 0 && g2 == 0) return coplanar_meet_beyond_corner(f, i0, g, j0, stats);
+                // One other corner c of g on f's plane, the other off it: g meets that plane in
+                // the segment sc (the hull of its corners there), which enters f iff c lies in
+                // f's angle at s.
+                const Point3 c = g[g1 == 0 ? (j0 + 1) % 3 : (j0 + 2) % 3];
+                return in_angle(f[i0], c, f, i0, f_axis, f_turn, stats);
+            }
+        }
         const int f1 = orient3d(g[0], g[1], g[2], f[(i0 + 1) % 3], stats);
-        const int f2 = f1 == 0 ? 0 : orient3d(g[0], g[1], g[2], f[(i0 + 2) % 3], stats);
+        const int f2 = orient3d(g[0], g[1], g[2], f[(i0 + 2) % 3], stats);
         if (f1 != 0 && f2 == f1) return false;
+        if ((f1 == 0) != (f2 == 0)) {
+            // The same with the roles swapped (g is not degenerate).
+            const auto [g_axis, g_turn] = area_axis(g, stats);
+            const Point3 c = f[f1 == 0 ? (i0 + 1) % 3 : (i0 + 2) % 3];
+            return in_angle(f[i0], c, g, j0, g_axis, g_turn, stats);
+        }
         if (g1 * g2 < 0 && f1 * f2 < 0) {
             // Each face crosses the other's plane: it meets the line L where the planes meet in
             // a segment from s to a point strictly inside its angle at s (on its opposite edge).
@@ -608,8 +697,8 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, std::array<int, 3> g
             const Point3 u = f[(i0 + 1) % 3], v = f[(i0 + 2) % 3];
             return orient3d(p, q, f[i0], u, stats) == g2 && orient3d(p, q, v, f[i0], stats) == g2;
         }
-        // Meeting beyond the shared corner s means an edge opposite s meets the other face, or
-        // an edge leaving s runs into the other face's angle at s (coplanar faces).
+        // (Left: a degenerate f.) Meeting beyond the shared corner s means an edge opposite s
+        // meets the other face, or an edge leaving s runs into the other face's angle at s.
         const int i = f_at[0], j = g_at[0];
         const Point3 s = f[i];
         if (segment_meets_triangle(f[(i + 1) % 3], f[(i + 2) % 3], g, stats)) return true;

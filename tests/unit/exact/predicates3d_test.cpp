@@ -308,6 +308,64 @@ TEST(FacesConflict, FacesSharingOneCornerInSpaceAgreeWithTheIndependentChecker) 
     EXPECT_GT(crossing_each_other, 1000);
 }
 
+// Faces apart in index but close in space (a fold of the surface near a collapsed star), with
+// small integer coordinates so that a corner or an edge of one face resting on the other's
+// plane is common (as along the creases of CAD models), besides pairs each strictly across the
+// other's plane: triangles_meet and faces_conflict agree with the checker, the sides given or
+// not.
+TEST(TrianglesMeet, PairsInSpaceAgreeWithTheIndependentChecker) {
+    std::mt19937_64 random(17);
+    std::uniform_int_distribution<int> small(-2, 2);
+    auto point = [&] { return Point3{static_cast<double>(small(random)), static_cast<double>(small(random)), static_cast<double>(small(random))}; };
+    auto counts = [](const Triangle3& t, const Triangle3& u) {  // u's corners: on t's plane, above, below
+        std::array<int, 3> count{};
+        for (const Point3& p : u) {
+            const int side = reference_orient3d(t[0], t[1], t[2], p);
+            ++count[side == 0 ? 0 : side > 0 ? 1 : 2];
+        }
+        return count;
+    };
+    auto rests_on = [&](const Triangle3& t, const Triangle3& u) {  // u touches t's plane, not crossing it
+        const auto [zero, positive, negative] = counts(t, u);
+        return zero > 0 && zero < 3 && (positive == 0) != (negative == 0);
+    };
+    auto crosses = [&](const Triangle3& t, const Triangle3& u) {  // u strictly across t's plane
+        const auto [zero, positive, negative] = counts(t, u);
+        return zero == 0 && positive > 0 && negative > 0;
+    };
+    PredicateStats stats;
+    int meeting = 0, apart = 0, resting = 0, resting_meeting = 0, crossing = 0, crossing_meeting = 0;
+    for (int trial = 0; trial < 30000; ++trial) {
+        const Triangle3 t{point(), point(), point()};
+        const Triangle3 u{point(), point(), point()};
+        if (shared_corners(t, u) != 0 || degenerate(t, stats) || degenerate(u, stats)) continue;
+        mesh::Mesh pair;
+        pair.points = {t[0], t[1], t[2], u[0], u[1], u[2]};
+        pair.faces = {{0, 1, 2}, {3, 4, 5}};
+        const bool checker = testing::find_defects(pair).intersecting_pairs > 0;
+        std::array<int, 3> u_sides{};
+        for (int k = 0; k < 3; ++k) u_sides[k] = reference_orient3d(t[0], t[1], t[2], u[k]);
+        EXPECT_EQ(triangles_meet(t, u, stats), checker) << "trial " << trial;
+        EXPECT_EQ(triangles_meet(u, t, stats), checker) << "trial " << trial << " (swapped)";
+        EXPECT_EQ(faces_conflict(t, u, u_sides, stats), checker) << "trial " << trial << " (sides given)";
+        (checker ? meeting : apart) += 1;
+        if (rests_on(t, u) || rests_on(u, t)) {
+            ++resting;
+            resting_meeting += checker;
+        }
+        if (crosses(t, u) && crosses(u, t)) {
+            ++crossing;
+            crossing_meeting += checker;
+        }
+    }
+    EXPECT_GT(meeting, 1000);
+    EXPECT_GT(apart, 1000);
+    EXPECT_GT(resting_meeting, 300);
+    EXPECT_GT(resting - resting_meeting, 300);
+    EXPECT_GT(crossing_meeting, 300);
+    EXPECT_GT(crossing - crossing_meeting, 300);
+}
+
 // Vertical gaps, by a different method: the point on the plane or the crossing point solved in
 // rationals, the heights interpolated there, the difference compared with the bound.
 bool reference_vertical_within(const Triangle3& t, Point3 v, double bound) {
