@@ -550,6 +550,57 @@ bool segment_meets_triangle(Point3 p, Point3 q, const Triangle3& t, PredicateSta
     return !(positive && negative);
 }
 
+// Conditions, all exact: (1) at least three corners; (2) seen along a direction n — from the
+// point q = p + n — every triangle turns one way σ: orient3d(p, x, y, q) = σ; (3) around p the
+// triangles wind once: a ray from p (towards s, as seen along n) lies in exactly one triangle's
+// half-open angle [x, y), counted with ρ(v) = orient3d(p, v, s, q): the angle holds the ray iff
+// σρ(x) ≥ 0 and σρ(y) < 0.
+//
+// Why that is enough. Project along n onto a plane: orient3d(p, u, v, q) is the orientation of
+// the projected p, u, v (the determinant of u − p, v − p and q − p ignores any part along n), so
+// by (2) each projected triangle is proper, turning σ, and spans an angle at p below π; (3)
+// decides for each angle, as the meet of a closed and an open half-plane, whether the ray lies
+// in it (half-open: the ray along y counts for the next triangle only). Around the ring the
+// angles follow one another, all turning σ, back to the start: they cover the directions around
+// p a whole number of times, once by (3). So the angles of two triangles share only their
+// common ray, if they are neighbours in the ring, and each projected triangle lies in its angle:
+// two projected triangles meet only at p, or along their shared edge. A common point of two
+// triangles projects there, and each triangle projects one-to-one: it is p, or on their shared
+// edge in both. (n, q and s are rounded choices: any is sound, a poor one fails a condition.)
+bool simple_fan(Point3 p, std::span<const Point3> ring, PredicateStats& stats) {
+    const std::size_t n = ring.size();
+    if (n < 3) return false;
+    double nx = 0, ny = 0, nz = 0, extent = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const Point3 x = ring[i], y = ring[(i + 1) % n];
+        const double ux = x.x - p.x, uy = x.y - p.y, uz = x.z - p.z, vx = y.x - p.x, vy = y.y - p.y, vz = y.z - p.z;
+        nx += uy * vz - uz * vy, ny += uz * vx - ux * vz, nz += ux * vy - uy * vx;
+        extent = std::max({extent, std::fabs(ux), std::fabs(uy), std::fabs(uz)});
+    }
+    const double length = std::sqrt(nx * nx + ny * ny + nz * nz);
+    if (!(length > 0) || !std::isfinite(length) || !(extent > 0)) return false;
+    const double scale = extent / length;
+    const Point3 q{p.x + nx * scale, p.y + ny * scale, p.z + nz * scale};
+    // s off n's line: along the axis where n is smallest.
+    Point3 s = p;
+    const double ax = std::fabs(nx), ay = std::fabs(ny), az = std::fabs(nz);
+    (ax <= ay && ax <= az ? s.x : ay <= az ? s.y : s.z) += extent;
+    if (!std::isfinite(q.x + q.y + q.z + s.x + s.y + s.z)) return false;
+    const int sigma = orient3d(p, ring[0], ring[1], q, stats);
+    if (sigma == 0) return false;
+    for (std::size_t i = 1; i < n; ++i) {
+        if (orient3d(p, ring[i], ring[(i + 1) % n], q, stats) != sigma) return false;
+    }
+    const int rho_first = sigma * orient3d(p, ring[0], s, q, stats);
+    int rho = rho_first, rays = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const int rho_next = i + 1 < n ? sigma * orient3d(p, ring[i + 1], s, q, stats) : rho_first;
+        rays += rho >= 0 && rho_next < 0;
+        rho = rho_next;
+    }
+    return rays == 1;
+}
+
 int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateStats& stats) {
     // The projection dropping the axis where t keeps its area maps t's plane one-to-one, so
     // the closed triangles meet iff their projections do: an edge of u meets t, or t lies

@@ -16,6 +16,7 @@
 #include "core/geometry.hpp"
 
 #include <array>
+#include <span>
 
 namespace toposimp::exact {
 
@@ -63,6 +64,12 @@ bool faces_conflict(const Triangle3& f, const Triangle3& g, PredicateStats& stat
 // orient3d(f[0], f[1], f[2], g[k]), or kSideUnknown (then computed if needed).
 constexpr int kSideUnknown = 2;
 bool faces_conflict(const Triangle3& f, const Triangle3& g, std::array<int, 3> g_sides, PredicateStats& stats);
+
+// Do the triangles (p, ring[i], ring[i + 1]) (cyclically; the fan a collapse to p makes) meet
+// one another only at p and along their shared edges from p? True only if they do; false may
+// also mean that this quick proof failed (too few corners, the fan not turning one way as seen
+// along the corners' mean normal, or winding around p more than once): then test pairs.
+bool simple_fan(Point3 p, std::span<const Point3> ring, PredicateStats& stats);
 
 // Vertical gaps between terrain faces (x–y is the map plane, z the height). Both decide
 // exactly whether a height difference is at most `bound` (≥ 0): the difference and the bound

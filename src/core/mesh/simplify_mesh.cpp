@@ -188,6 +188,11 @@ struct Placement {
     bool bound = false;  // see Candidate::bound
 };
 
+// An edge x → y of a collapse's link (opposite a or b in a face, in the face's turn).
+struct LinkEdge {
+    std::uint32_t x, y;
+};
+
 // What one block did.
 struct BlockResult {
     MeshStats stats;
@@ -419,6 +424,13 @@ private:
     bool flat_and_clean(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& fa, const std::vector<std::uint32_t>& fb,
                         const std::vector<std::uint32_t>& star, Point3 p, const std::vector<exact::Triangle3>& fresh,
                         Overlay& overlay, exact::PredicateStats& predicates);
+    // The link Γ of the collapse of ab: for each face of `star` (each has a or b, not both), its
+    // edge x → y opposite that corner, sorted by x. True if Γ is one cycle.
+    bool link_cycle(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& star, std::vector<LinkEdge>& link) const;
+    // Whether the new faces (the faces `star` with a and b at p) meet one another only at p and
+    // along their shared edges from p: Γ is one cycle and the fan over it simple (exact::simple_fan).
+    bool fan_is_simple(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& star, Point3 p,
+                       exact::PredicateStats& predicates) const;
     // Does face f meet a face near it beyond their shared corners/edge (faces_conflict), or is it
     // degenerate?
     bool meets_another(std::uint32_t f, const Overlay& overlay, exact::PredicateStats& predicates) const;
@@ -1211,25 +1223,8 @@ bool Simplifier::flat_and_clean(std::uint32_t a, std::uint32_t b, const std::vec
         }
     }
     // Γ one cycle: the edges opposite a or b in the faces that stay (each has one of them).
-    thread_local std::vector<std::pair<std::uint32_t, std::uint32_t>> link;
-    link.clear();
-    for (std::uint32_t f : star) {
-        const Face& c = face_[f];
-        const int k = c[0] == a || c[0] == b ? 0 : c[1] == a || c[1] == b ? 1 : 2;
-        link.emplace_back(c[(k + 1) % 3], c[(k + 2) % 3]);
-    }
-    std::sort(link.begin(), link.end());
-    for (std::size_t i = 1; i < link.size(); ++i) {
-        if (link[i].first == link[i - 1].first) return false;
-    }
-    std::uint32_t at = link.front().first;
-    for (std::size_t steps = 0; steps < link.size(); ++steps) {
-        const auto it = std::lower_bound(link.begin(), link.end(), std::pair{at, std::uint32_t{0}});
-        if (it == link.end() || it->first != at) return false;
-        at = it->second;
-        if (at == link.front().first && steps + 1 != link.size()) return false;
-    }
-    if (at != link.front().first) return false;
+    thread_local std::vector<LinkEdge> link;
+    if (!link_cycle(a, b, star, link)) return false;
     // One orientation in a coordinate plane where the reference face is proper.
     int axis = 0, turn = 0;
     for (; axis < 3 && turn == 0; ++axis) turn = exact::orient_projected(reference[0], reference[1], reference[2], axis, predicates);
@@ -1253,6 +1248,44 @@ bool Simplifier::flat_and_clean(std::uint32_t a, std::uint32_t b, const std::vec
         }
     }
     return true;
+}
+
+bool Simplifier::link_cycle(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& star,
+                            std::vector<LinkEdge>& link) const {
+    link.clear();
+    for (std::uint32_t f : star) {
+        const Face& c = face_[f];
+        const int k = c[0] == a || c[0] == b ? 0 : c[1] == a || c[1] == b ? 1 : 2;
+        link.push_back({c[(k + 1) % 3], c[(k + 2) % 3]});
+    }
+    if (link.empty()) return false;
+    std::sort(link.begin(), link.end(), [](const LinkEdge& e, const LinkEdge& f) { return e.x < f.x; });
+    for (std::size_t i = 1; i < link.size(); ++i) {
+        if (link[i].x == link[i - 1].x) return false;
+    }
+    std::uint32_t at = link.front().x;
+    for (std::size_t steps = 0; steps < link.size(); ++steps) {
+        const auto it = std::lower_bound(link.begin(), link.end(), at, [](const LinkEdge& e, std::uint32_t v) { return e.x < v; });
+        if (it == link.end() || it->x != at) return false;
+        at = it->y;
+        if (at == link.front().x && steps + 1 != link.size()) return false;
+    }
+    return at == link.front().x;
+}
+
+bool Simplifier::fan_is_simple(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& star, Point3 p,
+                               exact::PredicateStats& predicates) const {
+    thread_local std::vector<LinkEdge> link;
+    thread_local std::vector<Point3> ring;
+    if (star.size() < 3 || !link_cycle(a, b, star, link)) return false;
+    // Γ's corners in cycle order.
+    ring.clear();
+    const LinkEdge* edge = &link.front();
+    for (std::size_t steps = 0; steps < link.size(); ++steps) {
+        ring.push_back(pos_[edge->x]);
+        edge = &*std::lower_bound(link.begin(), link.end(), edge->y, [](const LinkEdge& e, std::uint32_t v) { return e.x < v; });
+    }
+    return exact::simple_fan(p, ring, predicates);
 }
 
 bool Simplifier::meets_another(std::uint32_t f, const Overlay& overlay, exact::PredicateStats& predicates) const {
@@ -1463,6 +1496,8 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         // shared with the new face included). All corners in the plane and none shared: the
         // coplanar test, where any contact is a conflict. Otherwise the general test.
         enum class Verdict { apart, coplanar, unknown };
+        // The new faces against one another: at once if they form a simple fan around p.
+        const bool simple_fan = !flatten && fan_is_simple(a, b, star, placement.p, predicates);
         for (std::size_t i = 0; i < fresh.size(); ++i) {
             const exact::Triangle3 mine = flat(fresh[i]);
             const Box3 mine_box = triangle_box(mine[0], mine[1], mine[2]);
@@ -1533,7 +1568,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
                     return false;
                 }
             }
-            for (std::size_t j = i + 1; j < fresh.size(); ++j) {
+            for (std::size_t j = i + 1; j < fresh.size() && !simple_fan; ++j) {
                 const exact::Triangle3 other = flat(fresh[j]);
                 if (!mine_box.overlaps(triangle_box(other[0], other[1], other[2]))) continue;
                 std::array<std::uint32_t, 3> ids = face_[star[j]];

@@ -366,6 +366,57 @@ TEST(TrianglesMeet, PairsInSpaceAgreeWithTheIndependentChecker) {
     EXPECT_GT(crossing - crossing_meeting, 300);
 }
 
+// Fans around p, as a collapse to p makes them: rings around p (small integer coordinates, so
+// corners on a triangle's line through p, on the counting ray and in one plane are common),
+// rings winding twice around p, and random rings. Whenever simple_fan passes a fan, the checker
+// finds no two of its triangles meeting beyond their shared corner or edge (and no degenerate
+// one); it passes most rings around p and never one winding twice.
+TEST(SimpleFan, PassesOnlyFansWhoseTrianglesDoNotMeet) {
+    std::mt19937_64 random(21);
+    std::uniform_int_distribution<int> small(-3, 3), radius(1, 4);
+    std::uniform_real_distribution<double> jitter(-0.3, 0.3);
+    PredicateStats stats;
+    int passed = 0, around = 0, refused_meeting = 0;
+    for (int trial = 0; trial < 6000; ++trial) {
+        const int kind = trial % 3;  // 0 around p, 1 twice around p, 2 random
+        const std::size_t n = 3 + static_cast<std::size_t>(trial / 3) % 6 + (kind == 1 ? 2 : 0);
+        const Point3 p{static_cast<double>(small(random)), static_cast<double>(small(random)), static_cast<double>(small(random))};
+        std::vector<Point3> ring;
+        for (std::size_t i = 0; i < n; ++i) {
+            if (kind == 2) {
+                ring.push_back({p.x + small(random), p.y + small(random), p.z + small(random)});
+                continue;
+            }
+            const double turns = kind == 0 ? 1.0 : 2.0;
+            const double angle = 2 * M_PI * turns * (static_cast<double>(i) + jitter(random)) / static_cast<double>(n);
+            const double r = radius(random);
+            ring.push_back({p.x + std::round(r * std::cos(angle)), p.y + std::round(r * std::sin(angle)), p.z + small(random) / 2});
+        }
+        mesh::Mesh fan;
+        fan.points.push_back(p);
+        fan.points.insert(fan.points.end(), ring.begin(), ring.end());
+        for (std::size_t i = 0; i < n; ++i) {
+            fan.faces.push_back({0, static_cast<std::uint32_t>(i + 1), static_cast<std::uint32_t>((i + 1) % n + 1)});
+        }
+        const bool simple = simple_fan(p, ring, stats);
+        const testing::MeshDefects defects = testing::find_defects(fan);
+        const bool meets = defects.intersecting_pairs + defects.degenerate_faces + defects.duplicate_faces > 0;
+        if (simple) {
+            EXPECT_FALSE(meets) << "trial " << trial << ": " << defects.first;
+            ++passed;
+            around += kind == 0;
+        } else {
+            refused_meeting += meets;
+        }
+        if (kind == 1) {
+            EXPECT_FALSE(simple) << "trial " << trial << " (twice around p)";
+        }
+    }
+    EXPECT_GT(around, 1000);
+    EXPECT_GT(passed - around, 20);
+    EXPECT_GT(refused_meeting, 1000);
+}
+
 // Vertical gaps, by a different method: the point on the plane or the crossing point solved in
 // rationals, the heights interpolated there, the difference compared with the bound.
 bool reference_vertical_within(const Triangle3& t, Point3 v, double bound) {
