@@ -421,6 +421,36 @@ int orient3d_float(Point3 a, Point3 b, Point3 c, Point3 d) {
 }
 
 int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, PredicateStats& stats) {
+    // A semi-static filter first. Evaluated in doubles, each of the 36 terms of the expanded
+    // polynomial (a product of four differences) picks up at most 9 roundings (difference,
+    // product, subtraction in each cross product, their product, two additions), so the error is
+    // at most γ9 times the sum of the terms' magnitudes, which the same evaluation over
+    // magnitudes (`permanent`) underestimates by at most the factor 1 − γ9: 10u·permanent covers
+    // both and the rounding of the bound itself. That model needs no underflow or overflow: with
+    // every nonzero difference within 2^±200, a product of two is a double of at least 2^-400, a
+    // nonzero cross product component at least its ulp, 2^-452, and a product of two components
+    // at least 2^-904 (a sum that lands below 2^-1022 is exact); nothing exceeds 2^803.
+    const double bx = b.x - a.x, by = b.y - a.y, bz = b.z - a.z, cx = c.x - a.x, cy = c.y - a.y, cz = c.z - a.z;
+    const double ex = e.x - d.x, ey = e.y - d.y, ez = e.z - d.z, fx = f.x - d.x, fy = f.y - d.y, fz = f.z - d.z;
+    bool in_range = true;
+    for (const double v : {bx, by, bz, cx, cy, cz, ex, ey, ez, fx, fy, fz}) {
+        const double m = std::fabs(v);
+        in_range &= m == 0.0 || (m >= 0x1p-200 && m <= 0x1p200);
+    }
+    if (in_range) {
+        const double n1x = by * cz - bz * cy, n1y = bz * cx - bx * cz, n1z = bx * cy - by * cx;
+        const double n2x = ey * fz - ez * fy, n2y = ez * fx - ex * fz, n2z = ex * fy - ey * fx;
+        const double value = n1x * n2x + n1y * n2y + n1z * n2z;
+        const double m1x = std::fabs(by * cz) + std::fabs(bz * cy), m1y = std::fabs(bz * cx) + std::fabs(bx * cz),
+                     m1z = std::fabs(bx * cy) + std::fabs(by * cx);
+        const double m2x = std::fabs(ey * fz) + std::fabs(ez * fy), m2y = std::fabs(ez * fx) + std::fabs(ex * fz),
+                     m2z = std::fabs(ex * fy) + std::fabs(ey * fx);
+        const double bound = 10.0 * kUnitRoundoff * (m1x * m2x + m1y * m2y + m1z * m2z);
+        if (value > bound || -value > bound) {
+            ++stats.filter_decided;
+            return value > 0 ? 1 : -1;
+        }
+    }
     const int sign = certified_sign(normal_dot_expr<Bounded>(a, b, c, d, e, f, Plain<Bounded>{}));
     if (sign != 2) {
         ++stats.filter_decided;

@@ -142,6 +142,50 @@ TEST(NormalDot, OppositeAndDegenerate) {
     EXPECT_EQ(normal_dot_sign(a, b, c, v1, v2, {0, 0x1p-60, 1}, stats), 1);
 }
 
+// Normals of two triangles nearly orthogonal (the second's plane holds the first's normal up to
+// a few ulps), at scales from 2^-300 to 2^300 (outside the semi-static filter's range at both
+// ends): normal_dot_sign agrees with rationals, and plain doubles get some signs wrong.
+TEST(NormalDot, AgreesWithRationalsNearOrthogonal) {
+    auto reference = [](Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f) {
+        auto q = [](double x) { return mpq_class(x); };
+        const mpq_class bx = q(b.x) - q(a.x), by = q(b.y) - q(a.y), bz = q(b.z) - q(a.z), cx = q(c.x) - q(a.x),
+                        cy = q(c.y) - q(a.y), cz = q(c.z) - q(a.z);
+        const mpq_class ex = q(e.x) - q(d.x), ey = q(e.y) - q(d.y), ez = q(e.z) - q(d.z), fx = q(f.x) - q(d.x),
+                        fy = q(f.y) - q(d.y), fz = q(f.z) - q(d.z);
+        return sgn((by * cz - bz * cy) * (ey * fz - ez * fy) + (bz * cx - bx * cz) * (ez * fx - ex * fz) +
+                   (bx * cy - by * cx) * (ex * fy - ey * fx));
+    };
+    std::mt19937_64 random(29);
+    std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+    std::uniform_int_distribution<int> ulps(-3, 3), scale(0, 4);
+    PredicateStats stats;
+    int naive_wrong = 0, nonzero = 0;
+    for (int trial = 0; trial < 20000; ++trial) {
+        const double s = std::ldexp(1.0, std::array{-300, -20, 0, 40, 300}[static_cast<std::size_t>(scale(random))]);
+        auto point = [&] { return Point3{s * coordinate(random), s * coordinate(random), s * coordinate(random)}; };
+        const Point3 a = point(), b = point(), c = point(), d = point(), w = point();
+        // e − d along the first triangle's normal (rounded), nudged by a few ulps.
+        const double nx = (b.y - a.y) * (c.z - a.z) - (b.z - a.z) * (c.y - a.y);
+        const double ny = (b.z - a.z) * (c.x - a.x) - (b.x - a.x) * (c.z - a.z);
+        const double nz = (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x);
+        const double norm = std::sqrt(nx * nx + ny * ny + nz * nz);
+        if (!(norm > 0) || !std::isfinite(norm)) continue;
+        Point3 e{d.x + s * nx / norm, d.y + s * ny / norm, d.z + s * nz / norm};
+        for (int k = ulps(random); k != 0; k += k > 0 ? -1 : 1) e.x = std::nextafter(e.x, k > 0 ? INFINITY : -INFINITY);
+        const Point3 f = w;
+        const int expected = reference(a, b, c, d, e, f);
+        EXPECT_EQ(normal_dot_sign(a, b, c, d, e, f, stats), expected) << "trial " << trial;
+        const double bx = b.x - a.x, by = b.y - a.y, bz = b.z - a.z, cx = c.x - a.x, cy = c.y - a.y, cz = c.z - a.z;
+        const double ex = e.x - d.x, ey = e.y - d.y, ez = e.z - d.z, fx = f.x - d.x, fy = f.y - d.y, fz = f.z - d.z;
+        const double naive = (by * cz - bz * cy) * (ey * fz - ez * fy) + (bz * cx - bx * cz) * (ez * fx - ex * fz) +
+                             (bx * cy - by * cx) * (ex * fy - ey * fx);
+        naive_wrong += ((naive > 0) - (naive < 0)) != expected;
+        nonzero += expected != 0;
+    }
+    EXPECT_GT(naive_wrong, 100);
+    EXPECT_GT(nonzero, 10000);
+}
+
 TEST(SegmentTriangle, TouchesAndMisses) {
     PredicateStats stats;
     const Triangle3 t{Point3{0, 0, 0}, Point3{4, 0, 0}, Point3{0, 4, 0}};
