@@ -264,8 +264,9 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
     std::string_view line;
     std::vector<std::string_view> tokens;
     std::vector<std::uint32_t> corners;
-    std::vector<double> numbers, colours;
+    std::vector<double> numbers, colours, alphas;
     std::size_t coloured = 0;  // vertices with a colour (v x y z r g b)
+    std::size_t with_alpha = 0;  // and of those, with a fourth number (v x y z r g b a)
     CornerValues uvs("texture coordinates", 2), normals("normals", 3);
     std::size_t face = 0;
     while (lines.next(line)) {
@@ -276,10 +277,13 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
             if (tokens.size() < 4) throw InputError(where(path, lines.number()) + "a vertex needs x y z");
             m.points.push_back(parse_point(path, lines.number(), tokens[1], tokens[2], tokens[3], m.points.size() + 1));
             if (tokens.size() >= 7) {
-                parse_numbers(tokens, 4, 3, numbers, path, lines.number());
+                parse_numbers(tokens, 4, tokens.size() >= 8 ? 4 : 3, numbers, path, lines.number());
                 colours.resize(3 * (m.points.size() - 1), 0.0);
-                colours.insert(colours.end(), numbers.begin(), numbers.end());
+                colours.insert(colours.end(), numbers.begin(), numbers.begin() + 3);
+                alphas.resize(m.points.size() - 1, 1.0);
+                alphas.push_back(numbers.size() == 4 ? numbers[3] : 1.0);
                 ++coloured;
+                with_alpha += numbers.size() == 4;
             }
         } else if (kind == "vn") {
             if (tokens.size() < 4) throw InputError(where(path, lines.number()) + "a normal needs x y z");
@@ -327,6 +331,13 @@ mesh::Mesh read_obj(const std::string& path, std::string_view text, const MeshRe
     if (coloured == m.points.size() && coloured > 0) {
         add_columns(layout, {"red", "green", "blue"}, ValueType::f32);
         append_columns(m.vertex_attributes, m.points.size(), 3, colours);
+        if (with_alpha == coloured) {
+            add_columns(layout, {"alpha"}, ValueType::f32);
+            append_columns(m.vertex_attributes, m.points.size(), 1, alphas);
+        } else if (with_alpha > 0) {
+            report.dropped.push_back("vertex colour alpha: only " + std::to_string(with_alpha) + " of " +
+                                     std::to_string(coloured) + " colours have one");
+        }
     } else if (coloured > 0) {
         report.dropped.push_back("vertex colours: only " + std::to_string(coloured) + " of " + std::to_string(m.points.size()) +
                                  " vertices have one");

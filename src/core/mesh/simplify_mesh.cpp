@@ -14,6 +14,8 @@
 #include <memory>
 #include <numeric>
 #include <span>
+#include <stdexcept>
+#include <string>
 
 namespace toposimp::mesh {
 namespace {
@@ -1853,6 +1855,27 @@ MeshStats Simplifier::run() {
 
 }  // namespace
 
-MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options) { return Simplifier(mesh, options).run(); }
+MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options) {
+    // The readers promise these; a library caller may not: refuse rather than read out of range.
+    const std::size_t n = mesh.points.size();
+    for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
+        for (const std::uint32_t v : mesh.faces[f]) {
+            if (v >= n) {
+                throw std::invalid_argument("simplify_mesh: face " + std::to_string(f) + " has corner " + std::to_string(v) +
+                                            ", beyond the " + std::to_string(n) + " vertices");
+            }
+        }
+    }
+    auto check = [](const Attributes& attributes, std::size_t rows, const char* what) {
+        if (attributes.values.size() != rows * attributes.width) {
+            throw std::invalid_argument(std::string("simplify_mesh: ") + what + " attributes hold " +
+                                        std::to_string(attributes.values.size()) + " values, not " + std::to_string(rows) +
+                                        " rows of " + std::to_string(attributes.width));
+        }
+    };
+    check(mesh.vertex_attributes, n, "vertex");
+    check(mesh.face_attributes, mesh.faces.size(), "face");
+    return Simplifier(mesh, options).run();
+}
 
 }  // namespace toposimp::mesh

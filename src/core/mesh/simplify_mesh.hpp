@@ -102,6 +102,8 @@ struct MeshStats {
 // Simplifies `mesh` in place. Faces repeating a corner and vertices that no face uses are
 // dropped. An input with a non-manifold edge is not simplified (MeshStats::non_manifold). The
 // result keeps the surviving vertices in input order and the surviving faces in input order.
+// Throws std::invalid_argument, the mesh untouched, if a corner index is out of range or an
+// attribute table does not hold one row per vertex (face).
 MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options);
 
 }  // namespace toposimp::mesh

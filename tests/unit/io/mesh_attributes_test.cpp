@@ -154,6 +154,24 @@ TEST(MeshAttributes, ObjSeamsAndPartialColoursAreDroppedWithTheReason) {
     EXPECT_EQ(partial.mesh.vertex_attributes.width, 0u);
 }
 
+// v x y z r g b a: the alpha is kept when every colour has one (and named as not written when
+// the output is OBJ, whose colours have none), dropped with the reason when only some do.
+TEST(MeshAttributes, ObjColourAlphaIsKeptWhenEveryColourHasOne) {
+    const Read r = read(write_file("alpha.obj", "v 0 0 0 1 0 0 0.25\nv 1 0 0 0 1 0 1\nv 0 1 0 0 0 1 0.5\nf 1 2 3\n"));
+    EXPECT_TRUE(r.report.dropped.empty());
+    ASSERT_EQ(names(r.report.layout.vertex), (std::vector<std::string>{"red", "green", "blue", "alpha"}));
+    EXPECT_EQ(std::vector<double>(r.mesh.vertex_attributes.row(0), r.mesh.vertex_attributes.row(1)),
+              (std::vector<double>{1, 0, 0, 0.25}));
+    const std::string ply = temp_path("attributes-alpha-out.ply").string();
+    EXPECT_TRUE(io::write_mesh(r.mesh, r.report.layout, ply, io::MeshFormat::ply, false).empty());
+    EXPECT_EQ(read(ply).mesh.vertex_attributes.row(2)[3], 0.5);
+    const std::string obj = temp_path("attributes-alpha-out.obj").string();
+    EXPECT_EQ(io::write_mesh(r.mesh, r.report.layout, obj, io::MeshFormat::obj, false), (std::vector<std::string>{"vertex alpha"}));
+    const Read some = read(write_file("some-alpha.obj", "v 0 0 0 1 0 0 0.25\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nf 1 2 3\n"));
+    EXPECT_TRUE(mentions(some.report.dropped, "vertex colour alpha: only 1 of 3 colours have one"));
+    EXPECT_EQ(names(some.report.layout.vertex), (std::vector<std::string>{"red", "green", "blue"}));
+}
+
 TEST(MeshAttributes, OffColoursAreIntegersOrFractionsByTheFile) {
     const Read ints = read(write_file("c.off", "COFF\n3 1 0\n0 0 0 255 0 0 255\n1 0 0 0 255 0 128\n0 1 0 0 0 255 0\n3 0 1 2\n"));
     EXPECT_EQ(names(ints.report.layout.vertex), (std::vector<std::string>{"red", "green", "blue", "alpha"}));

@@ -9,6 +9,8 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 namespace toposimp::testing {
@@ -110,6 +112,37 @@ TEST(MeshAttributeBlend, DroppedFacesAndVerticesTakeTheirRows) {
     EXPECT_EQ(m.vertex_attributes.values, (std::vector<double>{0, 10, 30}));
     EXPECT_EQ(m.face_attributes.values, (std::vector<double>{5, 6}));
     EXPECT_EQ(m.faces, (std::vector<mesh::Face>{{0, 1, 2}}));
+}
+
+// A library caller's mesh whose tables do not match it is refused, untouched, with a message
+// naming the table; so is a corner index beyond the vertices.
+TEST(MeshAttributeBlend, MismatchedTablesAndIndicesAreRefused) {
+    const mesh::Mesh good = flat_grid_with_rows(6);
+    mesh::MeshOptions options;
+    options.target = mesh::MeshTarget::keep_fraction;
+    options.value = 0.5;
+    auto refusal = [&](mesh::Mesh m) {
+        const mesh::Mesh before = m;
+        try {
+            mesh::simplify_mesh(m, options);
+        } catch (const std::invalid_argument& e) {
+            EXPECT_EQ(m.points.size(), before.points.size());
+            EXPECT_EQ(m.faces, before.faces);
+            EXPECT_EQ(m.vertex_attributes.values, before.vertex_attributes.values);
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    mesh::Mesh short_rows = good;
+    short_rows.vertex_attributes.values.pop_back();
+    EXPECT_NE(refusal(short_rows).find("vertex attributes"), std::string::npos) << refusal(short_rows);
+    mesh::Mesh extra_face_row = good;
+    extra_face_row.face_attributes.values.push_back(1);
+    EXPECT_NE(refusal(extra_face_row).find("face attributes"), std::string::npos) << refusal(extra_face_row);
+    mesh::Mesh bad_corner = good;
+    bad_corner.faces[3][1] = static_cast<std::uint32_t>(good.points.size());
+    EXPECT_NE(refusal(bad_corner).find("face 3 has corner"), std::string::npos) << refusal(bad_corner);
+    EXPECT_EQ(refusal(good), "accepted");
 }
 
 }  // namespace
