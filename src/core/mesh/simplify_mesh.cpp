@@ -1497,6 +1497,11 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         near.clear();
         near_triangle.clear();
         near_box.clear();
+        // The found faces and their corners lie anywhere in memory: load them all before reading.
+        for (std::uint32_t g : found) __builtin_prefetch(&face_[g]);
+        for (std::uint32_t g : found) {
+            for (std::uint32_t w : face_[g]) __builtin_prefetch(&pos_[w]);
+        }
         for (std::uint32_t g : found) {
             if (alive_[g] && !std::binary_search(fa.begin(), fa.end(), g) && !std::binary_search(fb.begin(), fb.end(), g)) {
                 near.push_back(g);
