@@ -278,9 +278,8 @@ bool coplanar_meet_beyond_corner(const Triangle3& f, int i, const Triangle3& g, 
 // so u meets t iff that corner or segment meets t: decided in the projection where t keeps its
 // area. −1 when t is degenerate (undecided).
 int touching_meets(const Triangle3& t, const Triangle3& u, const std::array<int, 3>& side, PredicateStats& stats) {
-    const auto [axis, turn] = area_axis(t, stats);
+    const int axis = area_axis(t, stats).first;
     if (axis < 0) return -1;
-    (void)turn;
     Point on[2];
     int count = 0;
     for (int k = 0; k < 3; ++k) {
