@@ -517,7 +517,14 @@ private:
     std::vector<std::uint32_t> stamp_;
     std::vector<std::uint32_t> touch_;  // per vertex, under a vertical bound (see touches())
     std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
-    std::unique_ptr<Quadric[]> quadric_;  // per vertex
+    std::unique_ptr<Quadric[]> quadric_;  // per vertex, about frame_
+    // The quadrics' origin: the centre of the input's bounding box. About the coordinate origin a
+    // plane's offset d is as large as the coordinates, and a cost sums terms of d² that cancel:
+    // in UTM metres (x ~ 5·10^5, y ~ 4·10^6) the rounding of d² exceeded the costs of a
+    // decimetre-sized model, the collapse order was noise and the result tens of times further
+    // from the input. About the centre the terms are as large as the model.
+    Point3 frame_{};
+    Point3 local(Point3 p) const { return minus(p, frame_); }
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
     std::vector<UnitBox> unit_boxes_;  // per live face, while the index is built
@@ -589,6 +596,17 @@ void Simplifier::build_quadrics() {
         double a, b, c, d, length;
     };
     const auto m = static_cast<std::int64_t>(face_.size());
+    const auto n = static_cast<std::int64_t>(pos_.size());
+    double lo_x = std::numeric_limits<double>::infinity(), lo_y = lo_x, lo_z = lo_x;
+    double hi_x = -lo_x, hi_y = -lo_x, hi_z = -lo_x;
+#pragma omp parallel for schedule(static) reduction(min : lo_x, lo_y, lo_z) reduction(max : hi_x, hi_y, hi_z)
+    for (std::int64_t i = 0; i < n; ++i) {
+        const Point3 p = pos_[static_cast<std::size_t>(i)];
+        lo_x = std::min(lo_x, p.x), lo_y = std::min(lo_y, p.y), lo_z = std::min(lo_z, p.z);
+        hi_x = std::max(hi_x, p.x), hi_y = std::max(hi_y, p.y), hi_z = std::max(hi_z, p.z);
+    }
+    // (Halves first: the sum of two coordinates near the largest double would overflow.)
+    if (n > 0) frame_ = {0.5 * lo_x + 0.5 * hi_x, 0.5 * lo_y + 0.5 * hi_y, 0.5 * lo_z + 0.5 * hi_z};
     // Left uninitialised (written once below, in parallel): zeroing and faulting in ~40 bytes per
     // face serially first took as long as the loop.
     const std::unique_ptr<Plane[]> planes(new Plane[face_.size()]);
@@ -601,12 +619,11 @@ void Simplifier::build_quadrics() {
         plane.length = length;
         if (!(length > 0)) continue;
         const Point3 unit{normal.x / length, normal.y / length, normal.z / length};
-        plane = {unit.x, unit.y, unit.z, -dot(unit, pos_[f[0]]), length};
+        plane = {unit.x, unit.y, unit.z, -dot(unit, local(pos_[f[0]])), length};
     }
     // Each vertex sums the planes of its faces in list order: deterministic for any thread count.
     // Its neighbours are counted as it goes, by the faces it shares with each and the way those
     // turn (w after v, or before it): one face, a border edge; more than two, a non-manifold edge.
-    const auto n = static_cast<std::int64_t>(pos_.size());
     quadric_ = std::make_unique_for_overwrite<Quadric[]>(pos_.size());  // each written once below
     const bool want_border = options_.terrain && !options_.height_field;
     const auto parts = static_cast<std::size_t>(omp_get_max_threads());
@@ -711,7 +728,7 @@ void Simplifier::add_border_planes() {
                 if (length > 0) {
                     const Point3 unit{side.x / length, side.y / length, side.z / length};
                     Quadric border{};
-                    border.add_plane(unit.x, unit.y, unit.z, -dot(unit, pos_[lo]), 1000.0 * dot(edge, edge));
+                    border.add_plane(unit.x, unit.y, unit.z, -dot(unit, local(pos_[lo])), 1000.0 * dot(edge, edge));
                     q += border;
                 }
             }
@@ -977,12 +994,12 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     const Quadric q = quadric_[a] + quadric_[b];
     if (locked_a || locked_b) {
         out.p = locked_a ? pos_[a] : pos_[b];
-        out.cost = q(out.p);
+        out.cost = q(local(out.p));
         out.bound = false;
         return true;
     }
-    // Optimal placement: solve the 3×3 system ∇(vᵀQv) = 0 by Cramer's rule when it is well
-    // conditioned and its solution stays near the edge and inside the block.
+    // Optimal placement: solve the 3×3 system ∇(vᵀQv) = 0 (v about frame_) by Cramer's rule when it
+    // is well conditioned and its solution stays near the edge and inside the block.
     const double m00 = q.xx, m01 = q.xy, m02 = q.xz, m11 = q.yy, m12 = q.yz, m22 = q.zz;
     const double r0 = -q.xw, r1 = -q.yw, r2 = -q.zw;
     const double c00 = m11 * m22 - m12 * m12, c01 = m02 * m12 - m01 * m22, c02 = m01 * m12 - m02 * m11;
@@ -992,25 +1009,25 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     bool bound = false;
     if (std::fabs(det) > 1e-10 * scale * scale * scale && std::isfinite(det)) {
         const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det, (c01 * r0 + c11 * r1 + c12 * r2) / det,
-                       (c02 * r0 + c12 * r1 + c22 * r2) / det};
+        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det + frame_.x, (c01 * r0 + c11 * r1 + c12 * r2) / det + frame_.y,
+                       (c02 * r0 + c12 * r1 + c22 * r2) / det + frame_.z};
         const double reach = norm(minus(pb, pa));
         const bool near = std::fabs(p.x - 0.5 * (pa.x + pb.x)) <= reach && std::fabs(p.y - 0.5 * (pa.y + pb.y)) <= reach &&
                           std::fabs(p.z - 0.5 * (pa.z + pb.z)) <= reach;
         if (near && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
             if (in_block(p, level, block)) {
-                out = {p, q(p), false};
+                out = {p, q(local(p)), false};
                 return true;
             }
             bound = true;
         }
     }
     // Otherwise the best of the two ends and the midpoint.
-    out = {pa, q(pa), false};
-    const double cost_b = q(pb);
+    out = {pa, q(local(pa)), false};
+    const double cost_b = q(local(pb));
     if (cost_b < out.cost) out = {pb, cost_b, false};
     const Point3 mid{0.5 * (pa.x + pb.x), 0.5 * (pa.y + pb.y), 0.5 * (pa.z + pb.z)};
-    const double cost_mid = q(mid);
+    const double cost_mid = q(local(mid));
     if (cost_mid < out.cost) {
         if (in_block(mid, level, block)) {
             out = {mid, cost_mid, false};
