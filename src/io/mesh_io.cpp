@@ -79,13 +79,17 @@ private:
     std::size_t number_ = 0;
 };
 
+// The C locale's white space (what std::isspace says there), without its library call per
+// character: a third of the time to read an OFF file went to those calls.
+constexpr bool is_space(char c) { return c == ' ' || (c >= '\t' && c <= '\r'); }
+
 void split(std::string_view line, std::vector<std::string_view>& tokens) {
     tokens.clear();
     std::size_t i = 0;
     while (i < line.size()) {
-        while (i < line.size() && std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        while (i < line.size() && is_space(line[i])) ++i;
         const std::size_t start = i;
-        while (i < line.size() && !std::isspace(static_cast<unsigned char>(line[i]))) ++i;
+        while (i < line.size() && !is_space(line[i])) ++i;
         if (i > start) tokens.push_back(line.substr(start, i - start));
     }
 }

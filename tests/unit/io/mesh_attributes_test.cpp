@@ -192,6 +192,16 @@ TEST(MeshAttributes, OffColoursAreIntegersOrFractionsByTheFile) {
     EXPECT_EQ(all.mesh.face_attributes.values, (std::vector<double>{0.25, 0.5, 1, 0.25, 0.5, 1}));
 }
 
+// Tokens are separated by the C locale's white space: space, tab, CR (Windows line ends),
+// vertical tab and form feed. Anything else, a non-ASCII byte included, belongs to a token.
+TEST(MeshAttributes, TextTokensSplitAtEveryKindOfWhiteSpace) {
+    const Read r = read(write_file("ws.off", "OFF\r\n3\t1 0\r\n0\v0\f0\r\n 1 \t0 0\n0 1 0\n3\t0\t1\t2\r\n"));
+    ASSERT_EQ(r.mesh.points.size(), 3u);
+    EXPECT_EQ(r.mesh.points[1].x, 1);
+    EXPECT_EQ(r.mesh.faces, (std::vector<mesh::Face>{{0, 1, 2}}));
+    EXPECT_THROW(read(write_file("nbsp.off", "OFF\n3 1 0\n0\xa0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")), std::exception);
+}
+
 TEST(MeshAttributes, ObjAndOffWriteWhatTheyHoldAndNameTheRest) {
     const Read ply = read(write_file("w.ply", std::string("ply\nformat ascii 1.0\n") + kPlyHeader + kPlyBody));
     const std::string obj = temp_path("attributes-w.obj").string();
