@@ -252,6 +252,13 @@ public:
             if (slot.key != kEmpty) visit(slot.value);
         }
     }
+    // Each cell's key and value, in slot order.
+    template <class Visit>
+    void for_each_keyed(Visit visit) {
+        for (Slot& slot : slots_) {
+            if (slot.key != kEmpty) visit(slot.key, slot.value);
+        }
+    }
 
 private:
     static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // no cell key: they use 63 bits
@@ -303,28 +310,41 @@ struct UnitBox {
 };
 
 // Faces by grid cell for one round: the entries grouped by cell, and a table from a cell to its
-// group. Built by a counting sort: count() each (cell, entry) pair, allocate(), then place() the
-// same pairs in the same order; a cell lists its entries in that order.
+// group. Built by a counting sort in parts (each a run of the entries, one thread's): each part
+// count()s its (cell, entry) pairs in a table of its own, allocate() gives every cell its group
+// and, in it, each part its share in part order, then each part place()s the same pairs in the
+// same order. A cell lists its entries in their order, whatever the number of parts.
 class CellIndex {
 public:
-    void clear() {
+    void clear(std::size_t parts) {
         entries_.clear();
         groups_.clear();
+        parts_.resize(parts);
+        for (CellMap<std::size_t>& part : parts_) part.clear();
     }
-    void count(std::uint64_t key) { ++groups_[key].count; }
+    void count(std::size_t part, std::uint64_t key) { ++parts_[part][key]; }
     void allocate() {
+        for (CellMap<std::size_t>& part : parts_) {
+            part.for_each_keyed([&](std::uint64_t key, std::size_t count) { groups_[key].count += count; });
+        }
         std::size_t total = 0;
         groups_.for_each([&](Group& group) {
             group.first = total;
             total += group.count;
             group.count = 0;
         });
+        // Each part's count becomes where its next entry in the cell goes.
+        for (CellMap<std::size_t>& part : parts_) {
+            part.for_each_keyed([&](std::uint64_t key, std::size_t& count) {
+                Group& group = *groups_.find(key);
+                const std::size_t at = group.first + group.count;
+                group.count += count;
+                count = at;
+            });
+        }
         entries_.resize(total);
     }
-    void place(std::uint64_t key, const IndexEntry& entry) {
-        Group& group = *groups_.find(key);
-        entries_[group.first + group.count++] = entry;
-    }
+    void place(std::size_t part, std::uint64_t key, const IndexEntry& entry) { entries_[(*parts_[part].find(key))++] = entry; }
     // The entries listed in a cell.
     std::span<const IndexEntry> entries(std::uint64_t key) const {
         const Group* group = groups_.find(key);
@@ -337,6 +357,7 @@ private:
     };
     std::vector<IndexEntry> entries_;
     CellMap<Group> groups_;
+    std::vector<CellMap<std::size_t>> parts_;
 };
 
 // The faces a block changed in the current round and that live, by index cell: an entry in each
@@ -905,7 +926,9 @@ IndexEntry index_entry(std::uint32_t f, const UnitBox& unit, std::uint64_t key) 
 }
 
 void Simplifier::build_face_index() {
-    index_.clear();
+    // Parts of the faces, one per thread (a function of the thread count, but the lists are not).
+    const auto parts = static_cast<std::int64_t>(omp_get_max_threads());
+    index_.clear(static_cast<std::size_t>(parts));
     if (!use_index_) return;
     const auto m = static_cast<std::int64_t>(face_.size());
     // The index has its own cells, about four times the current mean edge: stars grow as the
@@ -916,19 +939,26 @@ void Simplifier::build_face_index() {
     index_grid_ = grid_over_faces(4.0, grid_.origin);
     changed_.assign(face_.size(), 0);
     unit_boxes_.resize(face_.size());
+    // Each cell lists its faces in face order: part k holds a run of faces.
+    auto run_of = [&](std::int64_t k) { return m * k / parts; };
 #pragma omp parallel for schedule(static)
-    for (std::int64_t f = 0; f < m; ++f) {
-        if (alive_[f]) unit_boxes_[f] = unit_box(face_box(static_cast<std::uint32_t>(f)));
-    }
-    // Each cell lists its faces in face order.
-    for (std::int64_t f = 0; f < m; ++f) {
-        if (alive_[f]) for_cells(unit_boxes_[f].first, unit_boxes_[f].last, [&](std::uint64_t key) { index_.count(key); });
+    for (std::int64_t k = 0; k < parts; ++k) {
+        for (std::int64_t f = run_of(k); f < run_of(k + 1); ++f) {
+            if (!alive_[f]) continue;
+            const UnitBox& unit = unit_boxes_[f] = unit_box(face_box(static_cast<std::uint32_t>(f)));
+            for_cells(unit.first, unit.last, [&](std::uint64_t key) { index_.count(static_cast<std::size_t>(k), key); });
+        }
     }
     index_.allocate();
-    for (std::int64_t f = 0; f < m; ++f) {
-        if (!alive_[f]) continue;
-        const UnitBox& unit = unit_boxes_[f];
-        for_cells(unit.first, unit.last, [&](std::uint64_t key) { index_.place(key, index_entry(static_cast<std::uint32_t>(f), unit, key)); });
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < parts; ++k) {
+        for (std::int64_t f = run_of(k); f < run_of(k + 1); ++f) {
+            if (!alive_[f]) continue;
+            const UnitBox& unit = unit_boxes_[f];
+            for_cells(unit.first, unit.last, [&](std::uint64_t key) {
+                index_.place(static_cast<std::size_t>(k), key, index_entry(static_cast<std::uint32_t>(f), unit, key));
+            });
+        }
     }
 }
 
