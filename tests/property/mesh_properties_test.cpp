@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <string>
 
 namespace toposimp::mesh {
@@ -180,6 +181,28 @@ TEST(MeshProperties, FarFromTheOriginSimplifiesAsWellAsAtIt) {
     }
     EXPECT_GT(distance[0], 0.0);
     EXPECT_LT(distance[1], 1.5 * distance[0]) << "at the origin " << distance[0] << ", far from it " << distance[1];
+}
+
+// A cost goes with the fourth power of the size: a mesh 2^500 units across overflowed it, one
+// 2^-500 across underflowed it, and the order was noise. Scaled by a power of two, every step
+// of the simplification scales exactly (the quadrics' frame takes the scale out, the exact
+// predicates decide the same signs): the same faces, every point 2^k times the unscaled one.
+TEST(MeshProperties, ScaledByAPowerOfTwoSimplifiesTheSame) {
+    const Mesh input = testing::noisy_sphere(4, 0.05, 23);
+    Mesh unit = input;
+    const MeshStats unit_stats = simplified(unit, MeshTarget::keep_fraction, 0.1, 2);
+    for (int k : {-500, 500}) {
+        Mesh m = input;
+        for (Point3& p : m.points) p = {std::ldexp(p.x, k), std::ldexp(p.y, k), std::ldexp(p.z, k)};
+        const MeshStats stats = simplified(m, MeshTarget::keep_fraction, 0.1, 2);
+        ASSERT_EQ(m.faces, unit.faces) << k;
+        ASSERT_EQ(m.points.size(), unit.points.size()) << k;
+        for (std::size_t i = 0; i < m.points.size(); ++i) {
+            const Point3 p = unit.points[i];
+            ASSERT_TRUE(same_location(m.points[i], {std::ldexp(p.x, k), std::ldexp(p.y, k), std::ldexp(p.z, k)})) << k << ' ' << i;
+        }
+        EXPECT_EQ(stats.max_error, std::ldexp(unit_stats.max_error, k)) << k;
+    }
 }
 
 // A closed box, each side an n×n grid of unit cells (flat regions meeting at creases), faces

@@ -8,7 +8,10 @@
 // predicates' target includes this header, compiled with -ffp-contract=off.
 #pragma once
 
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <limits>
 
 namespace toposimp::exact::expansion {
 
@@ -18,6 +21,41 @@ namespace toposimp::exact::expansion {
 inline bool in_range(double x) {
     const double m = std::fabs(x);
     return m == 0.0 || (m >= 0x1p-150 && m <= 0x1p150);
+}
+
+// The binary exponent of a finite non-zero x (std::ilogb, inline but for subnormals).
+inline int exponent_of(double x) {
+    const int biased = static_cast<int>((std::bit_cast<std::uint64_t>(x) >> 52) & 0x7ff);
+    return biased != 0 ? biased - 1023 : std::ilogb(x);
+}
+
+// x·2^k, exact when the result is a normal double (std::ldexp, inline when 2^k is one).
+inline double times_power_of_two(double x, int k) {
+    if (k >= -1022 && k <= 1023) return x * std::bit_cast<double>(static_cast<std::uint64_t>(k + 1023) << 52);
+    return std::ldexp(x, k);
+}
+
+// Inputs beyond that range (coordinates of 10^±45 and more) would go to GMP, tens of times
+// slower. The predicates whose sign is that of a polynomial homogeneous in differences of the
+// inputs (orient2d, orient3d, the dot product of two normals) keep it when every input is
+// multiplied by one positive number, and multiplying by a power of two is exact unless a result
+// overflows or is subnormal. The exponent k that puts the largest magnitude among `values` in
+// [1, 2), if 2^k scales every value exactly; 0 if not, if k is 0 (nothing to gain) or a value
+// is not finite. Scale with times_power_of_two.
+template <class Values>
+int exact_rescaling(const Values& values) {
+    double largest = 0.0;
+    for (const double v : values) {
+        const double m = std::fabs(v);
+        if (!(m <= std::numeric_limits<double>::max())) return 0;  // (infinite or NaN)
+        largest = m > largest ? m : largest;
+    }
+    if (largest == 0.0) return 0;
+    const int k = -exponent_of(largest);
+    for (const double v : values) {
+        if (v != 0.0 && exponent_of(v) + k < -1022) return 0;  // would be subnormal: bits lost
+    }
+    return k;
 }
 
 // x + y == a + b exactly, x = fl(a + b).

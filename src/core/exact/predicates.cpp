@@ -82,6 +82,15 @@ int orient2d(Point a, Point b, Point c, PredicateStats& stats) {
         // Both products are exactly zero because a factor is exactly zero: det is exactly 0.
         ++stats.filter_decided;
         return 0;
+    } else {
+        // Out of the filter's range (coordinates far from 1, or far apart): once more with all
+        // points scaled towards 1, if that is exact (the determinant is then 2^2k times this
+        // one; the second call's k is 0, so there is no third).
+        const double values[] = {a.x, a.y, b.x, b.y, c.x, c.y};
+        if (const int k = expansion::exact_rescaling(values); k != 0) {
+            auto scaled = [k](Point p) { return Point{expansion::times_power_of_two(p.x, k), expansion::times_power_of_two(p.y, k)}; };
+            return orient2d(scaled(a), scaled(b), scaled(c), stats);
+        }
     }
     if (const int sign = orient2d_expansion(a, b, c); sign != 2) {
         ++stats.expansion_decided;

@@ -332,6 +332,12 @@ bool touches(const std::array<int, 3>& side) {
     return zero && positive != negative;
 }
 
+// p with every coordinate times 2^k.
+Point3 scaled(Point3 p, int k) {
+    using expansion::times_power_of_two;
+    return {times_power_of_two(p.x, k), times_power_of_two(p.y, k), times_power_of_two(p.z, k)};
+}
+
 }  // namespace
 
 int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d) {
@@ -398,6 +404,15 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
             return 1;
         }
     }
+    // Terms out of the filter's range (coordinates far from 1, or far apart): once more with all
+    // points scaled towards 1, if that is exact (the determinant is then 2^3k times this one; the
+    // second call's k is 0, so there is no third).
+    const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
+    if (!(permanent >= 0x1p-800 && permanent <= 0x1p1000)) {
+        if (const int k = expansion::exact_rescaling(values); k != 0) {
+            return orient3d(scaled(a, k), scaled(b, k), scaled(c, k), scaled(d, k), stats);
+        }
+    }
     // The dynamic filter next, unless the determinant came out exactly zero: then the points are
     // almost surely coplanar (flat regions), which no filter can certify.
     int sign = det == 0.0 ? 2 : certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
@@ -448,6 +463,14 @@ int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, 
         if (value > bound || -value > bound) {
             ++stats.filter_decided;
             return value > 0 ? 1 : -1;
+        }
+    }
+    // As orient3d: out of range, scaled towards 1 if that is exact (the value is then 2^4k times
+    // this one).
+    if (!in_range) {
+        const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z, e.x, e.y, e.z, f.x, f.y, f.z};
+        if (const int k = expansion::exact_rescaling(values); k != 0) {
+            return normal_dot_sign(scaled(a, k), scaled(b, k), scaled(c, k), scaled(d, k), scaled(e, k), scaled(f, k), stats);
         }
     }
     const int sign = certified_sign(normal_dot_expr<Bounded>(a, b, c, d, e, f, Plain<Bounded>{}));

@@ -256,6 +256,44 @@ OneWayDistance one_way_vertical(const Mesh& from, const Mesh& to, std::size_t fa
     return result;
 }
 
+// The two meshes' points and faces, moved and scaled by a power of two so that the bounding box
+// of all their points is centred at the origin, its largest half-extent in [1, 2): products of
+// squared lengths (distance2 takes them) neither overflow nor underflow, however large or small
+// the meshes. `unscale` takes a length back to the meshes' units.
+struct Framed {
+    Mesh a, b;
+    double unscale = 1.0;
+};
+Framed framed(const Mesh& a, const Mesh& b) {
+    Framed out;
+    V lo{0, 0, 0}, hi{0, 0, 0};
+    bool any = false;
+    for (const Mesh* m : {&a, &b}) {
+        for (const Point3& p : m->points) {
+            if (!any) lo = hi = v(p), any = true;
+            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+        }
+    }
+    const V centre{0.5 * lo.x + 0.5 * hi.x, 0.5 * lo.y + 0.5 * hi.y, 0.5 * lo.z + 0.5 * hi.z};
+    const double largest = std::max({0.5 * hi.x - 0.5 * lo.x, 0.5 * hi.y - 0.5 * lo.y, 0.5 * hi.z - 0.5 * lo.z});
+    const int e = largest > 0 && std::isfinite(largest) ? std::clamp(std::ilogb(largest), -1000, 1000) : 0;
+    const double scale = std::ldexp(1.0, -e);
+    out.unscale = std::ldexp(1.0, e);
+    for (auto [from, to] : {std::pair{&a, &out.a}, std::pair{&b, &out.b}}) {
+        to->faces = from->faces;
+        to->points.reserve(from->points.size());
+        for (const Point3& p : from->points) to->points.push_back({(p.x - centre.x) * scale, (p.y - centre.y) * scale, (p.z - centre.z) * scale});
+    }
+    return out;
+}
+
+OneWayDistance unscaled(OneWayDistance d, double unscale) {
+    d.max *= unscale;
+    d.mean *= unscale;
+    return d;
+}
+
 }  // namespace
 
 VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples) {
@@ -266,16 +304,17 @@ VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samp
 }
 
 HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples) {
+    const Framed in = framed(a, b);
     HausdorffDistance d;
-    d.forward = one_way(a, b, face_samples);
-    d.backward = one_way(b, a, face_samples);
+    d.forward = unscaled(one_way(in.a, in.b, face_samples), in.unscale);
+    d.backward = unscaled(one_way(in.b, in.a, face_samples), in.unscale);
     if (!a.points.empty()) {
-        V lo = v(a.points[0]), hi = lo;
-        for (const Point3& p : a.points) {
+        V lo = v(in.a.points[0]), hi = lo;
+        for (const Point3& p : in.a.points) {
             lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
             hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
         }
-        d.diagonal = std::sqrt(dot(hi - lo, hi - lo));
+        d.diagonal = std::sqrt(dot(hi - lo, hi - lo)) * in.unscale;
     }
     return d;
 }

@@ -404,7 +404,7 @@ private:
         return ((stamp_[c.a] + stamp_[c.b]) & kStampMask) != c.stamps();
     }
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
-        const Point3 d = minus(pos_[a], pos_[b]);
+        const Point3 d = scaled(minus(pos_[a], pos_[b]));
         const double length2 = dot(d, d);
         return {placement.cost + kLengthWeight * length2 * length2, a, b,
                 ((stamp_[a] + stamp_[b]) & kStampMask) | (placement.bound ? ~kStampMask : 0u), kNone};
@@ -538,14 +538,20 @@ private:
     std::vector<std::uint32_t> stamp_;
     std::vector<std::uint32_t> touch_;  // per vertex, under a vertical bound (see touches())
     std::vector<std::uint64_t> cell_;  // per vertex: its grid cell
-    std::unique_ptr<Quadric[]> quadric_;  // per vertex, about frame_
-    // The quadrics' origin: the centre of the input's bounding box. About the coordinate origin a
-    // plane's offset d is as large as the coordinates, and a cost sums terms of d² that cancel:
-    // in UTM metres (x ~ 5·10^5, y ~ 4·10^6) the rounding of d² exceeded the costs of a
-    // decimetre-sized model, the collapse order was noise and the result tens of times further
-    // from the input. About the centre the terms are as large as the model.
+    std::unique_ptr<Quadric[]> quadric_;  // per vertex, in frame coordinates (local())
+    // The quadrics' frame: origin at the centre of the input's bounding box, unit a power of two
+    // near its largest extent. About the coordinate origin a plane's offset d is as large as the
+    // coordinates, and a cost sums terms of d² that cancel: in UTM metres (x ~ 5·10^5, y ~ 4·10^6)
+    // the rounding of d² exceeded the costs of a decimetre-sized model, the collapse order was
+    // noise and the result tens of times further from the input. And a cost goes with the fourth
+    // power of the size: a model 10^100 units across overflowed, one 10^-150 across underflowed.
+    // In the frame the terms are of the order of 1. Scaling by a power of two is exact: the order
+    // and the placements are those the same model would get at that size.
     Point3 frame_{};
-    Point3 local(Point3 p) const { return minus(p, frame_); }
+    double scale_ = 1.0;    // frame units per coordinate unit, 2^-e
+    double unscale_ = 1.0;  // 2^e
+    Point3 local(Point3 p) const { return {(p.x - frame_.x) * scale_, (p.y - frame_.y) * scale_, (p.z - frame_.z) * scale_}; }
+    Point3 scaled(Point3 d) const { return {d.x * scale_, d.y * scale_, d.z * scale_}; }
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
     std::vector<UnitBox> unit_boxes_;  // per live face, while the index is built
@@ -627,14 +633,21 @@ void Simplifier::build_quadrics() {
         hi_x = std::max(hi_x, p.x), hi_y = std::max(hi_y, p.y), hi_z = std::max(hi_z, p.z);
     }
     // (Halves first: the sum of two coordinates near the largest double would overflow.)
-    if (n > 0) frame_ = {0.5 * lo_x + 0.5 * hi_x, 0.5 * lo_y + 0.5 * hi_y, 0.5 * lo_z + 0.5 * hi_z};
+    if (n > 0) {
+        frame_ = {0.5 * lo_x + 0.5 * hi_x, 0.5 * lo_y + 0.5 * hi_y, 0.5 * lo_z + 0.5 * hi_z};
+        const double largest = std::max({0.5 * hi_x - 0.5 * lo_x, 0.5 * hi_y - 0.5 * lo_y, 0.5 * hi_z - 0.5 * lo_z});
+        // (Both 2^±e normal doubles; an empty extent or a degenerate one keeps the unit.)
+        const int e = largest > 0 && std::isfinite(largest) ? std::clamp(std::ilogb(largest), -1000, 1000) : 0;
+        scale_ = std::ldexp(1.0, -e);
+        unscale_ = std::ldexp(1.0, e);
+    }
     // Left uninitialised (written once below, in parallel): zeroing and faulting in ~40 bytes per
     // face serially first took as long as the loop.
     const std::unique_ptr<Plane[]> planes(new Plane[face_.size()]);
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < m; ++i) {
         const Face& f = face_[static_cast<std::size_t>(i)];
-        const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
+        const Point3 normal = cross(scaled(minus(pos_[f[1]], pos_[f[0]])), scaled(minus(pos_[f[2]], pos_[f[0]])));
         const double length = norm(normal);
         Plane& plane = planes[static_cast<std::size_t>(i)];
         plane.length = length;
@@ -742,8 +755,8 @@ void Simplifier::add_border_planes() {
             for (const auto& [w, face] : borders) {
                 const auto lo = std::min(v, w), hi = std::max(v, w);
                 const Face& f = face_[face];
-                const Point3 normal = cross(minus(pos_[f[1]], pos_[f[0]]), minus(pos_[f[2]], pos_[f[0]]));
-                const Point3 edge = minus(pos_[hi], pos_[lo]);
+                const Point3 normal = cross(scaled(minus(pos_[f[1]], pos_[f[0]])), scaled(minus(pos_[f[2]], pos_[f[0]])));
+                const Point3 edge = scaled(minus(pos_[hi], pos_[lo]));
                 const Point3 side = cross(edge, normal);
                 const double length = norm(side);
                 if (length > 0) {
@@ -1040,8 +1053,9 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     bool bound = false;
     if (std::fabs(det) > 1e-10 * scale * scale * scale && std::isfinite(det)) {
         const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det + frame_.x, (c01 * r0 + c11 * r1 + c12 * r2) / det + frame_.y,
-                       (c02 * r0 + c12 * r1 + c22 * r2) / det + frame_.z};
+        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det * unscale_ + frame_.x,
+                       (c01 * r0 + c11 * r1 + c12 * r2) / det * unscale_ + frame_.y,
+                       (c02 * r0 + c12 * r1 + c22 * r2) / det * unscale_ + frame_.z};
         const double reach = norm(minus(pb, pa));
         const bool near = std::fabs(p.x - 0.5 * (pa.x + pb.x)) <= reach && std::fabs(p.y - 0.5 * (pa.y + pb.y)) <= reach &&
                           std::fabs(p.z - 0.5 * (pa.z + pb.z)) <= reach;
@@ -1072,7 +1086,8 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
 
 double Simplifier::error_of(const Placement& placement, std::uint32_t a, std::uint32_t b) const {
     const double area = quadric_[a].area + quadric_[b].area;
-    return area > 0 ? std::sqrt(std::max(placement.cost, 0.0) / area) : 0.0;
+    // (In frame units, so back to coordinate units.)
+    return area > 0 ? std::sqrt(std::max(placement.cost, 0.0) / area) * unscale_ : 0.0;
 }
 
 template <class Wanted>

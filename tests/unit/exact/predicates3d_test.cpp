@@ -130,6 +130,36 @@ TEST(Orient3d, HugeAndTinyCoordinates) {
     }
 }
 
+// Far outside the filters' and expansions' range (coordinates of 2^±500 and 2^±900) the points
+// are scaled by a power of two towards 1, which is exact, and decided there without GMP; with
+// coordinates of very different magnitudes the scaling would lose bits of the small ones, and
+// GMP decides. Points within an ulp of a plane: the sign agrees with rationals every time.
+TEST(Orient3d, OutOfRangeInputsAreScaledExactlyOrGoToGmp) {
+    std::mt19937_64 random(41);
+    std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+    for (int exponent : {-900, -500, 500, 900}) {
+        PredicateStats stats;
+        const double s = std::ldexp(1.0, exponent);
+        for (int trial = 0; trial < 3000; ++trial) {
+            auto point = [&] { return Point3{s * coordinate(random), s * coordinate(random), s * coordinate(random)}; };
+            const Point3 a = point(), b = point(), c = point();
+            const double t = std::uniform_real_distribution<double>(0, 1)(random);
+            Point3 d{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y), a.z + t * (b.z - a.z)};
+            d = up(d, trial % 3 - 1);
+            ASSERT_EQ(orient3d(a, b, c, d, stats), reference_orient3d(a, b, c, d)) << exponent << ' ' << trial;
+        }
+        EXPECT_EQ(stats.gmp_fallbacks, 0u) << exponent;
+    }
+    // One coordinate 2^-1000 among others near 2^500: scaled by 2^-500 it would be subnormal.
+    PredicateStats stats;
+    const double big = 0x1p500;
+    const Point3 a{0x1p-1000, 0, 0}, b{big, 0, 0}, c{0, big, 0};
+    for (const Point3 d : {Point3{big / 3, big / 3, 0}, Point3{big / 3, big / 3, 0x1p-1000}, Point3{big / 3, big / 3, -0x1p-1074}}) {
+        EXPECT_EQ(orient3d(a, b, c, d, stats), reference_orient3d(a, b, c, d));
+    }
+    EXPECT_GT(stats.gmp_fallbacks, 0u);
+}
+
 TEST(NormalDot, OppositeAndDegenerate) {
     PredicateStats stats;
     const Point3 a{0, 0, 0}, b{1, 0, 0}, c{0, 1, 0};

@@ -88,6 +88,25 @@ TEST(Orient2d, HugeAndTinyMagnitudesFallBackCorrectly) {
     EXPECT_EQ(orient2d({DBL_MAX, 0}, {-DBL_MAX, 0}, {0, DBL_MAX}, stats), orient2d_gmp({DBL_MAX, 0}, {-DBL_MAX, 0}, {0, DBL_MAX}));
 }
 
+// Collinear and one-ulp-off triples at 2^±600: scaled exactly towards 1 and decided without GMP,
+// as GMP decides.
+TEST(Orient2d, OutOfRangeTriplesAreScaledExactly) {
+    std::mt19937_64 random(43);
+    std::uniform_real_distribution<double> coordinate(-1.0, 1.0);
+    for (int exponent : {-600, 600}) {
+        PredicateStats stats;
+        const double s = std::ldexp(1.0, exponent);
+        for (int trial = 0; trial < 3000; ++trial) {
+            const Point a{s * coordinate(random), s * coordinate(random)}, b{s * coordinate(random), s * coordinate(random)};
+            const double t = std::uniform_real_distribution<double>(0, 1)(random);
+            Point c{a.x + t * (b.x - a.x), a.y + t * (b.y - a.y)};
+            if (trial % 3 != 1) c.y = std::nextafter(c.y, trial % 3 == 0 ? -INFINITY : INFINITY);
+            ASSERT_EQ(orient2d(a, b, c, stats), orient2d_gmp(a, b, c)) << exponent << ' ' << trial;
+        }
+        EXPECT_EQ(stats.gmp_fallbacks, 0u) << exponent;
+    }
+}
+
 // A triangle with one edge on y = x through (1e6, 1e6) … (1e6 + 2, 1e6 + 2): the point
 // (1e6 + 1, 1e6 + 1) is exactly on it; one ulp up or down is inside or outside.
 TEST(InClosedTriangle, PointsOneUlpFromAnEdge) {

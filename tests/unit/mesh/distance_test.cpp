@@ -118,5 +118,25 @@ TEST(Hausdorff, GridSearchFindsTheNearestFaceOfNearbySurfaces) {
     expect_same(fine, coarse);
 }
 
+// At 2^±500 units squared lengths times squared lengths overflow or underflow; the distances are
+// measured in a frame that takes the scale out, so they are the unscaled ones times 2^k exactly.
+TEST(Hausdorff, ScaledByAPowerOfTwoMeasuresTheSame) {
+    const Mesh fine = toposimp::testing::noisy_sphere(3, 0.0, 1);
+    const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
+    const HausdorffDistance unit = hausdorff(fine, coarse, 20000);
+    ASSERT_GT(unit.max(), 0.0);
+    for (int k : {-500, 500}) {
+        auto scaled = [k](Mesh m) {
+            for (Point3& p : m.points) p = {std::ldexp(p.x, k), std::ldexp(p.y, k), std::ldexp(p.z, k)};
+            return m;
+        };
+        const HausdorffDistance d = hausdorff(scaled(fine), scaled(coarse), 20000);
+        EXPECT_EQ(d.forward.max, std::ldexp(unit.forward.max, k)) << k;
+        EXPECT_EQ(d.backward.max, std::ldexp(unit.backward.max, k)) << k;
+        EXPECT_EQ(d.forward.mean, std::ldexp(unit.forward.mean, k)) << k;
+        EXPECT_EQ(d.diagonal, std::ldexp(unit.diagonal, k)) << k;
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::mesh
