@@ -55,6 +55,9 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     mesh->add_flag("--terrain", options.terrain,
                    "The mesh is a TIN over the x-y plane (z = height): never fold a face over in the map plane");
     mesh->add_flag("--triangulate", options.triangulate, "Split polygons with more than 3 corners into fans (else an error)");
+    mesh->add_flag("--weld", options.weld,
+                   "First merge vertices at exactly the same location (an unwelded mesh, as converted from STL); vertex "
+                   "attributes that differ between merged vertices are dropped");
     mesh->add_flag("--ascii", options.ascii, "Write PLY as text (default: binary little endian, double coordinates)");
     mesh->add_flag("--no-hausdorff", options.no_hausdorff, "Skip measuring the Hausdorff distance (saves time on big meshes)");
     mesh->add_option("-j,--threads", options.threads,
@@ -169,6 +172,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
         io::AttributeLayout layout;                   // what m's attribute columns are
         std::vector<std::string> dropped, unwritten;  // attributes not kept, and not written
         std::optional<io::Dem> dem;
+        std::size_t welded_vertices = 0;
         if (io::has_mesh_extension(options.input)) {
             io::MeshReadOptions read_options;
             read_options.triangulate = options.triangulate;
@@ -187,6 +191,18 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
             if (report.polygons_triangulated > 0) log->info("{} polygons split into triangle fans", report.polygons_triangulated);
             if (report.ignored_elements > 0) {
                 log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
+            }
+            if (options.weld) {
+                const mesh::Welded welded = mesh::weld_coincident(m);
+                welded_vertices = welded.vertices;
+                log->info("welded {} vertices onto others at the same location", welded.vertices);
+                for (std::size_t c = 0; c < welded.differs.size(); ++c) {
+                    if (!welded.differs[c]) continue;
+                    dropped.push_back("vertex " + layout.vertex[c].name + ": differs between vertices welded together");
+                    log->warn("{}: {}: dropped (not carried to the simplified mesh)", options.input, dropped.back());
+                }
+                mesh::remove_vertex_columns(m, welded.differs);
+                std::erase_if(layout.vertex, [&, c = std::size_t{0}](const io::AttributeColumn&) mutable { return welded.differs[c++]; });
             }
         } else {
             dem = gdal.read_dem(options.input, options.band);
@@ -213,7 +229,8 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
             for (std::uint32_t f : edge->faces) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
             throw io::InputError(options.input + ": the edge between vertices " + std::to_string(edge->a) + " and " +
                                  std::to_string(edge->b) + " (counted from 0) has more than two faces (" + faces +
-                                 ", ...): non-manifold meshes are not supported");
+                                 ", ...)" + (options.weld ? " once vertices at the same location are welded" : "") +
+                                 ": non-manifold meshes are not supported");
         }
         if (engine->terrain && !stats.terrain) {
             const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
@@ -257,8 +274,14 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
         const double total = seconds_since(start);
         progress.done();
         if (!stats.target_reached) {
-            log->warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks",
-                      stats.faces_out, stats.target_faces);
+            // An unwelded mesh is many separate pieces, whose border edges cannot collapse.
+            const std::size_t coincident = options.weld ? 0 : mesh::count_coincident(m);
+            log->warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks{}", stats.faces_out,
+                      stats.target_faces,
+                      coincident == 0 ? std::string()
+                                      : fmt::format(" ({} of the vertices left share their location with another: "
+                                                    "--weld merges such vertices first)",
+                                                    coincident));
         }
         log->debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection, "
                    "{} vertical error",
@@ -282,7 +305,8 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
             out << "{\"command\":\"mesh\",\"input\":" << io::json_string(options.input)
                 << ",\"output\":" << io::json_string(options.output) << ",\"vertices_in\":" << stats.vertices_in
                 << ",\"vertices_out\":" << stats.vertices_out << ",\"faces_in\":" << stats.faces_in
-                << ",\"faces_out\":" << stats.faces_out << ",\"collapses\":" << stats.collapses
+                << ",\"faces_out\":" << stats.faces_out << ",\"welded_vertices\":" << welded_vertices
+                << ",\"collapses\":" << stats.collapses
                 << ",\"flat_collapses_unsearched\":" << stats.flat_unsearched
                 << ",\"target\":{\"criterion\":" << io::json_string(describe(*engine, stats))
                 << ",\"target_faces\":" << stats.target_faces << ",\"reached\":" << (stats.target_reached ? "true" : "false")

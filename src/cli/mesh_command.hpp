@@ -24,6 +24,7 @@ struct MeshCommandOptions {
     std::string layer_name = "tin";
     bool terrain = false;
     bool triangulate = false;
+    bool weld = false;  // --weld: merge vertices at the same location first
     bool ascii = false;
     bool no_hausdorff = false;
     int threads = 0;

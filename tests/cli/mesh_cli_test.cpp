@@ -143,6 +143,49 @@ TEST(MeshCli, ColoursNormalsAndFaceValuesSurviveSimplification) {
         << obj.out;
 }
 
+// An unwelded mesh (each face with corners of its own, as converted from STL) is thousands of
+// separate triangles: nothing collapses, and the warning says why and what to do. --weld merges
+// the copies first; a colour that differs between copies (a seam) is dropped and said so.
+TEST(MeshCli, UnweldedMeshIsNamedAndWeldedOnRequest) {
+    const auto dir = fresh_dir("mesh");
+    io::MeshReadReport report;
+    const mesh::Mesh torus = io::read_mesh(testdata("mesh/torus.off"), {}, report);
+    mesh::Mesh soup;
+    io::AttributeLayout layout;
+    layout.vertex = {{"red", io::ValueType::u8}, {"green", io::ValueType::u8}, {"blue", io::ValueType::u8}};
+    soup.vertex_attributes.width = 3;
+    for (std::uint32_t f = 0; f < torus.faces.size(); ++f) {
+        for (std::uint32_t v : torus.faces[f]) {
+            soup.points.push_back(torus.points[v]);
+            // Green differs between the copies of a vertex (by face), red and blue do not.
+            soup.vertex_attributes.values.insert(soup.vertex_attributes.values.end(), {v % 2 == 0 ? 255.0 : 0.0, f % 2 == 0 ? 10.0 : 20.0, 0.0});
+        }
+        soup.faces.push_back({3 * f, 3 * f + 1, 3 * f + 2});
+    }
+    const std::string in = (dir / "soup.ply").string();
+    ASSERT_TRUE(io::write_mesh(soup, layout, in, io::MeshFormat::ply, false).empty());
+
+    const CliResult plain = run_cli({"mesh", in, "-o", (dir / "plain.ply").string(), "--keep", "10%", "--no-hausdorff", "--json"});
+    ASSERT_EQ(plain.code, 0) << plain.err;
+    EXPECT_NE(plain.err.find("target not reached"), std::string::npos) << plain.err;
+    EXPECT_NE(plain.err.find("14400 of the vertices left share their location with another: --weld merges"), std::string::npos)
+        << plain.err;
+    EXPECT_NE(plain.out.find("\"welded_vertices\":0,"), std::string::npos) << plain.out;
+
+    const std::string out = (dir / "welded.ply").string();
+    const CliResult welded = run_cli({"mesh", in, "-o", out, "--keep", "10%", "--weld", "--json"});
+    ASSERT_EQ(welded.code, 0) << welded.err;
+    EXPECT_EQ(welded.err.find("target not reached"), std::string::npos) << welded.err;
+    EXPECT_NE(welded.out.find("\"welded_vertices\":12000,"), std::string::npos) << welded.out;  // 14 400 corners, 2 400 vertices
+    EXPECT_NE(welded.out.find("\"faces_out\":480,"), std::string::npos) << welded.out;
+    EXPECT_NE(welded.out.find("\"vertex\":[\"red\",\"blue\"]"), std::string::npos) << welded.out;
+    EXPECT_NE(welded.out.find("\"dropped\":[\"vertex green: differs between vertices welded together\"]"), std::string::npos)
+        << welded.out;
+    const mesh::Mesh m = read_back(out);
+    EXPECT_EQ(m.faces.size(), 480u);
+    EXPECT_EQ(find_defects(m).total(), 0u);
+}
+
 TEST(MeshCli, ThreadCountDoesNotChangeTheFile) {
     const auto dir = fresh_dir("mesh");
     const std::string one = (dir / "one.ply").string(), two = (dir / "two.ply").string();

@@ -2,11 +2,27 @@
 
 #include <algorithm>
 #include <memory>
+#include <numeric>
 
 namespace toposimp::mesh {
 namespace {
 
 bool repeats_corner(const Face& f) { return f[0] == f[1] || f[1] == f[2] || f[2] == f[0]; }
+
+// The vertex numbers ordered by location (x, then y, then z; equal coordinates compare equal,
+// −0 and +0 too), then by number: vertices at one location are consecutive.
+std::vector<std::uint32_t> by_location(const Mesh& mesh) {
+    std::vector<std::uint32_t> order(mesh.points.size());
+    std::iota(order.begin(), order.end(), 0u);
+    const std::vector<Point3>& p = mesh.points;
+    std::sort(order.begin(), order.end(), [&p](std::uint32_t a, std::uint32_t b) {
+        if (p[a].x != p[b].x) return p[a].x < p[b].x;
+        if (p[a].y != p[b].y) return p[a].y < p[b].y;
+        if (p[a].z != p[b].z) return p[a].z < p[b].z;
+        return a < b;
+    });
+    return order;
+}
 
 }  // namespace
 
@@ -54,6 +70,58 @@ std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept) {
         for (std::uint32_t& v : f) v = index[v];
     }
     return before - faces;
+}
+
+std::size_t count_coincident(const Mesh& mesh) {
+    const std::vector<std::uint32_t> order = by_location(mesh);
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < order.size(); ++i) {
+        const bool before = i > 0 && same_location(mesh.points[order[i - 1]], mesh.points[order[i]]);
+        const bool after = i + 1 < order.size() && same_location(mesh.points[order[i + 1]], mesh.points[order[i]]);
+        count += before || after;
+    }
+    return count;
+}
+
+Welded weld_coincident(Mesh& mesh) {
+    Welded welded;
+    const Attributes& rows = mesh.vertex_attributes;
+    welded.differs.assign(rows.width, false);
+    const std::vector<std::uint32_t> order = by_location(mesh);
+    std::vector<std::uint32_t> target(mesh.points.size());
+    std::iota(target.begin(), target.end(), 0u);
+    for (std::size_t i = 1; i < order.size(); ++i) {
+        const std::uint32_t v = order[i];
+        if (!same_location(mesh.points[order[i - 1]], mesh.points[v])) continue;
+        const std::uint32_t first = target[order[i - 1]];  // the group's first, in number order
+        target[v] = first;
+        ++welded.vertices;
+        for (std::size_t c = 0; c < rows.width; ++c) {
+            // (Compared as values: NaN differs from itself, and −0 equals +0.)
+            if (!(rows.row(v)[c] == rows.row(first)[c])) welded.differs[c] = true;
+        }
+    }
+    if (welded.vertices == 0) return welded;
+    for (Face& f : mesh.faces) {
+        for (std::uint32_t& v : f) v = target[v];
+    }
+    return welded;
+}
+
+void remove_vertex_columns(Mesh& mesh, const std::vector<bool>& remove) {
+    Attributes& rows = mesh.vertex_attributes;
+    const std::size_t width = rows.width;
+    const auto kept = static_cast<std::size_t>(std::count(remove.begin(), remove.end(), false));
+    if (kept == width) return;
+    const std::size_t count = width == 0 ? 0 : rows.values.size() / width;
+    std::size_t at = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+        for (std::size_t c = 0; c < width; ++c) {
+            if (!remove[c]) rows.values[at++] = rows.values[i * width + c];
+        }
+    }
+    rows.values.resize(at);
+    rows.width = kept;
 }
 
 }  // namespace toposimp::mesh

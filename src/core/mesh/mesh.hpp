@@ -49,4 +49,21 @@ std::size_t count_repeated_corner_faces(const Mesh& mesh);
 // each kept vertex's number before (otherwise it is left empty).
 std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept = nullptr);
 
+// How many vertices share their location (all three coordinates equal) with another vertex.
+std::size_t count_coincident(const Mesh& mesh);
+
+// Welds vertices at the same location: in each group of such vertices the first (lowest
+// number) takes the others' place in every face, so that an unwelded mesh (a triangle soup, as
+// STL files give) becomes one surface. The others stay, unused (drop_unused drops them).
+struct Welded {
+    std::size_t vertices = 0;  // vertices replaced by another
+    // Per vertex attribute column: two vertices of a group hold different values there (a seam,
+    // say of texture coordinates), so the welded vertex's value stands for one of them only.
+    std::vector<bool> differs;
+};
+Welded weld_coincident(Mesh& mesh);
+
+// Removes the vertex attribute columns marked in `remove` (one flag per column).
+void remove_vertex_columns(Mesh& mesh, const std::vector<bool>& remove);
+
 }  // namespace toposimp::mesh
