@@ -407,8 +407,8 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
     // Terms out of the filter's range (coordinates far from 1, or far apart): once more with all
     // points scaled towards 1, if that is exact (the determinant is then 2^3k times this one; the
     // second call's k is 0, so there is no third).
-    const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
-    if (!(permanent >= 0x1p-800 && permanent <= 0x1p1000)) {
+    if (!(permanent >= 0x1p-800 && permanent <= 0x1p1000)) [[unlikely]] {
+        const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
         if (const int k = expansion::exact_rescaling(values); k != 0) {
             return orient3d(scaled(a, k), scaled(b, k), scaled(c, k), scaled(d, k), stats);
         }
@@ -467,7 +467,7 @@ int normal_dot_sign(Point3 a, Point3 b, Point3 c, Point3 d, Point3 e, Point3 f, 
     }
     // As orient3d: out of range, scaled towards 1 if that is exact (the value is then 2^4k times
     // this one).
-    if (!in_range) {
+    if (!in_range) [[unlikely]] {
         const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z, e.x, e.y, e.z, f.x, f.y, f.z};
         if (const int k = expansion::exact_rescaling(values); k != 0) {
             return normal_dot_sign(scaled(a, k), scaled(b, k), scaled(c, k), scaled(d, k), scaled(e, k), scaled(f, k), stats);
