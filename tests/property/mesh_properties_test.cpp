@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -203,6 +204,25 @@ TEST(MeshProperties, ScaledByAPowerOfTwoSimplifiesTheSame) {
         }
         EXPECT_EQ(stats.max_error, std::ldexp(unit_stats.max_error, k)) << k;
     }
+}
+
+// Near the largest double (a sphere of radius 2^1020 around x = 1.5·2^1023) the sum of two
+// coordinates overflows, and so would any cost taken in coordinate units: still clean, at the
+// target, and as close to the input as at size 1.
+TEST(MeshProperties, NearTheLargestDoubleSimplifiesAsWellAsAtSizeOne) {
+    const Mesh input = testing::noisy_sphere(4, 0.05, 27);
+    Mesh unit = input;
+    simplified(unit, MeshTarget::keep_fraction, 0.1, 2);
+    const double unit_distance = hausdorff(input, unit).max();
+    Mesh huge = input;
+    for (Point3& p : huge.points) p = {0x1.8p1023 + std::ldexp(p.x, 1020), std::ldexp(p.y, 1020), std::ldexp(p.z, 1020)};
+    ASSERT_FALSE(std::isfinite(huge.points[0].x + huge.points[1].x));  // (the premise)
+    const Mesh huge_input = huge;
+    const MeshStats stats = simplified(huge, MeshTarget::keep_fraction, 0.1, 2);
+    EXPECT_TRUE(stats.target_reached);
+    expect_clean(huge, "near the largest double");
+    const double huge_distance = std::ldexp(hausdorff(huge_input, huge).max(), -1020);
+    EXPECT_LT(huge_distance, 1.5 * unit_distance) << "at size 1 " << unit_distance << ", near the largest double " << huge_distance;
 }
 
 // A closed box, each side an n×n grid of unit cells (flat regions meeting at creases), faces

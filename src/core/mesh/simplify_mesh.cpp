@@ -404,9 +404,11 @@ private:
         return ((stamp_[c.a] + stamp_[c.b]) & kStampMask) != c.stamps();
     }
     Candidate candidate(std::uint32_t a, std::uint32_t b, const Placement& placement) const {
-        const Point3 d = scaled(minus(pos_[a], pos_[b]));
+        const Point3 d = span(pos_[b], pos_[a]);
         const double length2 = dot(d, d);
-        return {placement.cost + kLengthWeight * length2 * length2, a, b,
+        // (Never NaN, which the sorts could not order: a cost that is not a number goes last.)
+        const double cost = placement.cost + kLengthWeight * length2 * length2;
+        return {std::isnan(cost) ? std::numeric_limits<double>::infinity() : cost, a, b,
                 ((stamp_[a] + stamp_[b]) & kStampMask) | (placement.bound ? ~kStampMask : 0u), kNone};
     }
     // One round of a block, from its candidates (in any order; left in any order).
@@ -482,9 +484,9 @@ private:
     void blend_attributes(std::uint32_t a, std::uint32_t b, Point3 p) {
         Attributes& rows = mesh_.vertex_attributes;
         if (rows.width == 0) return;
-        const Point3 edge = minus(pos_[b], pos_[a]);
+        const Point3 edge = span(pos_[a], pos_[b]);
         const double length2 = dot(edge, edge);
-        const double t = length2 > 0 ? std::clamp(dot(minus(p, pos_[a]), edge) / length2, 0.0, 1.0) : 0.5;
+        const double t = length2 > 0 ? std::clamp(dot(span(pos_[a], p), edge) / length2, 0.0, 1.0) : 0.5;
         double* to = rows.row(a);
         const double* from = rows.row(b);
         // Exact at both ends and for a value both rows share.
@@ -551,7 +553,14 @@ private:
     double scale_ = 1.0;    // frame units per coordinate unit, 2^-e
     double unscale_ = 1.0;  // 2^e
     Point3 local(Point3 p) const { return {(p.x - frame_.x) * scale_, (p.y - frame_.y) * scale_, (p.z - frame_.z) * scale_}; }
-    Point3 scaled(Point3 d) const { return {d.x * scale_, d.y * scale_, d.z * scale_}; }
+    // q − p in frame units: the difference scaled, or if that overflowed (coordinates of opposite
+    // signs beyond half the largest double) the difference of the frame coordinates, which lie
+    // within the frame's extent.
+    Point3 span(Point3 p, Point3 q) const {
+        const Point3 d = minus(q, p);
+        if (std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)) [[likely]] return {d.x * scale_, d.y * scale_, d.z * scale_};
+        return minus(local(q), local(p));
+    }
     CellIndex index_;
     Grid index_grid_;                   // the index's cells (not the blocks')
     std::vector<UnitBox> unit_boxes_;  // per live face, while the index is built
@@ -647,7 +656,7 @@ void Simplifier::build_quadrics() {
 #pragma omp parallel for schedule(static)
     for (std::int64_t i = 0; i < m; ++i) {
         const Face& f = face_[static_cast<std::size_t>(i)];
-        const Point3 normal = cross(scaled(minus(pos_[f[1]], pos_[f[0]])), scaled(minus(pos_[f[2]], pos_[f[0]])));
+        const Point3 normal = cross(span(pos_[f[0]], pos_[f[1]]), span(pos_[f[0]], pos_[f[2]]));
         const double length = norm(normal);
         Plane& plane = planes[static_cast<std::size_t>(i)];
         plane.length = length;
@@ -755,8 +764,8 @@ void Simplifier::add_border_planes() {
             for (const auto& [w, face] : borders) {
                 const auto lo = std::min(v, w), hi = std::max(v, w);
                 const Face& f = face_[face];
-                const Point3 normal = cross(scaled(minus(pos_[f[1]], pos_[f[0]])), scaled(minus(pos_[f[2]], pos_[f[0]])));
-                const Point3 edge = scaled(minus(pos_[hi], pos_[lo]));
+                const Point3 normal = cross(span(pos_[f[0]], pos_[f[1]]), span(pos_[f[0]], pos_[f[2]]));
+                const Point3 edge = span(pos_[lo], pos_[hi]);
                 const Point3 side = cross(edge, normal);
                 const double length = norm(side);
                 if (length > 0) {
@@ -1050,15 +1059,16 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     const double det = m00 * c00 + m01 * c01 + m02 * c02;
     const double scale = std::max({std::fabs(m00), std::fabs(m11), std::fabs(m22)});
     const Point3 pa = pos_[a], pb = pos_[b];
+    // (Halves first: no overflow; the same double as half the sum otherwise.)
+    const Point3 mid{0.5 * pa.x + 0.5 * pb.x, 0.5 * pa.y + 0.5 * pb.y, 0.5 * pa.z + 0.5 * pb.z};
     bool bound = false;
     if (std::fabs(det) > 1e-10 * scale * scale * scale && std::isfinite(det)) {
         const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
         const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det * unscale_ + frame_.x,
                        (c01 * r0 + c11 * r1 + c12 * r2) / det * unscale_ + frame_.y,
                        (c02 * r0 + c12 * r1 + c22 * r2) / det * unscale_ + frame_.z};
-        const double reach = norm(minus(pb, pa));
-        const bool near = std::fabs(p.x - 0.5 * (pa.x + pb.x)) <= reach && std::fabs(p.y - 0.5 * (pa.y + pb.y)) <= reach &&
-                          std::fabs(p.z - 0.5 * (pa.z + pb.z)) <= reach;
+        const double reach = norm(minus(pb, pa));  // (infinite if the difference overflows: no limit)
+        const bool near = std::fabs(p.x - mid.x) <= reach && std::fabs(p.y - mid.y) <= reach && std::fabs(p.z - mid.z) <= reach;
         if (near && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
             if (in_block(p, level, block)) {
                 out = {p, q(local(p)), false};
@@ -1071,7 +1081,6 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     out = {pa, q(local(pa)), false};
     const double cost_b = q(local(pb));
     if (cost_b < out.cost) out = {pb, cost_b, false};
-    const Point3 mid{0.5 * (pa.x + pb.x), 0.5 * (pa.y + pb.y), 0.5 * (pa.z + pb.z)};
     const double cost_mid = q(local(mid));
     if (cost_mid < out.cost) {
         if (in_block(mid, level, block)) {
@@ -1390,7 +1399,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         return false;
     }
     const double error = error_of(placement, a, b);
-    if (options_.target == MeshTarget::max_error && !vertical_ && error > options_.value) return false;
+    if (options_.target == MeshTarget::max_error && !vertical_ && !(error <= options_.value)) return false;  // (NaN: refused)
     thread_local std::vector<std::uint32_t> fa, fb, shared, opposite, star, found;
     faces_of(a, fa, b, fb);
     for (const auto* faces : {&fa, &fb}) {
