@@ -141,7 +141,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
         log->error("{}", problem);
         return kUsageError;
     }
-    if (mesh_needs_gdal(options) && (!gdal.read_dem || !gdal.write_tin_layer)) {
+    if (mesh_needs_gdal(options) && (!gdal.read_dem || !gdal.write_tin_layer || !gdal.check_layer_output)) {
         log->error("{} -> {}: a DEM or an OGR layer needs GDAL, which this caller did not provide", options.input, options.output);
         return kUsageError;
     }
@@ -163,8 +163,9 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
                      : name == "off" ? io::MeshFormat::off
                                      : io::MeshFormat::obj;
         }
-        // Refuse an existing output before any work.
+        // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
         io::OutputFile output(options.output, options.overwrite, &context.out);
+        if (!to_mesh_file) gdal.check_layer_output(options.output, options.format);
 
         // Input: a mesh file, or a DEM raster triangulated into a TIN.
         progress.phase("reading " + options.input);

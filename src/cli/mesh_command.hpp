@@ -44,6 +44,9 @@ struct MeshGdal {
     io::Dem (*read_dem)(const std::string& path, int band) = nullptr;
     void (*write_tin_layer)(const mesh::Mesh& tin, const std::string& path, const std::string& driver,
                             const std::string& crs_wkt, const std::string& layer_name) = nullptr;
+    // Throws io::OutputError unless GDAL can create a layer at `path` (driver: -f, or "" for the
+    // extension's): asked before any work.
+    void (*check_layer_output)(const std::string& path, const std::string& driver) = nullptr;
 };
 
 // Does the job read a DEM or write an OGR layer?

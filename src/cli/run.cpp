@@ -4,6 +4,8 @@
 #include "cli/map_command.hpp"
 #include "cli/mesh_command.hpp"
 #include "io/dem.hpp"
+#include "io/errors.hpp"
+#include "io/gdal_support.hpp"
 #include "io/ogr_dataset.hpp"
 
 #include <CLI/CLI.hpp>
@@ -73,7 +75,16 @@ int run(const std::vector<std::string>& args, Context& context) {
         return kUsageError;
     }
     if (app.got_subcommand(map)) return run_map(map_options, context);
-    if (app.got_subcommand(mesh)) return run_mesh(mesh_options, context, {&io::read_dem, &io::write_tin_layer});
+    if (app.got_subcommand(mesh)) {
+        auto check_layer_output = [](const std::string& path, const std::string& driver) {
+            try {
+                io::vector_driver_for(path, driver);
+            } catch (const io::OutputError& error) {
+                throw io::OutputError(std::string(error.what()) + "; a mesh is written as .obj, .ply or .off");
+            }
+        };
+        return run_mesh(mesh_options, context, {&io::read_dem, &io::write_tin_layer, check_layer_output});
+    }
     if (app.got_subcommand(check)) return run_check(check_options, context);
     context.err << app.help();
     return kUsageError;

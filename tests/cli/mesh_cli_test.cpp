@@ -186,6 +186,24 @@ TEST(MeshCli, UnweldedMeshIsNamedAndWeldedOnRequest) {
     EXPECT_EQ(find_defects(m).total(), 0u);
 }
 
+// An output whose format cannot be told (.stl: not a mesh format here, nor a GDAL vector one)
+// or an unknown driver is refused before the input is read, naming the output as given.
+TEST(MeshCli, UnknownOutputFormatIsRefusedBeforeAnyWork) {
+    const auto dir = fresh_dir("mesh");
+    const std::string stl = (dir / "out.stl").string();
+    CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", stl, "--progress"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("cannot tell the output format of '" + stl + "' from its extension; name it with -f (e.g. -f GPKG); "
+                         "a mesh is written as .obj, .ply or .off"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("PROGRESS"), std::string::npos) << r.err;  // no phase started
+    r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", (dir / "out.gpkg").string(), "-f", "NoSuchDriver"});
+    EXPECT_EQ(r.code, 2) << r.err;
+    EXPECT_NE(r.err.find("unknown vector output format 'NoSuchDriver'"), std::string::npos) << r.err;
+    EXPECT_TRUE(std::filesystem::is_empty(dir)) << "nothing written";
+}
+
 TEST(MeshCli, ThreadCountDoesNotChangeTheFile) {
     const auto dir = fresh_dir("mesh");
     const std::string one = (dir / "one.ply").string(), two = (dir / "two.ply").string();
