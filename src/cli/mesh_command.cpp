@@ -32,12 +32,12 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
         "another. Formats: OBJ, PLY (ASCII or binary), OFF. Normals, colours, texture coordinates and other vertex\n"
         "properties are kept (a merged vertex blends its two ends' values); faces keep theirs.\n"
         "Exit status: 0 ok, 2 usage or input error.");
-    mesh->add_option("input", options.input, "Input mesh (.obj, .ply, .off) or a DEM raster (GeoTIFF or any GDAL raster)")
+    mesh->add_option("input", options.input, "Input mesh (.obj, .ply, .off, .stl) or a DEM raster (GeoTIFF or any GDAL raster)")
         ->required();
     mesh->add_option("-o,--output", options.output,
-                     "Output: a mesh (.obj, .ply, .off) or an OGR layer of triangles with Z (.gpkg, .shp, .fgb, ...)")
+                     "Output: a mesh (.obj, .ply, .off, .stl) or an OGR layer of triangles with Z (.gpkg, .shp, .fgb, ...)")
         ->required();
-    mesh->add_option("-f,--format", options.format, "Output format: obj, ply, off, or an OGR driver name (GPKG, ...)");
+    mesh->add_option("-f,--format", options.format, "Output format: obj, ply, off, stl, or an OGR driver name (GPKG, ...)");
     mesh->add_option("--band", options.band, "DEM band to read (default 1)")->check(CLI::PositiveNumber);
     mesh->add_option("--nln", options.layer_name, "Layer name for OGR output (default: tin)");
     auto* keep = mesh->add_option("--keep", options.keep, "Keep this share of the faces: 10% or 0.1 (default 10%)");
@@ -58,7 +58,9 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     mesh->add_flag("--weld", options.weld,
                    "First merge vertices at exactly the same location (an unwelded mesh, as converted from STL); vertex "
                    "attributes that differ between merged vertices are dropped");
-    mesh->add_flag("--ascii", options.ascii, "Write PLY as text (default: binary little endian, double coordinates)");
+    mesh->add_flag("--ascii", options.ascii,
+                   "Write PLY and STL as text (default: binary; PLY little endian with double coordinates, STL only if "
+                   "every coordinate is a float32, else text with every digit)");
     mesh->add_flag("--no-hausdorff", options.no_hausdorff, "Skip measuring the Hausdorff distance (saves time on big meshes)");
     mesh->add_option("-j,--threads", options.threads,
                      "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
@@ -83,7 +85,7 @@ std::string format_name(const MeshCommandOptions& options) {
 
 bool mesh_output(const MeshCommandOptions& options) {
     const std::string name = format_name(options);
-    return name.empty() ? io::has_mesh_extension(options.output) : (name == "obj" || name == "ply" || name == "off");
+    return name.empty() ? io::has_mesh_extension(options.output) : (name == "obj" || name == "ply" || name == "off" || name == "stl");
 }
 
 std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
@@ -161,6 +163,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
             format = name.empty() ? io::mesh_format_of(options.output)
                      : name == "ply" ? io::MeshFormat::ply
                      : name == "off" ? io::MeshFormat::off
+                     : name == "stl" ? io::MeshFormat::stl
                                      : io::MeshFormat::obj;
         }
         // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
@@ -193,9 +196,14 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
             if (report.ignored_elements > 0) {
                 log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
             }
+            if (report.welded > 0) {
+                log->info("{}: {} triangle corners welded into the vertex at their location (STL shares no vertices)", options.input,
+                          report.welded);
+            }
+            welded_vertices = report.welded;
             if (options.weld) {
                 const mesh::Welded welded = mesh::weld_coincident(m);
-                welded_vertices = welded.vertices;
+                welded_vertices += welded.vertices;
                 log->info("welded {} vertices onto others at the same location", welded.vertices);
                 for (std::size_t c = 0; c < welded.differs.size(); ++c) {
                     if (!welded.differs[c]) continue;

@@ -80,7 +80,7 @@ int run(const std::vector<std::string>& args, Context& context) {
             try {
                 io::vector_driver_for(path, driver);
             } catch (const io::OutputError& error) {
-                throw io::OutputError(std::string(error.what()) + "; a mesh is written as .obj, .ply or .off");
+                throw io::OutputError(std::string(error.what()) + "; a mesh is written as .obj, .ply, .off or .stl");
             }
         };
         return run_mesh(mesh_options, context, {&io::read_dem, &io::write_tin_layer, check_layer_output});

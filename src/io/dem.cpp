@@ -14,7 +14,7 @@ Dem read_dem(const std::string& path, int band_number) {
     QuietGdal quiet;
     DatasetPtr dataset(static_cast<GDALDataset*>(GDALOpenEx(path.c_str(), GDAL_OF_RASTER | GDAL_OF_READONLY, nullptr, nullptr, nullptr)));
     if (!dataset) {
-        throw InputError(path + ": neither a mesh (.obj, .ply, .off) nor a raster GDAL can open" + last_gdal_error());
+        throw InputError(path + ": neither a mesh (.obj, .ply, .off, .stl) nor a raster GDAL can open" + last_gdal_error());
     }
     if (band_number < 1 || band_number > dataset->GetRasterCount()) {
         throw InputError(path + ": no band " + std::to_string(band_number) + " (the raster has " +

@@ -15,7 +15,7 @@
 
 namespace toposimp::io {
 
-enum class MeshFormat { obj, ply, off };
+enum class MeshFormat { obj, ply, off, stl };
 
 // The type of a column of numbers in a file (PLY's scalar types).
 enum class ValueType { i8, u8, i16, u16, i32, u32, f32, f64 };
@@ -55,6 +55,7 @@ struct MeshReadReport {
     AttributeLayout layout;               // those kept
     std::size_t polygons_triangulated = 0;
     std::size_t ignored_elements = 0;     // OBJ lines/points, unknown PLY elements
+    std::size_t welded = 0;               // STL: corners merged into another at the same location
 };
 
 mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, MeshReadReport& report);

@@ -98,6 +98,25 @@ TEST(MeshCli, EveryFormatRoundTripsExactly) {
         ASSERT_EQ(m.points.size(), reference.points.size());
         for (std::size_t i = 0; i < m.points.size(); ++i) ASSERT_TRUE(same_location(m.points[i], reference.points[i])) << name;
     }
+    // STL numbers the vertices as it meets them: the same triangles, corner by corner.
+    const std::string stl = (dir / "e.stl").string();
+    const CliResult r = run_cli({"mesh", first, "-o", stl, "--keep", "100%", "--no-hausdorff"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    const mesh::Mesh m = read_back(stl);
+    ASSERT_EQ(m.faces.size(), reference.faces.size());
+    EXPECT_EQ(m.points.size(), reference.points.size());
+    for (std::size_t f = 0; f < m.faces.size(); ++f) {
+        for (int k = 0; k < 3; ++k) ASSERT_TRUE(same_location(m.points[m.faces[f][k]], reference.points[reference.faces[f][k]])) << f;
+    }
+    // And an STL input simplifies as one surface (its corners welded on reading).
+    const std::string half = (dir / "f.obj").string();
+    const CliResult simplified = run_cli({"mesh", stl, "-o", half, "--keep", "50%", "--json", "--no-hausdorff"});
+    ASSERT_EQ(simplified.code, 0) << simplified.err;
+    EXPECT_NE(simplified.out.find("\"welded_vertices\":" + std::to_string(3 * m.faces.size() - m.points.size()) + ","), std::string::npos)
+        << simplified.out;
+    const mesh::Mesh out = read_back(half);
+    EXPECT_EQ(out.faces.size(), m.faces.size() / 2);
+    EXPECT_EQ(find_defects(out).total(), 0u);
 }
 
 TEST(MeshCli, ColoursNormalsAndFaceValuesSurviveSimplification) {
@@ -186,15 +205,15 @@ TEST(MeshCli, UnweldedMeshIsNamedAndWeldedOnRequest) {
     EXPECT_EQ(find_defects(m).total(), 0u);
 }
 
-// An output whose format cannot be told (.stl: not a mesh format here, nor a GDAL vector one)
-// or an unknown driver is refused before the input is read, naming the output as given.
+// An output whose format cannot be told (.xyz: not a mesh format, nor a GDAL vector one) or an
+// unknown driver is refused before the input is read, naming the output as given.
 TEST(MeshCli, UnknownOutputFormatIsRefusedBeforeAnyWork) {
     const auto dir = fresh_dir("mesh");
-    const std::string stl = (dir / "out.stl").string();
-    CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", stl, "--progress"});
+    const std::string xyz = (dir / "out.xyz").string();
+    CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", xyz, "--progress"});
     EXPECT_EQ(r.code, 2) << r.err;
-    EXPECT_NE(r.err.find("cannot tell the output format of '" + stl + "' from its extension; name it with -f (e.g. -f GPKG); "
-                         "a mesh is written as .obj, .ply or .off"),
+    EXPECT_NE(r.err.find("cannot tell the output format of '" + xyz + "' from its extension; name it with -f (e.g. -f GPKG); "
+                         "a mesh is written as .obj, .ply, .off or .stl"),
               std::string::npos)
         << r.err;
     EXPECT_EQ(r.err.find("PROGRESS"), std::string::npos) << r.err;  // no phase started
@@ -271,7 +290,9 @@ INSTANTIATE_TEST_SUITE_P(
                 "v 9 9 9\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nv 0 -1 0\nf 2 2 3\nf 2 3 4\nf 3 2 5\nf 2 3 6\nf 2 4 5\n",
                 "the edge between vertices 1 and 2 (counted from 0) has more than two faces (1, 2, 3, ...)"},
         BadMesh{"NoFaces", "e.obj", kTetra, "no faces"},
-        BadMesh{"UnknownExtension", "u.stl", "solid x\n", "neither a mesh"}),
+        BadMesh{"TruncatedStl", "t.stl", "solid x\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\n", "truncated: the file ends inside a facet"},
+        BadMesh{"NotAnStl", "n.stl", "OBJ, not STL\n", "not an STL file"},
+        BadMesh{"UnknownExtension", "u.xyz", "solid x\n", "neither a mesh"}),
     [](const ::testing::TestParamInfo<BadMesh>& p) { return std::string(p.param.name); });
 
 TEST(MeshCli, PolygonsAreSplitOnlyWhenAsked) {
