@@ -82,9 +82,9 @@ class CheckAndMeshArgs(unittest.TestCase):
         self.assertEqual(cli_args.mesh_args("m.ply", "o.obj", target=1, count=5000)[4:6], ["--keep-faces", "5000"])
         self.assertEqual(cli_args.mesh_args("m.ply", "o.obj", target=2, max_error=0.5)[4:6], ["--max-error", "0.5"])
         args = cli_args.mesh_args("dem.tif", "tin.gpkg", band=2, free_boundary=True, output_layer="tin_5",
-                                  hausdorff=False, threads=1, terrain=True, triangulate=True)
+                                  hausdorff=False, threads=1, terrain=True, triangulate=True, weld=True)
         for expected in (["--band", "2"], ["--free-boundary"], ["--nln", "tin_5"], ["--no-hausdorff"],
-                         ["-j", "1"], ["--terrain"], ["--triangulate"]):
+                         ["-j", "1"], ["--terrain"], ["--triangulate"], ["--weld"]):
             position = args.index(expected[0])
             self.assertEqual(args[position:position + len(expected)], expected)
         for values in (dict(target=1), dict(target=2), dict(target=2, max_error=-1), dict(target=3),

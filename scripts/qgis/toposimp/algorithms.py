@@ -275,24 +275,28 @@ class _MeshTargets:
 
 class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
     NAME = "mesh"
-    DISPLAY_NAME = "Simplify a triangle mesh (OBJ, PLY, OFF)"
+    DISPLAY_NAME = "Simplify a triangle mesh (OBJ, PLY, OFF, STL)"
     GROUP = "Meshes and terrain"
     GROUP_ID = "meshes"
     HELP = ("Quadric-error edge collapse that never makes the surface touch or cross itself, turn a face "
             "over or lose its manifoldness (exact predicates). Terrain: the faces must keep their "
             "orientation in the map plane (a TIN with z = height). Lock the border to keep tiles "
-            "matching. Normals, colours and texture coordinates are dropped.")
+            "matching. Normals, colours, texture coordinates and other vertex properties are kept (a "
+            "merged vertex blends its two ends'). STL corners are welded on reading; weld the vertices "
+            "of other unwelded meshes (every face with corners of its own) with the option.")
 
     def initAlgorithm(self, config=None):
         self.addParameter(QgsProcessingParameterFile(
-            "INPUT", "Mesh", fileFilter="Meshes (*.obj *.ply *.off *.OBJ *.PLY *.OFF)"))
+            "INPUT", "Mesh", fileFilter="Meshes (*.obj *.ply *.off *.stl *.OBJ *.PLY *.OFF *.STL)"))
         self.add_target_parameters(10.0)
         self.addParameter(QgsProcessingParameterBoolean("TERRAIN", "Terrain (TIN over the x-y plane)", False))
         self.addParameter(QgsProcessingParameterBoolean("LOCK_BOUNDARY", "Keep the border vertices", False))
         self.addParameter(QgsProcessingParameterBoolean(
             "TRIANGULATE", "Split polygons into triangles (else they are an error)", False))
+        self.addParameter(QgsProcessingParameterBoolean(
+            "WELD", "Merge vertices at the same location first (unwelded meshes)", False))
         self.addParameter(QgsProcessingParameterFileDestination(
-            "OUTPUT", "Simplified mesh", "PLY (*.ply);;OBJ (*.obj);;OFF (*.off)"))
+            "OUTPUT", "Simplified mesh", "PLY (*.ply);;OBJ (*.obj);;OFF (*.off);;STL (*.stl)"))
 
     def processAlgorithm(self, parameters, context, feedback):
         output = self.parameterAsFileOutput(parameters, "OUTPUT", context)
@@ -302,6 +306,7 @@ class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
                 terrain=self.parameterAsBool(parameters, "TERRAIN", context),
                 lock_boundary=self.parameterAsBool(parameters, "LOCK_BOUNDARY", context),
                 triangulate=self.parameterAsBool(parameters, "TRIANGULATE", context),
+                weld=self.parameterAsBool(parameters, "WELD", context),
                 **self.target_values(parameters, context))
         except cli_args.ArgumentError as error:
             raise QgsProcessingException(str(error))

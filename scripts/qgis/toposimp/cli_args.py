@@ -163,7 +163,7 @@ def check_args(original_path, simplified_path, layer=None, simplified_layer=None
 
 def mesh_args(input_path, output_path, target=0, percent=10.0, count=None, max_error=None,
               band=None, terrain=False, lock_boundary=False, free_boundary=False,
-              triangulate=False, output_format=None, output_layer=None, hausdorff=True,
+              triangulate=False, weld=False, output_format=None, output_layer=None, hausdorff=True,
               threads=0, overwrite=True, progress=True):
     """Arguments of `toposimp mesh`: a mesh file or a DEM raster in, a mesh file or an OGR
     layer of triangles out."""
@@ -189,6 +189,8 @@ def mesh_args(input_path, output_path, target=0, percent=10.0, count=None, max_e
         args.append("--free-boundary")
     if triangulate:
         args.append("--triangulate")
+    if weld:
+        args.append("--weld")
     if output_format:
         args += ["-f", output_format]
     if output_layer:
