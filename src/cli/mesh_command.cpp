@@ -29,7 +29,7 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
         "Stopping criteria (one; default --keep 10%): --keep, --keep-faces, --max-error.\n"
         "Edges collapse in order of quadric error (Garland-Heckbert, optimal placement); a collapse is made only if\n"
         "exact predicates show it keeps the surface manifold, turns no face over, and makes no face touch or cross\n"
-        "another. Formats: OBJ, PLY (ASCII or binary), OFF. Normals, colours, texture coordinates and other vertex\n"
+        "another. Formats: OBJ, PLY (ASCII or binary), OFF, STL. Normals, colours, texture coordinates and other vertex\n"
         "properties are kept (a merged vertex blends its two ends' values); faces keep theirs.\n"
         "Exit status: 0 ok, 2 usage or input error.");
     mesh->add_option("input", options.input, "Input mesh (.obj, .ply, .off, .stl) or a DEM raster (GeoTIFF or any GDAL raster)")

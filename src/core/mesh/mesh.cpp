@@ -1,6 +1,8 @@
 #include "core/mesh/mesh.hpp"
 
 #include <algorithm>
+#include <bit>
+#include <cstdint>
 #include <memory>
 #include <numeric>
 
@@ -9,17 +11,23 @@ namespace {
 
 bool repeats_corner(const Face& f) { return f[0] == f[1] || f[1] == f[2] || f[2] == f[0]; }
 
-// The vertex numbers ordered by location (x, then y, then z; equal coordinates compare equal,
-// −0 and +0 too), then by number: vertices at one location are consecutive.
+// A double as an unsigned integer in the doubles' order, −0 as +0: a total order even with NaNs
+// (a library caller's), which the sort needs.
+std::uint64_t ordered(double value) {
+    const auto bits = std::bit_cast<std::uint64_t>(value + 0.0);
+    return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
+}
+
+// The vertex numbers ordered by location (x, then y, then z), then by number: vertices at one
+// location are consecutive.
 std::vector<std::uint32_t> by_location(const Mesh& mesh) {
     std::vector<std::uint32_t> order(mesh.points.size());
     std::iota(order.begin(), order.end(), 0u);
     const std::vector<Point3>& p = mesh.points;
     std::sort(order.begin(), order.end(), [&p](std::uint32_t a, std::uint32_t b) {
-        if (p[a].x != p[b].x) return p[a].x < p[b].x;
-        if (p[a].y != p[b].y) return p[a].y < p[b].y;
-        if (p[a].z != p[b].z) return p[a].z < p[b].z;
-        return a < b;
+        const std::uint64_t ka[3] = {ordered(p[a].x), ordered(p[a].y), ordered(p[a].z)};
+        const std::uint64_t kb[3] = {ordered(p[b].x), ordered(p[b].y), ordered(p[b].z)};
+        return std::lexicographical_compare(ka, ka + 3, kb, kb + 3) || (std::equal(ka, ka + 3, kb) && a < b);
     });
     return order;
 }

@@ -64,6 +64,15 @@ TEST(Weld, OnlyExactlyEqualLocationsWeldAndSeamsAreReported) {
     remove_vertex_columns(m, {true, false});
     EXPECT_EQ(m.vertex_attributes.width, 1u);
     EXPECT_EQ(m.vertex_attributes.values, (std::vector<double>{7, 7, 7, 7, 8, 7}));
+    // A library caller's NaN: ordered all the same (no undefined sort), located nowhere, welded to
+    // nothing.
+    Mesh odd;
+    const double nan = std::nan("");
+    odd.points = {{nan, 0, 0}, {0, 0, 0}, {nan, 0, 0}, {0, 0, 0}, {1, nan, 2}};
+    odd.faces = {{0, 1, 4}, {2, 3, 4}};
+    EXPECT_EQ(count_coincident(odd), 2u);
+    EXPECT_EQ(weld_coincident(odd).vertices, 1u);
+    EXPECT_EQ(odd.faces, (std::vector<Face>{{0, 1, 4}, {2, 1, 4}}));
 }
 
 }  // namespace
