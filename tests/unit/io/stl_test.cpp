@@ -89,6 +89,13 @@ TEST(Stl, TextWithAnyCaseAndLineEndsReadsTheSameDoubles) {
     EXPECT_EQ(m.faces.size(), 2u);
     EXPECT_EQ(m.points[1].y, 0.30000000000000004);
     EXPECT_EQ(m.faces[1][0], m.faces[0][1]);  // the shared corner welded
+    // A facet with two corners at one location is kept, repeating a corner: the command warns
+    // and drops it with the others of its kind.
+    const std::string degenerate = "solid d\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 0 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+    io::MeshReadReport degenerate_report;
+    const mesh::Mesh d = read(write_file("degenerate.stl", degenerate), degenerate_report);
+    EXPECT_EQ(d.points.size(), 2u);
+    EXPECT_EQ(d.faces, (std::vector<mesh::Face>{{0, 0, 1}}));
 }
 
 TEST(Stl, BadFilesNameTheFileAndThePlace) {
