@@ -404,18 +404,24 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
             return 1;
         }
     }
-    // Terms out of the filter's range (coordinates far from 1, or far apart): once more with all
-    // points scaled towards 1, if that is exact (the determinant is then 2^3k times this one; the
-    // second call's k is 0, so there is no third).
-    if (!(permanent >= 0x1p-800 && permanent <= 0x1p1000)) [[unlikely]] {
-        const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
-        if (const int k = expansion::exact_rescaling(values); k != 0) {
-            return orient3d(scaled(a, k), scaled(b, k), scaled(c, k), scaled(d, k), stats);
-        }
+    // Terms out of the filter's range (coordinates far from 1, or far apart), and the points out
+    // of the expansions' range below: once more with all points scaled towards 1, if that is
+    // exact (the determinant is then 2^3k times this one; the second call's k is 0, so there is
+    // no third). A permanent of exactly 0 is mostly exact zeros (points in a plane z = const),
+    // which the expansions decide at once: not scaled first.
+    const double values[] = {a.x, a.y, a.z, b.x, b.y, b.z, c.x, c.y, c.z, d.x, d.y, d.z};
+    auto rescaled = [&](int& sign) {
+        const int k = expansion::exact_rescaling(values);
+        if (k != 0) sign = orient3d(scaled(a, k), scaled(b, k), scaled(c, k), scaled(d, k), stats);
+        return k != 0;
+    };
+    int sign = 2;
+    if (permanent > 0.0 && !(permanent >= 0x1p-800 && permanent <= 0x1p1000) && rescaled(sign)) [[unlikely]] {
+        return sign;
     }
     // The dynamic filter next, unless the determinant came out exactly zero: then the points are
     // almost surely coplanar (flat regions), which no filter can certify.
-    int sign = det == 0.0 ? 2 : certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
+    sign = det == 0.0 ? 2 : certified_sign(orient3d_expr<Bounded>(a, b, c, d, Plain<Bounded>{}));
     if (sign != 2) {
         ++stats.filter_decided;
         return sign;
@@ -425,6 +431,7 @@ int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
         ++stats.expansion_decided;
         return sign;
     }
+    if (rescaled(sign)) return sign;
     ++stats.gmp_fallbacks;
     return orient3d_gmp(a, b, c, d);
 }
