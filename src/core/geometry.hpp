@@ -1,6 +1,8 @@
 // Plain geometry types shared by the whole engine.
 #pragma once
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 namespace toposimp {
@@ -73,6 +75,29 @@ inline Box3 triangle_box(Point3 a, Point3 b, Point3 c) {
     box.add(b);
     box.add(c);
     return box;
+}
+
+// Coordinates for sums of products of lengths, whose terms grow with the coordinates' size and
+// distance from the origin: origin at the centre of `box`, unit 2^e for its largest half-extent
+// in [2^e, 2^(e+1)). Multiplying by a power of two is exact, so a model scaled by one gets the
+// same frame coordinates.
+struct PowerOfTwoFrame {
+    Point3 centre{};
+    double scale = 1.0;    // frame units per coordinate unit, 2^-e
+    double unscale = 1.0;  // 2^e
+    Point3 local(Point3 p) const { return {(p.x - centre.x) * scale, (p.y - centre.y) * scale, (p.z - centre.z) * scale}; }
+};
+
+inline PowerOfTwoFrame frame_around(const Box3& box) {
+    // (Halves first: the sum or difference of two coordinates near the largest double overflows.)
+    PowerOfTwoFrame frame;
+    frame.centre = {0.5 * box.lo.x + 0.5 * box.hi.x, 0.5 * box.lo.y + 0.5 * box.hi.y, 0.5 * box.lo.z + 0.5 * box.hi.z};
+    const double largest = std::max({0.5 * box.hi.x - 0.5 * box.lo.x, 0.5 * box.hi.y - 0.5 * box.lo.y, 0.5 * box.hi.z - 0.5 * box.lo.z});
+    // (Both 2^±e normal doubles; an empty or degenerate box keeps the unit.)
+    const int e = largest > 0 && std::isfinite(largest) ? std::clamp(std::ilogb(largest), -1000, 1000) : 0;
+    frame.scale = std::ldexp(1.0, -e);
+    frame.unscale = std::ldexp(1.0, e);
+    return frame;
 }
 
 }  // namespace toposimp

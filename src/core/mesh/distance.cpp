@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <vector>
 
 namespace toposimp::mesh {
@@ -256,34 +257,31 @@ OneWayDistance one_way_vertical(const Mesh& from, const Mesh& to, std::size_t fa
     return result;
 }
 
-// The two meshes' points and faces, moved and scaled by a power of two so that the bounding box
-// of all their points is centred at the origin, its largest half-extent in [1, 2): products of
-// squared lengths (distance2 takes them) neither overflow nor underflow, however large or small
-// the meshes. `unscale` takes a length back to the meshes' units.
+// The two meshes' points and faces in the frame of all their points (geometry.hpp): products
+// of squared lengths (distance2 takes them) neither overflow nor underflow, however large or
+// small the meshes. `unscale` takes a length back to the meshes' units.
 struct Framed {
     Mesh a, b;
     double unscale = 1.0;
 };
 Framed framed(const Mesh& a, const Mesh& b) {
     Framed out;
-    V lo{0, 0, 0}, hi{0, 0, 0};
-    bool any = false;
+    std::optional<Box3> box;
     for (const Mesh* m : {&a, &b}) {
         for (const Point3& p : m->points) {
-            if (!any) lo = hi = v(p), any = true;
-            lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
-            hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+            if (box) {
+                box->add(p);
+            } else {
+                box = point_box(p);
+            }
         }
     }
-    const V centre{0.5 * lo.x + 0.5 * hi.x, 0.5 * lo.y + 0.5 * hi.y, 0.5 * lo.z + 0.5 * hi.z};
-    const double largest = std::max({0.5 * hi.x - 0.5 * lo.x, 0.5 * hi.y - 0.5 * lo.y, 0.5 * hi.z - 0.5 * lo.z});
-    const int e = largest > 0 && std::isfinite(largest) ? std::clamp(std::ilogb(largest), -1000, 1000) : 0;
-    const double scale = std::ldexp(1.0, -e);
-    out.unscale = std::ldexp(1.0, e);
+    const PowerOfTwoFrame frame = box ? frame_around(*box) : PowerOfTwoFrame{};
+    out.unscale = frame.unscale;
     for (auto [from, to] : {std::pair{&a, &out.a}, std::pair{&b, &out.b}}) {
         to->faces = from->faces;
         to->points.reserve(from->points.size());
-        for (const Point3& p : from->points) to->points.push_back({(p.x - centre.x) * scale, (p.y - centre.y) * scale, (p.z - centre.z) * scale});
+        for (const Point3& p : from->points) to->points.push_back(frame.local(p));
     }
     return out;
 }

@@ -549,16 +549,16 @@ private:
     // power of the size: a model 10^100 units across overflowed, one 10^-150 across underflowed.
     // In the frame the terms are of the order of 1. Scaling by a power of two is exact: the order
     // and the placements are those the same model would get at that size.
-    Point3 frame_{};
-    double scale_ = 1.0;    // frame units per coordinate unit, 2^-e
-    double unscale_ = 1.0;  // 2^e
-    Point3 local(Point3 p) const { return {(p.x - frame_.x) * scale_, (p.y - frame_.y) * scale_, (p.z - frame_.z) * scale_}; }
+    PowerOfTwoFrame frame_;
+    Point3 local(Point3 p) const { return frame_.local(p); }
     // q − p in frame units: the difference scaled, or if that overflowed (coordinates of opposite
     // signs beyond half the largest double) the difference of the frame coordinates, which lie
     // within the frame's extent.
     Point3 span(Point3 p, Point3 q) const {
         const Point3 d = minus(q, p);
-        if (std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)) [[likely]] return {d.x * scale_, d.y * scale_, d.z * scale_};
+        if (std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z)) [[likely]] {
+            return {d.x * frame_.scale, d.y * frame_.scale, d.z * frame_.scale};
+        }
         return minus(local(q), local(p));
     }
     CellIndex index_;
@@ -641,15 +641,7 @@ void Simplifier::build_quadrics() {
         lo_x = std::min(lo_x, p.x), lo_y = std::min(lo_y, p.y), lo_z = std::min(lo_z, p.z);
         hi_x = std::max(hi_x, p.x), hi_y = std::max(hi_y, p.y), hi_z = std::max(hi_z, p.z);
     }
-    // (Halves first: the sum of two coordinates near the largest double would overflow.)
-    if (n > 0) {
-        frame_ = {0.5 * lo_x + 0.5 * hi_x, 0.5 * lo_y + 0.5 * hi_y, 0.5 * lo_z + 0.5 * hi_z};
-        const double largest = std::max({0.5 * hi_x - 0.5 * lo_x, 0.5 * hi_y - 0.5 * lo_y, 0.5 * hi_z - 0.5 * lo_z});
-        // (Both 2^±e normal doubles; an empty extent or a degenerate one keeps the unit.)
-        const int e = largest > 0 && std::isfinite(largest) ? std::clamp(std::ilogb(largest), -1000, 1000) : 0;
-        scale_ = std::ldexp(1.0, -e);
-        unscale_ = std::ldexp(1.0, e);
-    }
+    if (n > 0) frame_ = frame_around({{lo_x, lo_y, lo_z}, {hi_x, hi_y, hi_z}});
     // Left uninitialised (written once below, in parallel): zeroing and faulting in ~40 bytes per
     // face serially first took as long as the loop.
     const std::unique_ptr<Plane[]> planes(new Plane[face_.size()]);
@@ -1064,9 +1056,9 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
     bool bound = false;
     if (std::fabs(det) > 1e-10 * scale * scale * scale && std::isfinite(det)) {
         const double c11 = m00 * m22 - m02 * m02, c12 = m01 * m02 - m00 * m12, c22 = m00 * m11 - m01 * m01;
-        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det * unscale_ + frame_.x,
-                       (c01 * r0 + c11 * r1 + c12 * r2) / det * unscale_ + frame_.y,
-                       (c02 * r0 + c12 * r1 + c22 * r2) / det * unscale_ + frame_.z};
+        const Point3 p{(c00 * r0 + c01 * r1 + c02 * r2) / det * frame_.unscale + frame_.centre.x,
+                       (c01 * r0 + c11 * r1 + c12 * r2) / det * frame_.unscale + frame_.centre.y,
+                       (c02 * r0 + c12 * r1 + c22 * r2) / det * frame_.unscale + frame_.centre.z};
         const double reach = norm(minus(pb, pa));  // (infinite if the difference overflows: no limit)
         const bool near = std::fabs(p.x - mid.x) <= reach && std::fabs(p.y - mid.y) <= reach && std::fabs(p.z - mid.z) <= reach;
         if (near && std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) {
@@ -1096,7 +1088,7 @@ bool Simplifier::place(std::uint32_t a, std::uint32_t b, int level, std::uint64_
 double Simplifier::error_of(const Placement& placement, std::uint32_t a, std::uint32_t b) const {
     const double area = quadric_[a].area + quadric_[b].area;
     // (In frame units, so back to coordinate units.)
-    return area > 0 ? std::sqrt(std::max(placement.cost, 0.0) / area) * unscale_ : 0.0;
+    return area > 0 ? std::sqrt(std::max(placement.cost, 0.0) / area) * frame_.unscale : 0.0;
 }
 
 template <class Wanted>
