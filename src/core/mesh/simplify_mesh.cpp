@@ -901,9 +901,9 @@ float float_up(float f) { return -float_down(-f); }
 
 // A coordinate in grid units, as a float at most (below) or at least (above) it. The double
 // scaling is monotone, so is the rounding: boxes that overlap keep overlapping. The nearest float
-// is within half a spacing of the value, so the float next to it, away from the value's side,
-// is past it: taken always, without asking on which side the value lay (a branch mispredicted
-// half the time; the box is at most one float spacing wider).
+// lies within half a spacing of the value, so the float below it is at most the value and the
+// float above it at least the value: taken always, without asking on which side of the nearest
+// float the value lay (a branch mispredicted half the time; a box one float spacing wider).
 float float_below(double value) {
     if (!(value > -std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
     if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
