@@ -996,6 +996,9 @@ mesh::Mesh read_stl(const std::string& path, std::string_view text, const MeshRe
     };
     if (text.size() >= 84 && text.size() == 84 + 50 * count) {
         report.encoding = "binary";
+        if (count > std::numeric_limits<std::uint32_t>::max() / 3) {
+            throw InputError(path + ": " + std::to_string(count) + " triangles: more corners than 32-bit vertex numbers hold");
+        }
         m.points.reserve(3 * count);
         m.faces.reserve(count);
         std::size_t coloured = 0;
