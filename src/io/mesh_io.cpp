@@ -981,8 +981,6 @@ void put_scalar(Put& put, ValueType type, double value) {
 // outer loop, vertex x y z three times, endloop, endfacet", and "endsolid"). Corners at the same
 // location are welded into one vertex (STL has no other way to share them); facet normals are
 // not read (they follow from the corners).
-constexpr std::uint32_t kNoVertex = ~std::uint32_t{0};
-
 mesh::Mesh read_stl(const std::string& path, std::string_view text, const MeshReadOptions& options, MeshReadReport& report) {
     mesh::Mesh m;
     constexpr bool big_endian = std::endian::native == std::endian::big;
@@ -1059,22 +1057,7 @@ mesh::Mesh read_stl(const std::string& path, std::string_view text, const MeshRe
         if (!loop.empty()) throw InputError(path + ": truncated: the file ends inside a facet");
     }
     report.welded = mesh::weld_coincident(m).vertices;
-    // The welded copies go, the vertices keep their order (faces with a repeated corner stay: the
-    // caller warns about them).
-    std::vector<std::uint32_t> number(m.points.size(), kNoVertex);
-    for (const mesh::Face& f : m.faces) {
-        for (std::uint32_t v : f) number[v] = 0;
-    }
-    std::uint32_t next = 0;
-    for (std::size_t v = 0; v < m.points.size(); ++v) {
-        if (number[v] == kNoVertex) continue;
-        m.points[next] = m.points[v];
-        number[v] = next++;
-    }
-    m.points.resize(next);
-    for (mesh::Face& f : m.faces) {
-        for (std::uint32_t& v : f) v = number[v];
-    }
+    mesh::drop_unused_vertices(m);  // (faces with a repeated corner stay: the caller warns about them)
     return m;
 }
 

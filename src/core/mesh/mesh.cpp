@@ -52,6 +52,11 @@ std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept) {
     }
     mesh.faces.resize(faces);
     face_rows.values.resize(faces * face_rows.width);
+    drop_unused_vertices(mesh, kept);
+    return before - faces;
+}
+
+void drop_unused_vertices(Mesh& mesh, std::vector<std::uint32_t>* kept) {
     std::vector<std::uint32_t> index(mesh.points.size(), 0);
     for (const Face& f : mesh.faces) {
         for (std::uint32_t v : f) index[v] = 1;
@@ -71,13 +76,12 @@ std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept) {
             if (list) kept->push_back(v);
         }
     }
-    if (next == mesh.points.size()) return before - faces;  // (every vertex used: numbers unchanged)
+    if (next == mesh.points.size()) return;  // (every vertex used: numbers unchanged)
     mesh.points.resize(next);
     vertex_rows.values.resize(std::size_t{next} * vertex_rows.width);
     for (Face& f : mesh.faces) {
         for (std::uint32_t& v : f) v = index[v];
     }
-    return before - faces;
 }
 
 std::size_t count_coincident(const Mesh& mesh) {

@@ -48,13 +48,16 @@ std::size_t count_repeated_corner_faces(const Mesh& mesh);
 // Returns how many faces were dropped. If `kept` is given and vertices were dropped, it receives
 // each kept vertex's number before (otherwise it is left empty).
 std::size_t drop_unused(Mesh& mesh, std::vector<std::uint32_t>* kept = nullptr);
+// The vertex half of drop_unused: vertices no face uses go, with their rows; faces that repeat
+// a corner stay.
+void drop_unused_vertices(Mesh& mesh, std::vector<std::uint32_t>* kept = nullptr);
 
 // How many vertices share their location (all three coordinates equal) with another vertex.
 std::size_t count_coincident(const Mesh& mesh);
 
 // Welds vertices at the same location: in each group of such vertices the first (lowest
 // number) takes the others' place in every face, so that an unwelded mesh (a triangle soup, as
-// STL files give) becomes one surface. The others stay, unused (drop_unused drops them).
+// STL files give) becomes one surface. The others stay, unused (drop_unused_vertices drops them).
 struct Welded {
     std::size_t vertices = 0;  // vertices replaced by another
     // Per vertex attribute column: two vertices of a group hold different values there (a seam,
