@@ -1,14 +1,15 @@
 #!/usr/bin/env python3
 """Mesh benchmark: toposimp mesh (1 thread and all threads) against meshoptimizer
 (meshopt_simplify, with and without LockBorder) and CGAL (Surface_mesh_simplification,
-Garland-Heckbert plane policies), same inputs and face targets, one run each.
+Garland-Heckbert plane policies), same inputs and face targets, one run each (or the medians of
+--runs alternating runs).
 
 For every output: wall time and peak RSS (/usr/bin/time -v), the simplification call's own
 time, the sampled Hausdorff distance to the input, and the defects the tests' independent
 brute-force checker finds (tests/tools/mesh_defects: intersecting face pairs beyond shared
 corners, non-manifold edges, map-plane folds for terrains). Prints a Markdown table.
 
-Usage: scripts/bench/mesh.py [--data DIR] [--datasets a,b,...] [--keep 0.1]
+Usage: scripts/bench/mesh.py [--data DIR] [--datasets a,b,...] [--keep 0.1] [--runs N]
 Needs: build/release (scripts/build.sh release) and the packages scripts/bench/fetch-data.sh
 installs (libmeshoptimizer-dev, libcgal-dev, libcgal-demo for the models, libeigen3-dev);
 builds the peers in build/peers. Terrains are generated into --data.
@@ -19,6 +20,7 @@ import math
 import os
 import random
 import re
+import statistics
 import struct
 import subprocess
 import sys
@@ -52,6 +54,87 @@ def terrain(path, n, seed=1):
                 a = j * (n + 1) + i
                 buf += struct.pack("<Biii", 3, a, a + 1, a + n + 2) + struct.pack("<Biii", 3, a, a + n + 2, a + n + 1)
         out.write(buf)
+
+
+def read_off(path):
+    """Vertices and triangles of a plain OFF file (the CGAL demo models)."""
+    with open(path) as f:
+        words = [w for line in f for w in line.split("#", 1)[0].split()]
+    assert words[0] == "OFF", path
+    nv, nf = int(words[1]), int(words[2])
+    at = 4
+    points = [tuple(float(w) for w in words[at + 3 * i:at + 3 * i + 3]) for i in range(nv)]
+    at += 3 * nv
+    faces = []
+    for _ in range(nf):
+        k = int(words[at])
+        assert k == 3, path + ": a face with " + str(k) + " corners"
+        faces.append((int(words[at + 1]), int(words[at + 2]), int(words[at + 3])))
+        at += 4
+    return points, faces
+
+
+def loop_step(points, faces):
+    """One step of Loop subdivision (Loop 1987): every triangle into four, new edge points at
+    3/8 (ends) + 1/8 (opposite corners), old points moved by Warren's weights; border edges and
+    points (and edges with more than two faces) follow the border curve's rules."""
+    opposite = {}  # (lower, higher) -> corners opposite the edge
+    for a, b, c in faces:
+        for u, w, o in ((a, b, c), (b, c, a), (c, a, b)):
+            opposite.setdefault((min(u, w), max(u, w)), []).append(o)
+    index, new_points = {}, list(points)
+    for (u, w), opp in opposite.items():
+        pu, pw = points[u], points[w]
+        if len(opp) == 2:
+            po, pq = points[opp[0]], points[opp[1]]
+            q = tuple(0.375 * (pu[i] + pw[i]) + 0.125 * (po[i] + pq[i]) for i in range(3))
+        else:
+            q = tuple(0.5 * (pu[i] + pw[i]) for i in range(3))
+        index[(u, w)] = len(new_points)
+        new_points.append(q)
+    neighbours = [set() for _ in points]
+    border = [[] for _ in points]
+    for (u, w), opp in opposite.items():
+        neighbours[u].add(w)
+        neighbours[w].add(u)
+        if len(opp) != 2:
+            border[u].append(w)
+            border[w].append(u)
+    for v, p in enumerate(points):
+        if border[v]:
+            if len(border[v]) == 2:
+                x, y = points[border[v][0]], points[border[v][1]]
+                new_points[v] = tuple(0.75 * p[i] + 0.125 * (x[i] + y[i]) for i in range(3))
+            continue  # (a corner of several border curves stays)
+        n = len(neighbours[v])
+        if n < 3:
+            continue
+        beta = (0.625 - (0.375 + 0.25 * math.cos(2 * math.pi / n)) ** 2) / n
+        s = [sum(points[w][i] for w in neighbours[v]) for i in range(3)]
+        new_points[v] = tuple((1 - n * beta) * p[i] + beta * s[i] for i in range(3))
+    new_faces = []
+    for a, b, c in faces:
+        ab, bc, ca = index[(min(a, b), max(a, b))], index[(min(b, c), max(b, c))], index[(min(c, a), max(c, a))]
+        new_faces += [(a, ab, ca), (b, bc, ab), (c, ca, bc), (ab, bc, ca)]
+    return new_points, new_faces
+
+
+def subdivided(source, path, steps):
+    """A CGAL demo model after `steps` Loop subdivision steps (4^steps times the faces), binary
+    PLY: a smooth scan-sized model from a small one."""
+    if os.path.exists(path):
+        return path
+    points, faces = read_off(source)
+    for _ in range(steps):
+        points, faces = loop_step(points, faces)
+    with open(path + ".part", "wb") as out:
+        out.write((f"ply\nformat binary_little_endian 1.0\nelement vertex {len(points)}\nproperty double x\n"
+                   f"property double y\nproperty double z\nelement face {len(faces)}\n"
+                   f"property list uchar int vertex_indices\nend_header\n").encode())
+        out.write(b"".join(struct.pack("<ddd", *p) for p in points))
+        out.write(b"".join(struct.pack("<Biii", 3, *f) for f in faces))
+    os.replace(path + ".part", path)
+    return path
 
 
 def npy(data):
@@ -125,6 +208,7 @@ def main():
     parser.add_argument("--data", default="/work/bench-data")
     parser.add_argument("--datasets", default="elephant,armadillo,bunny,fandisk,jacksboro,terrain-0.9M,terrain-2M,terrain-4M")
     parser.add_argument("--keep", type=float, default=0.1)
+    parser.add_argument("--runs", type=int, default=1, help="runs per tool (alternating); times are their medians")
     args = parser.parse_args()
     os.makedirs(args.data, exist_ok=True)
     subprocess.run(["cmake", "-S", os.path.join(ROOT, "scripts", "bench", "mesh_peers"), "-B", PEERS, "-G", "Ninja"],
@@ -136,6 +220,9 @@ def main():
         "bunny": lambda: cgal_model(args.data, "bunny00"),
         "fandisk": lambda: cgal_model(args.data, "fandisk_large"),
         "jacksboro": lambda: dem(args.data),
+        # Scan-sized models: two Loop subdivision steps of the small ones.
+        "armadillo-832k": lambda: subdivided(cgal_model(args.data, "armadillo"), os.path.join(args.data, "armadillo-832k.ply"), 2),
+        "elephant-1.4M": lambda: subdivided(cgal_model(args.data, "refined_elephant"), os.path.join(args.data, "elephant-1.4M.ply"), 2),
     }
     for name, n in (("terrain-0.9M", 671), ("terrain-2M", 1000), ("terrain-4M", 1414)):
         sources[name] = (lambda n=n, name=name: (terrain(os.path.join(args.data, name + ".ply"), n),
@@ -143,28 +230,41 @@ def main():
     out_dir = os.path.join(args.data, "mesh-out")
     os.makedirs(out_dir, exist_ok=True)
     threads = os.cpu_count()
-    rows = []
+    rows, ratios = [], []
     for name in args.datasets.split(","):
         source = sources[name]()
         is_terrain = name.startswith("terrain") or name == "jacksboro"
         faces = faces_of(source)
         target = round(args.keep * faces)
-        runs = []
         lock = ["--terrain", "--lock-boundary"] if is_terrain else []
-        for j in (1, threads):
+        # (label, command, output, the simplification time from its JSON output)
+        jobs = []
+        for j in sorted({1, threads}):
             out = os.path.join(out_dir, f"{name}-toposimp-{j}.ply")
-            wall, rss, text = timed([TOPOSIMP, "mesh", source, "-o", out, "--overwrite", "--keep-faces", str(target), "-j", str(j),
-                                     "--no-hausdorff", "--json"] + lock)
-            runs.append((f"toposimp {j} thr" + (" (terrain, locked border)" if is_terrain else ""), out, wall, rss,
-                         json.loads(text)["seconds"]["simplify"]))
+            jobs.append((f"toposimp {j} thr" + (" (terrain, locked border)" if is_terrain else ""),
+                         [TOPOSIMP, "mesh", source, "-o", out, "--overwrite", "--keep-faces", str(target), "-j", str(j),
+                          "--no-hausdorff", "--json"] + lock, out, lambda text: json.loads(text)["seconds"]["simplify"]))
         for flag in ([], ["--lock-border"]):
             out = os.path.join(out_dir, f"{name}-meshopt{''.join(flag)}.ply")
-            wall, rss, text = timed([os.path.join(PEERS, "meshopt_simplify"), source, out, str(target)] + flag)
-            runs.append(("meshoptimizer 0.18" + (" LockBorder" if flag else ""), out, wall, rss, json.loads(text)["simplify_seconds"]))
+            jobs.append(("meshoptimizer 0.18" + (" LockBorder" if flag else ""),
+                         [os.path.join(PEERS, "meshopt_simplify"), source, out, str(target)] + flag, out,
+                         lambda text: json.loads(text)["simplify_seconds"]))
         out = os.path.join(out_dir, f"{name}-cgal.ply")
-        wall, rss, text = timed([os.path.join(PEERS, "cgal_simplify"), source, out, str(target)])
-        runs.append(("CGAL 5.5 GH", out, wall, rss, json.loads(text)["simplify_seconds"]))
-        for label, out, wall, rss, simplify in runs:
+        jobs.append(("CGAL 5.5 GH", [os.path.join(PEERS, "cgal_simplify"), source, out, str(target)], out,
+                     lambda text: json.loads(text)["simplify_seconds"]))
+        # Alternating runs (every tool once, then again): the machine's slow and fast minutes fall
+        # on all of them alike. Medians of the times, the largest peak memory.
+        times = {label: [] for label, _, _, _ in jobs}
+        for _ in range(args.runs):
+            for label, command, out, simplify_of in jobs:
+                wall, rss, text = timed(command)
+                times[label].append((wall, simplify_of(text), rss))
+        walls = {}
+        for label, command, out, simplify_of in jobs:
+            wall = statistics.median(t[0] for t in times[label])
+            simplify = statistics.median(t[1] for t in times[label])
+            rss = max(t[2] for t in times[label])
+            walls[label] = wall
             check = [DEFECTS, out, "--against", source] + (["--terrain"] if is_terrain else [])
             try:
                 found = json.loads(subprocess.run(check, capture_output=True, text=True, timeout=900, check=True).stdout)
@@ -172,7 +272,11 @@ def main():
                 found = {}
             rows.append((name, faces, label, found.get("faces", "?"), wall, simplify, rss, found))
             print(f"{name} {label}: {wall:.2f} s, simplify {simplify:.3f} s, {rss:.0f} MiB, {found}", file=sys.stderr)
-    print(f"Target: {args.keep:.0%} of the faces. Machine: {os.cpu_count()} cores. One run each.\n")
+        ours = walls[jobs[len({1, threads}) - 1][0]]
+        ratios.append(f"{name}: CGAL's wall time / toposimp {threads} thr: {walls['CGAL 5.5 GH'] / ours:.2f}; "
+                      f"meshoptimizer's / toposimp {threads} thr: {walls['meshoptimizer 0.18'] / ours:.2f}")
+    runs = "One run each" if args.runs == 1 else f"Median of {args.runs} alternating runs each"
+    print(f"Target: {args.keep:.0%} of the faces. Machine: {os.cpu_count()} cores. {runs}.\n")
     print("| input (faces) | tool | faces out | wall s | simplify s | peak MiB | Hausdorff (% diag) | mean dist | intersecting pairs | non-manifold edges | map-plane folds |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")
     for name, faces, label, out_faces, wall, simplify, rss, d in rows:
@@ -181,6 +285,9 @@ def main():
         folds = d.get("map_plane_folds", "–")
         print(f"| {name} ({faces}) | {label} | {out_faces} | {wall:.2f} | {simplify:.3f} | {rss:.0f} | {h} | {mean} | "
               f"{d.get('intersecting_pairs', '?')} | {d.get('non_manifold_edges', '?')} | {folds} |")
+    print()
+    for line in ratios:
+        print(f"- {line}")
 
 
 if __name__ == "__main__":

@@ -391,6 +391,10 @@ private:
     Grid grid_over_faces(double factor, Point3 seed) const;
     void choose_grid();
     void check_terrain();
+    // Vertices and faces renumbered in a space-filling order (spatial_order), and back to the
+    // input's order for the output (input_order).
+    void spatial_order();
+    void input_order();
     void build_face_index();
     // The candidates of a block at the start of a level: the still valid ones of the blocks it
     // was made of at the level before (`before`, emptied), the others computed afresh.
@@ -575,6 +579,8 @@ private:
     static constexpr std::uint8_t kUnknown = 0, kClean = 1, kConflicting = 2;
     // Per vertex (3D meshes): another live vertex may have its location.
     std::vector<std::uint8_t> twin_;
+    // Each vertex's and each face's number before spatial_order().
+    std::vector<std::uint32_t> input_vertex_, input_face_;
     std::uint64_t live_faces_ = 0;
 };
 
@@ -609,12 +615,14 @@ void Simplifier::drop_dead_faces(std::vector<std::uint32_t>* kept) {
         if (!alive_[f]) continue;
         face_[count] = face_[f];
         clean_[count] = clean_[f];
+        if (!input_face_.empty()) input_face_[count] = input_face_[f];
         std::copy_n(rows.row(f), rows.width, rows.row(count));
         if (kept) kept->push_back(static_cast<std::uint32_t>(f));
         ++count;
     }
     face_.resize(count);
     clean_.resize(count);
+    if (!input_face_.empty()) input_face_.resize(count);
     rows.values.resize(count * rows.width);
     alive_.assign(count, 1);
 }
@@ -879,6 +887,132 @@ void Simplifier::find_twins() {
     for (std::size_t i = 1; i < order.size(); ++i) {
         if (same_location(pos_[order[i]], pos_[order[i - 1]])) twin_[order[i]] = twin_[order[i - 1]] = 1;
     }
+}
+
+namespace {
+
+// Row i of the result is row order[i] of `rows`.
+void permute_rows(Attributes& rows, const std::vector<std::uint32_t>& order) {
+    if (rows.width == 0) return;
+    std::vector<double> values(order.size() * rows.width);
+    for (std::size_t i = 0; i < order.size(); ++i) std::copy_n(rows.row(order[i]), rows.width, values.data() + i * rows.width);
+    rows.values.swap(values);
+}
+
+template <class T>
+void permute(std::vector<T>& items, const std::vector<std::uint32_t>& order) {
+    std::vector<T> result(order.size());
+    const auto count = static_cast<std::int64_t>(order.size());
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < count; ++i) result[static_cast<std::size_t>(i)] = items[order[static_cast<std::size_t>(i)]];
+    items.swap(result);
+}
+
+// The bits of x (10 of them) spread to every third bit: one axis of a Morton code.
+std::uint64_t every_third_bit(std::uint64_t x) {
+    x &= 0x3ff;
+    x = (x | x << 16) & 0x30000ffULL;
+    x = (x | x << 8) & 0x300f00fULL;
+    x = (x | x << 4) & 0x30c30c3ULL;
+    x = (x | x << 2) & 0x9249249ULL;
+    return x;
+}
+
+}  // namespace
+
+// A vertex's number is where its data lie in memory, and meshes come numbered in any order: in
+// the CGAL demo models an edge joins vertices a tenth to a third of the model apart in number
+// (their mean). A block's collapses then read and write all over every per-vertex array, which
+// for a model of a million faces are far bigger than the caches. Numbered along a Z-order curve
+// instead, the vertices of a cube of space mostly have neighbouring numbers, and the faces,
+// numbered by their lowest corner, too. Measured on two Loop subdivisions of the CGAL armadillo
+// (832 k faces), 2 threads: see BENCHMARKS.md.
+void Simplifier::spatial_order() {
+    const std::size_t n = pos_.size(), m = face_.size();
+    if (n == 0) return;
+    Box3 box = point_box(pos_[0]);
+    for (const Point3& p : pos_) box.add(p);
+    // 10 bits per axis (about a vertex per cell at a million vertices; more share a cell, in
+    // input order), on one scale for all three: a flat terrain is ordered in its map plane. (An
+    // extent that overflows, or NaN, gives every vertex the code 0: the input order.)
+    const double extent = std::max({box.hi.x - box.lo.x, box.hi.y - box.lo.y, box.hi.z - box.lo.z});
+    const double scale = extent > 0 && std::isfinite(extent) ? 0x1p10 / extent : 0.0;
+    auto units = [scale](double value, double lo) -> std::uint64_t {
+        const double u = (value - lo) * scale;
+        if (!(u >= 1)) return 0;  // (NaN too)
+        return u >= 0x1p10 - 1 ? 0x3ff : static_cast<std::uint64_t>(u);
+    };
+    // Code and number in one word, sorted by the code in three stable passes of 10 bits.
+    std::vector<std::uint64_t> keyed(n), other(n);
+    const auto count = static_cast<std::int64_t>(n);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < count; ++i) {
+        const Point3 p = pos_[static_cast<std::size_t>(i)];
+        const std::uint64_t code = every_third_bit(units(p.x, box.lo.x)) | every_third_bit(units(p.y, box.lo.y)) << 1 |
+                                   every_third_bit(units(p.z, box.lo.z)) << 2;
+        keyed[static_cast<std::size_t>(i)] = code << 32 | static_cast<std::uint64_t>(i);
+    }
+    for (int shift = 32; shift < 62; shift += 10) {
+        std::vector<std::size_t> first(1025, 0);
+        for (const std::uint64_t k : keyed) ++first[((k >> shift) & 0x3ff) + 1];
+        std::partial_sum(first.begin(), first.end(), first.begin());
+        for (const std::uint64_t k : keyed) other[first[(k >> shift) & 0x3ff]++] = k;
+        keyed.swap(other);
+    }
+    input_vertex_.resize(n);
+    std::vector<std::uint32_t> number(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto v = static_cast<std::uint32_t>(keyed[i]);
+        input_vertex_[i] = v;
+        number[v] = static_cast<std::uint32_t>(i);
+    }
+    // Faces by their lowest new corner number, in input order among those of one corner (a
+    // counting sort).
+    std::vector<std::uint32_t> first(n + 1, 0);
+    auto lowest = [&](const Face& c) { return std::min({number[c[0]], number[c[1]], number[c[2]]}); };
+    for (const Face& c : face_) ++first[lowest(c) + 1];
+    std::partial_sum(first.begin(), first.end(), first.begin());
+    input_face_.resize(m);
+    for (std::size_t f = 0; f < m; ++f) input_face_[first[lowest(face_[f])]++] = static_cast<std::uint32_t>(f);
+
+    permute(pos_, input_vertex_);
+    permute_rows(mesh_.vertex_attributes, input_vertex_);
+    permute(flags_, input_vertex_);
+    permute(stamp_, input_vertex_);
+    auto quadrics = std::make_unique_for_overwrite<Quadric[]>(n);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t i = 0; i < count; ++i) quadrics[static_cast<std::size_t>(i)] = quadric_[input_vertex_[static_cast<std::size_t>(i)]];
+    quadric_.swap(quadrics);
+    permute(face_, input_face_);
+    for (Face& c : face_) {
+        for (std::uint32_t& v : c) v = number[v];
+    }
+    permute_rows(mesh_.face_attributes, input_face_);
+    permute(alive_, input_face_);
+    permute(clean_, input_face_);
+    for (DirectedEdge& e : border_) e = {number[e.first], number[e.second]};
+    std::sort(border_.begin(), border_.end());
+    link_corners();
+}
+
+// The live faces in the order of their numbers in the input, the vertices numbered as in the
+// input (drop_unused then keeps that order).
+void Simplifier::input_order() {
+    if (input_vertex_.empty()) return;
+    std::vector<std::uint32_t> order(face_.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::sort(order.begin(), order.end(), [this](std::uint32_t f, std::uint32_t g) { return input_face_[f] < input_face_[g]; });
+    permute(face_, order);
+    permute_rows(mesh_.face_attributes, order);
+    for (Face& c : face_) {
+        for (std::uint32_t& v : c) v = input_vertex_[v];
+    }
+    std::vector<std::uint32_t> number(input_vertex_.size());  // the inverse: where each input vertex is now
+    for (std::size_t i = 0; i < input_vertex_.size(); ++i) number[input_vertex_[i]] = static_cast<std::uint32_t>(i);
+    permute(pos_, number);
+    permute_rows(mesh_.vertex_attributes, number);
+    input_vertex_.clear();
+    input_face_.clear();
 }
 
 template <class Visit>
@@ -1768,6 +1902,7 @@ MeshStats Simplifier::run() {
         return stats;
     }
     check_terrain();
+    spatial_order();
     if (terrain_ && options_.target == MeshTarget::max_error && std::isfinite(options_.value)) {
         vertical_ = std::make_unique<VerticalBound>(mesh_, options_.value);
     }
@@ -1927,6 +2062,7 @@ MeshStats Simplifier::run() {
 
     // Compact: surviving faces and vertices in input order.
     drop_dead_faces(nullptr);
+    input_order();
     drop_unused(mesh_);
 
     stats.vertices_out = pos_.size();

@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <numeric>
+#include <random>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -100,6 +102,68 @@ TEST(MeshAttributeBlend, RowsAreTheSameForAnyThreadCount) {
             EXPECT_EQ(m.face_attributes.values, first_faces);
         }
     }
+}
+
+// The simplifier numbers vertices and faces in a space-filling order while it works; what it
+// returns is in the input's order, whatever that was.
+mesh::Mesh shuffled_sphere_with_rows(unsigned seed) {
+    mesh::Mesh m = noisy_sphere(6, 0.05, seed);
+    std::mt19937 random(seed);
+    std::vector<std::uint32_t> number(m.points.size());
+    std::iota(number.begin(), number.end(), 0u);
+    std::shuffle(number.begin(), number.end(), random);
+    std::vector<Point3> points(m.points.size());
+    for (std::size_t v = 0; v < number.size(); ++v) points[number[v]] = m.points[v];
+    m.points = points;
+    for (mesh::Face& f : m.faces) {
+        for (std::uint32_t& v : f) v = number[v];
+    }
+    std::shuffle(m.faces.begin(), m.faces.end(), random);
+    m.vertex_attributes.width = 2;
+    for (std::size_t v = 0; v < m.points.size(); ++v) {
+        m.vertex_attributes.values.insert(m.vertex_attributes.values.end(), {static_cast<double>(v), m.points[v].z});
+    }
+    m.face_attributes.width = 1;
+    for (std::size_t f = 0; f < m.faces.size(); ++f) m.face_attributes.values.push_back(static_cast<double>(f));
+    return m;
+}
+
+TEST(MeshAttributeBlend, NothingToCollapseGivesTheInputBackInItsOrder) {
+    const mesh::Mesh input = shuffled_sphere_with_rows(3);
+    mesh::Mesh m = input;
+    mesh::MeshOptions options;
+    options.value = 1.0;  // keep every face
+    const mesh::MeshStats stats = mesh::simplify_mesh(m, options);
+    EXPECT_EQ(stats.collapses, 0u);
+    EXPECT_EQ(m.faces, input.faces);
+    ASSERT_EQ(m.points.size(), input.points.size());
+    for (std::size_t v = 0; v < m.points.size(); ++v) EXPECT_TRUE(same_location(m.points[v], input.points[v])) << v;
+    EXPECT_EQ(m.vertex_attributes.values, input.vertex_attributes.values);
+    EXPECT_EQ(m.face_attributes.values, input.face_attributes.values);
+}
+
+TEST(MeshAttributeBlend, KeptFacesComeInTheirInputOrder) {
+    mesh::Mesh m = shuffled_sphere_with_rows(4);
+    const mesh::Mesh input = m;
+    mesh::MeshOptions options;
+    options.value = 0.2;
+    ASSERT_GT(mesh::simplify_mesh(m, options).collapses, 0u);
+    // Each face keeps its row (its input number): increasing, so in input order.
+    ASSERT_EQ(m.face_attributes.values.size(), m.faces.size());
+    EXPECT_TRUE(std::is_sorted(m.face_attributes.values.begin(), m.face_attributes.values.end()));
+    EXPECT_EQ(std::adjacent_find(m.face_attributes.values.begin(), m.face_attributes.values.end()), m.face_attributes.values.end());
+    // A vertex at an input vertex's location (one that never moved, or a merge placed at one
+    // end) has that vertex's row.
+    std::map<std::array<double, 3>, std::size_t> id_at;
+    for (std::size_t v = 0; v < input.points.size(); ++v) id_at[{input.points[v].x, input.points[v].y, input.points[v].z}] = v;
+    std::size_t unmoved = 0;
+    for (std::size_t v = 0; v < m.points.size(); ++v) {
+        const auto it = id_at.find({m.points[v].x, m.points[v].y, m.points[v].z});
+        if (it == id_at.end()) continue;
+        ++unmoved;
+        EXPECT_EQ(m.vertex_attributes.row(v)[0], static_cast<double>(it->second)) << "vertex " << v;
+    }
+    EXPECT_GT(unmoved, 10u);
 }
 
 TEST(MeshAttributeBlend, DroppedFacesAndVerticesTakeTheirRows) {
