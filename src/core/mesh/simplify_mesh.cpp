@@ -396,6 +396,10 @@ private:
     // input's order for the output (input_order).
     void spatial_order();
     void input_order();
+    // Vertex i becomes vertex vertex_from[i] and face j face face_from[j], with their rows; a
+    // corner v is renamed corner_to[v].
+    void renumber(const std::vector<std::uint32_t>& vertex_from, const std::vector<std::uint32_t>& face_from,
+                  const std::vector<std::uint32_t>& corner_to);
     void build_face_index();
     // The candidates of a block at the start of a level: the still valid ones of the blocks it
     // was made of at the level before (`before`, emptied), the others computed afresh.
@@ -923,6 +927,22 @@ std::uint64_t every_third_bit(std::uint64_t x) {
 
 }  // namespace
 
+void Simplifier::renumber(const std::vector<std::uint32_t>& vertex_from, const std::vector<std::uint32_t>& face_from,
+                          const std::vector<std::uint32_t>& corner_to) {
+    const std::size_t n = pos_.size(), m = face_.size();
+    const Attributes &vertex_rows = mesh_.vertex_attributes, &face_rows = mesh_.face_attributes;
+    const std::size_t bytes = std::max({n * sizeof(Point3), m * sizeof(Face), n * vertex_rows.width * sizeof(double),
+                                        m * face_rows.width * sizeof(double)});
+    const auto scratch = std::make_unique_for_overwrite<unsigned char[]>(bytes);
+    permute(pos_.data(), n, 1, vertex_from, scratch.get());
+    permute(mesh_.vertex_attributes.values.data(), n, vertex_rows.width, vertex_from, scratch.get());
+    permute(face_.data(), m, 1, face_from, scratch.get());
+    permute(mesh_.face_attributes.values.data(), m, face_rows.width, face_from, scratch.get());
+    for (Face& c : face_) {
+        for (std::uint32_t& v : c) v = corner_to[v];
+    }
+}
+
 // The mean difference of a face's corner numbers up to which a mesh's numbering counts as local.
 constexpr std::uint64_t kLocalSpread = 4096;
 
@@ -992,19 +1012,7 @@ void Simplifier::spatial_order() {
     input_face_.resize(m);
     for (std::size_t f = 0; f < m; ++f) input_face_[first[lowest(face_[f])]++] = static_cast<std::uint32_t>(f);
 
-    {
-        const Attributes &vertex_rows = mesh_.vertex_attributes, &face_rows = mesh_.face_attributes;
-        const std::size_t bytes = std::max({n * sizeof(Point3), m * sizeof(Face), n * vertex_rows.width * sizeof(double),
-                                            m * face_rows.width * sizeof(double)});
-        const auto scratch = std::make_unique_for_overwrite<unsigned char[]>(bytes);
-        permute(pos_.data(), n, 1, input_vertex_, scratch.get());
-        permute(mesh_.vertex_attributes.values.data(), n, vertex_rows.width, input_vertex_, scratch.get());
-        permute(face_.data(), m, 1, input_face_, scratch.get());
-        permute(mesh_.face_attributes.values.data(), m, face_rows.width, input_face_, scratch.get());
-    }
-    for (Face& c : face_) {
-        for (std::uint32_t& v : c) v = number[v];
-    }
+    renumber(input_vertex_, input_face_, number);
     // The topology and the quadrics afresh (quicker than moving them, and their old arrays go
     // before the new ones come).
     quadric_.reset();
@@ -1019,20 +1027,9 @@ void Simplifier::input_order() {
     std::vector<std::uint32_t> order(face_.size());
     std::iota(order.begin(), order.end(), 0u);
     std::sort(order.begin(), order.end(), [this](std::uint32_t f, std::uint32_t g) { return input_face_[f] < input_face_[g]; });
-    const std::size_t n = pos_.size(), m = face_.size();
-    const Attributes &vertex_rows = mesh_.vertex_attributes, &face_rows = mesh_.face_attributes;
-    const std::size_t bytes = std::max({n * sizeof(Point3), m * sizeof(Face), n * vertex_rows.width * sizeof(double),
-                                        m * face_rows.width * sizeof(double)});
-    const auto scratch = std::make_unique_for_overwrite<unsigned char[]>(bytes);
-    permute(face_.data(), m, 1, order, scratch.get());
-    permute(mesh_.face_attributes.values.data(), m, face_rows.width, order, scratch.get());
-    for (Face& c : face_) {
-        for (std::uint32_t& v : c) v = input_vertex_[v];
-    }
-    std::vector<std::uint32_t> number(n);  // the inverse: where each input vertex is now
-    for (std::size_t i = 0; i < n; ++i) number[input_vertex_[i]] = static_cast<std::uint32_t>(i);
-    permute(pos_.data(), n, 1, number, scratch.get());
-    permute(mesh_.vertex_attributes.values.data(), n, vertex_rows.width, number, scratch.get());
+    std::vector<std::uint32_t> number(input_vertex_.size());  // the inverse: where each input vertex is now
+    for (std::size_t i = 0; i < input_vertex_.size(); ++i) number[input_vertex_[i]] = static_cast<std::uint32_t>(i);
+    renumber(number, order, input_vertex_);
     input_vertex_.clear();
     input_face_.clear();
 }
