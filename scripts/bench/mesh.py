@@ -76,7 +76,7 @@ def read_off(path):
 
 def loop_step(points, faces):
     """One step of Loop subdivision (Loop 1987): every triangle into four, new edge points at
-    3/8 (ends) + 1/8 (opposite corners), old points moved by Warren's weights; border edges and
+    3/8 (ends) + 1/8 (opposite corners), old points moved by Loop's weights (β from his thesis); border edges and
     points (and edges with more than two faces) follow the border curve's rules."""
     opposite = {}  # (lower, higher) -> corners opposite the edge
     for a, b, c in faces:
