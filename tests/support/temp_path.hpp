@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <functional>
 #include <string>
 
@@ -17,6 +18,13 @@ inline std::filesystem::path temp_path(const std::string& name) {
         return std::string(hex, 8);
     }();
     return std::filesystem::temp_directory_path() / ("toposimp-" + tree + "-" + name);
+}
+
+// `bytes` written to temp_path(name), whose path it returns.
+inline std::string write_temp_file(const std::string& name, const std::string& bytes) {
+    const std::string path = temp_path(name).string();
+    std::ofstream(path, std::ios::binary) << bytes;
+    return path;
 }
 
 }  // namespace toposimp::testing

@@ -17,11 +17,7 @@
 namespace toposimp::testing {
 namespace {
 
-std::string write_file(const std::string& name, const std::string& text) {
-    const std::string path = temp_path("attributes-" + name).string();
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-}
+std::string write_file(const std::string& name, const std::string& text) { return write_temp_file("attributes-" + name, text); }
 
 std::string read_text(const std::string& path) {
     std::ifstream in(path, std::ios::binary);

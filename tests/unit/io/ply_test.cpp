@@ -38,11 +38,7 @@ private:
     std::string text_;
 };
 
-std::string write_file(const std::string& name, const std::string& text) {
-    const std::string path = temp_path("ply-" + name).string();
-    std::ofstream(path, std::ios::binary) << text;
-    return path;
-}
+std::string write_file(const std::string& name, const std::string& text) { return write_temp_file("ply-" + name, text); }
 
 mesh::Mesh read(const std::string& path, bool triangulate = false) {
     io::MeshReadReport report;

@@ -23,11 +23,7 @@
 namespace toposimp::testing {
 namespace {
 
-std::string write_file(const std::string& name, const std::string& bytes) {
-    const std::string path = temp_path("stl-" + name).string();
-    std::ofstream(path, std::ios::binary) << bytes;
-    return path;
-}
+std::string write_file(const std::string& name, const std::string& bytes) { return write_temp_file("stl-" + name, bytes); }
 
 template <class T>
 void put(std::string& out, T value) {
