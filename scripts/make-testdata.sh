@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Rebuilds testdata/nh_borders.gpkg from the GIS Cup 2014 training set td1 (New Hampshire county
-# borders, MIT licence; ../shared/data/giscup14). Coordinates are copied as text, and GDAL's WKT
+# borders, MIT licence; testdata/giscup14). Coordinates are copied as text, and GDAL's WKT
 # reader parses them correctly rounded, so the GeoPackage holds the contest's values exactly.
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
-src=${1:-$here/../shared/data/giscup14/td1}
+src=${1:-$here/testdata/giscup14/td1}
 out=$here/testdata/nh_borders.gpkg
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT

@@ -4,7 +4,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/build.sh release >/dev/null
 mkdir -p testdata/golden
-data=../shared/data/giscup14
+data=testdata/giscup14
 for spec in td1:883 td2:517; do
   set=${spec%%:*} n=${spec##*:}
   out=testdata/golden/giscup-${set}_--remove-points_${n}.txt

@@ -4,7 +4,7 @@
 #           joined back into lines; control points: the 171 k GeoNames cities + uniform random
 #           points over the world up to 10 M (fixed seed)
 #   ne      Natural Earth states/provinces (Debian qgis-common) with the GeoNames cities
-#   td1/td2 GIS Cup 2014 training sets (../shared/data/giscup14)
+#   td1/td2 GIS Cup 2014 training sets (testdata/giscup14)
 # and the peers: mapshaper (npm). Everything goes to $TOPOSIMP_BENCH_DATA (default
 # build/bench-data); steps whose output exists are skipped.
 set -euo pipefail
@@ -46,7 +46,7 @@ fi
 # GIS Cup 2014 training sets as shapefiles (coordinates copied as text: exact).
 for set in td1 td2; do
   [ -f "${set}_lines.shp" ] && continue
-  src=$here/../shared/data/giscup14/$set
+  src=$here/testdata/giscup14/$set
   for kind in lines points; do
     { echo 'id,WKT'
       sed -E 's#^([^:]+):.*<gml:coordinates[^>]*>(.*)</gml:coordinates>.*$#\1|\2#' "$src/${kind}_out.txt" |

@@ -151,7 +151,7 @@ def npy(data):
 
 
 def dem(data):
-    """The real DEM of ../shared/data/README.md (Debian python-matplotlib-data: Jacksboro fault,
+    """A real DEM (Debian python-matplotlib-data: Jacksboro fault,
     403 x 344 cells of 3 arc-seconds, heights in metres), written as an ESRI ASCII grid in local
     metres (cells about 75 x 93 m), then triangulated by toposimp's own DEM reader into a binary
     PLY (--keep 100%: no collapse) that every tool reads."""

@@ -230,7 +230,7 @@ TEST(MapCli, GdalStyleLayerOptions) {
 TEST(MapCli, GiscupFormatLikeTheContestProgram) {
     const auto dir = fresh_dir("giscup");
     const std::string out = (dir / "out.txt").string();
-    const std::string data = std::string(TOPOSIMP_SHARED_DATA) + "/giscup14/td1/";
+    const std::string data = std::string(TOPOSIMP_TEST_DATA) + "/giscup14/td1/";
     const CliResult result = run_cli({"map", "--giscup", data + "lines_out.txt", "--points", data + "points_out.txt",
                                       "--remove-points", "883", "-o", out, "--json"});
     ASSERT_EQ(result.code, 0) << result.err;

@@ -49,7 +49,7 @@ TEST(Parallel, NaturalEarthStatesSameForAnyThreadCount) {
 
 TEST(Parallel, GiscupTrainingSetsSameForAnyThreadCount) {
     for (const std::string set : {"td1", "td2"}) {
-        const std::string dir = std::string(TOPOSIMP_SHARED_DATA) + "/giscup14/" + set + "/";
+        const std::string dir = std::string(TOPOSIMP_TEST_DATA) + "/giscup14/" + set + "/";
         map::MapData map;
         io::read_giscup_lines(dir + "lines_out.txt", map);
         map.control_points = io::read_giscup_points(dir + "points_out.txt");

