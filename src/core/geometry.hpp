@@ -49,6 +49,12 @@ struct Point3 {
 
 inline bool same_location(Point3 a, Point3 b) { return a.x == b.x && a.y == b.y && a.z == b.z; }
 
+// Points as vectors, in doubles (measures and placements; never a predicate).
+inline Point3 minus(Point3 a, Point3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline Point3 cross(Point3 a, Point3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline double dot(Point3 a, Point3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline double norm(Point3 a) { return std::sqrt(dot(a, a)); }
+
 // The plane projection that drops one axis: 0 drops x, 1 drops y, 2 drops z (the map plane).
 inline Point drop_axis(Point3 p, int axis) {
     return axis == 0 ? Point{p.y, p.z} : (axis == 1 ? Point{p.z, p.x} : Point{p.x, p.y});

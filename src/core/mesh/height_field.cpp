@@ -18,7 +18,8 @@ constexpr std::uint32_t kNone = 0xffffffffu;
 
 }  // namespace
 
-std::vector<DirectedEdge> border_edges(const Mesh& mesh) {
+std::vector<DirectedEdge> border_edges(const Mesh& mesh, int threads) {
+    if (threads <= 0) threads = omp_get_max_threads();
     // The corners of each vertex (a counting sort).
     const std::size_t n = mesh.points.size();
     std::vector<std::size_t> first(n + 1, 0);
@@ -35,9 +36,9 @@ std::vector<DirectedEdge> border_edges(const Mesh& mesh) {
     }
     // Around each vertex v: its faces' edges out of v (v, w) and into it (u, v), a few: scans. An
     // edge out of v with no edge into v from the same neighbour is a border edge.
-    std::vector<std::vector<DirectedEdge>> parts(static_cast<std::size_t>(omp_get_max_threads()));
+    std::vector<std::vector<DirectedEdge>> parts(static_cast<std::size_t>(threads));
     const auto vertices = static_cast<std::int64_t>(n);
-#pragma omp parallel
+#pragma omp parallel num_threads(threads)
     {
         auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)
@@ -156,9 +157,10 @@ bool covers_once_by_border(const Mesh& mesh, int turn, const std::vector<Directe
     return true;
 }
 
-std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& border) {
+std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& border,
+                                                         int threads) {
     if (covers_once_by_border(mesh, turn, border)) return std::nullopt;
-    return PlanIndex(mesh).overlapping_faces(mesh, turn);
+    return PlanIndex(mesh).overlapping_faces(mesh, turn, threads);
 }
 
 }  // namespace toposimp::mesh

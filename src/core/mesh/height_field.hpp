@@ -21,13 +21,15 @@ namespace toposimp::mesh {
 using DirectedEdge = std::pair<std::uint32_t, std::uint32_t>;
 
 // The border edges (v, w), sorted: a face has the edge from v to w and none the edge from w to v
-// (one such pair per face that has it).
-std::vector<DirectedEdge> border_edges(const Mesh& mesh);
+// (one such pair per face that has it). `threads`: 0 for OpenMP's default.
+std::vector<DirectedEdge> border_edges(const Mesh& mesh, int threads = 0);
 
 // `mesh`: faces all turned `turn` (±1) in the map plane, none degenerate there, no edge with
 // more than two faces; `border`: its border_edges. Two faces whose interiors overlap in the map
-// plane, the smallest such pair of face numbers, or none: it is a height field.
-std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& border);
+// plane, the smallest such pair of face numbers, or none: it is a height field. `threads`: 0 for
+// OpenMP's default (the answer does not depend on it).
+std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn, const std::vector<DirectedEdge>& border,
+                                                         int threads = 0);
 inline std::optional<std::array<std::uint32_t, 2>> plan_overlap(const Mesh& mesh, int turn) {
     return plan_overlap(mesh, turn, border_edges(mesh));
 }

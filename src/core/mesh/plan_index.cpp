@@ -86,7 +86,8 @@ PlanIndex::PlanIndex(const Mesh& mesh) {
     for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) for_cells(mesh.faces[f], [&](std::size_t c) { faces_[next[c]++] = f; });
 }
 
-std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn) const {
+std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn, int threads) const {
+    if (threads <= 0) threads = omp_get_max_threads();
     // Each pair whose boxes meet is tested once, in the first cell both list (on each axis the
     // later of their first cells). Every pair is looked at, so the smallest overlapping one is
     // found whatever the thread count.
@@ -96,8 +97,8 @@ std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const M
         std::int64_t cx, cy;  // first cell
     };
     constexpr std::uint32_t kNone = 0xffffffffu;
-    std::vector<std::array<std::uint32_t, 2>> found(static_cast<std::size_t>(omp_get_max_threads()), {kNone, kNone});
-#pragma omp parallel
+    std::vector<std::array<std::uint32_t, 2>> found(static_cast<std::size_t>(threads), {kNone, kNone});
+#pragma omp parallel num_threads(threads)
     {
         std::vector<Plan> here;
         exact::PredicateStats stats;

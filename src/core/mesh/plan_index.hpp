@@ -33,7 +33,7 @@ public:
     // is a height field over a planar triangulation, and stays one under collapses that keep
     // every face's turn and its border (the number of faces over a point is the winding number
     // of the border around it).
-    std::optional<std::array<std::uint32_t, 2>> overlapping_faces(const Mesh& mesh, int turn) const;
+    std::optional<std::array<std::uint32_t, 2>> overlapping_faces(const Mesh& mesh, int turn, int threads = 0) const;
 
 private:
     std::int64_t cell(double value, double origin, std::int64_t n) const {

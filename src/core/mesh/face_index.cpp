@@ -1,0 +1,150 @@
+#include "core/mesh/face_index.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace toposimp::mesh::detail {
+namespace {
+
+// The float next to a finite f, below or above it (std::nextafter, without the library call:
+// a neighbouring float is the neighbouring bit pattern of the same sign).
+float float_down(float f) {
+    if (f == 0) return -std::numeric_limits<float>::denorm_min();
+    const auto bits = std::bit_cast<std::uint32_t>(f);
+    return std::bit_cast<float>(f > 0 ? bits - 1 : bits + 1);
+}
+float float_up(float f) { return -float_down(-f); }
+
+// A coordinate in grid units, as a float at most (below) or at least (above) it. The double
+// scaling is monotone, so is the rounding: boxes that overlap keep overlapping. The nearest float
+// lies within half a spacing of the value, so the float below it is at most the value and the
+// float above it at least the value: taken always, without asking on which side of the nearest
+// float the value lay (a branch mispredicted half the time; a box one float spacing wider).
+float float_below(double value) {
+    if (!(value > -std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
+    if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
+    return float_down(static_cast<float>(value));
+}
+float float_above(double value) {
+    if (!(value < std::numeric_limits<float>::max())) return std::numeric_limits<float>::infinity();
+    if (value < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::max();
+    return float_up(static_cast<float>(value));
+}
+
+// A face's entry in the list of one of its cells.
+IndexEntry index_entry(std::uint32_t f, const UnitBox& unit, std::uint64_t key) {
+    IndexEntry entry;
+    entry.first_here = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+        entry.lo[axis] = unit.lo[axis];
+        entry.hi[axis] = unit.hi[axis];
+        entry.first_here = static_cast<std::uint8_t>(entry.first_here | (Grid::unpack(key, axis) == Grid::unpack(unit.first, axis)) << axis);
+    }
+    entry.face = f;
+    return entry;
+}
+
+}  // namespace
+
+UnitBox FaceIndex::unit_box(const Box3& box) const {
+    UnitBox unit;
+    for (int axis = 0; axis < 3; ++axis) {
+        unit.lo[axis] = float_below(grid_.units(box.lo[axis], axis));
+        unit.hi[axis] = float_above(grid_.units(box.hi[axis], axis));
+    }
+    unit.first = grid_.cell_key(box.lo);
+    unit.last = grid_.cell_key(box.hi);
+    return unit;
+}
+
+void FaceIndex::build(const Grid& grid, const std::vector<Face>& faces, const std::vector<Point3>& points,
+                      const std::vector<std::uint8_t>& alive, int threads) {
+    // Parts of the faces, one per thread (a function of the thread count, but the lists are not).
+    const auto parts = static_cast<std::int64_t>(threads);
+    cells_.clear(static_cast<std::size_t>(parts));
+    const auto m = static_cast<std::int64_t>(faces.size());
+    grid_ = grid;
+    changed_.assign(faces.size(), 0);
+    unit_boxes_.resize(faces.size());
+    auto face_box = [&](std::int64_t f) {
+        const Face& c = faces[static_cast<std::size_t>(f)];
+        return triangle_box(points[c[0]], points[c[1]], points[c[2]]);
+    };
+    // Each cell lists its faces in face order: part k holds a run of faces.
+    auto run_of = [&](std::int64_t k) { return m * k / parts; };
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::int64_t k = 0; k < parts; ++k) {
+        for (std::int64_t f = run_of(k); f < run_of(k + 1); ++f) {
+            if (!alive[f]) continue;
+            const UnitBox& unit = unit_boxes_[f] = unit_box(face_box(f));
+            for_cells(unit.first, unit.last, [&](std::uint64_t key) { cells_.count(static_cast<std::size_t>(k), key); });
+        }
+    }
+    cells_.allocate();
+#pragma omp parallel for schedule(static) num_threads(threads)
+    for (std::int64_t k = 0; k < parts; ++k) {
+        for (std::int64_t f = run_of(k); f < run_of(k + 1); ++f) {
+            if (!alive[f]) continue;
+            const UnitBox& unit = unit_boxes_[f];
+            for_cells(unit.first, unit.last, [&](std::uint64_t key) {
+                cells_.place(static_cast<std::size_t>(k), key, index_entry(static_cast<std::uint32_t>(f), unit, key));
+            });
+        }
+    }
+}
+
+// Faces that may touch `box` (inside the calling block), each once: from the round's index
+// those whose box at the start of the round overlaps it — a face another block changes lay, and
+// lies, inside that block, so its start box cannot overlap and it is never read — unless this
+// block changed them, and the faces this block changed, from its overlay, if their box now
+// overlaps it. Boxes are compared rounded outward (a few more faces, never fewer). A face
+// spanning several of the box's cells is taken in the first (lowest on every axis) of them.
+void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::uint32_t>& out) const {
+    out.clear();
+    const UnitBox unit = unit_box(box);
+    const std::uint64_t box_lo = unit.first;
+    const float* unit_lo = unit.lo;
+    const float* unit_hi = unit.hi;
+    for_cells(unit.first, unit.last, [&](std::uint64_t key) {
+        // The first cell a face and the box share is, on each axis, the later of their first
+        // ones; the cell visited is in both: it is that one where it is the face's first or the
+        // box's on every axis.
+        std::uint8_t box_first = 0;
+        for (int axis = 0; axis < 3; ++axis) box_first |= static_cast<std::uint8_t>((Grid::unpack(key, axis) == Grid::unpack(box_lo, axis)) << axis);
+        // Without branches (a hit is written always, kept or overwritten), as the tests are
+        // hard to predict; the index's hits then lose the faces this block changed.
+        auto scan = [&](std::span<const IndexEntry> entries, bool from_index) {
+            const std::size_t start = out.size();
+            out.resize(start + entries.size());
+            std::uint32_t* at = out.data() + start;
+            for (const IndexEntry& entry : entries) {
+                *at = entry.face;
+                at += (entry.lo[0] <= unit_hi[0]) & (unit_lo[0] <= entry.hi[0]) & (entry.lo[1] <= unit_hi[1]) &
+                      (unit_lo[1] <= entry.hi[1]) & (entry.lo[2] <= unit_hi[2]) & (unit_lo[2] <= entry.hi[2]) &
+                      ((entry.first_here | box_first) == 7);
+            }
+            if (from_index) at = std::remove_if(out.data() + start, at, [this](std::uint32_t f) { return changed_[f] != 0; });
+            out.resize(static_cast<std::size_t>(at - out.data()));
+        };
+        scan(cells_.entries(key), true);
+        if (const std::vector<IndexEntry>* mine = overlay.find(key)) scan(*mine, false);
+    });
+}
+
+void FaceIndex::leave_overlay(std::uint32_t f, const Box3& box, Overlay& overlay) const {
+    if (!changed_[f]) return;
+    for_cells(grid_.cell_key(box.lo), grid_.cell_key(box.hi), [&](std::uint64_t key) {
+        std::vector<IndexEntry>& list = *overlay.find(key);
+        auto it = std::find_if(list.begin(), list.end(), [f](const IndexEntry& e) { return e.face == f; });
+        *it = list.back();
+        list.pop_back();
+    });
+}
+
+void FaceIndex::enter_overlay(std::uint32_t f, const Box3& box, Overlay& overlay) {
+    changed_[f] = 1;
+    const UnitBox unit = unit_box(box);
+    for_cells(unit.first, unit.last, [&](std::uint64_t key) { overlay[key].push_back(index_entry(f, unit, key)); });
+}
+
+}  // namespace toposimp::mesh::detail

@@ -1,0 +1,86 @@
+// The k-th smallest of many keys held in several lists, in parallel: the round threshold of both
+// engines' count targets (the map's smallest effective areas, the mesh's cheapest collapses).
+//
+// Keys are 64-bit unsigned integers (ordered_bits() turns doubles into such keys, in their
+// order). A histogram of the keys' top 16 bits is counted in parallel, one list at a time per
+// thread; the bucket holding the k-th key is found; then, in parallel again, each list counts its
+// keys in lower buckets and collects those in that bucket, among which the k-th is selected
+// (std::nth_element). The answer depends only on the keys, never on the thread count or on how
+// the keys are split into lists.
+#pragma once
+
+#include <algorithm>
+#include <bit>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+namespace toposimp::parallel {
+
+// A double as an unsigned integer in the same order: bigger doubles, bigger keys (never for
+// NaN; −0 is taken as +0, which it equals).
+inline std::uint64_t ordered_bits(double value) {
+    const auto bits = std::bit_cast<std::uint64_t>(value + 0.0);
+    return (bits >> 63) != 0 ? ~bits : bits | (std::uint64_t{1} << 63);
+}
+
+// The double of an ordered_bits() key.
+inline double from_ordered_bits(std::uint64_t key) {
+    return std::bit_cast<double>((key >> 63) != 0 ? key & ~(std::uint64_t{1} << 63) : ~key);
+}
+
+struct Selection {
+    std::uint64_t key = 0;             // the k-th smallest key
+    std::vector<std::uint64_t> less;   // per list: how many of its keys are smaller
+    std::vector<std::uint64_t> equal;  // per list: how many equal it
+};
+
+// The k-th smallest (k from 1 to the number of keys) of the keys key_of(item) of every item of
+// every list of `lists` (a vector of ranges), with each list's counts below and at it.
+template <class Lists, class KeyOf>
+Selection select_kth(const Lists& lists, std::size_t k, int threads, KeyOf key_of) {
+    constexpr int kShift = 48;  // the histogram's digit: the keys' top 16 bits
+    const auto n = static_cast<std::int64_t>(lists.size());
+    std::vector<std::uint64_t> histogram(std::size_t{1} << (64 - kShift), 0);
+#pragma omp parallel num_threads(threads)
+    {
+        std::vector<std::uint64_t> mine(histogram.size(), 0);
+#pragma omp for schedule(dynamic, 1) nowait
+        for (std::int64_t i = 0; i < n; ++i) {
+            for (const auto& item : lists[static_cast<std::size_t>(i)]) ++mine[key_of(item) >> kShift];
+        }
+#pragma omp critical(toposimp_select_histogram)
+        for (std::size_t d = 0; d < histogram.size(); ++d) histogram[d] += mine[d];
+    }
+    std::uint64_t digit = 0, below = 0;
+    while (below + histogram[digit] < k) below += histogram[digit++];
+
+    Selection selection;
+    selection.less.assign(lists.size(), 0);
+    selection.equal.assign(lists.size(), 0);
+    std::vector<std::vector<std::uint64_t>> in_bucket(lists.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (std::int64_t i = 0; i < n; ++i) {
+        const auto l = static_cast<std::size_t>(i);
+        for (const auto& item : lists[l]) {
+            const std::uint64_t key = key_of(item), d = key >> kShift;
+            if (d < digit) ++selection.less[l];
+            if (d == digit) in_bucket[l].push_back(key);
+        }
+    }
+    std::vector<std::uint64_t> bucket;
+    bucket.reserve(histogram[digit]);
+    for (const auto& list : in_bucket) bucket.insert(bucket.end(), list.begin(), list.end());
+    const auto at = bucket.begin() + static_cast<std::ptrdiff_t>(k - below - 1);
+    std::nth_element(bucket.begin(), at, bucket.end());
+    selection.key = *at;
+    for (std::size_t l = 0; l < lists.size(); ++l) {
+        for (const std::uint64_t key : in_bucket[l]) {
+            selection.less[l] += key < selection.key;
+            selection.equal[l] += key == selection.key;
+        }
+    }
+    return selection;
+}
+
+}  // namespace toposimp::parallel
