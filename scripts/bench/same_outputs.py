@@ -79,6 +79,9 @@ def jobs(data, only):
             for j in (1, 2):
                 found.append((f"ne-keep{keep}-j{j}", ["map", states, "-p", cities, "--keep", keep, "-j", str(j),
                                                      "-o", "{out}", "--json"], ".geojson"))
+        for j in (1, 2):  # without points: the count target is reached, in rounds
+            found.append((f"ne-nopoints-keep20%-j{j}", ["map", states, "--keep", "20%", "-j", str(j), "-o", "{out}", "--json"],
+                          ".geojson"))
         found.append(("ne-max-shp", ["map", states, "-p", cities, "--max", "-o", "{out}", "--json"], ".shp"))
         found.append(("ne-check", ["check", states, "{prev}", "-p", cities, "--json"], None))
     if only in (None, "mesh"):
@@ -87,6 +90,14 @@ def jobs(data, only):
             source = mesh.cgal_model(data, file)
             for j in (1, 2):
                 found.append((f"{name}-j{j}", ["mesh", source, "-o", "{out}", "--keep", "10%", "-j", str(j), "--json"], ".ply"))
+        # Every mesh format written, with attributes (normals, colours, texture coordinates).
+        attributed = os.path.join(data, "elephant-attributes.ply")
+        if not os.path.exists(attributed):
+            subprocess.run([sys.executable, os.path.join(HERE, "attributed_ply.py"), mesh.cgal_model(data, "refined_elephant"),
+                            attributed, os.path.join(data, "elephant-plain.ply")], check=True)
+        for suffix, extra in ((".obj", []), (".off", []), (".stl", []), (".ply", ["--ascii"]), (".stl", ["--ascii"])):
+            found.append((f"elephant-attributes{''.join(extra)}{suffix.replace('.', '-')}",
+                          ["mesh", attributed, "-o", "{out}", "--keep", "10%", "--no-hausdorff", "--json"] + extra, suffix))
         jacksboro = mesh.dem(data)
         for j in (1, 2):
             found.append((f"jacksboro-j{j}", ["mesh", jacksboro, "-o", "{out}", "--keep", "10%", "--terrain",

@@ -2,9 +2,9 @@
 
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
-#include "io/errors.hpp"
-#include "io/json_text.hpp"
-#include "io/output_file.hpp"
+#include "io/common/errors.hpp"
+#include "io/common/json_text.hpp"
+#include "io/common/output_file.hpp"
 
 #include <fstream>
 #include <iomanip>

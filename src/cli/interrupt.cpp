@@ -1,6 +1,6 @@
 #include "cli/interrupt.hpp"
 
-#include "io/output_file.hpp"
+#include "io/common/output_file.hpp"
 
 #include <pthread.h>
 #include <unistd.h>

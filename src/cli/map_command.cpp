@@ -5,12 +5,12 @@
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
 #include "core/map/simplify.hpp"
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
-#include "io/giscup.hpp"
-#include "io/json_text.hpp"
-#include "io/ogr_dataset.hpp"
-#include "io/output_file.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
+#include "io/map/giscup.hpp"
+#include "io/common/json_text.hpp"
+#include "io/ogr/ogr_dataset.hpp"
+#include "io/common/output_file.hpp"
 
 #include <cpl_conv.h>
 

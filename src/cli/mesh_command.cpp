@@ -4,11 +4,11 @@
 #include "cli/progress.hpp"
 #include "cli/logging.hpp"
 #include "core/mesh/distance.hpp"
-#include "core/mesh/simplify_mesh.hpp"
-#include "io/errors.hpp"
-#include "io/json_text.hpp"
-#include "io/mesh_io.hpp"
-#include "io/output_file.hpp"
+#include "core/mesh/simplify.hpp"
+#include "io/common/errors.hpp"
+#include "io/common/json_text.hpp"
+#include "io/mesh/mesh_files.hpp"
+#include "io/common/output_file.hpp"
 
 #include <CLI/CLI.hpp>  // (all of CLI11, for parse_mesh_command's own App: the launcher has no other)
 
@@ -88,28 +88,26 @@ bool mesh_output(const MeshCommandOptions& options) {
     return name.empty() ? io::has_mesh_extension(options.output) : (name == "obj" || name == "ply" || name == "off" || name == "stl");
 }
 
-std::optional<mesh::MeshOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
-    mesh::MeshOptions target;
+std::optional<mesh::SimplifyOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
+    mesh::SimplifyOptions target;
     if (options.keep_faces >= 0) {
-        target.target = mesh::MeshTarget::keep_faces;
-        target.value = std::floor(options.keep_faces);
+        target.stop = {mesh::Target::keep_faces, std::floor(options.keep_faces)};
     } else if (options.max_error >= 0) {
-        target.target = mesh::MeshTarget::max_error;
-        target.value = options.max_error;
+        target.stop = {mesh::Target::max_error, options.max_error};
     } else if (!options.keep.empty()) {
         const std::optional<double> share = parse_share(options.keep, "faces", problem);
         if (!share) return std::nullopt;
-        target.value = *share;
+        target.stop.value = *share;
     }
     return target;
 }
 
-std::string describe(const mesh::MeshOptions& target, const mesh::MeshStats& stats) {
+std::string describe(const mesh::StopCriterion& target, const mesh::SimplifyStats& stats) {
     std::ostringstream text;
     switch (target.target) {
-        case mesh::MeshTarget::keep_fraction: text << "keep " << target.value * 100 << "% of the faces"; break;
-        case mesh::MeshTarget::keep_faces: text << "keep " << target.value << " faces"; break;
-        case mesh::MeshTarget::max_error:
+        case mesh::Target::keep_fraction: text << "keep " << target.value * 100 << "% of the faces"; break;
+        case mesh::Target::keep_faces: text << "keep " << target.value << " faces"; break;
+        case mesh::Target::max_error:
             text << (stats.vertical_bound ? "vertical error <= " : "quadric error <= ") << target.value;
             break;
     }
@@ -138,7 +136,7 @@ bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions
 int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
-    std::optional<mesh::MeshOptions> engine = mesh_target(options, problem);
+    std::optional<mesh::SimplifyOptions> engine = mesh_target(options, problem);
     if (!engine) {
         log->error("{}", problem);
         return kUsageError;
@@ -231,7 +229,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
 
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        const mesh::MeshStats stats = mesh::simplify_mesh(m, *engine);
+        const mesh::SimplifyStats stats = mesh::simplify(m, *engine);
         const double seconds_simplify = seconds_since(simplify_start);
         if (const auto& edge = stats.non_manifold) {
             std::string faces;
@@ -247,7 +245,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
                                                              " (counted from 0) overlap in the x-y plane"
                                                        : "the faces are not all turned the same way in the x-y plane";
             log->warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, why,
-                      engine->target == mesh::MeshTarget::max_error ? " (--max-error bounds the quadric error)" : "");
+                      engine->stop.target == mesh::Target::max_error ? " (--max-error bounds the quadric error)" : "");
         } else if (stats.vertical_bound && !engine->lock_boundary) {
             log->info("border vertices kept where they are: the vertical bound is measured over the input's extent");
         }
@@ -301,7 +299,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
                    peak_memory_mib());
         std::string summary = fmt::format("{} -> {} faces, {} -> {} vertices ({} collapses, {} refused), {}, {:.3f} s",
                                           stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out,
-                                          stats.collapses, stats.refused(), describe(*engine, stats), total);
+                                          stats.collapses, stats.refused(), describe(engine->stop, stats), total);
         if (distance) {
             summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
                                    distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
@@ -317,7 +315,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
                 << ",\"faces_out\":" << stats.faces_out << ",\"welded_vertices\":" << welded_vertices
                 << ",\"collapses\":" << stats.collapses
                 << ",\"flat_collapses_unsearched\":" << stats.flat_unsearched
-                << ",\"target\":{\"criterion\":" << io::json_string(describe(*engine, stats))
+                << ",\"target\":{\"criterion\":" << io::json_string(describe(engine->stop, stats))
                 << ",\"target_faces\":" << stats.target_faces << ",\"reached\":" << (stats.target_reached ? "true" : "false")
                 << "},\"refused\":{\"total\":" << stats.refused() << ",\"link\":" << stats.refused_link
                 << ",\"boundary\":" << stats.refused_boundary << ",\"flip\":" << stats.refused_flip
@@ -325,7 +323,7 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
                 << ",\"vertical\":" << stats.refused_vertical << "},\"max_quadric_error\":" << stats.max_error
                 << ",\"terrain\":" << (stats.terrain ? "true" : "false")
                 << ",\"lock_boundary\":" << (engine->lock_boundary || stats.vertical_bound ? "true" : "false");
-            if (stats.vertical_bound) out << ",\"guaranteed_vertical_error\":" << engine->value;
+            if (stats.vertical_bound) out << ",\"guaranteed_vertical_error\":" << engine->stop.value;
             // Attribute columns kept, dropped on reading (with the reason), left out on writing.
             auto names = [](const auto& list, auto name_of) {
                 std::string text = "[";

@@ -2,7 +2,7 @@
 #pragma once
 
 #include "cli/cli.hpp"
-#include "io/dem.hpp"
+#include "io/ogr/dem.hpp"
 
 #include <CLI/App.hpp>
 

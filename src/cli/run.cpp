@@ -3,10 +3,10 @@
 #include "cli/check_command.hpp"
 #include "cli/map_command.hpp"
 #include "cli/mesh_command.hpp"
-#include "io/dem.hpp"
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
-#include "io/ogr_dataset.hpp"
+#include "io/ogr/dem.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 
 #include <CLI/CLI.hpp>
 #include <gmp.h>

@@ -4,9 +4,9 @@
 #include "core/exact/predicates.hpp"
 #include "core/map/crossings.hpp"
 #include "core/map/point_grid.hpp"
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
-#include "io/ogr_dataset.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 
 #include <geos_c.h>
 #include <gmpxx.h>

@@ -2,7 +2,7 @@
 // message naming the file and the place, no output left behind).
 #include "cli/cli_fixtures.hpp"
 #include "core/mesh/mesh.hpp"
-#include "io/mesh_io.hpp"
+#include "io/mesh/mesh_files.hpp"
 #include "support/mesh_checker.hpp"
 
 #include <gtest/gtest.h>

@@ -1,8 +1,8 @@
 // Parallel simplification of real maps: the output is the same for any number of threads.
 #include "cli/cli_fixtures.hpp"
 #include "core/map/simplify.hpp"
-#include "io/giscup.hpp"
-#include "io/ogr_dataset.hpp"
+#include "io/map/giscup.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 #include "support/exact_checker.hpp"
 
 #include <gtest/gtest.h>

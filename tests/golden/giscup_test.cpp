@@ -2,7 +2,7 @@
 // the asked number of points removed, and byte-identical output to the stored golden files.
 #include "cli/cli_fixtures.hpp"
 #include "core/map/simplify.hpp"
-#include "io/giscup.hpp"
+#include "io/map/giscup.hpp"
 #include "support/exact_checker.hpp"
 
 #include <gtest/gtest.h>

@@ -2,7 +2,7 @@
 // map-plane fold, whatever the target; the same result for any thread count. Every check is
 // the independent brute-force checker's (tests/support/mesh_checker), not the engine's.
 #include "core/mesh/distance.hpp"
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 #include "support/mesh_checker.hpp"
 #include "support/random_meshes.hpp"
 
@@ -17,15 +17,15 @@ namespace {
 
 using testing::find_defects;
 
-MeshStats simplified(Mesh& m, MeshTarget target, double value, int threads, bool terrain = false, bool lock = false) {
-    MeshOptions options;
-    options.target = target;
-    options.value = value;
+SimplifyStats simplified(Mesh& m, Target target, double value, int threads, bool terrain = false, bool lock = false) {
+    SimplifyOptions options;
+    options.stop.target = target;
+    options.stop.value = value;
     options.threads = threads;
     options.parallel_threshold = 0;  // every loop parallel, even on small meshes
     options.terrain = terrain;
     options.lock_boundary = lock;
-    return simplify_mesh(m, options);
+    return simplify(m, options);
 }
 
 void expect_clean(const Mesh& m, const std::string& what) {
@@ -75,7 +75,7 @@ TEST(MeshProperties, SpheresStayClosedManifoldAndUnbroken) {
         for (double keep : {0.5, 0.1, 0.02}) {
             Mesh m = testing::noisy_sphere(3, seed % 2 == 0 ? 0.3 : 0.02, seed);
             const std::size_t faces = m.faces.size();
-            const MeshStats stats = simplified(m, MeshTarget::keep_fraction, keep, 2);
+            const SimplifyStats stats = simplified(m, Target::keep_fraction, keep, 2);
             const std::string what = "seed " + std::to_string(seed) + " keep " + std::to_string(keep);
             expect_clean(m, what);
             EXPECT_EQ(testing::volume_sign(m), 1) << what;
@@ -92,7 +92,7 @@ TEST(MeshProperties, SpheresStayClosedManifoldAndUnbroken) {
 
 TEST(MeshProperties, CountTargetsLandWithinOneCollapse) {
     Mesh m = testing::noisy_sphere(4, 0.01, 3);
-    const MeshStats stats = simplified(m, MeshTarget::keep_faces, 1000, 3);
+    const SimplifyStats stats = simplified(m, Target::keep_faces, 1000, 3);
     ASSERT_TRUE(stats.target_reached);
     EXPECT_LE(m.faces.size(), 1000u);
     EXPECT_GE(m.faces.size(), 998u);  // a collapse removes two faces of a closed surface
@@ -102,7 +102,7 @@ TEST(MeshProperties, NoisyTerrainNeverFoldsInTheMapPlane) {
     for (std::uint64_t seed = 1; seed <= 4; ++seed) {
         for (bool lock : {true, false}) {
             Mesh m = testing::noisy_heightfield(40, seed % 2 == 0 ? 2.0 : 0.2, seed);
-            const MeshStats stats = simplified(m, MeshTarget::keep_fraction, 0.05, 2, true, lock);
+            const SimplifyStats stats = simplified(m, Target::keep_fraction, 0.05, 2, true, lock);
             const std::string what = "seed " + std::to_string(seed) + (lock ? " locked" : " free");
             expect_clean(m, what);
             EXPECT_EQ(testing::count_map_plane_folds(m, 1), 0u) << what;
@@ -121,7 +121,7 @@ TEST(MeshProperties, SheetsUlpsApartNeverTouch) {
     for (int ulps : {1, 4, 64}) {
         for (std::uint64_t seed = 1; seed <= 3; ++seed) {
             Mesh m = testing::near_sheets(16, ulps, seed);
-            const MeshStats stats = simplified(m, MeshTarget::keep_fraction, 0.05, 2);
+            const SimplifyStats stats = simplified(m, Target::keep_fraction, 0.05, 2);
             const std::string what = std::to_string(ulps) + " ulps, seed " + std::to_string(seed);
             expect_clean(m, what);
             EXPECT_GT(stats.collapses, 0u) << what;
@@ -133,7 +133,7 @@ TEST(MeshProperties, SheetsUlpsApartNeverTouch) {
 TEST(MeshProperties, FoldedStripLayersNeverCross) {
     for (double gap : {0.5, 1e-3, 1e-9}) {
         Mesh m = testing::folded_strip(40, gap, 5);
-        const MeshStats stats = simplified(m, MeshTarget::keep_fraction, 0.05, 2);
+        const SimplifyStats stats = simplified(m, Target::keep_fraction, 0.05, 2);
         expect_clean(m, "gap " + std::to_string(gap));
         EXPECT_GT(stats.collapses, 0u);
     }
@@ -141,7 +141,7 @@ TEST(MeshProperties, FoldedStripLayersNeverCross) {
 
 TEST(MeshProperties, MaxErrorBoundsEveryCollapse) {
     Mesh m = testing::noisy_heightfield(40, 0.3, 9);
-    const MeshStats stats = simplified(m, MeshTarget::max_error, 0.25, 2);
+    const SimplifyStats stats = simplified(m, Target::max_error, 0.25, 2);
     EXPECT_GT(stats.collapses, 0u);
     EXPECT_LE(stats.max_error, 0.25);
     expect_clean(m, "max error");
@@ -152,8 +152,8 @@ TEST(MeshProperties, SameResultForAnyThreadCount) {
                            testing::near_sheets(24, 2, 13), testing::folded_strip(60, 1e-3, 14)};
     int k = 0;
     for (const Mesh& input : inputs) {
-        for (MeshTarget target : {MeshTarget::keep_fraction, MeshTarget::max_error}) {
-            const double value = target == MeshTarget::keep_fraction ? 0.1 : 0.05;
+        for (Target target : {Target::keep_fraction, Target::max_error}) {
+            const double value = target == Target::keep_fraction ? 0.1 : 0.05;
             Mesh serial = input;
             simplified(serial, target, value, 1, k == 1);
             for (int threads : {2, 3, 4, 7}) {
@@ -175,7 +175,7 @@ TEST(MeshProperties, FarFromTheOriginSimplifiesAsWellAsAtIt) {
     for (int k = 0; k < 2; ++k) {
         Mesh input = testing::noisy_sphere(5, 0.002, 21, k == 0 ? Point3{0, 0, 0} : far);
         Mesh m = input;
-        const MeshStats stats = simplified(m, MeshTarget::keep_fraction, 0.1, 2);
+        const SimplifyStats stats = simplified(m, Target::keep_fraction, 0.1, 2);
         EXPECT_TRUE(stats.target_reached);
         expect_clean(m, k == 0 ? "at the origin" : "far from it");
         distance[k] = hausdorff(input, m).max();
@@ -191,11 +191,11 @@ TEST(MeshProperties, FarFromTheOriginSimplifiesAsWellAsAtIt) {
 TEST(MeshProperties, ScaledByAPowerOfTwoSimplifiesTheSame) {
     const Mesh input = testing::noisy_sphere(4, 0.05, 23);
     Mesh unit = input;
-    const MeshStats unit_stats = simplified(unit, MeshTarget::keep_fraction, 0.1, 2);
+    const SimplifyStats unit_stats = simplified(unit, Target::keep_fraction, 0.1, 2);
     for (int k : {-500, 500}) {
         Mesh m = input;
         for (Point3& p : m.points) p = {std::ldexp(p.x, k), std::ldexp(p.y, k), std::ldexp(p.z, k)};
-        const MeshStats stats = simplified(m, MeshTarget::keep_fraction, 0.1, 2);
+        const SimplifyStats stats = simplified(m, Target::keep_fraction, 0.1, 2);
         ASSERT_EQ(m.faces, unit.faces) << k;
         ASSERT_EQ(m.points.size(), unit.points.size()) << k;
         for (std::size_t i = 0; i < m.points.size(); ++i) {
@@ -212,13 +212,13 @@ TEST(MeshProperties, ScaledByAPowerOfTwoSimplifiesTheSame) {
 TEST(MeshProperties, NearTheLargestDoubleSimplifiesAsWellAsAtSizeOne) {
     const Mesh input = testing::noisy_sphere(4, 0.05, 27);
     Mesh unit = input;
-    simplified(unit, MeshTarget::keep_fraction, 0.1, 2);
+    simplified(unit, Target::keep_fraction, 0.1, 2);
     const double unit_distance = hausdorff(input, unit).max();
     Mesh huge = input;
     for (Point3& p : huge.points) p = {0x1.8p1023 + std::ldexp(p.x, 1020), std::ldexp(p.y, 1020), std::ldexp(p.z, 1020)};
     ASSERT_FALSE(std::isfinite(huge.points[0].x + huge.points[1].x));  // (the premise)
     const Mesh huge_input = huge;
-    const MeshStats stats = simplified(huge, MeshTarget::keep_fraction, 0.1, 2);
+    const SimplifyStats stats = simplified(huge, Target::keep_fraction, 0.1, 2);
     EXPECT_TRUE(stats.target_reached);
     expect_clean(huge, "near the largest double");
     const double huge_distance = std::ldexp(hausdorff(huge_input, huge).max(), -1020);
@@ -327,14 +327,14 @@ TEST(MeshProperties, FlatRegionsSkipTheSearchButDecideTheSame) {
                 const std::string what = std::string(input.name) + ", keep " + std::to_string(keep) + ", " +
                                          std::to_string(threads) + " threads";
                 Mesh searched = input.mesh, shortcut = input.mesh;
-                MeshOptions options;
-                options.value = keep;
+                SimplifyOptions options;
+                options.stop.value = keep;
                 options.threads = threads;
                 options.parallel_threshold = 0;
                 options.flat_shortcut = false;
-                const MeshStats plain = simplify_mesh(searched, options);
+                const SimplifyStats plain = simplify(searched, options);
                 options.flat_shortcut = true;
-                const MeshStats fast = simplify_mesh(shortcut, options);
+                const SimplifyStats fast = simplify(shortcut, options);
                 EXPECT_EQ(plain.flat_unsearched, 0u) << what;
                 if (input.flat) {
                     EXPECT_GT(fast.flat_unsearched, 0u) << what;
@@ -378,7 +378,7 @@ TEST(MeshProperties, VerticalErrorOfASimplifiedTerrainBoundsItsHausdorffDistance
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
         const Mesh input = testing::noisy_heightfield(30, 0.5, seed);
         Mesh output = input;
-        simplified(output, MeshTarget::keep_fraction, 0.1, 2, true, true);
+        simplified(output, Target::keep_fraction, 0.1, 2, true, true);
         const VerticalError vertical = vertical_error(input, output, 20000);
         const HausdorffDistance distance = hausdorff(input, output, 20000);
         EXPECT_EQ(vertical.outside, 0u);
@@ -400,7 +400,7 @@ TEST(MeshProperties, TerrainMaxErrorBoundsTheVerticalGapEverywhere) {
             for (double bound : {0.0, 0.05, 0.4, 1.5}) {
                 const Mesh input = testing::noisy_heightfield(16, noise, seed);
                 Mesh output = input;
-                const MeshStats stats = simplified(output, MeshTarget::max_error, bound, 2, true, false);
+                const SimplifyStats stats = simplified(output, Target::max_error, bound, 2, true, false);
                 const std::string what =
                     "seed " + std::to_string(seed) + ", noise " + std::to_string(noise) + ", bound " + std::to_string(bound);
                 EXPECT_TRUE(stats.vertical_bound) << what;
@@ -426,8 +426,8 @@ TEST(MeshProperties, TerrainMaxErrorBoundsTheVerticalGapEverywhere) {
 TEST(MeshProperties, TerrainMaxErrorSameResultForAnyThreadCount) {
     const Mesh input = testing::noisy_heightfield(60, 1.0, 21);
     Mesh one = input, three = input;
-    const MeshStats a = simplified(one, MeshTarget::max_error, 0.5, 1, true, true);
-    const MeshStats b = simplified(three, MeshTarget::max_error, 0.5, 3, true, true);
+    const SimplifyStats a = simplified(one, Target::max_error, 0.5, 1, true, true);
+    const SimplifyStats b = simplified(three, Target::max_error, 0.5, 3, true, true);
     EXPECT_GT(a.collapses, 1000u);
     EXPECT_EQ(a.collapses, b.collapses);
     EXPECT_TRUE(same(one, three));

@@ -6,7 +6,7 @@
 // For checking any tool's output (benchmarks).
 // Prints one JSON line.
 #include "core/mesh/distance.hpp"
-#include "io/mesh_io.hpp"
+#include "io/mesh/mesh_files.hpp"
 #include "support/mesh_checker.hpp"
 
 #include <algorithm>

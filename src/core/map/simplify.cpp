@@ -4,6 +4,8 @@
 #include "core/map/crossings.hpp"
 #include "core/map/location_key.hpp"
 #include "core/map/point_grid.hpp"
+#include "core/parallel/blocks.hpp"
+#include "core/parallel/select.hpp"
 
 #include <omp.h>
 
@@ -189,24 +191,24 @@ private:
         owned_points_ = std::vector<Point>();  // freed: the grid has them
     }
 
-    // Blocks of 2^shift_ × 2^shift_ grid cells form level 0; level l groups 2^l × 2^l of them.
+    // The point grid's cells grouped into blocks (parallel/blocks.hpp, axis 0 the columns, axis
+    // 1 the rows): 2^shift × 2^shift cells at level 0, levels up to one block.
     void set_up_levels() {
         const std::uint32_t side = std::max(grid_->columns(), grid_->rows());
-        shift_ = kMinShift;
-        while (((side - 1) >> shift_) >= kMaxBlocksPerSide) ++shift_;
-        block_columns_ = ((grid_->columns() - 1) >> shift_) + 1;
-        block_rows_ = ((grid_->rows() - 1) >> shift_) + 1;
-        levels_ = static_cast<unsigned>(std::max(std::bit_width(block_columns_ - 1), std::bit_width(block_rows_ - 1))) + 1;
+        blocks_.cells = {grid_->columns(), grid_->rows()};
+        blocks_.shift = kMinShift;
+        while (((side - 1) >> blocks_.shift) >= kMaxBlocksPerSide) ++blocks_.shift;
+        levels_ = static_cast<unsigned>(blocks_.top_level()) + 1;
         stats_.levels = levels_;
     }
 
-    std::uint32_t block_column(Point p) const { return grid_->column(p.x) >> shift_; }
-    std::uint32_t block_row(Point p) const { return grid_->row(p.y) >> shift_; }
+    std::uint32_t block_column(Point p) const { return blocks_.block(grid_->column(p.x), 0); }
+    std::uint32_t block_row(Point p) const { return blocks_.block(grid_->row(p.y), 0); }
 
     // The finest level at which two vertices fall in one block.
     unsigned shared_level(std::uint32_t u, std::uint32_t w) const {
         const std::uint32_t a = block_xy_[u], b = block_xy_[w];
-        return static_cast<unsigned>(std::max(std::bit_width((a ^ b) >> 16), std::bit_width((a ^ b) & 0xffffu)));
+        return static_cast<unsigned>(std::max(Blocks::shared_level(a >> 16, b >> 16), Blocks::shared_level(a & 0xffffu, b & 0xffffu)));
     }
 
     // The level an interior vertex is removable at, given its current neighbours. Removals at a
@@ -215,12 +217,12 @@ private:
     unsigned level_of(std::uint32_t v) const { return std::max(shared_level(v, prev_[v]), shared_level(v, next_[v])); }
 
     std::uint32_t block_at(std::uint32_t v, unsigned level) const {
-        const std::uint32_t columns = ((block_columns_ - 1) >> level) + 1;
+        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(level));
         return ((block_xy_[v] & 0xffffu) >> level) * columns + ((block_xy_[v] >> 16) >> level);
     }
 
     std::uint32_t blocks_at(unsigned level) const {
-        return (((block_columns_ - 1) >> level) + 1) * (((block_rows_ - 1) >> level) + 1);
+        return blocks_.blocks(0, static_cast<int>(level)) * blocks_.blocks(1, static_cast<int>(level));
     }
 
     // Linked lists over the vertices and ring bookkeeping: distinct locations, and the level
@@ -253,7 +255,7 @@ private:
             if (is_closed(c)) {
                 distinct_[c] = count_distinct_locations(chain);
                 whole_level_[c] = static_cast<std::uint8_t>(
-                    std::max(std::bit_width(min_column ^ max_column), std::bit_width(min_row ^ max_row)));
+                    std::max(Blocks::shared_level(min_column, max_column), Blocks::shared_level(min_row, max_row)));
             }
         }
     }
@@ -356,12 +358,11 @@ private:
     // Marks the `budget` queued vertices smallest in (area, id) order (all if fewer) and sets
     // the round's threshold to the largest of them. Returns false if nothing is queued.
     //
-    // A radix-style selection, so that no (area, id) pool is kept: the areas of the queued
-    // vertices, in id order, take 8 bytes each, and a histogram of their top 16 bits (bit
-    // patterns of non-negative doubles order as the values) finds the bucket holding the
-    // budget-th smallest; only that bucket's keys are copied out and selected from. Then every
-    // queued vertex with a smaller area is marked, and of those with area K, the first ones in
-    // id order up to the budget.
+    // No (area, id) pool is kept: the areas of the queued vertices, in id order, take 8 bytes
+    // each as keys (bit patterns of non-negative doubles order as the values), and the
+    // budget-th smallest, K, is selected from them (parallel/select.hpp, the same selection as
+    // the mesh engine's round threshold). Then every queued vertex with a smaller area is marked,
+    // and of those with area K, the first ones in id order up to the budget.
     bool mark_smallest(std::uint64_t budget) {
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
         const auto share = static_cast<std::size_t>(threads);
@@ -381,53 +382,33 @@ private:
         for (std::size_t t = 0; t < share; ++t) offset[t + 1] += offset[t];
         const std::size_t queued = offset.back();
         if (queued == 0) return false;
-        constexpr int kShift = 48;  // the histogram's digit: the keys' top 16 bits
         FillLater<std::uint64_t> keys(queued);
-        std::vector<std::uint64_t> histogram(std::size_t{1} << 16, 0);
 #pragma omp parallel num_threads(threads)
         {
             const int t = omp_get_thread_num();
             const auto [begin, end] = range(t);
-            std::vector<std::uint64_t> part(std::size_t{1} << 16, 0);
             std::size_t k = offset[static_cast<std::size_t>(t)];
             for (std::uint32_t v = begin; v < end; ++v) {
                 marked_[v] = 0;
-                if (state_[v] != State::queued) continue;
-                const auto key = std::bit_cast<std::uint64_t>(area_of(v));
-                keys[k++] = key;
-                ++part[key >> kShift];
+                if (state_[v] == State::queued) keys[k++] = std::bit_cast<std::uint64_t>(area_of(v));
             }
-#pragma omp critical(toposimp_histogram)
-            for (std::size_t d = 0; d < part.size(); ++d) histogram[d] += part[d];
         }
-        std::uint64_t key = 0, rank = 0;  // select the rank-th smallest (1-based) among keys equal to key
-        if (budget >= queued) {
-            key = *std::max_element(keys.begin(), keys.end());
-            rank = static_cast<std::uint64_t>(std::count(keys.begin(), keys.end(), key));
-        } else {
-            std::uint64_t digit = 0;
-            rank = budget;
-            while (rank > histogram[digit]) rank -= histogram[digit++];
-            std::vector<std::uint64_t> bucket;
-            bucket.reserve(histogram[digit]);
-            for (const std::uint64_t own : keys) {
-                if (own >> kShift == digit) bucket.push_back(own);
-            }
-            const auto nth = bucket.begin() + static_cast<std::ptrdiff_t>(rank - 1);
-            std::nth_element(bucket.begin(), nth, bucket.end());
-            key = *nth;
-            rank -= static_cast<std::uint64_t>(std::count_if(bucket.begin(), bucket.end(), [&](std::uint64_t own) { return own < key; }));
-        }
+        // The budget-th smallest key (the largest when the budget takes them all), and of those
+        // equal to it the first `rank` in id order: each thread's run of keys is a list.
+        std::vector<std::span<const std::uint64_t>> runs(share);
+        for (std::size_t t = 0; t < share; ++t) runs[t] = {keys.data() + offset[t], keys.data() + offset[t + 1]};
+        const std::uint64_t wanted = std::min<std::uint64_t>(budget, queued);
+        const parallel::Selection kth = parallel::select_kth(runs, wanted, threads, [](std::uint64_t own) { return own; });
+        const std::uint64_t key = kth.key;
+        std::uint64_t rank = wanted;
+        for (const std::uint64_t less : kth.less) rank -= less;
         // Mark: areas below the key, and the first `rank` vertices (in id order) at the key.
-        std::vector<std::uint64_t> at_key(static_cast<std::size_t>(threads) + 1, 0);
+        std::vector<std::uint64_t> at_key(share + 1, 0);  // keys at the key in the runs before
+        for (std::size_t t = 0; t < share; ++t) at_key[t + 1] = at_key[t] + kth.equal[t];
 #pragma omp parallel num_threads(threads)
         {
             const int t = omp_get_thread_num();
-            const std::size_t begin = offset[static_cast<std::size_t>(t)], end = offset[static_cast<std::size_t>(t) + 1];
-            at_key[static_cast<std::size_t>(t) + 1] = static_cast<std::uint64_t>(std::count(keys.begin() + begin, keys.begin() + end, key));
-#pragma omp barrier
-#pragma omp single
-            for (int u = 0; u < threads; ++u) at_key[static_cast<std::size_t>(u) + 1] += at_key[static_cast<std::size_t>(u)];
+            const std::size_t begin = offset[static_cast<std::size_t>(t)];
             const auto [first, last] = range(t);
             std::uint64_t seen = at_key[static_cast<std::size_t>(t)];
             std::size_t k = begin;
@@ -770,8 +751,9 @@ private:
     const int threads_;
     const std::size_t parallel_min_;  // below this many items a loop runs on one thread
     std::optional<PointGrid> grid_;
-    unsigned shift_ = kMinShift, levels_ = 1;
-    std::uint32_t block_columns_ = 1, block_rows_ = 1;
+    using Blocks = parallel::BlockLevels<2>;
+    Blocks blocks_;
+    unsigned levels_ = 1;
     std::vector<std::uint32_t> prev_, next_, chain_of_;
     std::vector<std::uint8_t> shared_;     // per vertex: another vertex is at its location
     std::vector<std::uint32_t> block_xy_;  // per vertex: level-0 block, column << 16 | row

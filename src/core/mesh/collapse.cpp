@@ -8,7 +8,7 @@ namespace toposimp::mesh::detail {
 
 bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::uint64_t block, BlockResult& result,
                               std::vector<std::uint32_t>& around, Overlay& overlay) {
-    MeshStats& stats = result.stats;
+    SimplifyStats& stats = result.stats;
     thread_local Collapse c;
     c.a = a;
     c.b = b;
@@ -17,7 +17,7 @@ bool Simplifier::try_collapse(std::uint32_t a, std::uint32_t b, int level, std::
         return false;
     }
     c.error = error_of(c.placement, a, b);
-    if (options_.target == MeshTarget::max_error && !vertical_ && !(c.error <= options_.value)) return false;  // (NaN: refused)
+    if (options_.stop.target == Target::max_error && !vertical_ && !(c.error <= options_.stop.value)) return false;  // (NaN: refused)
     gather_faces(c);
     if (c.shared.empty()) return false;  // no longer an edge
     if (!link_condition_holds(c)) {
@@ -113,7 +113,7 @@ void Simplifier::gather_star(Collapse& c) const {
     }
 }
 
-bool Simplifier::faces_stay_upright(Collapse& c, MeshStats& stats) const {
+bool Simplifier::faces_stay_upright(Collapse& c, SimplifyStats& stats) const {
     const std::uint32_t a = c.a, b = c.b;
     exact::PredicateStats& predicates = stats.predicates;
     c.fresh.clear();
@@ -205,7 +205,7 @@ void Simplifier::apply(const Collapse& c, BlockResult& result, std::vector<std::
         ++touch_[a];
         for (std::uint32_t w : around) ++touch_[w];
     }
-    MeshStats& stats = result.stats;
+    SimplifyStats& stats = result.stats;
     ++stats.collapses;
     stats.max_error = std::max(stats.max_error, c.error);
     result.faces_removed += c.shared.size();

@@ -37,7 +37,7 @@ struct Nearby {
 
 }  // namespace
 
-bool Simplifier::no_new_contact(Collapse& c, Overlay& overlay, MeshStats& stats) {
+bool Simplifier::no_new_contact(Collapse& c, Overlay& overlay, SimplifyStats& stats) {
     // In a terrain with a locked border the planar argument suffices; a collapse that moves a
     // border vertex of a terrain is checked in the map plane (faces flattened to z = 0).
     exact::PredicateStats& predicates = stats.predicates;

@@ -28,7 +28,7 @@ struct Mesh {
     std::vector<Point3> points;
     std::vector<Face> faces;
     // Simplification gives a merged vertex the blend of its two ends' rows, weighted by where the
-    // merged vertex lies along the edge (simplify_mesh.hpp); a face keeps its row.
+    // merged vertex lies along the edge (simplify.hpp); a face keeps its row.
     Attributes vertex_attributes{};
     Attributes face_attributes{};
 };

@@ -1,4 +1,4 @@
-// UGSimp's simplifier (simplify_mesh.hpp says what it does), shared by the files that implement
+// UGSimp's simplifier (simplify.hpp says what it does), shared by the files that implement
 // it, one step of the method each:
 //   topology.cpp       corner lists, live faces, compaction, vertices sharing a location
 //   quadrics.cpp       per-vertex quadrics (and border edges, non-manifold edges), placement
@@ -6,7 +6,7 @@
 //   face_index.cpp     faces by cell, for the contact search
 //   collapse.cpp       one collapse: its checks in order, then the change
 //   contacts.cpp       the no-new-contact check of a collapse
-//   simplify_mesh.cpp  the driver: grid, levels, rounds, blocks, the count target's threshold
+//   simplify.cpp       the driver: grid, levels, rounds, blocks, the count target's threshold
 #pragma once
 
 #include "core/exact/predicates3d.hpp"
@@ -14,7 +14,7 @@
 #include "core/mesh/grid.hpp"
 #include "core/mesh/height_field.hpp"
 #include "core/mesh/quadric.hpp"
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 #include "core/mesh/vertical_bound.hpp"
 
 #include <algorithm>
@@ -95,7 +95,7 @@ struct LinkEdge {
 
 // What one block did.
 struct BlockResult {
-    MeshStats stats;
+    SimplifyStats stats;
     std::uint64_t faces_removed = 0;
 };
 
@@ -120,12 +120,12 @@ struct Collapse {
 
 class Simplifier {
 public:
-    Simplifier(Mesh& mesh, const MeshOptions& options) : mesh_(mesh), options_(options) {}
+    Simplifier(Mesh& mesh, const SimplifyOptions& options) : mesh_(mesh), options_(options) {}
 
-    MeshStats run();
+    SimplifyStats run();
 
 private:
-    // ---- simplify_mesh.cpp: the driver ----
+    // ---- simplify.cpp: the driver ----
     // A block of a level: a run of the level's vertices, and its share of a round's work.
     struct Block {
         std::uint64_t key;
@@ -141,11 +141,11 @@ private:
         std::vector<std::vector<Candidate>> candidates;
         std::vector<std::vector<std::vector<Candidate>*>> before;
     };
-    bool prepare(MeshStats& stats);
+    bool prepare(SimplifyStats& stats);
     Level group_by_block(int level, Level& finer, std::vector<std::uint32_t>& live) const;
     void find_candidates(Level& level, int round);
     double share_work(Level& level, std::uint64_t left, bool top) const;
-    std::uint64_t collapse_blocks(Level& level, double limit, MeshStats& stats);
+    std::uint64_t collapse_blocks(Level& level, double limit, SimplifyStats& stats);
     // A grid over the live faces' corners and `seed`, cells `factor` times the mean edge (at
     // most 2^20 per side). Edge lengths are summed in fixed chunks of faces, the chunks' sums in
     // order: the same grid for any thread count.
@@ -267,7 +267,7 @@ private:
     void gather_star(Collapse& c) const;
     // No changed face turns over (3D: its normal reversed; terrain: its map-plane orientation),
     // loses its area or duplicates another; counts the refusal's reason in `stats`.
-    bool faces_stay_upright(Collapse& c, MeshStats& stats) const;
+    bool faces_stay_upright(Collapse& c, SimplifyStats& stats) const;
     // b merges into a at the placement.
     void apply(const Collapse& c, BlockResult& result, std::vector<std::uint32_t>& around, Overlay& overlay);
 
@@ -276,7 +276,7 @@ private:
     // (3D meshes; terrains that move a border vertex: in the map plane). Counts the refusal, or
     // a collapse decided without a search, in `stats`; notes in c.twin_after whether another
     // vertex lies at the placement.
-    bool no_new_contact(Collapse& c, Overlay& overlay, MeshStats& stats);
+    bool no_new_contact(Collapse& c, Overlay& overlay, SimplifyStats& stats);
     // The search itself: the faces near the fresh ones, tested against them (flattened to z = 0
     // if `flatten`).
     bool search_contacts(Collapse& c, bool flatten, Overlay& overlay, exact::PredicateStats& predicates);
@@ -327,7 +327,7 @@ private:
     }
 
     Mesh& mesh_;
-    const MeshOptions& options_;
+    const SimplifyOptions& options_;
     int threads_ = 1;  // every parallel loop's (num_threads clauses: no process-wide OpenMP state)
     bool by_count_ = true;       // a count target (not max_error)
     std::uint64_t target_ = 0;   // its faces
@@ -336,8 +336,8 @@ private:
     bool lock_ = false;  // border vertices never move (asked for, or kept for the vertical bound)
     std::unique_ptr<VerticalBound> vertical_;  // terrains under a max_error target
     int terrain_turn_ = 0;  // the map-plane orientation all terrain faces share
-    std::optional<std::array<std::uint32_t, 2>> plan_overlap_;  // see MeshStats
-    std::optional<NonManifoldEdge> non_manifold_;                // see MeshStats
+    std::optional<std::array<std::uint32_t, 2>> plan_overlap_;  // see SimplifyStats
+    std::optional<NonManifoldEdge> non_manifold_;                // see SimplifyStats
     std::vector<DirectedEdge> border_;                           // see build_quadrics
     BlockGrid grid_;
 

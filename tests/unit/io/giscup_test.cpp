@@ -1,6 +1,6 @@
-#include "io/giscup.hpp"
+#include "io/map/giscup.hpp"
 
-#include "io/errors.hpp"
+#include "io/common/errors.hpp"
 #include "support/temp_path.hpp"
 
 #include <gtest/gtest.h>

@@ -1,10 +1,10 @@
 // GeoPackage control points read with SQLite directly must be exactly the points OGR reads:
 // blobs written by hand in every form the reader decodes, checked against OGR on the same file.
-#include "io/gpkg_points.hpp"
+#include "io/map/gpkg_points.hpp"
 
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
-#include "io/ogr_dataset.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 #include "support/temp_path.hpp"
 #include "unit/io/ogr_points_reference.hpp"
 

@@ -1,6 +1,6 @@
 // Vertex and face attributes through the mesh readers and writers: what each format keeps, the
 // values exactly where the type holds them, and what is dropped or not written, with the reason.
-#include "io/mesh_io.hpp"
+#include "io/mesh/mesh_files.hpp"
 #include "support/temp_path.hpp"
 
 #include <gtest/gtest.h>

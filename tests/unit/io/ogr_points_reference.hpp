@@ -3,7 +3,7 @@
 #pragma once
 
 #include "core/geometry.hpp"
-#include "io/gdal_support.hpp"
+#include "io/ogr/gdal_support.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // The binary PLY reader: its fast paths (records read in a tight loop while they are regular)
 // must give what the general reader gives, meshes and errors alike.
-#include "io/errors.hpp"
-#include "io/mesh_io.hpp"
+#include "io/common/errors.hpp"
+#include "io/mesh/mesh_files.hpp"
 #include "support/temp_path.hpp"
 
 #include <gtest/gtest.h>

@@ -1,11 +1,11 @@
 // Shapefile records decoded from the .shp directly must be exactly what OGR reads: control
 // points from files written by OGR in every point shape type, and line and polygon shapes (what
 // a written output is checked with) in every such type, each against OGR's reading of the file.
-#include "io/shapefile.hpp"
+#include "io/map/shapefile.hpp"
 
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
-#include "io/ogr_dataset.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 #include "support/temp_path.hpp"
 #include "unit/io/ogr_points_reference.hpp"
 

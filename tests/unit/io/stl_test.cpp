@@ -2,8 +2,8 @@
 // otherwise; corners welded into shared vertices; clear errors naming the file and the line or
 // triangle. Written as binary only when every coordinate is a float32 (exact), else as text
 // with every digit: both read back to the same doubles.
-#include "io/errors.hpp"
-#include "io/mesh_io.hpp"
+#include "io/common/errors.hpp"
+#include "io/mesh/mesh_files.hpp"
 #include "support/temp_path.hpp"
 
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // Attributes through simplification: a merged vertex blends its two ends' rows at the point of
 // their edge nearest the placement, a face keeps its row, and the rows follow every renumbering.
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 #include "support/random_meshes.hpp"
 
 #include <gtest/gtest.h>
@@ -39,9 +39,9 @@ TEST(MeshAttributeBlend, OnAFlatGridEveryVertexKeepsItsLinearValue) {
     // midpoint) and the blend of a linear function is its value there.
     mesh::Mesh m = flat_grid_with_rows(24);
     const std::size_t faces_in = m.faces.size();
-    mesh::MeshOptions options;
-    options.value = 0.2;
-    const mesh::MeshStats stats = mesh::simplify_mesh(m, options);
+    mesh::SimplifyOptions options;
+    options.stop.value = 0.2;
+    const mesh::SimplifyStats stats = mesh::simplify(m, options);
     ASSERT_GT(stats.collapses, 0u);
     ASSERT_EQ(m.vertex_attributes.values.size(), 3 * m.points.size());
     for (std::size_t v = 0; v < m.points.size(); ++v) {
@@ -63,11 +63,11 @@ TEST(MeshAttributeBlend, ALockedBorderVertexKeepsItsOwnRow) {
     for (std::size_t v = 0; v < m.points.size(); ++v) m.vertex_attributes.values.push_back(static_cast<double>(v) + 0.1);
     std::map<std::array<double, 3>, std::size_t> id_at;
     for (std::size_t v = 0; v < input.size(); ++v) id_at[{input[v].x, input[v].y, input[v].z}] = v;
-    mesh::MeshOptions options;
-    options.value = 0.1;
+    mesh::SimplifyOptions options;
+    options.stop.value = 0.1;
     options.terrain = true;
     options.lock_boundary = true;
-    mesh::simplify_mesh(m, options);
+    mesh::simplify(m, options);
     const double lo = input.front().x, hi = input.back().x;  // the grid's extent in x and y
     std::size_t border = 0;
     for (std::size_t v = 0; v < m.points.size(); ++v) {
@@ -89,11 +89,11 @@ TEST(MeshAttributeBlend, RowsAreTheSameForAnyThreadCount) {
         for (const Point3& p : m.points) m.vertex_attributes.values.insert(m.vertex_attributes.values.end(), {p.x * p.y, p.z});
         m.face_attributes = {1, std::vector<double>(m.faces.size())};
         for (std::size_t f = 0; f < m.faces.size(); ++f) m.face_attributes.values[f] = static_cast<double>(f);
-        mesh::MeshOptions options;
-        options.value = 0.1;
+        mesh::SimplifyOptions options;
+        options.stop.value = 0.1;
         options.threads = threads;
         options.parallel_threshold = 0;
-        mesh::simplify_mesh(m, options);
+        mesh::simplify(m, options);
         if (threads == 1) {
             first_vertices = m.vertex_attributes.values;
             first_faces = m.face_attributes.values;
@@ -131,9 +131,9 @@ mesh::Mesh shuffled_sphere_with_rows(unsigned seed) {
 TEST(MeshAttributeBlend, NothingToCollapseGivesTheInputBackInItsOrder) {
     const mesh::Mesh input = shuffled_sphere_with_rows(3);
     mesh::Mesh m = input;
-    mesh::MeshOptions options;
-    options.value = 1.0;  // keep every face
-    const mesh::MeshStats stats = mesh::simplify_mesh(m, options);
+    mesh::SimplifyOptions options;
+    options.stop.value = 1.0;  // keep every face
+    const mesh::SimplifyStats stats = mesh::simplify(m, options);
     EXPECT_EQ(stats.collapses, 0u);
     EXPECT_EQ(m.faces, input.faces);
     ASSERT_EQ(m.points.size(), input.points.size());
@@ -145,9 +145,9 @@ TEST(MeshAttributeBlend, NothingToCollapseGivesTheInputBackInItsOrder) {
 TEST(MeshAttributeBlend, KeptFacesComeInTheirInputOrder) {
     mesh::Mesh m = shuffled_sphere_with_rows(4);
     const mesh::Mesh input = m;
-    mesh::MeshOptions options;
-    options.value = 0.2;
-    ASSERT_GT(mesh::simplify_mesh(m, options).collapses, 0u);
+    mesh::SimplifyOptions options;
+    options.stop.value = 0.2;
+    ASSERT_GT(mesh::simplify(m, options).collapses, 0u);
     // Each face keeps its row (its input number): increasing, so in input order.
     ASSERT_EQ(m.face_attributes.values.size(), m.faces.size());
     EXPECT_TRUE(std::is_sorted(m.face_attributes.values.begin(), m.face_attributes.values.end()));
@@ -182,13 +182,13 @@ TEST(MeshAttributeBlend, DroppedFacesAndVerticesTakeTheirRows) {
 // naming the table; so is a corner index beyond the vertices.
 TEST(MeshAttributeBlend, MismatchedTablesAndIndicesAreRefused) {
     const mesh::Mesh good = flat_grid_with_rows(6);
-    mesh::MeshOptions options;
-    options.target = mesh::MeshTarget::keep_fraction;
-    options.value = 0.5;
+    mesh::SimplifyOptions options;
+    options.stop.target = mesh::Target::keep_fraction;
+    options.stop.value = 0.5;
     auto refusal = [&](mesh::Mesh m) {
         const mesh::Mesh before = m;
         try {
-            mesh::simplify_mesh(m, options);
+            mesh::simplify(m, options);
         } catch (const std::invalid_argument& e) {
             EXPECT_EQ(m.points.size(), before.points.size());
             EXPECT_EQ(m.faces, before.faces);

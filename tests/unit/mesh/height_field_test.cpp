@@ -6,7 +6,7 @@
 #include "core/mesh/height_field.hpp"
 
 #include "core/mesh/plan_index.hpp"
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 #include "support/exact_checker.hpp"
 
 #include <gtest/gtest.h>
@@ -94,10 +94,10 @@ bool expect_agreement(const Mesh& m, bool height_field) {
     // The simplifier decides the same from its own border edges (counted in its pass over each
     // vertex's faces).
     Mesh copy = m;
-    MeshOptions options;
+    SimplifyOptions options;
     options.terrain = true;
-    options.value = 1.0;
-    const MeshStats stats = simplify_mesh(copy, options);
+    options.stop.value = 1.0;
+    const SimplifyStats stats = simplify(copy, options);
     EXPECT_EQ(stats.terrain, height_field);
     EXPECT_EQ(stats.plan_overlap, pair);
     return fast;

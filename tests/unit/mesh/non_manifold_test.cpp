@@ -3,7 +3,7 @@
 // numbers of the input, though faces repeating a corner and unused vertices are dropped first),
 // and leave the mesh unsimplified.
 #include "core/mesh/mesh.hpp"
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 
 #include <gtest/gtest.h>
 
@@ -60,7 +60,7 @@ TEST(NonManifoldInput, TheSimplifierNamesTheEdgeTheInputCheckNames) {
         if (!expected) {
             Mesh copy = m;
             if (!copy.faces.empty() && count_repeated_corner_faces(copy) < copy.faces.size()) {
-                EXPECT_FALSE(simplify_mesh(copy, MeshOptions{}).non_manifold.has_value()) << trial;
+                EXPECT_FALSE(simplify(copy, SimplifyOptions{}).non_manifold.has_value()) << trial;
                 ++manifold;
             }
             continue;
@@ -68,10 +68,10 @@ TEST(NonManifoldInput, TheSimplifierNamesTheEdgeTheInputCheckNames) {
         ++named;
         Mesh copy = m;
         unused_or_repeated += drop_unused(copy) > 0 || copy.points.size() < m.points.size();
-        MeshOptions options;
-        options.value = 0.5;
+        SimplifyOptions options;
+        options.stop.value = 0.5;
         const std::vector<Face> faces = m.faces;
-        const MeshStats stats = simplify_mesh(m, options);
+        const SimplifyStats stats = simplify(m, options);
         ASSERT_TRUE(stats.non_manifold.has_value()) << trial;
         EXPECT_EQ(stats.non_manifold->a, expected->a) << trial;
         EXPECT_EQ(stats.non_manifold->b, expected->b) << trial;

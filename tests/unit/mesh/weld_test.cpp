@@ -2,7 +2,7 @@
 // as STL files give) welds back into the sphere, each location's first vertex standing for the
 // others; a seam in an attribute column is reported; exact equality, no tolerance.
 #include "core/mesh/mesh.hpp"
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 #include "support/random_meshes.hpp"
 
 #include <gtest/gtest.h>
@@ -43,9 +43,9 @@ TEST(Weld, AnUnweldedSphereWeldsBackAndSimplifiesLikeTheSphere) {
     EXPECT_EQ(soup.points.size(), sphere.points.size());
     EXPECT_EQ(count_coincident(soup), 0u);
     Mesh a = sphere, b = soup;
-    MeshOptions options;
+    SimplifyOptions options;
     options.threads = 1;
-    EXPECT_EQ(simplify_mesh(a, options).faces_out, simplify_mesh(b, options).faces_out);
+    EXPECT_EQ(simplify(a, options).faces_out, simplify(b, options).faces_out);
 }
 
 TEST(Weld, OnlyExactlyEqualLocationsWeldAndSeamsAreReported) {

@@ -1,6 +1,6 @@
-#include "io/gdal_support.hpp"
+#include "io/ogr/gdal_support.hpp"
 
-#include "io/errors.hpp"
+#include "io/common/errors.hpp"
 
 #include <cpl_error.h>
 

@@ -1,7 +1,7 @@
-#include "io/dem.hpp"
+#include "io/ogr/dem.hpp"
 
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
 
 #include <cmath>
 #include <limits>

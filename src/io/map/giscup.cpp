@@ -1,7 +1,7 @@
-#include "io/giscup.hpp"
+#include "io/map/giscup.hpp"
 
-#include "io/errors.hpp"
-#include "io/number_format.hpp"
+#include "io/common/errors.hpp"
+#include "io/common/number_format.hpp"
 
 #include <cmath>
 #include <fstream>

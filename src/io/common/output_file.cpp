@@ -1,6 +1,6 @@
-#include "io/output_file.hpp"
+#include "io/common/output_file.hpp"
 
-#include "io/errors.hpp"
+#include "io/common/errors.hpp"
 
 #include <unistd.h>
 

@@ -24,19 +24,24 @@
 
 namespace toposimp::mesh {
 
-enum class MeshTarget {
+enum class Target {
     keep_fraction,  // keep this share of the faces
     keep_faces,     // keep this many faces
-    // Collapse while the error stays at most this. For a terrain (MeshOptions::terrain, and
+    // Collapse while the error stays at most this. For a terrain (SimplifyOptions::terrain, and
     // the faces do triangulate the map plane): the vertical distance between the input and the
     // output surface, everywhere, guaranteed by exact tests (vertical_bound.hpp); the border is
     // then kept as it is. Otherwise the quadric error (a distance in the mesh's units).
     max_error,
 };
 
-struct MeshOptions {
-    MeshTarget target = MeshTarget::keep_fraction;
+// When to stop collapsing (as map::StopCriterion says when to stop removing vertices).
+struct StopCriterion {
+    Target target = Target::keep_fraction;
     double value = 0.1;
+};
+
+struct SimplifyOptions {
+    StopCriterion stop;
     // Border vertices (on an edge with one face) never move and are never removed.
     bool lock_boundary = false;
     // The faces triangulate the map plane (a terrain TIN, z = height): a collapse must keep every
@@ -61,7 +66,7 @@ struct MeshOptions {
     std::function<void(double done)> progress;
 };
 
-struct MeshStats {
+struct SimplifyStats {
     std::uint64_t vertices_in = 0, vertices_out = 0;
     std::uint64_t faces_in = 0, faces_out = 0;
     std::uint64_t target_faces = 0;  // count targets only
@@ -89,7 +94,7 @@ struct MeshStats {
     // The vertical distance to the input is at most the max_error target everywhere.
     bool vertical_bound = false;
     // Collapses in flat regions proven free of contacts without searching for nearby faces
-    // (see flat_and_clean in simplify_mesh.cpp); included in `collapses`.
+    // (see flat_and_clean in contacts.cpp); included in `collapses`.
     std::uint64_t flat_unsearched = 0;
     double max_error = 0.0;  // largest quadric error (distance) of a collapse made
     int levels = 0;
@@ -100,10 +105,10 @@ struct MeshStats {
 };
 
 // Simplifies `mesh` in place. Faces repeating a corner and vertices that no face uses are
-// dropped. An input with a non-manifold edge is not simplified (MeshStats::non_manifold). The
+// dropped. An input with a non-manifold edge is not simplified (SimplifyStats::non_manifold). The
 // result keeps the surviving vertices in input order and the surviving faces in input order.
 // Throws std::invalid_argument, the mesh untouched, if a corner index is out of range or an
 // attribute table does not hold one row per vertex (face).
-MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options);
+SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options);
 
 }  // namespace toposimp::mesh

@@ -1,9 +1,9 @@
-#include "io/geojson_writer.hpp"
+#include "io/ogr/geojson_writer.hpp"
 
-#include "io/errors.hpp"
-#include "io/field_text.hpp"
-#include "io/json_text.hpp"
-#include "io/number_format.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/field_text.hpp"
+#include "io/common/json_text.hpp"
+#include "io/common/number_format.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -1,6 +1,6 @@
-#include "io/shapefile.hpp"
+#include "io/map/shapefile.hpp"
 
-#include "io/errors.hpp"
+#include "io/common/errors.hpp"
 
 #include <algorithm>
 #include <array>

@@ -1,12 +1,12 @@
-#include "io/ogr_dataset.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 
 #include "core/map/coverage.hpp"
-#include "io/errors.hpp"
-#include "io/gdal_support.hpp"
-#include "io/geojson_writer.hpp"
-#include "io/gpkg_points.hpp"
-#include "io/output_file.hpp"
-#include "io/shapefile.hpp"
+#include "io/common/errors.hpp"
+#include "io/ogr/gdal_support.hpp"
+#include "io/ogr/geojson_writer.hpp"
+#include "io/map/gpkg_points.hpp"
+#include "io/common/output_file.hpp"
+#include "io/map/shapefile.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>

@@ -2,7 +2,7 @@
 // whatever its precision options). Attributes follow GDAL's GeoJSON conventions.
 #pragma once
 
-#include "io/layer_source.hpp"
+#include "io/ogr/layer_source.hpp"
 
 #include <string>
 #include <vector>

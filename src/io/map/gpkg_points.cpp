@@ -1,6 +1,6 @@
-#include "io/gpkg_points.hpp"
+#include "io/map/gpkg_points.hpp"
 
-#include "io/errors.hpp"
+#include "io/common/errors.hpp"
 
 #include <sqlite3.h>
 

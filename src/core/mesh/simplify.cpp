@@ -1,10 +1,10 @@
-// UGSimp's driver (simplify_mesh.hpp): the block grid, then level by level, finest first, rounds
+// UGSimp's driver (simplify.hpp): the block grid, then level by level, finest first, rounds
 // in which every block collapses its cheapest edges in parallel — read as the method goes:
 //   drop unused → topology → quadrics → terrain? → spatial order → border planes → grid →
 //   for each level: blocks → candidates → rounds (index → threshold → collapse blocks) →
 //   compact → input order.
 // The steps live in the files simplifier.hpp lists.
-#include "core/mesh/simplify_mesh.hpp"
+#include "core/mesh/simplify.hpp"
 
 #include "core/mesh/height_field.hpp"
 #include "core/mesh/simplifier.hpp"
@@ -276,7 +276,7 @@ void Simplifier::reopen(std::vector<Candidate>& candidates) const {
 // The mesh made ready: unused vertices and faces with a repeated corner dropped, corner lists,
 // quadrics, the terrain test, the spatial numbering, locked or weighted borders, the block grid.
 // False if the mesh has a non-manifold edge (in stats: it is not simplified).
-bool Simplifier::prepare(MeshStats& stats) {
+bool Simplifier::prepare(SimplifyStats& stats) {
     // Each kept face's number in the input, if drop_unused drops some (for messages).
     std::vector<std::uint32_t> input_face;
     if (count_repeated_corner_faces(mesh_) > 0) {
@@ -292,11 +292,11 @@ bool Simplifier::prepare(MeshStats& stats) {
     threads_ = options_.threads > 0 ? options_.threads : omp_get_max_threads();
     if (face_.size() < options_.parallel_threshold) threads_ = 1;
     stats.threads = threads_;
-    by_count_ = options_.target != MeshTarget::max_error;
-    if (options_.target == MeshTarget::keep_fraction) {
-        target_ = static_cast<std::uint64_t>(std::llround(options_.value * static_cast<double>(face_.size())));
-    } else if (options_.target == MeshTarget::keep_faces) {
-        target_ = static_cast<std::uint64_t>(std::max(0.0, options_.value));
+    by_count_ = options_.stop.target != Target::max_error;
+    if (options_.stop.target == Target::keep_fraction) {
+        target_ = static_cast<std::uint64_t>(std::llround(options_.stop.value * static_cast<double>(face_.size())));
+    } else if (options_.stop.target == Target::keep_faces) {
+        target_ = static_cast<std::uint64_t>(std::max(0.0, options_.stop.value));
     }
     stats.target_faces = target_;
     build_topology();
@@ -312,8 +312,8 @@ bool Simplifier::prepare(MeshStats& stats) {
     }
     check_terrain();
     spatial_order();
-    if (terrain_ && options_.target == MeshTarget::max_error && std::isfinite(options_.value)) {
-        vertical_ = std::make_unique<VerticalBound>(mesh_, options_.value);
+    if (terrain_ && options_.stop.target == Target::max_error && std::isfinite(options_.stop.value)) {
+        vertical_ = std::make_unique<VerticalBound>(mesh_, options_.stop.value);
     }
     lock_ = options_.lock_boundary || vertical_;
     stats.terrain = terrain_;
@@ -421,7 +421,7 @@ double Simplifier::share_work(Level& level, std::uint64_t left, bool top) const 
 }
 
 // Every block's round, in parallel; what they did summed into `stats`. The faces removed.
-std::uint64_t Simplifier::collapse_blocks(Level& level, double limit, MeshStats& stats) {
+std::uint64_t Simplifier::collapse_blocks(Level& level, double limit, SimplifyStats& stats) {
     const auto block_count = static_cast<std::int64_t>(level.blocks.size());
     std::vector<BlockResult> results(level.blocks.size());
 #pragma omp parallel for schedule(dynamic, 1) num_threads(threads_)
@@ -432,7 +432,7 @@ std::uint64_t Simplifier::collapse_blocks(Level& level, double limit, MeshStats&
     }
     std::uint64_t removed = 0;
     for (const BlockResult& r : results) {
-        const MeshStats& s = r.stats;
+        const SimplifyStats& s = r.stats;
         stats.collapses += s.collapses;
         stats.refused_link += s.refused_link;
         stats.refused_boundary += s.refused_boundary;
@@ -450,9 +450,9 @@ std::uint64_t Simplifier::collapse_blocks(Level& level, double limit, MeshStats&
 
 // UGSimp (dissertation chapter 4): levels of blocks, finest first; at each, rounds in which
 // every block collapses its cheapest edges in parallel, while they make progress.
-MeshStats Simplifier::run() {
+SimplifyStats Simplifier::run() {
     const auto start = Clock::now();
-    MeshStats stats;
+    SimplifyStats stats;
     if (!prepare(stats)) return stats;
     stats.seconds_setup = std::chrono::duration<double>(Clock::now() - start).count();
     const auto sweep = Clock::now();
@@ -504,20 +504,20 @@ MeshStats Simplifier::run() {
 
 }  // namespace detail
 
-MeshStats simplify_mesh(Mesh& mesh, const MeshOptions& options) {
+SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options) {
     // The readers promise these; a library caller may not: refuse rather than read out of range.
     const std::size_t n = mesh.points.size();
     for (std::size_t f = 0; f < mesh.faces.size(); ++f) {
         for (const std::uint32_t v : mesh.faces[f]) {
             if (v >= n) {
-                throw std::invalid_argument("simplify_mesh: face " + std::to_string(f) + " has corner " + std::to_string(v) +
+                throw std::invalid_argument("mesh::simplify: face " + std::to_string(f) + " has corner " + std::to_string(v) +
                                             ", beyond the " + std::to_string(n) + " vertices");
             }
         }
     }
     auto check = [](const Attributes& attributes, std::size_t rows, const char* what) {
         if (attributes.values.size() != rows * attributes.width) {
-            throw std::invalid_argument(std::string("simplify_mesh: ") + what + " attributes hold " +
+            throw std::invalid_argument(std::string("mesh::simplify: ") + what + " attributes hold " +
                                         std::to_string(attributes.values.size()) + " values, not " + std::to_string(rows) +
                                         " rows of " + std::to_string(attributes.width));
         }

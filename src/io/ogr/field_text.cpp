@@ -1,4 +1,4 @@
-#include "io/field_text.hpp"
+#include "io/ogr/field_text.hpp"
 
 #include <cmath>
 #include <cstdio>

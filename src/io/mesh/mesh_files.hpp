@@ -1,4 +1,7 @@
-// Mesh files: Wavefront OBJ, PLY (ASCII, binary little and big endian) and OFF.
+// Mesh files: Wavefront OBJ, PLY (ASCII, binary little and big endian), OFF and STL, one codec
+// file each in io/mesh/ (obj.cpp, ply.cpp, off.cpp, stl.cpp), listed once in the table of
+// mesh_formats() (mesh_files.cpp), from which the command line, its help and the QGIS provider
+// (through `toposimp mesh --list-formats`) take the formats.
 // Positions and triangles are read, and with them what each vertex and face carries besides:
 // normals, colours, texture coordinates, any other scalar PLY property. Those become attribute
 // columns of the mesh (a simplified mesh blends them, see mesh.hpp) and are written back where
@@ -10,7 +13,9 @@
 
 #include "core/mesh/mesh.hpp"
 
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace toposimp::io {
@@ -35,12 +40,6 @@ struct AttributeLayout {
     std::vector<AttributeColumn> vertex, face;
 };
 
-// From the file name's extension (case-insensitive); throws InputError for anything else.
-MeshFormat mesh_format_of(const std::string& path);
-// Does the file name end in .obj, .ply or .off?
-bool has_mesh_extension(const std::string& path);
-const char* to_string(MeshFormat format);
-
 // Shortest round-trip text of a number (for messages).
 std::string io_number(double value);
 
@@ -57,6 +56,42 @@ struct MeshReadReport {
     std::size_t ignored_elements = 0;     // OBJ lines/points, unknown PLY elements
     std::size_t welded = 0;               // STL: corners merged into another at the same location
 };
+
+namespace mesh_codec {
+class MeshWriter;
+struct WrittenRows;
+}  // namespace mesh_codec
+
+// A mesh format: what names it, what it can carry, and its codec. A new format is a codec file
+// in io/mesh/ and a row of the table (mesh_files.cpp); nothing else lists formats.
+struct MeshFormatInfo {
+    MeshFormat format;
+    const char* name;       // as -f takes it: "ply"
+    const char* title;      // for people: "PLY"
+    const char* extension;  // ".ply" (any case)
+    const char* carries;    // the attributes it can hold, in words
+    bool has_text_and_binary;  // --ascii chooses the text encoding
+    mesh::Mesh (*read)(const std::string& path, std::string_view text, const MeshReadOptions& options, MeshReadReport& report);
+    // The columns of `layout` it has no place for ("vertex quality", ...).
+    std::vector<std::string> (*unwritable)(const AttributeLayout& layout);
+    void (*write)(const mesh::Mesh& mesh, const mesh_codec::WrittenRows& rows, mesh_codec::MeshWriter& out, bool ascii);
+};
+
+// Every mesh format, in the order the help lists them.
+std::span<const MeshFormatInfo> mesh_formats();
+const MeshFormatInfo& info(MeshFormat format);
+// The format -f names (case-insensitive), or null.
+const MeshFormatInfo* mesh_format_named(std::string_view name);
+// The format of a file name's extension (case-insensitive), or null.
+const MeshFormatInfo* mesh_format_by_extension(const std::string& path);
+// From the file name's extension; throws InputError for anything else.
+MeshFormat mesh_format_of(const std::string& path);
+// Does the file name end in a mesh format's extension?
+bool has_mesh_extension(const std::string& path);
+const char* to_string(MeshFormat format);
+// The formats' extensions or names joined for messages and help: ".obj, .ply, .off, .stl".
+std::string mesh_extensions_text(const char* separator = ", ");
+std::string mesh_format_names_text(const char* separator = ", ");
 
 mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, MeshReadReport& report);
 

@@ -1,7 +1,7 @@
 // JSON text: strings escaped per RFC 8259, numbers in shortest round-trip form (null if not finite).
 #pragma once
 
-#include "io/number_format.hpp"
+#include "io/common/number_format.hpp"
 
 #include <cmath>
 #include <cstdio>

@@ -1,0 +1,119 @@
+#include "io/mesh/mesh_files.hpp"
+
+#include "io/mesh/codecs.hpp"
+#include "io/mesh/reading.hpp"
+#include "io/mesh/writing.hpp"
+
+#include <array>
+
+namespace toposimp::io {
+namespace {
+
+using namespace mesh_codec;
+
+// The mesh formats: the only list of them.
+constexpr std::array<MeshFormatInfo, 4> kFormats{{
+    {MeshFormat::obj, "obj", "OBJ", ".obj", "vertex colours, texture coordinates and normals (one per vertex)", false,
+     read_obj, obj_unwritable, write_obj},
+    {MeshFormat::ply, "ply", "PLY", ".ply", "every scalar vertex and face property, with its type", true, read_ply,
+     ply_unwritable, write_ply},
+    {MeshFormat::off, "off", "OFF", ".off", "vertex normals, colours and texture coordinates; face colours", false, read_off,
+     off_unwritable, write_off},
+    {MeshFormat::stl, "stl", "STL", ".stl", "positions only (corners welded on reading)", true, read_stl, stl_unwritable,
+     write_stl},
+}};
+
+std::string extension_of(const std::string& path) {
+    const std::size_t dot = path.find_last_of('.');
+    return dot == std::string::npos ? "" : lower(path.substr(dot));
+}
+
+}  // namespace
+
+std::string io_number(double value) {
+    std::string text;
+    append_number(text, value);
+    return text;
+}
+
+std::span<const MeshFormatInfo> mesh_formats() { return kFormats; }
+
+const MeshFormatInfo& info(MeshFormat format) {
+    for (const MeshFormatInfo& row : kFormats) {
+        if (row.format == format) return row;
+    }
+    return kFormats.front();  // (every format has a row)
+}
+
+const MeshFormatInfo* mesh_format_named(std::string_view name) {
+    const std::string wanted = lower(std::string(name));
+    for (const MeshFormatInfo& row : kFormats) {
+        if (wanted == row.name) return &row;
+    }
+    return nullptr;
+}
+
+const MeshFormatInfo* mesh_format_by_extension(const std::string& path) {
+    const std::string extension = extension_of(path);
+    for (const MeshFormatInfo& row : kFormats) {
+        if (extension == row.extension) return &row;
+    }
+    return nullptr;
+}
+
+MeshFormat mesh_format_of(const std::string& path) {
+    if (const MeshFormatInfo* row = mesh_format_by_extension(path)) return row->format;
+    std::string extensions;
+    for (std::size_t i = 0; i < kFormats.size(); ++i) {
+        extensions += (i == 0 ? "" : i + 1 == kFormats.size() ? " or " : ", ") + std::string(kFormats[i].extension);
+    }
+    throw InputError(path + ": unknown mesh format (use a " + extensions + " file, or -f)");
+}
+
+bool has_mesh_extension(const std::string& path) { return mesh_format_by_extension(path) != nullptr; }
+
+const char* to_string(MeshFormat format) { return info(format).title; }
+
+std::string mesh_extensions_text(const char* separator) {
+    std::string text;
+    for (const MeshFormatInfo& row : kFormats) text += (text.empty() ? "" : separator) + std::string(row.extension);
+    return text;
+}
+
+std::string mesh_format_names_text(const char* separator) {
+    std::string text;
+    for (const MeshFormatInfo& row : kFormats) text += (text.empty() ? "" : separator) + std::string(row.name);
+    return text;
+}
+
+mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, MeshReadReport& report) {
+    const std::string data = read_all(path);
+    std::string_view text(data);
+    // Recognise the format by content first, by extension otherwise.
+    if (text.substr(0, 4) == "ply\n" || text.substr(0, 5) == "ply\r\n") {
+        report.format = MeshFormat::ply;
+    } else {
+        std::string first(text.substr(0, std::min<std::size_t>(text.size(), 8)));
+        if (first.find("OFF") != std::string::npos && first.find("OFF") < 5) {
+            report.format = MeshFormat::off;
+        } else {
+            report.format = mesh_format_of(path);
+        }
+    }
+    return info(report.format).read(path, text, options, report);
+}
+
+std::vector<std::string> write_mesh(const mesh::Mesh& m, const AttributeLayout& layout, const std::string& path,
+                                    MeshFormat format, bool ascii) {
+    const MeshFormatInfo& codec = info(format);
+    std::vector<std::string> unwritable = codec.unwritable(layout);
+    const VertexGroups groups = find_groups(layout.vertex);
+    const mesh::Attributes vertex_rows = written_values(m.vertex_attributes, layout.vertex, groups.normal);
+    const mesh::Attributes face_rows = written_values(m.face_attributes, layout.face, {-1, -1, -1});  // (no normal)
+    MeshWriter out(path);
+    codec.write(m, {vertex_rows, face_rows, layout}, out, ascii);
+    out.finish();
+    return unwritable;
+}
+
+}  // namespace toposimp::io
