@@ -1,5 +1,7 @@
 #include "cli/check_command.hpp"
 
+#include "cli/guard.hpp"
+#include "cli/json.hpp"
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
 #include "io/common/errors.hpp"
@@ -15,7 +17,7 @@ namespace toposimp::cli {
 CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
     CLI::App* check = app.add_subcommand("check", "Compare an original with a simplified dataset and report what was broken");
     std::string kinds = "Violations reported:\n";
-    for (const auto& [kind, meaning] : validate::kinds()) kinds += "  " + kind + ": " + meaning + "\n";
+    for (const validate::KindInfo& kind : validate::kinds()) kinds += std::string("  ") + kind.name + ": " + kind.meaning + "\n";
     check->footer(kinds +
                   "GEOS checks polygon validity; contacts, sides and containment are decided with exact predicates.\n"
                   "Exit status: 0 clean, 1 violations found, 2 usage or input error.");
@@ -46,7 +48,7 @@ void print_table(std::ostream& out, const validate::CheckReport& report) {
         out << std::left << std::setw(24) << "kind" << std::setw(14) << "layer" << std::setw(10) << "feature" << std::setw(10)
             << "other" << std::setw(44) << "where (x y)" << "detail [decided by]\n";
         for (const validate::Violation& v : report.violations) {
-            out << std::setw(24) << v.kind << std::setw(14) << v.layer << std::setw(10) << v.feature << std::setw(10) << v.other
+            out << std::setw(24) << validate::name(v.kind) << std::setw(14) << v.layer << std::setw(10) << v.feature << std::setw(10) << v.other
                 << std::setw(44) << (io::json_number(v.x) + " " + io::json_number(v.y)) << v.detail << " [" << v.decided_by << "]\n";
         }
         out << "counts:";
@@ -61,23 +63,25 @@ void print_table(std::ostream& out, const validate::CheckReport& report) {
 }
 
 void print_json(std::ostream& out, const validate::CheckReport& report) {
-    out << "{\"command\":\"check\",\"clean\":" << (report.clean() ? "true" : "false") << ",\"features\":" << report.features
-        << ",\"control_points\":" << report.control_points << ",\"invalid_in_original\":" << report.invalid_in_original
-        << ",\"counts\":{";
-    bool first = true;
-    for (const auto& [kind, count] : report.counts()) {
-        out << (first ? "" : ",") << io::json_string(kind) << ':' << count;
-        first = false;
+    JsonWriter json;
+    json.field("command", "check").field("clean", report.clean()).field("features", report.features);
+    json.field("control_points", report.control_points).field("invalid_in_original", report.invalid_in_original);
+    json.object("counts");
+    for (const auto& [kind, count] : report.counts()) json.field(kind, count);
+    json.end().array("violations");
+    for (const validate::Violation& v : report.violations) {
+        json.object()
+            .field("kind", validate::name(v.kind))
+            .field("layer", v.layer)
+            .field("feature", v.feature)
+            .field("other", v.other)
+            .exact("x", v.x)
+            .exact("y", v.y)
+            .field("detail", v.detail)
+            .field("decided_by", v.decided_by)
+            .end();
     }
-    out << "},\"violations\":[";
-    for (std::size_t i = 0; i < report.violations.size(); ++i) {
-        const validate::Violation& v = report.violations[i];
-        out << (i ? "," : "") << "{\"kind\":" << io::json_string(v.kind) << ",\"layer\":" << io::json_string(v.layer)
-            << ",\"feature\":" << io::json_string(v.feature) << ",\"other\":" << io::json_string(v.other) << ",\"x\":" << io::json_number(v.x)
-            << ",\"y\":" << io::json_number(v.y) << ",\"detail\":" << io::json_string(v.detail) << ",\"decided_by\":" << io::json_string(v.decided_by)
-            << '}';
-    }
-    out << "]}\n";
+    out << json.line();
 }
 
 std::string violations_geojson(const validate::CheckReport& report) {
@@ -85,7 +89,7 @@ std::string violations_geojson(const validate::CheckReport& report) {
     for (std::size_t i = 0; i < report.violations.size(); ++i) {
         const validate::Violation& v = report.violations[i];
         out += i ? ",\n" : "";
-        out += "{\"type\":\"Feature\",\"properties\":{\"kind\":" + io::json_string(v.kind) + ",\"layer\":" + io::json_string(v.layer) +
+        out += "{\"type\":\"Feature\",\"properties\":{\"kind\":" + io::json_string(validate::name(v.kind)) + ",\"layer\":" + io::json_string(v.layer) +
                ",\"feature\":" + io::json_string(v.feature) + ",\"other\":" + io::json_string(v.other) + ",\"detail\":" + io::json_string(v.detail) +
                ",\"decided_by\":" + io::json_string(v.decided_by) + "},\"geometry\":{\"type\":\"Point\",\"coordinates\":[" +
                io::json_number(v.x) + "," + io::json_number(v.y) + "]}}";
@@ -93,10 +97,10 @@ std::string violations_geojson(const validate::CheckReport& report) {
     return out + "\n]}\n";
 }
 
+// parse (done) → check → write the GeoJSON of the violations → report.
 int run_check(const CheckCommandOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
-    try {
-        // Inside the try: on an error its destructor clears the terminal line before the message.
+    return guarded(*log, [&] {
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         progress.phase("checking " + options.check.simplified + " against " + options.check.original);
         const validate::CheckReport report = validate::check(options.check);
@@ -116,12 +120,7 @@ int run_check(const CheckCommandOptions& options, Context& context) {
             print_table(context.out, report);
         }
         return report.clean() ? kOk : kTopologyFailure;
-    } catch (const io::InputError& error) {
-        log->error("{}", error.what());
-    } catch (const io::OutputError& error) {
-        log->error("{}", error.what());
-    }
-    return kUsageError;
+    });
 }
 
 }  // namespace toposimp::cli

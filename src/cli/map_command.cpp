@@ -2,17 +2,16 @@
 
 #include "cli/check_command.hpp"
 #include "cli/common.hpp"
+#include "cli/guard.hpp"
+#include "cli/json.hpp"
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
 #include "core/map/simplify.hpp"
 #include "io/common/errors.hpp"
-#include "io/ogr/gdal_support.hpp"
-#include "io/map/giscup.hpp"
-#include "io/common/json_text.hpp"
-#include "io/ogr/ogr_dataset.hpp"
 #include "io/common/output_file.hpp"
-
-#include <cpl_conv.h>
+#include "io/map/giscup.hpp"
+#include "io/ogr/gdal_env.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -86,11 +85,6 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
 
 namespace {
 
-// --validate found something: no output, exit status 1.
-struct ValidationFailed {
-    std::size_t violations;
-};
-
 std::optional<map::StopCriterion> stop_criterion(const MapOptions& options, std::string& problem) {
     map::StopCriterion stop;
     if (options.max) {
@@ -121,27 +115,27 @@ std::string describe(const map::StopCriterion& stop) {
     return text.str();
 }
 
-struct Timings {
-    double read = 0, simplify = 0, write = 0, total = 0;
+exact::Arithmetic arithmetic_of(const std::string& name) {
+    if (name == "rational") return exact::Arithmetic::rational;
+    if (name == "float") return exact::Arithmetic::floating;
+    return exact::Arithmetic::exact;
+}
+
+// What a map job read: the engine's map, and what is needed to write it back (the OGR layers
+// with their attributes, or the GIS Cup lines' ids).
+struct MapInput {
+    map::MapData map;
+    std::optional<io::OgrDataset> dataset;
+    io::GiscupLines giscup_lines;
+
+    std::uint64_t features() const { return dataset ? dataset->summary().features() : map.chains.size(); }
 };
 
-void print_json(std::ostream& out, const MapOptions& options, const map::StopCriterion& stop,
-                const map::SimplifyStats& stats, const Timings& time, std::uint64_t features) {
-    out << "{\"command\":\"map\",\"input\":" << io::json_string(options.input) << ",\"output\":" << io::json_string(options.output)
-        << ",\"features\":" << features << ",\"vertices_in\":" << stats.vertices_in
-        << ",\"vertices_out\":" << stats.vertices_out << ",\"removed\":" << stats.removed
-        << ",\"control_points\":" << stats.control_points << ",\"target\":{\"criterion\":" << io::json_string(describe(stop))
-        << ",\"removal_goal\":" << stats.removal_goal << ",\"reached\":" << (stats.target_reached ? "true" : "false")
-        << "},\"blocked\":{\"total\":" << stats.blocked() << ",\"point_in_triangle\":" << stats.blocked_by_point
-        << ",\"ring\":" << stats.blocked_by_ring << ",\"coincident_segment\":" << stats.blocked_by_coincidence
-        << "},\"pinned_by_crossing\":" << stats.pinned_by_crossing << ",\"arithmetic\":" << io::json_string(options.arithmetic)
-        << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
-        << "},\"engine_seconds\":{\"index\":" << stats.seconds_index << ",\"crossings\":" << stats.seconds_crossings
-        << ",\"sweep\":" << stats.seconds_sweep << "},\"predicates\":{\"filter_decided\":"
-        << stats.predicates.filter_decided << ",\"expansion_decided\":" << stats.predicates.expansion_decided
-        << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks
-        << "},\"seconds\":{\"read\":" << time.read << ",\"simplify\":" << time.simplify << ",\"write\":" << time.write
-        << ",\"total\":" << time.total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";
+MapInput read_giscup(const MapOptions& options) {
+    MapInput input;
+    input.giscup_lines = io::read_giscup_lines(options.input, input.map);
+    if (!options.points.empty()) input.map.control_points = io::read_giscup_points(options.points);
+    return input;
 }
 
 void log_input(spdlog::logger& log, const std::string& input, const io::DatasetSummary& summary) {
@@ -162,14 +156,141 @@ void log_input(spdlog::logger& log, const std::string& input, const io::DatasetS
     if (summary.arcs > 0) log.debug("polygon rings: {} arcs, {} of them shared", summary.arcs, summary.shared_arcs);
 }
 
-exact::Arithmetic arithmetic_of(const std::string& name) {
-    if (name == "rational") return exact::Arithmetic::rational;
-    if (name == "float") return exact::Arithmetic::floating;
-    return exact::Arithmetic::exact;
+// The layers through OGR, and the control points file on a second thread meanwhile.
+MapInput read_layers(const MapOptions& options, spdlog::logger& log) {
+    MapInput input;
+    std::future<std::vector<Point>> points;
+    if (!options.points.empty()) {
+        const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads) : std::thread::hardware_concurrency();
+        points = std::async(std::launch::async, [&options, threads] { return io::read_control_points(options.points, threads); });
+    }
+    try {
+        // A Shapefile input's .prj may go to a Shapefile output (one .shp file, not a directory
+        // of them) as it is, without parsing the CRS.
+        const std::string extension = std::filesystem::path(options.output).extension().string();
+        const bool prj_as_file = (extension == ".shp" || extension == ".SHP") && io::is_shapefile_output(options.output, options.format);
+        input.dataset.emplace(io::OgrDataset::read(options.input, options.layers, input.map, prj_as_file));
+    } catch (...) {
+        if (points.valid()) points.wait();
+        throw;
+    }
+    if (points.valid()) {
+        std::vector<Point> read = points.get();
+        std::vector<Point>& control_points = input.map.control_points;
+        if (control_points.empty()) {
+            control_points = std::move(read);
+        } else {
+            control_points.insert(control_points.end(), read.begin(), read.end());
+        }
+    }
+    log_input(log, options.input, input.dataset->summary());
+    return input;
+}
+
+void write_giscup(const MapOptions& options, const MapInput& input, const map::SimplifyResult& result, std::ostream& stdout_stream) {
+    io::OutputFile output(options.output, options.overwrite, &stdout_stream);
+    {
+        std::ofstream out(output.staging_path(), std::ios::binary);
+        io::write_giscup_lines(out, input.giscup_lines, input.map, result.kept);
+        out.close();
+        if (!out) throw io::OutputError("error writing '" + options.output + "'");
+    }
+    output.commit();
+}
+
+// The layers through OGR; with --validate, `toposimp check` on the written file first, which
+// leaves no output if it finds anything.
+void write_layers(const MapOptions& options, const MapInput& input, const map::SimplifyResult& result, Context& context,
+                  Progress& progress, spdlog::logger& log) {
+    io::WriteOptions write;
+    write.path = options.output;
+    write.format = options.format;
+    write.layer_name = options.layer_name;
+    write.layer_options = options.layer_options;
+    write.dataset_options = options.dataset_options;
+    write.overwrite = options.overwrite;
+    write.stdout_stream = &context.out;
+    if (options.validate) {
+        write.before_commit = [&](const std::string& written) {
+            progress.phase("validating");
+            validate::CheckOptions check;
+            check.original = options.input;
+            check.simplified = written;
+            check.points = options.points;
+            check.layers = options.layers;
+            const validate::CheckReport report = validate::check(check);
+            if (!report.clean()) {
+                progress.done();
+                print_table(context.err, report);
+                throw TopologyFailure{fmt::format("--validate found {} violation(s); no output written", report.violations.size())};
+            }
+            log.debug("validation: clean ({} features, {} control points)", report.features, report.control_points);
+        };
+    }
+    for (const std::string& warning : input.dataset->write(write, input.map, result.kept)) log.warn("{}", warning);
+}
+
+struct Timings {
+    double read = 0, simplify = 0, write = 0, total = 0;
+};
+
+// The messages after a run: target missed, refusals, predicates, memory, the one-line summary.
+void report(const map::SimplifyStats& stats, const map::StopCriterion& stop, const Timings& time, const MapOptions& options,
+            bool err_is_terminal, spdlog::logger& log) {
+    if (!stats.target_reached) {
+        log.warn("target not reached: removed {} of the {} vertices asked for; no more can go without changing topology",
+                 stats.removed, stats.removal_goal);
+    }
+    log.debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP", stats.predicates.filter_decided,
+              stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks);
+    const double memory = peak_memory_mib();
+    log.debug("peak memory {:.0f} MiB: {:.0f} bytes per vertex and control point", memory,
+              memory * 1048576.0 / static_cast<double>(std::max<std::uint64_t>(1, stats.vertices_in + stats.control_points)));
+    log.debug("refused removals: {} point in triangle, {} ring, {} coincident segment", stats.blocked_by_point,
+              stats.blocked_by_ring, stats.blocked_by_coincidence);
+    if (stats.pinned_by_crossing > 0) {
+        log.debug("{} vertices kept at the ends of segments that cross or touch other lines in the input", stats.pinned_by_crossing);
+    }
+    const std::string summary = fmt::format("{} -> {} vertices ({} removed, {} refused), {}, {:.3f} s", stats.vertices_in,
+                                            stats.vertices_out, stats.removed, stats.blocked(), describe(stop), time.total);
+    if (err_is_terminal || options.verbosity > 0) log.info("{}", summary);
+}
+
+std::string json_summary(const MapOptions& options, const map::StopCriterion& stop, const map::SimplifyStats& stats,
+                         const Timings& time, std::uint64_t features) {
+    JsonWriter json;
+    json.field("command", "map").field("input", options.input).field("output", options.output);
+    json.field("features", features).field("vertices_in", stats.vertices_in).field("vertices_out", stats.vertices_out);
+    json.field("removed", stats.removed).field("control_points", stats.control_points);
+    json.object("target").field("criterion", describe(stop)).field("removal_goal", stats.removal_goal);
+    json.field("reached", stats.target_reached).end();
+    json.object("blocked")
+        .field("total", stats.blocked())
+        .field("point_in_triangle", stats.blocked_by_point)
+        .field("ring", stats.blocked_by_ring)
+        .field("coincident_segment", stats.blocked_by_coincidence)
+        .end();
+    json.field("pinned_by_crossing", stats.pinned_by_crossing).field("arithmetic", options.arithmetic);
+    json.object("parallel").field("threads", stats.threads).field("levels", stats.levels).field("rounds", stats.rounds).end();
+    json.object("engine_seconds")
+        .field("index", stats.seconds_index)
+        .field("crossings", stats.seconds_crossings)
+        .field("sweep", stats.seconds_sweep)
+        .end();
+    add_predicates(json, stats.predicates);
+    json.object("seconds")
+        .field("read", time.read)
+        .field("simplify", time.simplify)
+        .field("write", time.write)
+        .field("total", time.total)
+        .end();
+    json.field("peak_memory_mib", peak_memory_mib());
+    return json.line();
 }
 
 }  // namespace
 
+// parse (done) → read → simplify → write → report.
 int run_map(const MapOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
@@ -178,7 +299,7 @@ int run_map(const MapOptions& options, Context& context) {
         log->error("{}", problem);
         return kUsageError;
     }
-    for (const auto& [key, value] : options.config) CPLSetConfigOption(key.c_str(), value.c_str());
+    io::set_config_options(options.config);
 
     map::SimplifyOptions simplify_options;
     simplify_options.stop = *stop;
@@ -196,141 +317,45 @@ int run_map(const MapOptions& options, Context& context) {
         log->warn("--arithmetic float uses naive double predicates: the output may break topology");
     }
 
-    const auto start = Clock::now();
-    Timings time;
-    try {
-        // Inside the try: on an error its destructor clears the terminal line before the message.
+    return guarded(*log, [&] {
+        const auto start = Clock::now();
+        Timings time;
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         simplify_options.progress = [&progress](double done) { progress.update(done); };
         // An output that cannot be written fails now, not after reading and simplifying.
         io::OutputFile::check_destination(options.output, options.overwrite);
-        if (!options.giscup) io::vector_driver_for(options.output, options.format);
-        progress.phase("reading " + options.input);
-        // read → simplify → write; the engine builds chains, indexes and ranks inside simplify().
-        map::MapData map;
-        std::optional<io::OgrDataset> dataset;
-        io::GiscupLines giscup_lines;
-        if (options.giscup) {
-            giscup_lines = io::read_giscup_lines(options.input, map);
-            if (!options.points.empty()) map.control_points = io::read_giscup_points(options.points);
-        } else {
-            // The control points file is read on a second thread while the map is read here.
-            std::future<std::vector<Point>> points;
-            if (!options.points.empty()) {
-                const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads) : std::thread::hardware_concurrency();
-                points = std::async(std::launch::async, [&options, threads] { return io::read_control_points(options.points, threads); });
-            }
-            try {
-                // A Shapefile input's .prj may go to a Shapefile output (one .shp file, not a
-                // directory of them) as it is, without parsing the CRS.
-                const std::string extension = std::filesystem::path(options.output).extension().string();
-                const bool prj_as_file = (extension == ".shp" || extension == ".SHP") &&
-                                         io::vector_driver_for(options.output, options.format)->GetDescription() ==
-                                             std::string("ESRI Shapefile");
-                dataset.emplace(io::OgrDataset::read(options.input, options.layers, map, prj_as_file));
-            } catch (...) {
-                if (points.valid()) points.wait();
-                throw;
-            }
-            if (points.valid()) {
-                std::vector<Point> read = points.get();
-                if (map.control_points.empty()) {
-                    map.control_points = std::move(read);
-                } else {
-                    map.control_points.insert(map.control_points.end(), read.begin(), read.end());
-                }
-            }
-            log_input(*log, options.input, dataset->summary());
-        }
-        time.read = seconds_since(start);
-        log->debug("{} chains, {} vertices, {} control points", map.chains.size(), map.vertices.size(),
-                   map.control_points.size());
+        if (!options.giscup) io::check_vector_output(options.output, options.format);
 
+        progress.phase("reading " + options.input);
+        MapInput input = options.giscup ? read_giscup(options) : read_layers(options, *log);
+        time.read = seconds_since(start);
+        log->debug("{} chains, {} vertices, {} control points", input.map.chains.size(), input.map.vertices.size(),
+                   input.map.control_points.size());
+
+        // The engine builds chains, indexes and ranks inside simplify().
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        const map::SimplifyResult result = map::simplify_releasing_points(map, simplify_options);
+        const map::SimplifyResult result = map::simplify_releasing_points(input.map, simplify_options);
         time.simplify = seconds_since(simplify_start);
-        const map::SimplifyStats& stats = result.stats;
 
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
         if (options.giscup) {
-            io::OutputFile output(options.output, options.overwrite, &context.out);
-            {
-                std::ofstream out(output.staging_path(), std::ios::binary);
-                io::write_giscup_lines(out, giscup_lines, map, result.kept);
-                out.close();
-                if (!out) throw io::OutputError("error writing '" + options.output + "'");
-            }
-            output.commit();
+            write_giscup(options, input, result, context.out);
         } else {
-            io::WriteOptions write;
-            write.path = options.output;
-            write.format = options.format;
-            write.layer_name = options.layer_name;
-            write.layer_options = options.layer_options;
-            write.dataset_options = options.dataset_options;
-            write.overwrite = options.overwrite;
-            write.stdout_stream = &context.out;
-            if (options.validate) {
-                write.before_commit = [&](const std::string& written) {
-                    progress.phase("validating");
-                    validate::CheckOptions check;
-                    check.original = options.input;
-                    check.simplified = written;
-                    check.points = options.points;
-                    check.layers = options.layers;
-                    const validate::CheckReport report = validate::check(check);
-                    if (!report.clean()) {
-                        progress.done();
-                        print_table(context.err, report);
-                        throw ValidationFailed(report.violations.size());
-                    }
-                    log->debug("validation: clean ({} features, {} control points)", report.features, report.control_points);
-                };
-            }
-            for (const std::string& warning : dataset->write(write, map, result.kept)) log->warn("{}", warning);
+            write_layers(options, input, result, context, progress, *log);
         }
         time.write = seconds_since(write_start);
         time.total = seconds_since(start);
         progress.done();
 
-        if (!stats.target_reached) {
-            log->warn("target not reached: removed {} of the {} vertices asked for; no more can go without changing topology",
-                      stats.removed, stats.removal_goal);
-        }
-        log->debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP",
-                   stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks);
-        const double memory = peak_memory_mib();
-        log->debug("peak memory {:.0f} MiB: {:.0f} bytes per vertex and control point", memory,
-                   memory * 1048576.0 / static_cast<double>(std::max<std::uint64_t>(1, stats.vertices_in + stats.control_points)));
-        log->debug("refused removals: {} point in triangle, {} ring, {} coincident segment", stats.blocked_by_point,
-                   stats.blocked_by_ring, stats.blocked_by_coincidence);
-        if (stats.pinned_by_crossing > 0) {
-            log->debug("{} vertices kept at the ends of segments that cross or touch other lines in the input",
-                      stats.pinned_by_crossing);
-        }
-        const std::string summary_line = fmt::format("{} -> {} vertices ({} removed, {} refused), {}, {:.3f} s",
-                                                     stats.vertices_in, stats.vertices_out, stats.removed,
-                                                     stats.blocked(), describe(*stop), time.total);
-        if (context.err_is_terminal || options.verbosity > 0) log->info("{}", summary_line);
+        report(result.stats, *stop, time, options, context.err_is_terminal, *log);
         if (options.json) {
             const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
-            print_json(output_is_stdout ? context.err : context.out, options, *stop, stats, time,
-                       dataset ? dataset->summary().features() : map.chains.size());
+            (output_is_stdout ? context.err : context.out) << json_summary(options, *stop, result.stats, time, input.features());
         }
         return kOk;
-    } catch (const io::InputError& error) {
-        log->error("{}", error.what());
-    } catch (const io::OutputError& error) {
-        log->error("{}", error.what());
-    } catch (const ValidationFailed& failed) {
-        log->error("--validate found {} violation(s); no output written", failed.violations);
-        return kTopologyFailure;
-    } catch (const std::bad_alloc&) {
-        log->error("out of memory");
-    }
-    return kUsageError;
+    });
 }
 
 }  // namespace toposimp::cli

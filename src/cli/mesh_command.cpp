@@ -1,14 +1,15 @@
 #include "cli/mesh_command.hpp"
 
 #include "cli/common.hpp"
-#include "cli/progress.hpp"
+#include "cli/guard.hpp"
+#include "cli/json.hpp"
 #include "cli/logging.hpp"
+#include "cli/progress.hpp"
 #include "core/mesh/distance.hpp"
 #include "core/mesh/simplify.hpp"
 #include "io/common/errors.hpp"
-#include "io/common/json_text.hpp"
-#include "io/mesh/mesh_files.hpp"
 #include "io/common/output_file.hpp"
+#include "io/mesh/mesh_files.hpp"
 
 #include <CLI/CLI.hpp>  // (all of CLI11, for parse_mesh_command's own App: the launcher has no other)
 
@@ -24,20 +25,29 @@
 namespace toposimp::cli {
 
 CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
+    // The formats as io/mesh's table lists them.
+    std::string titles, text_and_binary;
+    for (const io::MeshFormatInfo& format : io::mesh_formats()) {
+        titles += (titles.empty() ? "" : ", ") + std::string(format.title) + (format.has_text_and_binary ? " (text or binary)" : "");
+        if (format.has_text_and_binary) text_and_binary += (text_and_binary.empty() ? "" : " and ") + std::string(format.title);
+    }
+    const std::string extensions = io::mesh_extensions_text();
     CLI::App* mesh = app.add_subcommand("mesh", "Simplify a triangle mesh or terrain TIN without self-intersections");
     mesh->footer(
         "Stopping criteria (one; default --keep 10%): --keep, --keep-faces, --max-error.\n"
         "Edges collapse in order of quadric error (Garland-Heckbert, optimal placement); a collapse is made only if\n"
         "exact predicates show it keeps the surface manifold, turns no face over, and makes no face touch or cross\n"
-        "another. Formats: OBJ, PLY (ASCII or binary), OFF, STL. Normals, colours, texture coordinates and other vertex\n"
-        "properties are kept (a merged vertex blends its two ends' values); faces keep theirs.\n"
+        "another. Formats: " + titles + " ('toposimp formats' says what each carries).\n"
+        "Normals, colours, texture coordinates and other vertex properties are kept (a merged vertex blends its two\n"
+        "ends' values); faces keep theirs.\n"
         "Exit status: 0 ok, 2 usage or input error.");
-    mesh->add_option("input", options.input, "Input mesh (.obj, .ply, .off, .stl) or a DEM raster (GeoTIFF or any GDAL raster)")
+    mesh->add_option("input", options.input, "Input mesh (" + extensions + ") or a DEM raster (GeoTIFF or any GDAL raster)")
         ->required();
     mesh->add_option("-o,--output", options.output,
-                     "Output: a mesh (.obj, .ply, .off, .stl) or an OGR layer of triangles with Z (.gpkg, .shp, .fgb, ...)")
+                     "Output: a mesh (" + extensions + ") or an OGR layer of triangles with Z (.gpkg, .shp, .fgb, ...)")
         ->required();
-    mesh->add_option("-f,--format", options.format, "Output format: obj, ply, off, stl, or an OGR driver name (GPKG, ...)");
+    mesh->add_option("-f,--format", options.format,
+                     "Output format: " + io::mesh_format_names_text() + ", or an OGR driver name (GPKG, ...)");
     mesh->add_option("--band", options.band, "DEM band to read (default 1)")->check(CLI::PositiveNumber);
     mesh->add_option("--nln", options.layer_name, "Layer name for OGR output (default: tin)");
     auto* keep = mesh->add_option("--keep", options.keep, "Keep this share of the faces: 10% or 0.1 (default 10%)");
@@ -59,7 +69,7 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
                    "First merge vertices at exactly the same location (an unwelded mesh, as converted from STL); vertex "
                    "attributes that differ between merged vertices are dropped");
     mesh->add_flag("--ascii", options.ascii,
-                   "Write PLY and STL as text (default: binary; PLY little endian with double coordinates, STL only if "
+                   "Write " + text_and_binary + " as text (default: binary; PLY little endian with double coordinates, STL only if "
                    "every coordinate is a float32, else text with every digit)");
     mesh->add_flag("--no-hausdorff", options.no_hausdorff, "Skip measuring the Hausdorff distance (saves time on big meshes)");
     mesh->add_option("-j,--threads", options.threads,
@@ -76,16 +86,9 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
 
 namespace {
 
-// The output format's name as given with -f, in lower case ("" if none).
-std::string format_name(const MeshCommandOptions& options) {
-    std::string f = options.format;
-    for (char& c : f) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return f;
-}
-
-bool mesh_output(const MeshCommandOptions& options) {
-    const std::string name = format_name(options);
-    return name.empty() ? io::has_mesh_extension(options.output) : (name == "obj" || name == "ply" || name == "off" || name == "stl");
+// The mesh format of the output (-f, else the extension), or null: an OGR layer.
+const io::MeshFormatInfo* output_format(const MeshCommandOptions& options) {
+    return options.format.empty() ? io::mesh_format_by_extension(options.output) : io::mesh_format_named(options.format);
 }
 
 std::optional<mesh::SimplifyOptions> mesh_target(const MeshCommandOptions& options, std::string& problem) {
@@ -114,10 +117,242 @@ std::string describe(const mesh::StopCriterion& target, const mesh::SimplifyStat
     return text.str();
 }
 
+// What a mesh job read: a mesh file with its attribute columns, or a DEM's TIN.
+struct MeshInput {
+    mesh::Mesh mesh;
+    io::AttributeLayout layout;         // what the mesh's attribute columns are
+    std::vector<std::string> dropped;   // attributes in the file not kept, each with the reason
+    std::optional<io::Dem> dem;
+    std::size_t welded_vertices = 0;
+};
+
+// A mesh file, its vertices welded if asked.
+MeshInput read_mesh_file(const MeshCommandOptions& options, spdlog::logger& log) {
+    MeshInput input;
+    io::MeshReadOptions read_options;
+    read_options.triangulate = options.triangulate;
+    io::MeshReadReport report;
+    mesh::Mesh& m = input.mesh;
+    m = io::read_mesh(options.input, read_options, report);
+    log.debug("read {} ({}{}): {} vertices, {} faces", options.input, io::to_string(report.format),
+              report.encoding.empty() ? "" : " " + report.encoding, m.points.size(), m.faces.size());
+    input.layout = report.layout;
+    input.dropped = report.dropped;
+    for (const std::string& what : input.dropped) log.warn("{}: {}: dropped (not carried to the simplified mesh)", options.input, what);
+    if (!input.layout.vertex.empty() || !input.layout.face.empty()) {
+        log.debug("attributes kept: {} per vertex, {} per face", input.layout.vertex.size(), input.layout.face.size());
+    }
+    if (report.polygons_triangulated > 0) log.info("{} polygons split into triangle fans", report.polygons_triangulated);
+    if (report.ignored_elements > 0) {
+        log.warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
+    }
+    if (report.welded > 0) {
+        log.info("{}: {} triangle corners welded into the vertex at their location (STL shares no vertices)", options.input,
+                 report.welded);
+    }
+    input.welded_vertices = report.welded;
+    if (options.weld) {
+        const mesh::Welded welded = mesh::weld_coincident(m);
+        input.welded_vertices += welded.vertices;
+        log.info("welded {} vertices onto others at the same location", welded.vertices);
+        for (std::size_t c = 0; c < welded.differs.size(); ++c) {
+            if (!welded.differs[c]) continue;
+            input.dropped.push_back("vertex " + input.layout.vertex[c].name + ": differs between vertices welded together");
+            log.warn("{}: {}: dropped (not carried to the simplified mesh)", options.input, input.dropped.back());
+        }
+        mesh::remove_vertex_columns(m, welded.differs);
+        std::erase_if(input.layout.vertex, [&, c = std::size_t{0}](const io::AttributeColumn&) mutable { return welded.differs[c++]; });
+    }
+    return input;
+}
+
+// A DEM raster triangulated into a TIN: a terrain, its border locked unless freed.
+MeshInput read_dem(const MeshCommandOptions& options, const MeshGdal& gdal, mesh::SimplifyOptions& engine, spdlog::logger& log) {
+    MeshInput input;
+    input.dem = gdal.read_dem(options.input, options.band);
+    const io::Dem& dem = *input.dem;
+    input.mesh = std::move(input.dem->tin);
+    engine.terrain = true;
+    engine.height_field = true;  // a grid's triangles: none overlap
+    engine.lock_boundary = !options.free_boundary;
+    log.debug("read DEM {} ({} x {} cells, {} without data): TIN of {} vertices, {} triangles", options.input, dem.width,
+              dem.height, dem.nodata_cells, input.mesh.points.size(), input.mesh.faces.size());
+    return input;
+}
+
+// What the engine's stats say the user must hear: a non-manifold input is an error; a terrain
+// that is not one is simplified in space, with a warning.
+void check_result(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engine, const MeshCommandOptions& options,
+                  spdlog::logger& log) {
+    if (const auto& edge = stats.non_manifold) {
+        std::string faces;
+        for (std::uint32_t f : edge->faces) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
+        throw io::InputError(options.input + ": the edge between vertices " + std::to_string(edge->a) + " and " +
+                             std::to_string(edge->b) + " (counted from 0) has more than two faces (" + faces + ", ...)" +
+                             (options.weld ? " once vertices at the same location are welded" : "") +
+                             ": non-manifold meshes are not supported");
+    }
+    if (engine.terrain && !stats.terrain) {
+        const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
+                                                         std::to_string((*stats.plan_overlap)[1]) +
+                                                         " (counted from 0) overlap in the x-y plane"
+                                                   : "the faces are not all turned the same way in the x-y plane";
+        log.warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, why,
+                 engine.stop.target == mesh::Target::max_error ? " (--max-error bounds the quadric error)" : "");
+    } else if (stats.vertical_bound && !engine.lock_boundary) {
+        log.info("border vertices kept where they are: the vertical bound is measured over the input's extent");
+    }
+}
+
+// Writes the simplified mesh to `path` (the output's staging file): a mesh file, or an OGR layer
+// of triangles. The attribute columns not written.
+std::vector<std::string> write_output(const MeshInput& input, const io::MeshFormatInfo* format, const std::string& path,
+                                      const MeshCommandOptions& options, const MeshGdal& gdal, spdlog::logger& log) {
+    const io::AttributeLayout& layout = input.layout;
+    if (format) {
+        std::vector<std::string> unwritten = io::write_mesh(input.mesh, layout, path, format->format, options.ascii);
+        for (const std::string& column : unwritten) {
+            log.warn("{}: {} not written: {} has no place for it", options.output, column, format->title);
+        }
+        return unwritten;
+    }
+    if (!layout.vertex.empty() || !layout.face.empty()) {
+        log.warn("{}: vertex and face attributes not written: a layer of triangles has no place for them", options.output);
+    }
+    gdal.write_tin_layer(input.mesh, path, options.format, input.dem ? input.dem->crs_wkt : std::string(), options.layer_name);
+    return {};
+}
+
+// How far the output lies from the input: the sampled Hausdorff distance, and for terrains the
+// vertical error.
+struct Measures {
+    std::optional<mesh::HausdorffDistance> distance;
+    std::optional<mesh::VerticalError> vertical;
+};
+
+Measures measure(const mesh::Mesh& original, const mesh::Mesh& simplified, const mesh::SimplifyStats& stats, int threads) {
+    Measures measures;
+    // Four samples per input face, at least 50 000 and at most 400 000 per direction.
+    const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
+    measures.distance = mesh::hausdorff(original, simplified, samples, threads);
+    if (stats.terrain) measures.vertical = mesh::vertical_error(original, simplified, samples, threads);
+    return measures;
+}
+
+struct Timings {
+    double read = 0, simplify = 0, write = 0, hausdorff = 0, total = 0;
+};
+
+// The messages after a run: target missed, refusals, predicates, the one-line summary.
+void report(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engine, const Measures& measures, const Timings& time,
+            const MeshCommandOptions& options, const MeshInput& input, bool err_is_terminal, spdlog::logger& log) {
+    if (!stats.target_reached) {
+        // An unwelded mesh is many separate pieces, whose border edges cannot collapse.
+        const std::size_t coincident = options.weld ? 0 : mesh::count_coincident(input.mesh);
+        log.warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks{}", stats.faces_out,
+                 stats.target_faces,
+                 coincident == 0 ? std::string()
+                                 : fmt::format(" ({} of the vertices left share their location with another: "
+                                               "--weld merges such vertices first)",
+                                               coincident));
+    }
+    log.debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection, "
+              "{} vertical error",
+              stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
+              stats.refused_intersection, stats.refused_vertical);
+    log.debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP; peak memory {:.0f} MiB",
+              stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks,
+              peak_memory_mib());
+    std::string summary = fmt::format("{} -> {} faces, {} -> {} vertices ({} collapses, {} refused), {}, {:.3f} s",
+                                      stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out, stats.collapses,
+                                      stats.refused(), describe(engine.stop, stats), time.total);
+    if (const auto& distance = measures.distance) {
+        summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
+                               distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
+    }
+    if (measures.vertical) summary += fmt::format("; vertical error {:.6g}", measures.vertical->max());
+    if (err_is_terminal || options.verbosity > 0) log.info("{}", summary);
+}
+
+// A one-sided distance as JSON: its largest and mean sample distance, and how many samples.
+template <class Side>
+void sides(JsonWriter& json, const Side& forward, const Side& backward) {
+    json.object("input_to_output").field("max", forward.max).field("mean", forward.mean).field("samples", forward.samples).end();
+    json.object("output_to_input").field("max", backward.max).field("mean", backward.mean).field("samples", backward.samples).end();
+}
+
+std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engine, const Measures& measures,
+                         const Timings& time, const MeshCommandOptions& options, const MeshInput& input,
+                         const std::vector<std::string>& unwritten) {
+    JsonWriter json;
+    json.field("command", "mesh").field("input", options.input).field("output", options.output);
+    json.field("vertices_in", stats.vertices_in).field("vertices_out", stats.vertices_out);
+    json.field("faces_in", stats.faces_in).field("faces_out", stats.faces_out);
+    json.field("welded_vertices", input.welded_vertices).field("collapses", stats.collapses);
+    json.field("flat_collapses_unsearched", stats.flat_unsearched);
+    json.object("target")
+        .field("criterion", describe(engine.stop, stats))
+        .field("target_faces", stats.target_faces)
+        .field("reached", stats.target_reached)
+        .end();
+    json.object("refused")
+        .field("total", stats.refused())
+        .field("link", stats.refused_link)
+        .field("boundary", stats.refused_boundary)
+        .field("flip", stats.refused_flip)
+        .field("degenerate", stats.refused_degenerate)
+        .field("intersection", stats.refused_intersection)
+        .field("vertical", stats.refused_vertical)
+        .end();
+    json.field("max_quadric_error", stats.max_error).field("terrain", stats.terrain);
+    json.field("lock_boundary", engine.lock_boundary || stats.vertical_bound);
+    if (stats.vertical_bound) json.field("guaranteed_vertical_error", engine.stop.value);
+    // Attribute columns kept, dropped on reading (with the reason), left out on writing.
+    json.object("attributes").array("vertex");
+    for (const io::AttributeColumn& column : input.layout.vertex) json.item(column.name);
+    json.end().array("face");
+    for (const io::AttributeColumn& column : input.layout.face) json.item(column.name);
+    json.end().array("dropped");
+    for (const std::string& what : input.dropped) json.item(what);
+    json.end().array("not_written");
+    for (const std::string& what : unwritten) json.item(what);
+    json.end().end();
+    if (const auto& dem = input.dem) {
+        json.object("dem")
+            .field("width", dem->width)
+            .field("height", dem->height)
+            .field("cells_without_data", dem->nodata_cells)
+            .field("crs", !dem->crs_wkt.empty())
+            .end();
+    }
+    if (const auto& distance = measures.distance) {
+        const double diagonal = distance->diagonal > 0 ? distance->diagonal : 1.0;
+        json.object("hausdorff").field("max", distance->max()).field("max_fraction_of_diagonal", distance->max() / diagonal);
+        sides(json, distance->forward, distance->backward);
+        json.field("diagonal", distance->diagonal).end();
+    }
+    if (const auto& vertical = measures.vertical) {
+        json.object("vertical_error").field("max", vertical->max());
+        sides(json, vertical->forward, vertical->backward);
+        json.field("samples_outside", vertical->outside).end();
+    }
+    json.object("parallel").field("threads", stats.threads).field("levels", stats.levels).field("rounds", stats.rounds).end();
+    add_predicates(json, stats.predicates);
+    json.object("seconds")
+        .field("read", time.read)
+        .field("simplify", time.simplify)
+        .field("write", time.write)
+        .field("hausdorff", time.hausdorff)
+        .field("total", time.total)
+        .end();
+    json.field("peak_memory_mib", peak_memory_mib());
+    return json.line();
+}
+
 }  // namespace
 
 bool mesh_needs_gdal(const MeshCommandOptions& options) {
-    return !io::has_mesh_extension(options.input) || !mesh_output(options);
+    return !io::has_mesh_extension(options.input) || output_format(options) == nullptr;
 }
 
 bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions& options) {
@@ -133,6 +368,31 @@ bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions
     return true;
 }
 
+void print_mesh_formats(std::ostream& out, bool json) {
+    if (json) {
+        JsonWriter writer;
+        writer.array("mesh_formats");
+        for (const io::MeshFormatInfo& format : io::mesh_formats()) {
+            writer.object()
+                .field("name", format.name)
+                .field("title", format.title)
+                .field("extension", format.extension)
+                .field("carries", format.carries)
+                .field("text_and_binary", format.has_text_and_binary)
+                .end();
+        }
+        out << writer.line();
+        return;
+    }
+    out << "Mesh formats (toposimp mesh; -f NAME or the extension):\n";
+    for (const io::MeshFormatInfo& format : io::mesh_formats()) {
+        out << "  " << format.name << "  " << format.extension << "  " << format.title
+            << (format.has_text_and_binary ? " (text or binary)" : "") << ": " << format.carries << "\n";
+    }
+    out << "Maps and DEMs are read and written through GDAL: 'ogrinfo --formats', 'gdalinfo --formats'.\n";
+}
+
+// parse (done) → read → simplify → write → measure → report.
 int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
@@ -148,79 +408,20 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
     engine->lock_boundary = options.lock_boundary;
     engine->terrain = options.terrain;
     engine->threads = options.threads;
-    const auto start = Clock::now();
-    try {
-        // Inside the try: on an error its destructor clears the terminal line before the message.
+    return guarded(*log, [&] {
+        const auto start = Clock::now();
+        Timings time;
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         engine->progress = [&progress](double done) { progress.update(done); };
-        // Output: a mesh file, or an OGR layer of triangles.
-        const std::string name = format_name(options);
-        const bool to_mesh_file = mesh_output(options);
-        io::MeshFormat format = io::MeshFormat::obj;
-        if (to_mesh_file) {
-            format = name.empty() ? io::mesh_format_of(options.output)
-                     : name == "ply" ? io::MeshFormat::ply
-                     : name == "off" ? io::MeshFormat::off
-                     : name == "stl" ? io::MeshFormat::stl
-                                     : io::MeshFormat::obj;
-        }
         // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
+        const io::MeshFormatInfo* format = output_format(options);
         io::OutputFile output(options.output, options.overwrite, &context.out);
-        if (!to_mesh_file) gdal.check_layer_output(options.output, options.format);
+        if (!format) gdal.check_layer_output(options.output, options.format);
 
-        // Input: a mesh file, or a DEM raster triangulated into a TIN.
         progress.phase("reading " + options.input);
-        mesh::Mesh m;
-        io::AttributeLayout layout;                   // what m's attribute columns are
-        std::vector<std::string> dropped, unwritten;  // attributes not kept, and not written
-        std::optional<io::Dem> dem;
-        std::size_t welded_vertices = 0;
-        if (io::has_mesh_extension(options.input)) {
-            io::MeshReadOptions read_options;
-            read_options.triangulate = options.triangulate;
-            io::MeshReadReport report;
-            m = io::read_mesh(options.input, read_options, report);
-            log->debug("read {} ({}{}): {} vertices, {} faces", options.input, io::to_string(report.format),
-                       report.encoding.empty() ? "" : " " + report.encoding, m.points.size(), m.faces.size());
-            layout = report.layout;
-            dropped = report.dropped;
-            for (const std::string& what : dropped) {
-                log->warn("{}: {}: dropped (not carried to the simplified mesh)", options.input, what);
-            }
-            if (!layout.vertex.empty() || !layout.face.empty()) {
-                log->debug("attributes kept: {} per vertex, {} per face", layout.vertex.size(), layout.face.size());
-            }
-            if (report.polygons_triangulated > 0) log->info("{} polygons split into triangle fans", report.polygons_triangulated);
-            if (report.ignored_elements > 0) {
-                log->warn("{} elements that are not faces (lines, points, unknown PLY elements) ignored", report.ignored_elements);
-            }
-            if (report.welded > 0) {
-                log->info("{}: {} triangle corners welded into the vertex at their location (STL shares no vertices)", options.input,
-                          report.welded);
-            }
-            welded_vertices = report.welded;
-            if (options.weld) {
-                const mesh::Welded welded = mesh::weld_coincident(m);
-                welded_vertices += welded.vertices;
-                log->info("welded {} vertices onto others at the same location", welded.vertices);
-                for (std::size_t c = 0; c < welded.differs.size(); ++c) {
-                    if (!welded.differs[c]) continue;
-                    dropped.push_back("vertex " + layout.vertex[c].name + ": differs between vertices welded together");
-                    log->warn("{}: {}: dropped (not carried to the simplified mesh)", options.input, dropped.back());
-                }
-                mesh::remove_vertex_columns(m, welded.differs);
-                std::erase_if(layout.vertex, [&, c = std::size_t{0}](const io::AttributeColumn&) mutable { return welded.differs[c++]; });
-            }
-        } else {
-            dem = gdal.read_dem(options.input, options.band);
-            m = std::move(dem->tin);
-            engine->terrain = true;
-            engine->height_field = true;  // a grid's triangles: none overlap
-            engine->lock_boundary = !options.free_boundary;
-            log->debug("read DEM {} ({} x {} cells, {} without data): TIN of {} vertices, {} triangles", options.input,
-                       dem->width, dem->height, dem->nodata_cells, m.points.size(), m.faces.size());
-        }
-        const double seconds_read = seconds_since(start);
+        MeshInput input = io::has_mesh_extension(options.input) ? read_mesh_file(options, *log) : read_dem(options, gdal, *engine, *log);
+        mesh::Mesh& m = input.mesh;
+        time.read = seconds_since(start);
         if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");
         if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
             log->warn("{} faces repeat a corner (no area) and are dropped", repeated);
@@ -230,147 +431,32 @@ int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
         const mesh::SimplifyStats stats = mesh::simplify(m, *engine);
-        const double seconds_simplify = seconds_since(simplify_start);
-        if (const auto& edge = stats.non_manifold) {
-            std::string faces;
-            for (std::uint32_t f : edge->faces) faces += (faces.empty() ? "" : ", ") + std::to_string(f);
-            throw io::InputError(options.input + ": the edge between vertices " + std::to_string(edge->a) + " and " +
-                                 std::to_string(edge->b) + " (counted from 0) has more than two faces (" + faces +
-                                 ", ...)" + (options.weld ? " once vertices at the same location are welded" : "") +
-                                 ": non-manifold meshes are not supported");
-        }
-        if (engine->terrain && !stats.terrain) {
-            const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
-                                                             std::to_string((*stats.plan_overlap)[1]) +
-                                                             " (counted from 0) overlap in the x-y plane"
-                                                       : "the faces are not all turned the same way in the x-y plane";
-            log->warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, why,
-                      engine->stop.target == mesh::Target::max_error ? " (--max-error bounds the quadric error)" : "");
-        } else if (stats.vertical_bound && !engine->lock_boundary) {
-            log->info("border vertices kept where they are: the vertical bound is measured over the input's extent");
-        }
+        time.simplify = seconds_since(simplify_start);
+        check_result(stats, *engine, options, *log);
 
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
-        if (to_mesh_file) {
-            unwritten = io::write_mesh(m, layout, output.staging_path(), format, options.ascii);
-            for (const std::string& column : unwritten) {
-                log->warn("{}: {} not written: {} has no place for it", options.output, column, io::to_string(format));
-            }
-        } else {
-            if (!layout.vertex.empty() || !layout.face.empty()) {
-                log->warn("{}: vertex and face attributes not written: a layer of triangles has no place for them", options.output);
-            }
-            gdal.write_tin_layer(m, output.staging_path(), options.format, dem ? dem->crs_wkt : std::string(), options.layer_name);
-        }
+        const std::vector<std::string> unwritten = write_output(input, format, output.staging_path(), options, gdal, *log);
         output.commit();
-        const double seconds_write = seconds_since(write_start);
+        time.write = seconds_since(write_start);
 
-        std::optional<mesh::HausdorffDistance> distance;
-        std::optional<mesh::VerticalError> vertical;  // terrains
-        double seconds_hausdorff = 0;
+        Measures measures;
         if (!options.no_hausdorff) {
             progress.phase("measuring the Hausdorff distance");
             const auto measure_start = Clock::now();
-            // Four samples per input face, at least 50 000 and at most 400 000 per direction.
-            const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
-            distance = mesh::hausdorff(original, m, samples);
-            if (stats.terrain) vertical = mesh::vertical_error(original, m, samples);
-            seconds_hausdorff = seconds_since(measure_start);
+            measures = measure(original, m, stats, options.threads);
+            time.hausdorff = seconds_since(measure_start);
         }
-        const double total = seconds_since(start);
+        time.total = seconds_since(start);
         progress.done();
-        if (!stats.target_reached) {
-            // An unwelded mesh is many separate pieces, whose border edges cannot collapse.
-            const std::size_t coincident = options.weld ? 0 : mesh::count_coincident(m);
-            log->warn("target not reached: {} faces left of the {} asked for; no more collapses pass the checks{}", stats.faces_out,
-                      stats.target_faces,
-                      coincident == 0 ? std::string()
-                                      : fmt::format(" ({} of the vertices left share their location with another: "
-                                                    "--weld merges such vertices first)",
-                                                    coincident));
-        }
-        log->debug("refused collapses: {} link condition, {} border, {} flip, {} degenerate or duplicate face, {} intersection, "
-                   "{} vertical error",
-                   stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
-                   stats.refused_intersection, stats.refused_vertical);
-        log->debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP; peak memory {:.0f} MiB",
-                   stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks,
-                   peak_memory_mib());
-        std::string summary = fmt::format("{} -> {} faces, {} -> {} vertices ({} collapses, {} refused), {}, {:.3f} s",
-                                          stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out,
-                                          stats.collapses, stats.refused(), describe(engine->stop, stats), total);
-        if (distance) {
-            summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
-                                   distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
-        }
-        if (vertical) summary += fmt::format("; vertical error {:.6g}", vertical->max());
-        if (context.err_is_terminal || options.verbosity > 0) log->info("{}", summary);
+
+        report(stats, *engine, measures, time, options, input, context.err_is_terminal, *log);
+        // The summary never mixes with a mesh written to stdout.
         if (options.json) {
-            // The summary never mixes with a mesh written to stdout.
-            std::ostream& out = output.to_stdout() ? context.err : context.out;
-            out << "{\"command\":\"mesh\",\"input\":" << io::json_string(options.input)
-                << ",\"output\":" << io::json_string(options.output) << ",\"vertices_in\":" << stats.vertices_in
-                << ",\"vertices_out\":" << stats.vertices_out << ",\"faces_in\":" << stats.faces_in
-                << ",\"faces_out\":" << stats.faces_out << ",\"welded_vertices\":" << welded_vertices
-                << ",\"collapses\":" << stats.collapses
-                << ",\"flat_collapses_unsearched\":" << stats.flat_unsearched
-                << ",\"target\":{\"criterion\":" << io::json_string(describe(engine->stop, stats))
-                << ",\"target_faces\":" << stats.target_faces << ",\"reached\":" << (stats.target_reached ? "true" : "false")
-                << "},\"refused\":{\"total\":" << stats.refused() << ",\"link\":" << stats.refused_link
-                << ",\"boundary\":" << stats.refused_boundary << ",\"flip\":" << stats.refused_flip
-                << ",\"degenerate\":" << stats.refused_degenerate << ",\"intersection\":" << stats.refused_intersection
-                << ",\"vertical\":" << stats.refused_vertical << "},\"max_quadric_error\":" << stats.max_error
-                << ",\"terrain\":" << (stats.terrain ? "true" : "false")
-                << ",\"lock_boundary\":" << (engine->lock_boundary || stats.vertical_bound ? "true" : "false");
-            if (stats.vertical_bound) out << ",\"guaranteed_vertical_error\":" << engine->stop.value;
-            // Attribute columns kept, dropped on reading (with the reason), left out on writing.
-            auto names = [](const auto& list, auto name_of) {
-                std::string text = "[";
-                for (const auto& item : list) {
-                    if (text.size() > 1) text += ',';
-                    io::append_json_string(text, name_of(item));
-                }
-                return text + "]";
-            };
-            const auto column_name = [](const io::AttributeColumn& c) -> const std::string& { return c.name; };
-            const auto itself = [](const std::string& text) -> const std::string& { return text; };
-            out << ",\"attributes\":{\"vertex\":" << names(layout.vertex, column_name) << ",\"face\":" << names(layout.face, column_name)
-                << ",\"dropped\":" << names(dropped, itself) << ",\"not_written\":" << names(unwritten, itself) << "}";
-            if (dem) {
-                out << ",\"dem\":{\"width\":" << dem->width << ",\"height\":" << dem->height
-                    << ",\"cells_without_data\":" << dem->nodata_cells << ",\"crs\":" << (dem->crs_wkt.empty() ? "false" : "true") << "}";
-            }
-            if (distance) {
-                const double diagonal = distance->diagonal > 0 ? distance->diagonal : 1.0;
-                out << ",\"hausdorff\":{\"max\":" << distance->max() << ",\"max_fraction_of_diagonal\":" << distance->max() / diagonal
-                    << ",\"input_to_output\":{\"max\":" << distance->forward.max << ",\"mean\":" << distance->forward.mean
-                    << ",\"samples\":" << distance->forward.samples << "},\"output_to_input\":{\"max\":" << distance->backward.max
-                    << ",\"mean\":" << distance->backward.mean << ",\"samples\":" << distance->backward.samples
-                    << "},\"diagonal\":" << distance->diagonal << "}";
-            }
-            if (vertical) {
-                out << ",\"vertical_error\":{\"max\":" << vertical->max() << ",\"input_to_output\":{\"max\":"
-                    << vertical->forward.max << ",\"mean\":" << vertical->forward.mean << ",\"samples\":" << vertical->forward.samples
-                    << "},\"output_to_input\":{\"max\":" << vertical->backward.max << ",\"mean\":" << vertical->backward.mean
-                    << ",\"samples\":" << vertical->backward.samples << "},\"samples_outside\":" << vertical->outside << "}";
-            }
-            out << ",\"parallel\":{\"threads\":" << stats.threads << ",\"levels\":" << stats.levels << ",\"rounds\":" << stats.rounds
-                << "},\"predicates\":{\"filter_decided\":" << stats.predicates.filter_decided
-                << ",\"expansion_decided\":" << stats.predicates.expansion_decided
-                << ",\"gmp_fallbacks\":" << stats.predicates.gmp_fallbacks << "},\"seconds\":{\"read\":" << seconds_read
-                << ",\"simplify\":" << seconds_simplify << ",\"write\":" << seconds_write << ",\"hausdorff\":" << seconds_hausdorff
-                << ",\"total\":" << total << "},\"peak_memory_mib\":" << peak_memory_mib() << "}\n";
+            (output.to_stdout() ? context.err : context.out) << json_summary(stats, *engine, measures, time, options, input, unwritten);
         }
         return kOk;
-    } catch (const io::InputError& error) {
-        log->error("{}", error.what());
-    } catch (const io::OutputError& error) {
-        log->error("{}", error.what());
-    } catch (const std::bad_alloc&) {
-        log->error("out of memory");
-    }
-    return kUsageError;
+    });
 }
 
 }  // namespace toposimp::cli

@@ -14,7 +14,7 @@ namespace toposimp::cli {
 struct MeshCommandOptions {
     std::string input;
     std::string output;
-    std::string format;        // obj, ply, off (default: from the output's extension)
+    std::string format;        // a mesh format's name (io::mesh_formats()) or an OGR driver; default: the output's extension
     std::string keep;          // share of faces, 10% or 0.1
     double keep_faces = -1;
     double max_error = -1;
@@ -57,5 +57,9 @@ bool mesh_needs_gdal(const MeshCommandOptions& options);
 bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions& options);
 
 int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal);
+
+// `toposimp formats`: the mesh formats (io/mesh's table) with what each carries, as a table or
+// as JSON (the QGIS provider builds its file filters from it).
+void print_mesh_formats(std::ostream& out, bool json);
 
 }  // namespace toposimp::cli

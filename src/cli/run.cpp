@@ -3,10 +3,10 @@
 #include "cli/check_command.hpp"
 #include "cli/map_command.hpp"
 #include "cli/mesh_command.hpp"
-#include "io/ogr/dem.hpp"
 #include "io/common/errors.hpp"
-#include "io/ogr/gdal_support.hpp"
-#include "io/ogr/ogr_dataset.hpp"
+#include "io/mesh/mesh_files.hpp"
+#include "io/ogr/dem.hpp"
+#include "io/ogr/gdal_env.hpp"
 
 #include <CLI/CLI.hpp>
 #include <gmp.h>
@@ -17,7 +17,7 @@
 namespace toposimp::cli {
 namespace {
 
-constexpr const char* kVersion = "0.1.0";
+constexpr const char* kVersion = TOPOSIMP_VERSION;  // CMakeLists.txt's project version
 
 // GDAL's tools spell some options with one dash (-lco, -dsco, -nln); CLI11 wants two.
 std::vector<std::string> gdal_style_to_cli11(const std::vector<std::string>& args) {
@@ -48,10 +48,14 @@ int run(const std::vector<std::string>& args, Context& context) {
     CLI::App* mesh = add_mesh_command(app, mesh_options);
     CheckCommandOptions check_options;
     CLI::App* check = add_check_command(app, check_options);
+    bool formats_json = false;
+    CLI::App* formats = app.add_subcommand("formats", "List the mesh formats and what each carries");
+    formats->add_flag("--json", formats_json, "As JSON");
     auto chosen = [&]() -> CLI::App* {
         if (app.got_subcommand(map)) return map;
         if (app.got_subcommand(mesh)) return mesh;
         if (app.got_subcommand(check)) return check;
+        if (app.got_subcommand(formats)) return formats;
         return nullptr;
     };
 
@@ -78,14 +82,18 @@ int run(const std::vector<std::string>& args, Context& context) {
     if (app.got_subcommand(mesh)) {
         auto check_layer_output = [](const std::string& path, const std::string& driver) {
             try {
-                io::vector_driver_for(path, driver);
+                io::check_vector_output(path, driver);
             } catch (const io::OutputError& error) {
-                throw io::OutputError(std::string(error.what()) + "; a mesh is written as .obj, .ply, .off or .stl");
+                throw io::OutputError(std::string(error.what()) + "; a mesh is written as " + io::mesh_extensions_text(", ", " or "));
             }
         };
         return run_mesh(mesh_options, context, {&io::read_dem, &io::write_tin_layer, check_layer_output});
     }
     if (app.got_subcommand(check)) return run_check(check_options, context);
+    if (app.got_subcommand(formats)) {
+        print_mesh_formats(context.out, formats_json);
+        return kOk;
+    }
     context.err << app.help();
     return kUsageError;
 }

@@ -5,10 +5,10 @@
 #include "core/map/crossings.hpp"
 #include "core/map/point_grid.hpp"
 #include "io/common/errors.hpp"
-#include "io/ogr/gdal_support.hpp"
 #include "io/ogr/ogr_dataset.hpp"
+#include "validate/geos.hpp"
+#include "validate/layers.hpp"
 
-#include <geos_c.h>
 #include <gmpxx.h>
 
 #include <algorithm>
@@ -19,119 +19,43 @@
 #include <unordered_map>
 
 namespace toposimp::validate {
+namespace {
 
-const std::vector<std::pair<std::string, std::string>>& kinds() {
-    static const std::vector<std::pair<std::string, std::string>> list{
-        {"feature_lost", "a feature of the original is missing, or its geometry became empty"},
-        {"parts_changed", "a feature has a different number of lines, polygons or rings"},
-        {"not_subset", "a line or ring is not an order-preserving subset of the original's vertices"},
-        {"ring_collapsed", "a ring has fewer than 3 distinct corners or no area"},
-        {"ring_flipped", "a ring turns the other way than in the original"},
-        {"invalid_polygon", "a polygon valid in the original is invalid (GEOS IsValidOp)"},
-        {"new_crossing", "two lines (or rings) cross more often than in the original"},
-        {"lost_crossing", "two lines cross less often than in the original"},
-        {"new_touching", "two lines touch or overlap where they did not (a T-contact or partial overlap)"},
-        {"lost_touching", "two lines no longer touch as in the original"},
-        {"new_coincidence", "two lines now share a segment; they shared none"},
-        {"border_no_longer_shared", "two features shared a border segment and share none now (gap or overlap)"},
-        {"point_changed_polygon", "a control point is in a different polygon (or on a boundary) than before"},
-        {"point_changed_side", "a control point was swept over by a simplified line: it changed side"},
-    };
-    return list;
-}
+constexpr KindInfo kKinds[] = {
+    {ViolationKind::feature_lost, "feature_lost", "a feature of the original is missing, or its geometry became empty"},
+    {ViolationKind::parts_changed, "parts_changed", "a feature has a different number of lines, polygons or rings"},
+    {ViolationKind::not_subset, "not_subset", "a line or ring is not an order-preserving subset of the original's vertices"},
+    {ViolationKind::ring_collapsed, "ring_collapsed", "a ring has fewer than 3 distinct corners or no area"},
+    {ViolationKind::ring_flipped, "ring_flipped", "a ring turns the other way than in the original"},
+    {ViolationKind::invalid_polygon, "invalid_polygon", "a polygon valid in the original is invalid (GEOS IsValidOp)"},
+    {ViolationKind::new_crossing, "new_crossing", "two lines (or rings) cross more often than in the original"},
+    {ViolationKind::lost_crossing, "lost_crossing", "two lines cross less often than in the original"},
+    {ViolationKind::new_touching, "new_touching", "two lines touch or overlap where they did not (a T-contact or partial overlap)"},
+    {ViolationKind::lost_touching, "lost_touching", "two lines no longer touch as in the original"},
+    {ViolationKind::new_coincidence, "new_coincidence", "two lines now share a segment; they shared none"},
+    {ViolationKind::border_no_longer_shared, "border_no_longer_shared",
+     "two features shared a border segment and share none now (gap or overlap)"},
+    {ViolationKind::point_changed_polygon, "point_changed_polygon",
+     "a control point is in a different polygon (or on a boundary) than before"},
+    {ViolationKind::point_changed_side, "point_changed_side", "a control point was swept over by a simplified line: it changed side"},
+};
+
+}  // namespace
+
+std::span<const KindInfo> kinds() { return kKinds; }
+
+const char* name(ViolationKind kind) { return kKinds[static_cast<std::size_t>(kind)].name; }
 
 std::map<std::string, std::uint64_t> CheckReport::counts() const {
     std::map<std::string, std::uint64_t> result;
-    for (const auto& [kind, meaning] : kinds()) result[kind] = 0;
-    for (const Violation& v : violations) ++result[v.kind];
+    for (const KindInfo& kind : kinds()) result[kind.name] = 0;
+    for (const Violation& v : violations) ++result[name(v.kind)];
     return result;
 }
 
 namespace {
 
 using io::InputError;
-
-struct Feature {
-    enum class Type { none, lines, polygons, points };
-    std::string key;
-    Type type = Type::none;
-    std::vector<std::vector<Point>> parts;  // lines: line parts; polygons: rings, polygon by polygon
-    std::vector<std::uint32_t> rings_per_polygon;
-    std::unique_ptr<OGRGeometry> geometry;
-};
-
-struct Layer {
-    std::string name;
-    std::vector<Feature> features;
-};
-
-std::vector<Point> points_of(const OGRSimpleCurve& curve) {
-    std::vector<Point> points(curve.getNumPoints());
-    for (int i = 0; i < curve.getNumPoints(); ++i) points[i] = {curve.getX(i), curve.getY(i)};
-    return points;
-}
-
-void add_geometry(Feature& feature, const OGRGeometry& geometry) {
-    switch (wkbFlatten(geometry.getGeometryType())) {
-        case wkbLineString:
-        case wkbLinearRing:
-            feature.type = Feature::Type::lines;
-            feature.parts.push_back(points_of(*geometry.toSimpleCurve()));
-            break;
-        case wkbPolygon: {
-            feature.type = Feature::Type::polygons;
-            std::uint32_t rings = 0;
-            for (const OGRLinearRing* ring : *geometry.toPolygon()) {
-                if (ring->IsEmpty()) continue;
-                feature.parts.push_back(points_of(*ring));
-                ++rings;
-            }
-            feature.rings_per_polygon.push_back(rings);
-            break;
-        }
-        case wkbPoint:
-        case wkbMultiPoint: feature.type = Feature::Type::points; break;
-        case wkbMultiLineString:
-        case wkbMultiPolygon:
-        case wkbGeometryCollection:
-            for (const OGRGeometry* member : *geometry.toGeometryCollection()) add_geometry(feature, *member);
-            break;
-        default: break;
-    }
-}
-
-std::vector<Layer> read_layers(const std::string& path, const std::vector<std::string>& names, const std::string& key) {
-    io::DatasetPtr dataset = io::open_vector(path);
-    std::vector<OGRLayer*> sources;
-    if (names.empty()) {
-        for (int i = 0; i < dataset->GetLayerCount(); ++i) sources.push_back(dataset->GetLayer(i));
-    } else {
-        for (const std::string& name : names) sources.push_back(&io::pick_layer(*dataset, path, name));
-    }
-    std::vector<Layer> layers;
-    io::QuietGdal quiet;
-    for (OGRLayer* source : sources) {
-        Layer layer;
-        layer.name = source->GetName();
-        const int key_field = key.empty() ? -1 : source->GetLayerDefn()->GetFieldIndex(key.c_str());
-        if (!key.empty() && key_field < 0) {
-            throw InputError("'" + path + "', layer '" + layer.name + "' has no field '" + key + "' (--key)");
-        }
-        std::size_t index = 0;
-        for (auto& ogr_feature : *source) {
-            Feature feature;
-            feature.key = key_field >= 0 ? ogr_feature->GetFieldAsString(key_field) : std::to_string(index);
-            if (const OGRGeometry* geometry = ogr_feature->GetGeometryRef()) {
-                add_geometry(feature, *geometry);
-                feature.geometry.reset(geometry->clone());
-            }
-            layer.features.push_back(std::move(feature));
-            ++index;
-        }
-        layers.push_back(std::move(layer));
-    }
-    return layers;
-}
 
 // Is `simplified` an order-preserving subset of `original` with the same ends (lines), or of
 // some rotation of the ring, forwards or backwards (rings)? Fills the original index of each
@@ -183,66 +107,6 @@ std::size_t distinct_locations(const std::vector<Point>& ring) {
     return static_cast<std::size_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
 }
 
-// GEOS, once per check.
-class Geos {
-public:
-    Geos() : handle_(GEOS_init_r()) {}
-    ~Geos() { GEOS_finish_r(handle_); }
-    Geos(const Geos&) = delete;
-    Geos& operator=(const Geos&) = delete;
-    GEOSContextHandle_t handle() const { return handle_; }
-
-    // IsValidOp on a polygon geometry: empty if valid, else the reason; `where` gets the location.
-    std::optional<std::string> invalid_reason(const OGRGeometry& geometry, Point& where) const {
-        GEOSGeometry* g = geometry.exportToGEOS(handle_);
-        if (g == nullptr) return std::string("GEOS cannot read the geometry");
-        char* reason = nullptr;
-        GEOSGeometry* location = nullptr;
-        const char valid = GEOSisValidDetail_r(handle_, g, 0, &reason, &location);
-        std::optional<std::string> result;
-        if (valid == 0) {
-            result = reason ? reason : "invalid";
-            if (location) {
-                GEOSGeomGetX_r(handle_, location, &where.x);
-                GEOSGeomGetY_r(handle_, location, &where.y);
-            }
-        }
-        if (reason) GEOSFree_r(handle_, reason);
-        if (location) GEOSGeom_destroy_r(handle_, location);
-        GEOSGeom_destroy_r(handle_, g);
-        return result;
-    }
-
-    // Where segments pq and rs meet (a point of their intersection).
-    Point meeting_point(Point p, Point q, Point r, Point s) const {
-        auto segment = [&](Point a, Point b) {
-            GEOSCoordSequence* sequence = GEOSCoordSeq_create_r(handle_, 2, 2);
-            GEOSCoordSeq_setXY_r(handle_, sequence, 0, a.x, a.y);
-            GEOSCoordSeq_setXY_r(handle_, sequence, 1, b.x, b.y);
-            return GEOSGeom_createLineString_r(handle_, sequence);
-        };
-        GEOSGeometry* a = segment(p, q);
-        GEOSGeometry* b = segment(r, s);
-        Point where{(p.x + q.x) / 2, (p.y + q.y) / 2};
-        if (GEOSGeometry* meet = GEOSIntersection_r(handle_, a, b)) {
-            if (!GEOSisEmpty_r(handle_, meet)) {
-                if (GEOSGeometry* centre = GEOSGetCentroid_r(handle_, meet)) {
-                    GEOSGeomGetX_r(handle_, centre, &where.x);
-                    GEOSGeomGetY_r(handle_, centre, &where.y);
-                    GEOSGeom_destroy_r(handle_, centre);
-                }
-            }
-            GEOSGeom_destroy_r(handle_, meet);
-        }
-        GEOSGeom_destroy_r(handle_, a);
-        GEOSGeom_destroy_r(handle_, b);
-        return where;
-    }
-
-private:
-    GEOSContextHandle_t handle_;
-};
-
 struct Matched {
     std::size_t layer;
     const Feature* original;
@@ -288,144 +152,165 @@ std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linewor
     return pairs;
 }
 
-}  // namespace
+// One comparison, phase by phase: match the features, then per feature (lost, parts, subset,
+// rings, validity), then the contacts between every pair of features, then the control points,
+// and last the report's order.
+class Checker {
+public:
+    explicit Checker(const CheckOptions& options) : options_(options) {}
 
-CheckReport check(const CheckOptions& options) {
-    const std::vector<Layer> original = read_layers(options.original, options.layers, options.key);
-    std::vector<Layer> simplified;
-    if (options.simplified_layer.empty()) {
-        simplified = read_layers(options.simplified, {}, options.key);
-    } else {
-        if (original.size() != 1) {
-            throw InputError("--simplified-layer compares one layer, and the original has several: name one with -l");
+    CheckReport run() {
+        match_features();
+        check_features();
+        check_contacts();
+        if (!options_.points.empty()) {
+            const std::vector<Point> points = io::read_control_points(options_.points);
+            report_.control_points = points.size();
+            check_points_in_polygons(points);
+            check_points_beside_lines(points);
         }
-        simplified = read_layers(options.simplified, {options.simplified_layer}, options.key);
-        simplified.front().name = original.front().name;  // matched whatever it is called
+        sort_report();
+        return std::move(report_);
     }
-    CheckReport report;
-    Geos geos;
-    exact::PredicateStats stats;
-    auto violation = [&](std::string kind, const std::string& layer, const std::string& feature, Point where,
-                         std::string detail, std::string decided_by = "exact", std::string other = {}) {
-        report.violations.push_back({std::move(kind), layer, feature, std::move(other), where.x, where.y, std::move(detail),
-                                     std::move(decided_by)});
-    };
 
-    // Match layers by name (or the only one to the only one), features by key or order.
-    std::vector<Matched> matched;
-    for (std::size_t l = 0; l < original.size(); ++l) {
-        const Layer* target = nullptr;
-        for (const Layer& candidate : simplified) {
-            if (candidate.name == original[l].name) target = &candidate;
-        }
-        if (target == nullptr && original.size() == 1 && simplified.size() == 1) target = &simplified.front();
-        if (target == nullptr) {
-            throw InputError("'" + options.simplified + "' has no layer '" + original[l].name + "' (name the layers with -l)");
-        }
-        std::unordered_map<std::string, const Feature*> by_key;
-        for (const Feature& feature : target->features) by_key.emplace(feature.key, &feature);
-        for (const Feature& feature : original[l].features) {
-            const auto found = by_key.find(feature.key);
-            matched.push_back({l, &feature, found == by_key.end() ? nullptr : found->second});
-        }
+private:
+    void violation(ViolationKind kind, const std::string& layer, const std::string& feature, Point where, std::string detail,
+                   std::string decided_by = "exact", std::string other = {}) {
+        report_.violations.push_back({kind, layer, feature, std::move(other), where.x, where.y, std::move(detail), std::move(decided_by)});
     }
-    report.features = matched.size();
+    const std::string& layer_of(std::size_t m) const { return original_[matched_[m].layer].name; }
 
-    // Per feature: lost, parts, subset, rings, validity.
-    std::vector<std::vector<std::vector<std::size_t>>> line_matches(matched.size());
-    for (std::size_t m = 0; m < matched.size(); ++m) {
-        const Feature& before = *matched[m].original;
-        const Feature* after = matched[m].simplified;
-        const std::string& layer = original[matched[m].layer].name;
-        const Point somewhere = before.parts.empty() || before.parts[0].empty() ? Point{0, 0} : before.parts[0][0];
-        if (before.parts.empty()) continue;  // nothing to lose
-        if (after == nullptr || after->parts.empty()) {
-            violation("feature_lost", layer, before.key, somewhere, after ? "geometry is empty" : "no such feature");
-            continue;
+    // Layers by name (or the only one to the only one), features by key or order.
+    void match_features() {
+        original_ = read_layers(options_.original, options_.layers, options_.key);
+        if (options_.simplified_layer.empty()) {
+            simplified_ = read_layers(options_.simplified, {}, options_.key);
+        } else {
+            if (original_.size() != 1) {
+                throw InputError("--simplified-layer compares one layer, and the original has several: name one with -l");
+            }
+            simplified_ = read_layers(options_.simplified, {options_.simplified_layer}, options_.key);
+            simplified_.front().name = original_.front().name;  // matched whatever it is called
         }
-        if (after->parts.size() != before.parts.size() || after->rings_per_polygon != before.rings_per_polygon) {
-            violation("parts_changed", layer, before.key, somewhere,
-                      std::to_string(before.parts.size()) + " parts became " + std::to_string(after->parts.size()));
-            continue;
-        }
-        auto& matches = line_matches[m];
-        matches.resize(before.parts.size());
-        for (std::size_t k = 0; k < before.parts.size(); ++k) {
-            const auto& a = before.parts[k];
-            const auto& b = after->parts[k];
-            if (before.type == Feature::Type::polygons) {
-                bool reversed = false;
-                if (!match_ring(a, b, reversed)) {
-                    violation("not_subset", layer, before.key, b.empty() ? somewhere : b[0], "ring " + std::to_string(k));
-                    continue;
-                }
-                if (b.size() < 4 || distinct_locations(b) < 3 || area_sign(b) == 0) {
-                    violation("ring_collapsed", layer, before.key, b[0], "ring " + std::to_string(k) + " has " +
-                                                                             std::to_string(b.size()) + " vertices");
-                } else if (area_sign(b) != area_sign(a) * (reversed ? -1 : 1)) {
-                    violation("ring_flipped", layer, before.key, b[0], "ring " + std::to_string(k));
-                }
-            } else if (!match_line(a, b, matches[k])) {
-                violation("not_subset", layer, before.key, b.empty() ? somewhere : b[0], "line " + std::to_string(k));
-                matches[k].clear();
+        for (std::size_t l = 0; l < original_.size(); ++l) {
+            const Layer* target = nullptr;
+            for (const Layer& candidate : simplified_) {
+                if (candidate.name == original_[l].name) target = &candidate;
+            }
+            if (target == nullptr && original_.size() == 1 && simplified_.size() == 1) target = &simplified_.front();
+            if (target == nullptr) {
+                throw InputError("'" + options_.simplified + "' has no layer '" + original_[l].name + "' (name the layers with -l)");
+            }
+            std::unordered_map<std::string, const Feature*> by_key;
+            for (const Feature& feature : target->features) by_key.emplace(feature.key, &feature);
+            for (const Feature& feature : original_[l].features) {
+                const auto found = by_key.find(feature.key);
+                matched_.push_back({l, &feature, found == by_key.end() ? nullptr : found->second});
             }
         }
-        if (before.type == Feature::Type::polygons && after->geometry) {
-            Point where{};
-            if (geos.invalid_reason(*before.geometry, where)) {
-                ++report.invalid_in_original;
-            } else if (const auto reason = geos.invalid_reason(*after->geometry, where)) {
-                violation("invalid_polygon", layer, before.key, where, *reason, "GEOS");
-            }
-        }
+        report_.features = matched_.size();
     }
 
-    // Contacts between every pair of features, before and after.
-    Linework before_lines, after_lines;
-    for (std::uint32_t m = 0; m < matched.size(); ++m) {
-        before_lines.add(*matched[m].original, m);
-        if (matched[m].simplified) after_lines.add(*matched[m].simplified, m);
-    }
-    const auto before_pairs = count_contacts(before_lines, stats);
-    const auto after_pairs = count_contacts(after_lines, stats);
-    auto location = [&](const Linework& side, const map::SegmentContact& c) {
-        const auto& v = side.map.vertices;
-        return geos.meeting_point(v[c.s], v[c.s + 1], v[c.t], v[c.t + 1]);
-    };
-    auto name_of = [&](std::uint32_t m) { return matched[m].original->key; };
-    auto layer_of = [&](std::uint32_t m) { return original[matched[m].layer].name; };
-    auto compare = [&](const auto& pairs, const auto& others, bool after_side) {
-        for (const auto& [pair, contacts] : pairs) {
-            const auto other = others.find(pair);
-            for (std::size_t kind = 0; kind < 3; ++kind) {
-                const std::uint32_t here = contacts.count[kind];
-                const std::uint32_t there = other == others.end() ? 0 : other->second.count[kind];
-                // Where: computed only for a pair that is reported.
-                const auto where = [&] { return location(after_side ? after_lines : before_lines, contacts.first[kind]); };
-                const std::string counts = std::to_string(after_side ? there : here) + " before, " +
-                                           std::to_string(after_side ? here : there) + " after";
-                if (kind == static_cast<std::size_t>(map::ContactKind::identical)) {
-                    // Shared segments: only appearing (coincidence) or vanishing (border split) matters.
-                    if (here > 0 && there == 0) {
-                        violation(after_side ? "new_coincidence" : "border_no_longer_shared", layer_of(pair.first),
-                                  name_of(pair.first), where(), counts + " shared segments", "exact", name_of(pair.second));
+    // Per feature: lost, parts, subset, rings, validity. Keeps where each simplified line's
+    // vertices are in the original (line_matches_), for the control points.
+    void check_features() {
+        line_matches_.resize(matched_.size());
+        for (std::size_t m = 0; m < matched_.size(); ++m) {
+            const Feature& before = *matched_[m].original;
+            const Feature* after = matched_[m].simplified;
+            const std::string& layer = layer_of(m);
+            const Point somewhere = before.parts.empty() || before.parts[0].empty() ? Point{0, 0} : before.parts[0][0];
+            if (before.parts.empty()) continue;  // nothing to lose
+            if (after == nullptr || after->parts.empty()) {
+                violation(ViolationKind::feature_lost, layer, before.key, somewhere, after ? "geometry is empty" : "no such feature");
+                continue;
+            }
+            if (after->parts.size() != before.parts.size() || after->rings_per_polygon != before.rings_per_polygon) {
+                violation(ViolationKind::parts_changed, layer, before.key, somewhere,
+                          std::to_string(before.parts.size()) + " parts became " + std::to_string(after->parts.size()));
+                continue;
+            }
+            auto& matches = line_matches_[m];
+            matches.resize(before.parts.size());
+            for (std::size_t k = 0; k < before.parts.size(); ++k) {
+                const auto& a = before.parts[k];
+                const auto& b = after->parts[k];
+                if (before.type == Feature::Type::polygons) {
+                    bool reversed = false;
+                    if (!match_ring(a, b, reversed)) {
+                        violation(ViolationKind::not_subset, layer, before.key, b.empty() ? somewhere : b[0], "ring " + std::to_string(k));
+                        continue;
                     }
-                } else if (here > there) {
-                    const bool crossing = kind == static_cast<std::size_t>(map::ContactKind::crossing);
-                    const std::string what = after_side ? (crossing ? "new_crossing" : "new_touching")
-                                                        : (crossing ? "lost_crossing" : "lost_touching");
-                    violation(what, layer_of(pair.first), name_of(pair.first), where(), counts, "exact", name_of(pair.second));
+                    if (b.size() < 4 || distinct_locations(b) < 3 || area_sign(b) == 0) {
+                        violation(ViolationKind::ring_collapsed, layer, before.key, b[0],
+                                  "ring " + std::to_string(k) + " has " + std::to_string(b.size()) + " vertices");
+                    } else if (area_sign(b) != area_sign(a) * (reversed ? -1 : 1)) {
+                        violation(ViolationKind::ring_flipped, layer, before.key, b[0], "ring " + std::to_string(k));
+                    }
+                } else if (!match_line(a, b, matches[k])) {
+                    violation(ViolationKind::not_subset, layer, before.key, b.empty() ? somewhere : b[0], "line " + std::to_string(k));
+                    matches[k].clear();
+                }
+            }
+            if (before.type == Feature::Type::polygons && after->geometry) {
+                Point where{};
+                if (geos_.invalid_reason(*before.geometry, where)) {
+                    ++report_.invalid_in_original;
+                } else if (const auto reason = geos_.invalid_reason(*after->geometry, where)) {
+                    violation(ViolationKind::invalid_polygon, layer, before.key, where, *reason, "GEOS");
                 }
             }
         }
-    };
-    compare(after_pairs, before_pairs, true);
-    compare(before_pairs, after_pairs, false);
+    }
 
-    // Control points: the polygon they are in, and which side of every simplified line.
-    if (!options.points.empty()) {
-        std::vector<Point> points = io::read_control_points(options.points);
-        report.control_points = points.size();
+    // Contacts between every pair of features, before and after: crossings, touchings and
+    // shared segments that appeared or vanished.
+    void check_contacts() {
+        Linework before_lines, after_lines;
+        for (std::uint32_t m = 0; m < matched_.size(); ++m) {
+            before_lines.add(*matched_[m].original, m);
+            if (matched_[m].simplified) after_lines.add(*matched_[m].simplified, m);
+        }
+        const auto before_pairs = count_contacts(before_lines, stats_);
+        const auto after_pairs = count_contacts(after_lines, stats_);
+        auto location = [&](const Linework& side, const map::SegmentContact& c) {
+            const auto& v = side.map.vertices;
+            return geos_.meeting_point(v[c.s], v[c.s + 1], v[c.t], v[c.t + 1]);
+        };
+        auto name_of = [&](std::uint32_t m) { return matched_[m].original->key; };
+        auto compare = [&](const auto& pairs, const auto& others, bool after_side) {
+            for (const auto& [pair, contacts] : pairs) {
+                const auto other = others.find(pair);
+                for (std::size_t kind = 0; kind < 3; ++kind) {
+                    const std::uint32_t here = contacts.count[kind];
+                    const std::uint32_t there = other == others.end() ? 0 : other->second.count[kind];
+                    // Where: computed only for a pair that is reported.
+                    const auto where = [&] { return location(after_side ? after_lines : before_lines, contacts.first[kind]); };
+                    const std::string counts = std::to_string(after_side ? there : here) + " before, " +
+                                               std::to_string(after_side ? here : there) + " after";
+                    if (kind == static_cast<std::size_t>(map::ContactKind::identical)) {
+                        // Shared segments: only appearing (coincidence) or vanishing (border split) matters.
+                        if (here > 0 && there == 0) {
+                            violation(after_side ? ViolationKind::new_coincidence : ViolationKind::border_no_longer_shared,
+                                      layer_of(pair.first), name_of(pair.first), where(), counts + " shared segments", "exact",
+                                      name_of(pair.second));
+                        }
+                    } else if (here > there) {
+                        const bool crossing = kind == static_cast<std::size_t>(map::ContactKind::crossing);
+                        const ViolationKind what = after_side ? (crossing ? ViolationKind::new_crossing : ViolationKind::new_touching)
+                                                              : (crossing ? ViolationKind::lost_crossing : ViolationKind::lost_touching);
+                        violation(what, layer_of(pair.first), name_of(pair.first), where(), counts, "exact", name_of(pair.second));
+                    }
+                }
+            }
+        };
+        compare(after_pairs, before_pairs, true);
+        compare(before_pairs, after_pairs, false);
+    }
+
+    // Control points and polygons: each point in the same polygon (inside, on its boundary or
+    // outside) before and after.
+    void check_points_in_polygons(const std::vector<Point>& points) {
         auto locate = [&](const Feature& feature, Point p) {
             // 2 inside, 1 on the boundary, 0 outside (polygon = exterior minus holes; any polygon).
             int best = 0;
@@ -433,7 +318,7 @@ CheckReport check(const CheckOptions& options) {
             for (const std::uint32_t rings : feature.rings_per_polygon) {
                 int here = 0;
                 for (std::uint32_t r = 0; r < rings; ++r, ++ring) {
-                    const auto at = exact::locate_in_ring(feature.parts[ring], p, stats);
+                    const auto at = exact::locate_in_ring(feature.parts[ring], p, stats_);
                     if (r == 0) here = at == exact::RingLocation::inside ? 2 : at == exact::RingLocation::boundary ? 1 : 0;
                     else if (here == 2 && at == exact::RingLocation::boundary) here = 1;
                     else if (here == 2 && at == exact::RingLocation::inside) here = 0;
@@ -443,9 +328,9 @@ CheckReport check(const CheckOptions& options) {
             return best;
         };
         // Bounding boxes of polygon features, for a quick reject before the exact test.
-        std::vector<Box> boxes(matched.size(), Box{INFINITY, INFINITY, -INFINITY, -INFINITY});
-        for (std::size_t m = 0; m < matched.size(); ++m) {
-            for (const Feature* f : {matched[m].original, matched[m].simplified}) {
+        std::vector<Box> boxes(matched_.size(), Box{INFINITY, INFINITY, -INFINITY, -INFINITY});
+        for (std::size_t m = 0; m < matched_.size(); ++m) {
+            for (const Feature* f : {matched_[m].original, matched_[m].simplified}) {
                 if (f == nullptr || f->type != Feature::Type::polygons) continue;
                 for (const auto& part : f->parts) {
                     for (const Point q : part) {
@@ -458,8 +343,8 @@ CheckReport check(const CheckOptions& options) {
         // Candidate polygons per point from a uniform grid over their boxes.
         std::vector<std::size_t> polygons;
         Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};
-        for (std::size_t m = 0; m < matched.size(); ++m) {
-            if (matched[m].original->type != Feature::Type::polygons || !(boxes[m].min_x <= boxes[m].max_x)) continue;
+        for (std::size_t m = 0; m < matched_.size(); ++m) {
+            if (matched_[m].original->type != Feature::Type::polygons || !(boxes[m].min_x <= boxes[m].max_x)) continue;
             polygons.push_back(m);
             extent = {std::min(extent.min_x, boxes[m].min_x), std::min(extent.min_y, boxes[m].min_y),
                       std::max(extent.max_x, boxes[m].max_x), std::max(extent.max_y, boxes[m].max_y)};
@@ -482,22 +367,26 @@ CheckReport check(const CheckOptions& options) {
             if (!box_contains(extent, p)) continue;
             for (const std::size_t m : cells[cell(p.y, extent.min_y, extent.max_y) * side + cell(p.x, extent.min_x, extent.max_x)]) {
                 if (!box_contains(boxes[m], p)) continue;
-                const int before = locate(*matched[m].original, p);
-                const int after = matched[m].simplified ? locate(*matched[m].simplified, p) : 0;
+                const int before = locate(*matched_[m].original, p);
+                const int after = matched_[m].simplified ? locate(*matched_[m].simplified, p) : 0;
                 if (before != after) {
                     static const char* names[] = {"outside", "on the boundary", "inside"};
-                    violation("point_changed_polygon", original[matched[m].layer].name, matched[m].original->key, p,
+                    violation(ViolationKind::point_changed_polygon, layer_of(m), matched_[m].original->key, p,
                               std::string("was ") + names[before] + ", now " + names[after]);
                 }
             }
         }
+    }
+
+    // Control points and lines: no point in the detour a removed stretch of a line sweeps.
+    void check_points_beside_lines(const std::vector<Point>& points) {
         // Lines: a removed stretch a…b sweeps the detour a…b + segment b→a; no point may be in it.
         const map::PointGrid grid(points);
-        for (std::size_t m = 0; m < matched.size(); ++m) {
-            const Feature& before = *matched[m].original;
+        for (std::size_t m = 0; m < matched_.size(); ++m) {
+            const Feature& before = *matched_[m].original;
             if (before.type != Feature::Type::lines) continue;
-            for (std::size_t k = 0; k < line_matches[m].size(); ++k) {
-                const auto& at = line_matches[m][k];
+            for (std::size_t k = 0; k < line_matches_[m].size(); ++k) {
+                const auto& at = line_matches_[m][k];
                 for (std::size_t i = 0; i + 1 < at.size(); ++i) {
                     if (at[i + 1] <= at[i] + 1) continue;
                     const std::span<const Point> detour(before.parts[k].data() + at[i], at[i + 1] - at[i] + 1);
@@ -505,8 +394,8 @@ CheckReport check(const CheckOptions& options) {
                     for (const Point q : detour) box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
                     grid.any_in_cells(box, [&](std::uint32_t, Point q) {
                         if (!box_contains(box, q) || same_location(q, detour.front()) || same_location(q, detour.back())) return false;
-                        if (exact::locate_in_ring(detour, q, stats) != exact::RingLocation::outside) {
-                            violation("point_changed_side", original[matched[m].layer].name, before.key, q,
+                        if (exact::locate_in_ring(detour, q, stats_) != exact::RingLocation::outside) {
+                            violation(ViolationKind::point_changed_side, layer_of(m), before.key, q,
                                       "swept by the segment replacing vertices " + std::to_string(at[i]) + "…" +
                                           std::to_string(at[i + 1]) + " of line " + std::to_string(k));
                         }
@@ -519,13 +408,24 @@ CheckReport check(const CheckOptions& options) {
 
     // Report order: by kind as listed, then layer, feature, other feature and place — a total
     // order, so the report does not depend on hash-map iteration.
-    std::map<std::string, std::size_t> rank;
-    for (std::size_t i = 0; i < kinds().size(); ++i) rank[kinds()[i].first] = i;
-    std::sort(report.violations.begin(), report.violations.end(), [&](const Violation& a, const Violation& b) {
-        return std::tie(rank[a.kind], a.layer, a.feature, a.other, a.x, a.y, a.detail) <
-               std::tie(rank[b.kind], b.layer, b.feature, b.other, b.x, b.y, b.detail);
-    });
-    return report;
-}
+    void sort_report() {
+        std::sort(report_.violations.begin(), report_.violations.end(), [](const Violation& a, const Violation& b) {
+            return std::tie(a.kind, a.layer, a.feature, a.other, a.x, a.y, a.detail) <
+                   std::tie(b.kind, b.layer, b.feature, b.other, b.x, b.y, b.detail);
+        });
+    }
+
+    const CheckOptions& options_;
+    std::vector<Layer> original_, simplified_;
+    std::vector<Matched> matched_;
+    std::vector<std::vector<std::vector<std::size_t>>> line_matches_;  // per feature, per line: original index of each vertex
+    CheckReport report_;
+    Geos geos_;
+    exact::PredicateStats stats_;
+};
+
+}  // namespace
+
+CheckReport check(const CheckOptions& options) { return Checker(options).run(); }
 
 }  // namespace toposimp::validate

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 #include <map>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -24,8 +25,36 @@ struct CheckOptions {
                                      // original layer, whatever its name; empty: match by name
 };
 
+// What a simplification can break, in report order. Their names and meanings: kinds().
+enum class ViolationKind {
+    feature_lost,
+    parts_changed,
+    not_subset,
+    ring_collapsed,
+    ring_flipped,
+    invalid_polygon,
+    new_crossing,
+    lost_crossing,
+    new_touching,
+    lost_touching,
+    new_coincidence,
+    border_no_longer_shared,
+    point_changed_polygon,
+    point_changed_side,
+};
+
+struct KindInfo {
+    ViolationKind kind;
+    const char* name;     // as reports write it: "new_crossing"
+    const char* meaning;  // for people
+};
+
+// Every kind, in report order, with its name and meaning: the one table of them.
+std::span<const KindInfo> kinds();
+const char* name(ViolationKind kind);
+
 struct Violation {
-    std::string kind;        // see kinds() for the list
+    ViolationKind kind;
     std::string layer;
     std::string feature;     // key value, or feature index
     std::string other;       // the other feature (contacts), or empty
@@ -41,11 +70,10 @@ struct CheckReport {
     std::uint64_t invalid_in_original = 0;  // invalid polygons already invalid before: not counted
 
     bool clean() const { return violations.empty(); }
+    // How many of each kind (every kind, none left out), by name in alphabetical order, as the
+    // reports list them.
     std::map<std::string, std::uint64_t> counts() const;
 };
-
-// Every kind of violation, in report order, with what it means.
-const std::vector<std::pair<std::string, std::string>>& kinds();
 
 // Throws io::InputError for unreadable or mismatched input.
 CheckReport check(const CheckOptions& options);

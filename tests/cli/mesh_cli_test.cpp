@@ -81,6 +81,30 @@ TEST(MeshCli, MeshToStdoutKeepsTheSummaryOnStderr) {
     EXPECT_NE(r.err.find("{\"command\":\"mesh\""), std::string::npos) << r.err;
 }
 
+// `toposimp formats` lists io/mesh's table: every format the readers and writers know, and -f
+// and the extensions name the same ones.
+TEST(MeshCli, FormatsListsEveryMeshFormat) {
+    const CliResult json = run_cli({"formats", "--json"});
+    ASSERT_EQ(json.code, 0) << json.err;
+    const CliResult table = run_cli({"formats"});
+    ASSERT_EQ(table.code, 0) << table.err;
+    ASSERT_EQ(io::mesh_formats().size(), 4u);
+    for (const io::MeshFormatInfo& format : io::mesh_formats()) {
+        EXPECT_NE(json.out.find(std::string("{\"name\":\"") + format.name + "\",\"title\":\"" + format.title +
+                                "\",\"extension\":\"" + format.extension + "\""),
+                  std::string::npos)
+            << json.out;
+        EXPECT_NE(table.out.find(format.carries), std::string::npos) << table.out;
+        EXPECT_EQ(io::mesh_format_named(format.name), &format);
+        EXPECT_EQ(io::mesh_format_by_extension(std::string("x") + format.extension), &format);
+    }
+    EXPECT_EQ(io::mesh_format_named("PLY"), &io::info(io::MeshFormat::ply)) << "names in any case";
+    EXPECT_EQ(io::mesh_format_by_extension("model.STL"), &io::info(io::MeshFormat::stl)) << "extensions in any case";
+    EXPECT_EQ(io::mesh_format_named("gpkg"), nullptr);
+    EXPECT_EQ(io::mesh_format_by_extension("tin.gpkg"), nullptr);
+    EXPECT_EQ(io::mesh_extensions_text(", ", " or "), ".obj, .ply, .off or .stl");
+}
+
 TEST(MeshCli, EveryFormatRoundTripsExactly) {
     const auto dir = fresh_dir("mesh");
     const std::string first = (dir / "a.ply").string();

@@ -2,7 +2,7 @@
 // Garland–Heckbert plane policies, stopping at a face count. Reads and writes with toposimp's
 // mesh I/O; prints the time of the simplification call alone.
 #include "core/mesh/mesh.hpp"
-#include "io/mesh_io.hpp"
+#include "io/mesh/mesh_files.hpp"
 
 #include <CGAL/Simple_cartesian.h>
 #include <CGAL/Surface_mesh.h>

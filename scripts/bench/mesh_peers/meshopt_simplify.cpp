@@ -3,7 +3,7 @@
 // Reads and writes with toposimp's mesh I/O so every tool pays the same I/O; prints the time of
 // the simplification call alone.
 #include "core/mesh/mesh.hpp"
-#include "io/mesh_io.hpp"
+#include "io/mesh/mesh_files.hpp"
 
 #include <meshoptimizer.h>
 

@@ -125,6 +125,23 @@ class Runner(unittest.TestCase):
             runner.find_executable(None, environ={"PATH": "/nonexistent"})
         self.assertIn("PATH", str(raised.exception))
 
+    def test_mesh_formats_come_from_the_tool(self):
+        tool = fake_tool(self.tmp.name, r'''
+            assert sys.argv[1:] == ["formats", "--json"], sys.argv
+            print('{"mesh_formats":[{"name":"obj","title":"OBJ","extension":".obj","carries":"x","text_and_binary":false},'
+                  '{"name":"ply","title":"PLY","extension":".ply","carries":"y","text_and_binary":true}]}')
+        ''')
+        formats = runner.mesh_formats(tool)
+        self.assertEqual([f["name"] for f in formats], ["obj", "ply"])
+        inputs, outputs = runner.mesh_file_filters(formats)
+        self.assertEqual(inputs, "Meshes (*.obj *.ply *.OBJ *.PLY)")
+        self.assertEqual(outputs, "PLY (*.ply);;OBJ (*.obj)")  # PLY first: the default keeps every attribute
+
+    def test_mesh_formats_unknown_when_the_tool_cannot_say(self):
+        tool = fake_tool(self.tmp.name, 'print("toposimp: error: no", file=sys.stderr); sys.exit(2)')
+        self.assertEqual(runner.mesh_formats(tool), [])
+        self.assertEqual(runner.mesh_file_filters([]), ("All files (*)", "All files (*)"))
+
     def test_overall_percent(self):
         self.assertEqual(runner.overall_percent("reading a.gpkg", 100), 15)
         self.assertEqual(runner.overall_percent("simplifying", 50), 50)
@@ -149,6 +166,13 @@ class RealExecutable(unittest.TestCase):
                 runner.run(BINARY, ["mesh", dem, "-o", os.path.join(tmp, "tin.ply"), "--progress", "-j", "1"],
                            feedback, poll_seconds=0.01)
             self.assertEqual(sorted(os.listdir(tmp)), ["dem.asc"])
+
+    def test_mesh_formats_of_the_real_tool(self):
+        names = [f["name"] for f in runner.mesh_formats(BINARY)]
+        self.assertEqual(sorted(names), ["obj", "off", "ply", "stl"])
+        inputs, outputs = runner.mesh_file_filters(runner.mesh_formats(BINARY))
+        self.assertIn("*.stl", inputs)
+        self.assertTrue(outputs.startswith("PLY (*.ply)"))
 
     def test_error_message_names_the_file(self):
         with tempfile.TemporaryDirectory() as tmp:

@@ -273,9 +273,17 @@ class _MeshTargets:
                 "HAUSDORFF_DISTANCE": summary.get("hausdorff", {}).get("max")}
 
 
+def _mesh_formats():
+    """The mesh formats the toposimp that would run reads and writes ([] if it cannot be found)."""
+    try:
+        return runner.mesh_formats(runner.find_executable(settings.configured_executable()))
+    except runner.ExecutableNotFound:
+        return []
+
+
 class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
     NAME = "mesh"
-    DISPLAY_NAME = "Simplify a triangle mesh (OBJ, PLY, OFF, STL)"
+    DISPLAY_NAME = "Simplify a triangle mesh"
     GROUP = "Meshes and terrain"
     GROUP_ID = "meshes"
     HELP = ("Quadric-error edge collapse that never makes the surface touch or cross itself, turn a face "
@@ -285,9 +293,13 @@ class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
             "merged vertex blends its two ends'). STL corners are welded on reading; weld the vertices "
             "of other unwelded meshes (every face with corners of its own) with the option.")
 
+    def displayName(self):  # noqa: N802
+        titles = [f["title"] for f in _mesh_formats()]
+        return "{} ({})".format(self.DISPLAY_NAME, ", ".join(titles)) if titles else self.DISPLAY_NAME
+
     def initAlgorithm(self, config=None):
-        self.addParameter(QgsProcessingParameterFile(
-            "INPUT", "Mesh", fileFilter="Meshes (*.obj *.ply *.off *.stl *.OBJ *.PLY *.OFF *.STL)"))
+        inputs, outputs = runner.mesh_file_filters(_mesh_formats())
+        self.addParameter(QgsProcessingParameterFile("INPUT", "Mesh", fileFilter=inputs))
         self.add_target_parameters(10.0)
         self.addParameter(QgsProcessingParameterBoolean("TERRAIN", "Terrain (TIN over the x-y plane)", False))
         self.addParameter(QgsProcessingParameterBoolean("LOCK_BOUNDARY", "Keep the border vertices", False))
@@ -295,8 +307,7 @@ class MeshAlgorithm(_MeshTargets, ToposimpAlgorithm):
             "TRIANGULATE", "Split polygons into triangles (else they are an error)", False))
         self.addParameter(QgsProcessingParameterBoolean(
             "WELD", "Merge vertices at the same location first (unwelded meshes)", False))
-        self.addParameter(QgsProcessingParameterFileDestination(
-            "OUTPUT", "Simplified mesh", "PLY (*.ply);;OBJ (*.obj);;OFF (*.off);;STL (*.stl)"))
+        self.addParameter(QgsProcessingParameterFileDestination("OUTPUT", "Simplified mesh", outputs))
 
     def processAlgorithm(self, parameters, context, feedback):
         output = self.parameterAsFileOutput(parameters, "OUTPUT", context)

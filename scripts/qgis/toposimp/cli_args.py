@@ -26,7 +26,6 @@ MESH_TARGETS = [
     ("keep_faces", "Keep N faces"),
     ("max_error", "Error up to E (terrain: vertical distance, guaranteed; else quadric error)"),
 ]
-MESH_FORMATS = ("obj", "ply", "off")
 
 
 class ArgumentError(ValueError):

@@ -154,6 +154,37 @@ def parse_summary(stdout):
     return {}
 
 
+_mesh_formats = {}
+
+
+def mesh_formats(executable, timeout=30):
+    """The mesh formats `toposimp formats --json` lists ({name, title, extension, carries,
+    text_and_binary} each): the table in toposimp's source (io/mesh/mesh_files.cpp) is their only
+    list. Asked once per executable; [] if it cannot say."""
+    if executable not in _mesh_formats:
+        formats = []
+        try:
+            done = subprocess.run([executable, "formats", "--json"], capture_output=True, text=True, timeout=timeout,
+                                  stdin=subprocess.DEVNULL)
+            if done.returncode == 0:
+                formats = json.loads(done.stdout).get("mesh_formats", [])
+        except (OSError, ValueError, subprocess.SubprocessError):
+            formats = []
+        _mesh_formats[executable] = formats
+    return _mesh_formats[executable]
+
+
+def mesh_file_filters(formats):
+    """QGIS file filters for mesh files in `formats`: (input, output). Outputs list PLY first,
+    the default, as it keeps every attribute; with no formats known, any file."""
+    if not formats:
+        return "All files (*)", "All files (*)"
+    patterns = ["*" + f["extension"].lower() for f in formats] + ["*" + f["extension"].upper() for f in formats]
+    ordered = sorted(formats, key=lambda f: f["name"] != "ply")
+    outputs = ";;".join("{} (*{})".format(f["title"], f["extension"].lower()) for f in ordered)
+    return "Meshes ({})".format(" ".join(patterns)), outputs
+
+
 def _quote(arg):
     if arg and all(c.isalnum() or c in "-_./:=%+," for c in arg):
         return arg

@@ -3,6 +3,8 @@
 #include "core/exact/predicates.hpp"
 #include "core/mesh/plan_index.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -177,13 +179,13 @@ std::vector<V> samples_of(const Mesh& m, std::size_t face_samples) {
 // The largest and mean of measure(sample, d) over the samples that it measures (returns true
 // for), in parallel over fixed chunks, summed in order: the same for any thread count.
 template <class Measure>
-OneWayDistance over_samples(const std::vector<V>& samples, Measure measure) {
+OneWayDistance over_samples(const std::vector<V>& samples, int threads, Measure measure) {
     constexpr std::size_t kChunk = 4096;
     const std::size_t chunks = (samples.size() + kChunk - 1) / kChunk;
     std::vector<double> sums(chunks, 0.0), maxima(chunks, 0.0);
     std::vector<std::size_t> measured(chunks, 0);
     const auto count = static_cast<std::int64_t>(chunks);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
     for (std::int64_t c = 0; c < count; ++c) {
         const std::size_t first = static_cast<std::size_t>(c) * kChunk, last = std::min(samples.size(), first + kChunk);
         double sum = 0, most = 0;
@@ -210,9 +212,9 @@ OneWayDistance over_samples(const std::vector<V>& samples, Measure measure) {
     return result;
 }
 
-OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_samples) {
+OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_samples, int threads) {
     const FaceGrid grid(to);
-    return over_samples(samples_of(from, face_samples), [&grid](V p, double& d) {
+    return over_samples(samples_of(from, face_samples), threads, [&grid](V p, double& d) {
         d = grid.nearest(p);
         return true;
     });
@@ -244,10 +246,10 @@ bool height_at(const Mesh& mesh, const PlanIndex& index, double x, double y, dou
     return false;
 }
 
-OneWayDistance one_way_vertical(const Mesh& from, const Mesh& to, std::size_t face_samples, std::size_t& outside) {
+OneWayDistance one_way_vertical(const Mesh& from, const Mesh& to, std::size_t face_samples, std::size_t& outside, int threads) {
     const PlanIndex index(to);
     const std::vector<V> samples = samples_of(from, face_samples);
-    const OneWayDistance result = over_samples(samples, [&](V p, double& d) {
+    const OneWayDistance result = over_samples(samples, threads, [&](V p, double& d) {
         double z = 0;
         if (!height_at(to, index, p.x, p.y, z)) return false;
         d = std::fabs(p.z - z);
@@ -294,18 +296,20 @@ OneWayDistance unscaled(OneWayDistance d, double unscale) {
 
 }  // namespace
 
-VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples) {
+VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples, int threads) {
+    if (threads <= 0) threads = omp_get_max_threads();
     VerticalError e;
-    e.forward = one_way_vertical(a, b, face_samples, e.outside);
-    e.backward = one_way_vertical(b, a, face_samples, e.outside);
+    e.forward = one_way_vertical(a, b, face_samples, e.outside, threads);
+    e.backward = one_way_vertical(b, a, face_samples, e.outside, threads);
     return e;
 }
 
-HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples) {
+HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples, int threads) {
+    if (threads <= 0) threads = omp_get_max_threads();
     const Framed in = framed(a, b);
     HausdorffDistance d;
-    d.forward = unscaled(one_way(in.a, in.b, face_samples), in.unscale);
-    d.backward = unscaled(one_way(in.b, in.a, face_samples), in.unscale);
+    d.forward = unscaled(one_way(in.a, in.b, face_samples, threads), in.unscale);
+    d.backward = unscaled(one_way(in.b, in.a, face_samples, threads), in.unscale);
     if (!a.points.empty()) {
         V lo = v(in.a.points[0]), hi = lo;
         for (const Point3& p : in.a.points) {

@@ -22,7 +22,8 @@ struct HausdorffDistance {
 };
 
 // `face_samples`: about how many points to spread over each mesh's faces (plus its vertices).
-HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000);
+// `threads`: 0 for OpenMP's default; the result is the same for any.
+HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000, int threads = 0);
 
 // Vertical error between two terrains (faces triangulating the x–y plane): from each sample of
 // one (the same samples as hausdorff's), |Δz| to the other's surface straight above or below it
@@ -34,6 +35,6 @@ struct VerticalError {
     std::size_t outside = 0;  // samples of either outside the other's x–y extent
     double max() const { return forward.max > backward.max ? forward.max : backward.max; }
 };
-VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000);
+VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000, int threads = 0);
 
 }  // namespace toposimp::mesh

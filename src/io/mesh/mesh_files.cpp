@@ -63,20 +63,19 @@ const MeshFormatInfo* mesh_format_by_extension(const std::string& path) {
 
 MeshFormat mesh_format_of(const std::string& path) {
     if (const MeshFormatInfo* row = mesh_format_by_extension(path)) return row->format;
-    std::string extensions;
-    for (std::size_t i = 0; i < kFormats.size(); ++i) {
-        extensions += (i == 0 ? "" : i + 1 == kFormats.size() ? " or " : ", ") + std::string(kFormats[i].extension);
-    }
-    throw InputError(path + ": unknown mesh format (use a " + extensions + " file, or -f)");
+    throw InputError(path + ": unknown mesh format (use a " + mesh_extensions_text(", ", " or ") + " file, or -f)");
 }
 
 bool has_mesh_extension(const std::string& path) { return mesh_format_by_extension(path) != nullptr; }
 
 const char* to_string(MeshFormat format) { return info(format).title; }
 
-std::string mesh_extensions_text(const char* separator) {
+std::string mesh_extensions_text(const char* separator, const char* last) {
     std::string text;
-    for (const MeshFormatInfo& row : kFormats) text += (text.empty() ? "" : separator) + std::string(row.extension);
+    for (std::size_t i = 0; i < kFormats.size(); ++i) {
+        const char* before = i == 0 ? "" : last && i + 1 == kFormats.size() ? last : separator;
+        text += before + std::string(kFormats[i].extension);
+    }
     return text;
 }
 

@@ -89,8 +89,9 @@ MeshFormat mesh_format_of(const std::string& path);
 // Does the file name end in a mesh format's extension?
 bool has_mesh_extension(const std::string& path);
 const char* to_string(MeshFormat format);
-// The formats' extensions or names joined for messages and help: ".obj, .ply, .off, .stl".
-std::string mesh_extensions_text(const char* separator = ", ");
+// The formats' extensions or names joined for messages and help: ".obj, .ply, .off, .stl", or
+// with `last` before the last one: ".obj, .ply, .off or .stl".
+std::string mesh_extensions_text(const char* separator = ", ", const char* last = nullptr);
 std::string mesh_format_names_text(const char* separator = ", ");
 
 mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, MeshReadReport& report);

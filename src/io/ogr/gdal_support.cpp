@@ -1,7 +1,11 @@
 #include "io/ogr/gdal_support.hpp"
 
+#include "io/ogr/gdal_env.hpp"
+#include "io/ogr/map_formats.hpp"
+
 #include "io/common/errors.hpp"
 
+#include <cpl_conv.h>
 #include <cpl_error.h>
 
 #include <algorithm>
@@ -73,14 +77,7 @@ GDALDriver* vector_driver_for(const std::string& path, const std::string& format
         std::string extension = std::filesystem::path(path).extension().string();
         if (!extension.empty()) extension.erase(0, 1);
         std::transform(extension.begin(), extension.end(), extension.begin(), ::tolower);
-        static const std::pair<const char*, const char*> kKnown[] = {
-            {"shp", "ESRI Shapefile"}, {"gpkg", "GPKG"},  {"geojson", "GeoJSON"}, {"json", "GeoJSON"},
-            {"fgb", "FlatGeobuf"},     {"gml", "GML"},    {"csv", "CSV"},         {"kml", "KML"},
-            {"sqlite", "SQLite"},      {"geojsonl", "GeoJSONSeq"}, {"geojsons", "GeoJSONSeq"},
-        };
-        for (const auto& [known_extension, driver] : kKnown) {
-            if (extension == known_extension) name = driver;
-        }
+        if (const char* known = map_driver_for_extension(extension)) name = known;
         for (int i = 0; name.empty() && i < drivers.GetDriverCount(); ++i) {
             GDALDriver* driver = drivers.GetDriver(i);
             const char* extensions = driver->GetMetadataItem(GDAL_DMD_EXTENSIONS);
@@ -102,5 +99,17 @@ GDALDriver* vector_driver_for(const std::string& path, const std::string& format
     return driver;
 }
 
+
+void set_config_options(const std::vector<std::pair<std::string, std::string>>& options) {
+    for (const auto& [key, value] : options) CPLSetConfigOption(key.c_str(), value.c_str());
+}
+
+void check_vector_output(const std::string& path, const std::string& format) { vector_driver_for(path, format); }
+
+bool is_shapefile_output(const std::string& path, const std::string& format) {
+    return vector_driver_for(path, format)->GetDescription() == std::string("ESRI Shapefile");
+}
+
+std::string gdal_version() { return GDALVersionInfo("RELEASE_NAME"); }
 
 }  // namespace toposimp::io

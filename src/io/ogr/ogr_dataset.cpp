@@ -2,11 +2,12 @@
 
 #include "core/map/coverage.hpp"
 #include "io/common/errors.hpp"
+#include "io/common/output_file.hpp"
+#include "io/map/gpkg_points.hpp"
+#include "io/map/shapefile.hpp"
 #include "io/ogr/gdal_support.hpp"
 #include "io/ogr/geojson_writer.hpp"
-#include "io/map/gpkg_points.hpp"
-#include "io/common/output_file.hpp"
-#include "io/map/shapefile.hpp"
+#include "io/ogr/map_formats.hpp"
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
@@ -491,29 +492,26 @@ bool same_coordinates(const OGRGeometry* expected, const OGRGeometry* actual, st
     return true;
 }
 
-// Layer creation options toposimp adds unless the user set them.
-CPLStringList layer_options_for(const std::string& driver_name, const std::vector<std::string>& given,
+// Layer creation options toposimp adds unless the user set them (map_formats.cpp says which).
+CPLStringList layer_options_for(const MapFormatRules* rules, const std::vector<std::string>& given,
                                 const OgrDataset::Data::Layer& layer) {
     CPLStringList options;
     for (const auto& option : given) options.AddString(option.c_str());
-    // CSV drops geometries unless asked to write them as WKT.
-    if (driver_name == "CSV" && options.FetchNameValue("GEOMETRY") == nullptr) options.SetNameValue("GEOMETRY", "AS_WKT");
-    // Databases with an FID column (GPKG, SQLite): keep the source's FID column name, and never
-    // collide with an attribute field of that name (GML inputs have a string 'fid').
-    if ((driver_name == "GPKG" || driver_name == "SQLite") && options.FetchNameValue("FID") == nullptr) {
+    if (rules == nullptr) return options;
+    if (rules->layer_option) {
+        const std::string option = rules->layer_option;
+        const std::size_t equals = option.find('=');
+        const std::string key = option.substr(0, equals);
+        if (options.FetchNameValue(key.c_str()) == nullptr) options.SetNameValue(key.c_str(), option.substr(equals + 1).c_str());
+    }
+    // Databases with an FID column: keep the source's FID column name, and never collide with an
+    // attribute field of that name (GML inputs have a string 'fid').
+    if (rules->keeps_fid_column && options.FetchNameValue("FID") == nullptr) {
         std::string fid = layer.fid_column.empty() ? "fid" : layer.fid_column;
         while (layer.definition->GetFieldIndex(fid.c_str()) >= 0) fid += "_";
         options.SetNameValue("FID", fid.c_str());
     }
-    // FlatGeobuf's spatial index sorts the features; keep the input order unless asked.
-    if (driver_name == "FlatGeobuf" && options.FetchNameValue("SPATIAL_INDEX") == nullptr) {
-        options.SetNameValue("SPATIAL_INDEX", "NO");
-    }
     return options;
-}
-
-bool holds_several_layers(const std::string& driver_name) {
-    return driver_name == "GPKG" || driver_name == "SQLite" || driver_name == "OpenFileGDB" || driver_name == "FileGDB";
 }
 
 }  // namespace
@@ -524,8 +522,9 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     std::vector<std::string> warnings;
     GDALDriver* driver = vector_driver_for(options.path, options.format);
     const std::string driver_name = driver->GetDescription();
+    const MapFormatRules* rules = map_format_rules(driver_name);
     const std::size_t layer_count = data.layers.size();
-    if (layer_count > 1 && !holds_several_layers(driver_name)) {
+    if (layer_count > 1 && !(rules && rules->several_layers)) {
         std::string names;
         for (const auto& layer : data.layers) names += (names.empty() ? "" : ", ") + layer->name;
         throw OutputError("a " + driver_name + " file holds one layer and the input has " + std::to_string(layer_count) +
@@ -533,7 +532,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     }
     if (!options.layer_name.empty() && layer_count > 1) throw OutputError("-nln names one layer, and there are " + std::to_string(layer_count));
     OutputFile output(options.path, options.overwrite, options.stdout_stream);
-    if (output.to_stdout() && (driver_name == "ESRI Shapefile" || driver_name == "MapInfo File")) {
+    if (output.to_stdout() && rules && rules->several_files) {
         throw OutputError("a " + driver_name + " is several files and cannot go to stdout; use -f GeoJSON, FlatGeobuf or GPKG");
     }
     auto output_name = [&](const Data::Layer& layer) { return options.layer_name.empty() ? layer.name : options.layer_name; };
@@ -548,7 +547,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         source.geometry = [&data, &layer, &map, &kept](std::size_t i) { return data.build_geometry(layer, i, map, kept); };
         return source;
     };
-    if (driver_name == "GeoJSON") {
+    if (rules && rules->own_writer) {
         // GDAL 3.6's GeoJSON writer rounds coordinates: toposimp writes GeoJSON itself.
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
             warnings.push_back("-lco/-dsco are ignored for GeoJSON: toposimp writes it itself to keep coordinates exact");
@@ -566,7 +565,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         for (const auto& layer_pointer : data.layers) {
             const Data::Layer& layer = *layer_pointer;
             const std::string name = output_name(layer);
-            CPLStringList layer_options = layer_options_for(driver_name, options.layer_options, layer);
+            CPLStringList layer_options = layer_options_for(rules, options.layer_options, layer);
             OGRLayer* target = dataset->CreateLayer(name.c_str(), layer.srs.get(), layer.geometry_type, layer_options.List());
             if (target == nullptr) throw OutputError("cannot create layer '" + name + "' in '" + options.path + "'" + last_gdal_error());
             for (int i = 0; i < layer.definition->GetFieldCount(); ++i) {
@@ -734,7 +733,5 @@ std::vector<Point> read_control_points(const std::string& spec, unsigned threads
     read_points_of(layer, path, points);
     return points;
 }
-
-std::string gdal_version() { return GDALVersionInfo("RELEASE_NAME"); }
 
 }  // namespace toposimp::io

@@ -82,7 +82,4 @@ private:
 // GeoPackage on up to `threads` connections at once.
 std::vector<Point> read_control_points(const std::string& spec, unsigned threads = 1);
 
-// The GDAL release this was built against and runs with, for --version.
-std::string gdal_version();
-
 }  // namespace toposimp::io

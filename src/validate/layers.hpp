@@ -1,0 +1,34 @@
+// The datasets `toposimp check` compares, read through OGR: each feature's lines or polygon rings
+// as point lists (and its geometry, for GEOS), keyed by a field or by order.
+#pragma once
+
+#include "core/geometry.hpp"
+
+#include <ogr_geometry.h>
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace toposimp::validate {
+
+struct Feature {
+    enum class Type { none, lines, polygons, points };
+    std::string key;
+    Type type = Type::none;
+    std::vector<std::vector<Point>> parts;  // lines: line parts; polygons: rings, polygon by polygon
+    std::vector<std::uint32_t> rings_per_polygon;
+    std::unique_ptr<OGRGeometry> geometry;
+};
+
+struct Layer {
+    std::string name;
+    std::vector<Feature> features;
+};
+
+// The named layers of `path` (none named: every layer); InputError for an unreadable dataset, a
+// missing layer or a missing key field.
+std::vector<Layer> read_layers(const std::string& path, const std::vector<std::string>& names, const std::string& key);
+
+}  // namespace toposimp::validate
