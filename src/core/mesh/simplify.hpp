@@ -11,6 +11,7 @@
 // predicates (float filter, GMP fallback): link condition, no face flipped (normal reversed, or
 // for terrain, orientation in the map plane changed), no degenerate or duplicate face, and no
 // contact between a new face and any other face except along the corners they share.
+// (simplifier.hpp lists the files the method's steps live in.)
 #pragma once
 
 #include "core/exact/predicates.hpp"
