@@ -145,10 +145,11 @@ def main():
     builds = {"old": os.path.join(args.old, "toposimp"), "new": os.path.join(args.new, "toposimp")}
     differing = 0
     previous = {"old": "", "new": ""}  # each build's output of the job before (a check reads it)
-    print("| job | identical | old s (median) | new s (median) | new/old |")
-    print("|---|---|---|---|---|")
+    print("| job | identical | old s (median) | new s (median) | new/old | simplify s, old → new (new/old) |")
+    print("|---|---|---|---|---|---|")
     for name, arguments, suffix in jobs(args.data, args.only):
         times = {"old": [], "new": []}
+        engine = {"old": [], "new": []}  # the --json summary's seconds.simplify: the engine alone
         results = {}
         for _ in range(args.runs):
             for which, binary in builds.items():
@@ -162,7 +163,9 @@ def main():
                 if run.returncode not in (0, 1):
                     sys.exit(f"{' '.join(command)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
                 try:
-                    summary = without_varying(json.loads(run.stdout, object_pairs_hook=collections.OrderedDict))
+                    parsed = json.loads(run.stdout, object_pairs_hook=collections.OrderedDict)
+                    summary = without_varying(parsed)
+                    engine[which].append(parsed.get("seconds", {}).get("simplify"))
                 except json.JSONDecodeError:
                     summary = run.stdout  # a table: compared as it is
                 files = {}
@@ -177,7 +180,11 @@ def main():
         old_t, new_t = statistics.median(times["old"]), statistics.median(times["new"])
         same = results["old"] == results["new"]
         differing += not same
-        print(f"| {name} | {'yes' if same else 'NO'} | {old_t:.3f} | {new_t:.3f} | {new_t / old_t:.3f} |", flush=True)
+        simplify = "–"
+        if all(t is not None for t in engine["old"] + engine["new"]) and engine["old"]:
+            old_e, new_e = statistics.median(engine["old"]), statistics.median(engine["new"])
+            simplify = f"{old_e:.3f} → {new_e:.3f} ({new_e / old_e:.3f})"
+        print(f"| {name} | {'yes' if same else 'NO'} | {old_t:.3f} | {new_t:.3f} | {new_t / old_t:.3f} | {simplify} |", flush=True)
         if not same:
             (old_summary, old_files), (new_summary, new_files) = results["old"], results["new"]
             keys = sorted(k for k in set(old_summary or {}) | set(new_summary or {})
