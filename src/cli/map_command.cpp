@@ -2,6 +2,7 @@
 
 #include "cli/check_command.hpp"
 #include "cli/common.hpp"
+#include "cli/validators.hpp"
 #include "cli/guard.hpp"
 #include "cli/json.hpp"
 #include "cli/logging.hpp"
@@ -51,12 +52,12 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
         ->allow_extra_args(false);
     auto* keep = map->add_option("--keep", options.keep, "Keep this share of the vertices: 10% or 0.1 (default 10%)");
     auto* keep_points = map->add_option("--keep-points", options.keep_points, "Keep N vertices in total")
-                            ->check(CLI::NonNegativeNumber);
+                            ->check(number_at_least(0));
     auto* remove_points = map->add_option("--remove-points", options.remove_points, "Remove N vertices (GIS Cup 2014)")
-                              ->check(CLI::NonNegativeNumber);
+                              ->check(number_at_least(0));
     auto* max_area = map->add_option("--max-area", options.max_area,
                                      "Remove vertices whose effective area is at most A (map units squared)")
-                         ->check(CLI::NonNegativeNumber);
+                         ->check(number_at_least(0));
     auto* max = map->add_flag("--max", options.max, "Remove every vertex that can be removed");
     const std::vector<CLI::Option*> criteria{keep, keep_points, remove_points, max_area, max};
     for (CLI::Option* a : criteria) {
@@ -70,7 +71,7 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
         ->check(CLI::IsMember({"exact", "rational", "float"}));
     map->add_option("-j,--threads", options.threads,
                     "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
-        ->check(CLI::NonNegativeNumber);
+        ->check(number_at_least(0));
     map->add_flag("--giscup", options.giscup, "Input, --points and output are GIS Cup 2014 text files");
     map->add_flag("--json", options.json, "Print a JSON summary on stdout (on stderr when the output is stdout)");
     map->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");

@@ -1,6 +1,7 @@
 #include "cli/mesh_command.hpp"
 
 #include "cli/common.hpp"
+#include "cli/validators.hpp"
 #include "cli/guard.hpp"
 #include "cli/json.hpp"
 #include "cli/logging.hpp"
@@ -48,14 +49,14 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
         ->required();
     mesh->add_option("-f,--format", options.format,
                      "Output format: " + io::mesh_format_names_text() + ", or an OGR driver name (GPKG, ...)");
-    mesh->add_option("--band", options.band, "DEM band to read (default 1)")->check(CLI::PositiveNumber);
+    mesh->add_option("--band", options.band, "DEM band to read (default 1)")->check(number_at_least(1));
     mesh->add_option("--nln", options.layer_name, "Layer name for OGR output (default: tin)");
     auto* keep = mesh->add_option("--keep", options.keep, "Keep this share of the faces: 10% or 0.1 (default 10%)");
-    auto* keep_faces = mesh->add_option("--keep-faces", options.keep_faces, "Keep at most N faces")->check(CLI::NonNegativeNumber);
+    auto* keep_faces = mesh->add_option("--keep-faces", options.keep_faces, "Keep at most N faces")->check(number_at_least(0));
     auto* max_error = mesh->add_option("--max-error", options.max_error,
                                        "Collapse only while the error stays at most E: for a terrain, the vertical distance to the "
                                        "input everywhere (guaranteed; the border is kept), else the quadric error (a distance)")
-                          ->check(CLI::NonNegativeNumber);
+                          ->check(number_at_least(0));
     keep->excludes(keep_faces)->excludes(max_error);
     keep_faces->excludes(max_error);
     mesh->add_flag("--lock-boundary", options.lock_boundary,
@@ -74,7 +75,7 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     mesh->add_flag("--no-hausdorff", options.no_hausdorff, "Skip measuring the Hausdorff distance (saves time on big meshes)");
     mesh->add_option("-j,--threads", options.threads,
                      "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
-        ->check(CLI::NonNegativeNumber);
+        ->check(number_at_least(0));
     mesh->add_flag("--json", options.json, "Print a JSON summary on stdout (on stderr when the output is stdout)");
     mesh->add_flag("--overwrite", options.overwrite, "Replace the output if it exists");
     mesh->add_flag("--progress", options.progress,

@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <tuple>
 #include <unordered_map>
@@ -62,13 +63,29 @@ using io::InputError;
 // simplified vertex.
 bool match_line(const std::vector<Point>& original, const std::vector<Point>& simplified, std::vector<std::size_t>& at) {
     at.clear();
-    std::size_t i = 0;
-    for (const Point p : simplified) {
-        while (i < original.size() && !same_location(original[i], p)) ++i;
-        if (i == original.size()) return false;
+    if (original.empty() || simplified.size() < 2) {
+        std::size_t i = 0;
+        for (const Point p : simplified) {
+            while (i < original.size() && !same_location(original[i], p)) ++i;
+            if (i == original.size()) return false;
+            at.push_back(i++);
+        }
+        return !at.empty() && at.front() == 0 && at.back() + 1 == original.size();
+    }
+    // The ends are the original's ends; the vertices between, in order, before its last one. (A
+    // line ending in a repeated vertex Z, Z simplified to A, Z matched Z to the first copy and
+    // was reported not a subset: issue 29.)
+    const std::size_t last = original.size() - 1;
+    if (!same_location(simplified.front(), original.front()) || !same_location(simplified.back(), original[last])) return false;
+    at.push_back(0);
+    std::size_t i = 1;
+    for (std::size_t k = 1; k + 1 < simplified.size(); ++k) {
+        while (i < last && !same_location(original[i], simplified[k])) ++i;
+        if (i == last) return false;
         at.push_back(i++);
     }
-    return !at.empty() && at.front() == 0 && at.back() + 1 == original.size();
+    at.push_back(last);
+    return true;
 }
 
 bool match_ring(const std::vector<Point>& original, std::vector<Point> simplified, bool& reversed) {
@@ -183,6 +200,15 @@ private:
     // Layers by name (or the only one to the only one), features by key or order.
     void match_features() {
         original_ = read_layers(options_.original, options_.layers, options_.key);
+        // The control points' own layer, when -p names one in the original (ORIG:points), is not
+        // compared: it need not be in the simplified file (issue 29).
+        if (options_.layers.empty() && !options_.points.empty() && original_.size() > 1) {
+            const io::PointsSpec points = io::split_points_spec(options_.points);
+            std::error_code error;
+            if (!points.layer.empty() && std::filesystem::equivalent(points.path, options_.original, error)) {
+                std::erase_if(original_, [&](const Layer& layer) { return layer.name == points.layer; });
+            }
+        }
         if (options_.simplified_layer.empty()) {
             simplified_ = read_layers(options_.simplified, {}, options_.key);
         } else {

@@ -74,8 +74,15 @@ void OutputFile::check_destination(const std::string& destination, bool overwrit
     const fs::path target(destination);
     if (target.filename().empty()) throw OutputError("output '" + destination + "' is a folder, not a file name");
     std::error_code error;
-    if (fs::exists(target, error) && !overwrite) {
-        throw OutputError("output '" + destination + "' exists; pass --overwrite to replace it");
+    const fs::file_status status = fs::status(target, error);
+    if (fs::exists(status)) {
+        // Only files are replaced: --overwrite on a device or a folder would have put a file in
+        // its place (issue 29: as root, -o /dev/null --overwrite replaced /dev/null).
+        if (!fs::is_regular_file(status)) {
+            throw OutputError("output '" + destination + "' is " + (fs::is_directory(status) ? "a folder" : "not a regular file (a device?)") +
+                              "; toposimp writes and replaces files only (for standard output, use -o /vsistdout/)");
+        }
+        if (!overwrite) throw OutputError("output '" + destination + "' exists; pass --overwrite to replace it");
     }
     const fs::path parent = target.parent_path().empty() ? fs::path(".") : target.parent_path();
     if (!fs::is_directory(parent, error)) throw OutputError("output folder '" + parent.string() + "' does not exist");

@@ -1,6 +1,7 @@
 #include "io/map/giscup.hpp"
 
 #include "io/common/errors.hpp"
+#include "io/common/input_file.hpp"
 #include "io/common/number_format.hpp"
 
 #include <cmath>
@@ -62,16 +63,17 @@ ParsedLine parse_line(std::string_view text, const std::string& path, std::size_
 
 template <class Visit>
 void for_each_geometry(const std::string& path, Visit&& visit) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open file");
-    std::string text;
+    const std::string data = read_file(path);
+    std::string_view rest = data;
     std::size_t line_number = 0;
-    while (std::getline(in, text)) {
+    while (!rest.empty()) {
+        const std::size_t end = std::min(rest.find('\n'), rest.size());
+        const std::string_view text = rest.substr(0, end);
+        rest.remove_prefix(std::min(end + 1, rest.size()));
         ++line_number;
-        if (text.find_first_not_of(" \t\r") == std::string::npos) continue;
+        if (text.find_first_not_of(" \t\r") == std::string_view::npos) continue;
         visit(parse_line(text, path, line_number), line_number);
     }
-    if (in.bad()) throw InputError(path + ": read error");
 }
 
 }  // namespace

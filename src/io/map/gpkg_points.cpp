@@ -4,11 +4,14 @@
 
 #include <sqlite3.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <future>
 #include <memory>
+#include <optional>
 
 namespace toposimp::io {
 namespace {
@@ -88,7 +91,7 @@ private:
     std::size_t at_ = 0;
 };
 
-enum class Decoded { ok, not_decoded, non_finite };
+using Decoded = PointBlob;
 
 // One WKB Point or MultiPoint (ISO codes 1/4 + 1000·Z/M/ZM, or the older 0x80000000 Z and
 // 0x40000000 M flags). A point with NaN for both x and y is empty, as OGR reads it.
@@ -143,20 +146,21 @@ Decoded decode_blob(const unsigned char* data, std::size_t size, std::vector<Poi
     return decode_wkb(in, out, false);
 }
 
-// The rows with from <= FID < to (all rows when `range` is false), in FID order.
-std::optional<std::vector<Point>> read_rows(const GpkgTable& table, bool range, std::int64_t from, std::int64_t to,
+// The rows with from <= FID < to (to: none, up to the last; all rows when `range` is false), in
+// FID order.
+std::optional<std::vector<Point>> read_rows(const GpkgTable& table, bool range, std::int64_t from, std::optional<std::int64_t> to,
                                             std::size_t expected) {
     Connection db = open_read_only(table.path);
     if (!db) return std::nullopt;
     const std::string fid = sql_identifier(table.fid_column);
     std::string sql = "SELECT " + fid + ", " + sql_identifier(table.geometry_column) + " FROM " + sql_identifier(table.table);
-    if (range) sql += " WHERE " + fid + " >= ?1 AND " + fid + " < ?2";
+    if (range) sql += " WHERE " + fid + " >= ?1" + (to ? " AND " + fid + " < ?2" : "");
     sql += " ORDER BY " + fid;
     Statement statement = prepare(db.get(), sql);
     if (!statement) return std::nullopt;
     if (range) {
         sqlite3_bind_int64(statement.get(), 1, from);
-        sqlite3_bind_int64(statement.get(), 2, to);
+        if (to) sqlite3_bind_int64(statement.get(), 2, *to);
     }
     std::vector<Point> points;
     points.reserve(expected);
@@ -182,6 +186,10 @@ std::optional<std::vector<Point>> read_rows(const GpkgTable& table, bool range, 
 
 }  // namespace
 
+PointBlob decode_point_blob(const unsigned char* data, std::size_t size, std::vector<Point>& out) {
+    return decode_blob(data, size, out);
+}
+
 std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsigned threads) {
     if (table.fid_column.empty() || table.geometry_column.empty()) return std::nullopt;
     std::int64_t first = 0, last = -1;
@@ -197,17 +205,28 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
         first = sqlite3_column_int64(bounds.get(), 0);
         last = sqlite3_column_int64(bounds.get(), 1);
     }
+    // FIDs say nothing of how many rows there are (FIDs 1 and 2^62: two rows), so no count is
+    // taken from them: reservations are bounded by what the file can hold (a point's row takes
+    // a blob of at least 29 bytes), and the span is computed without signed overflow (FIDs may
+    // run from INT64_MIN to INT64_MAX; issue 29).
+    std::error_code error;
+    const std::uintmax_t bytes = std::filesystem::file_size(table.path, error);
+    const std::uint64_t most_rows = error ? 0 : bytes / 29 + 1;
+    const std::uint64_t gaps = static_cast<std::uint64_t>(last) - static_cast<std::uint64_t>(first);  // last - first, exactly
+    auto reservation = [most_rows](std::uint64_t fids) { return static_cast<std::size_t>(std::min(fids, most_rows)); };
     // Below this many FIDs one connection is as quick as starting several.
-    constexpr std::int64_t kSplitFrom = 1 << 16;
-    const std::int64_t span = last - first + 1;  // ≥ 1; may overflow only for absurd FIDs
-    if (threads <= 1 || span < kSplitFrom || span <= 0) {
-        return read_rows(table, false, 0, 0, static_cast<std::size_t>(span > 0 && span < (1 << 26) ? span : 0));
-    }
+    constexpr std::uint64_t kSplitFrom = 1 << 16;
+    if (threads <= 1 || gaps < kSplitFrom) return read_rows(table, false, 0, 0, reservation(gaps + 1));
     std::vector<std::future<std::optional<std::vector<Point>>>> parts;
+    const std::uint64_t share = gaps / threads;
     for (unsigned t = 0; t < threads; ++t) {
-        const std::int64_t from = first + span / threads * t, to = t + 1 == threads ? last + 1 : first + span / threads * (t + 1);
-        parts.push_back(std::async(std::launch::async, [&table, from, to] {
-            return read_rows(table, true, from, to, static_cast<std::size_t>(to - from));
+        // (Modular: first + share·t never passes last; the bounds are FIDs again.)
+        const auto from = static_cast<std::int64_t>(static_cast<std::uint64_t>(first) + share * t);
+        const std::optional<std::int64_t> to =
+            t + 1 == threads ? std::nullopt : std::optional(static_cast<std::int64_t>(static_cast<std::uint64_t>(first) + share * (t + 1)));
+        const std::size_t expected = reservation(t + 1 == threads ? gaps - share * t + 1 : share);
+        parts.push_back(std::async(std::launch::async, [&table, from, to, expected] {
+            return read_rows(table, true, from, to, expected);
         }));
     }
     std::vector<std::optional<std::vector<Point>>> read;

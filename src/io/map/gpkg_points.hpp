@@ -28,4 +28,9 @@ struct GpkgTable {
 // std::nullopt when the file or a row is not what this reader decodes (then use OGR).
 std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsigned threads);
 
+// One row's geometry blob (GeoPackage binary header + ISO WKB Point or MultiPoint), its points
+// appended to `out`; what read_gpkg_points decodes, exposed for its fuzz target.
+enum class PointBlob { ok, not_decoded, non_finite };
+PointBlob decode_point_blob(const unsigned char* data, std::size_t size, std::vector<Point>& out);
+
 }  // namespace toposimp::io

@@ -117,6 +117,8 @@ bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
     const std::uintmax_t shx_size = std::filesystem::file_size(shx_path, error);
     if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return false;
     const std::uint64_t records = (shx_size - 100) / 8;
+    const std::uintmax_t shp_size = std::filesystem::file_size(shp_path, error);
+    if (error) return false;
 
     // dBASE header: record count, header length and record length; each record starts with
     // its deletion flag ('*' deleted, ' ' not).
@@ -138,8 +140,11 @@ bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
         if (offset != shp.offset() || !shp.take(record_header, 8) || std::uint64_t{big_u32(record_header + 4)} * 2 != length) {
             return false;
         }
+        // A length is held against the file before anything is allocated for it (issue 29: a
+        // 10 KB file claiming a 2 GB record).
+        if (length < 4 || length > shp_size - std::min<std::uint64_t>(shp_size, shp.offset())) return false;
         content.resize(static_cast<std::size_t>(length));
-        if (length < 4 || !shp.take(content.data(), content.size())) return false;
+        if (!shp.take(content.data(), content.size())) return false;
         if (deletion != '*' && deletion != ' ') return false;
         const std::uint32_t type = little_u32(content.data());
         if (deletion == ' ' && type != 0 && type != *file_type) return false;

@@ -1,5 +1,6 @@
 #include "io/mesh/mesh_files.hpp"
 
+#include "io/common/input_file.hpp"
 #include "io/mesh/codecs.hpp"
 #include "io/mesh/reading.hpp"
 #include "io/mesh/writing.hpp"
@@ -86,17 +87,21 @@ std::string mesh_format_names_text(const char* separator) {
 }
 
 mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, MeshReadReport& report) {
-    const std::string data = read_all(path);
+    report.format = mesh_format_of(path);
+    const std::string data = read_file(path);
     std::string_view text(data);
-    // Recognise the format by content first, by extension otherwise.
-    if (text.substr(0, 4) == "ply\n" || text.substr(0, 5) == "ply\r\n") {
-        report.format = MeshFormat::ply;
-    } else {
-        std::string first(text.substr(0, std::min<std::size_t>(text.size(), 8)));
-        if (first.find("OFF") != std::string::npos && first.find("OFF") < 5) {
+    // A PLY or OFF file under another mesh extension is read as what it is, when its first line
+    // says so exactly: "ply", or an OFF header word ([ST][C][N][4][n]OFF). Never for STL, whose
+    // binary header is free text (issue 29: one starting "OFFSHORE"), and never on a word that
+    // merely begins the same (an OBJ starting "# OFFSET").
+    if (report.format != MeshFormat::stl) {
+        const std::string_view first = text.substr(0, std::min(text.find_first_of("\r\n"), text.size()));
+        const std::string_view word = first.substr(0, std::min(first.find_first_of(" \t"), first.size()));
+        const bool off_word = word.ends_with("OFF") && word.substr(0, word.size() - 3).find_first_not_of("STCN4n") == std::string_view::npos;
+        if (first == "ply") {
+            report.format = MeshFormat::ply;
+        } else if (off_word) {
             report.format = MeshFormat::off;
-        } else {
-            report.format = mesh_format_of(path);
         }
     }
     return info(report.format).read(path, text, options, report);

@@ -179,6 +179,12 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
             if (!parse_integer(tokens[2], count) || count < 0) {
                 throw InputError(where(path, lines.number()) + "bad element count '" + std::string(tokens[2]) + "'");
             }
+            // One vertex and one face element: a second would renumber the first's (issue 29).
+            for (const Element& before : elements) {
+                if ((tokens[1] == "vertex" || tokens[1] == "face") && before.name == tokens[1]) {
+                    throw InputError(where(path, lines.number()) + "a second '" + before.name + "' element (a PLY file has one)");
+                }
+            }
             elements.push_back({std::string(tokens[1]), static_cast<std::size_t>(count), {}});
         } else if (tokens[0] == "property" && !elements.empty()) {
             Property property;
@@ -237,12 +243,34 @@ mesh::Mesh read_ply(const std::string& path, std::string_view text, const MeshRe
         }
         if (rows != nullptr) rows->width = layout->size();
         if (is_vertex) {
+            // Each axis once: a record with x twice and no z would be read past its end (issue 29).
             int seen = 0;
-            for (std::size_t k = 0; k < element.properties.size(); ++k) seen += axis_of[k] >= 0;
-            if (seen != 3) throw InputError(path + ": the vertex element needs properties x, y and z");
+            for (std::size_t k = 0; k < element.properties.size(); ++k) {
+                if (axis_of[k] < 0) continue;
+                if ((seen & (1 << axis_of[k])) != 0) {
+                    throw InputError(path + ": the vertex element has property " + element.properties[k].name + " twice");
+                }
+                seen |= 1 << axis_of[k];
+            }
+            if (seen != 7) throw InputError(path + ": the vertex element needs properties x, y and z");
         }
         if (is_face && list_index < 0) throw InputError(path + ": the face element needs a vertex_indices list");
-        if (!is_vertex && !is_face) report.ignored_elements += element.count;
+        if (!is_vertex && !is_face) {
+            report.ignored_elements += element.count;
+            if (element.properties.empty()) continue;  // nothing to read, however many (issue 29: a loop of 2^63)
+        }
+        // Every count is held against what the rest of the file can hold before anything is
+        // allocated or looped over: an element takes its fixed-size values (binary) or a line
+        // of at least one character (text).
+        const std::size_t room = ascii ? text.size() - std::min(text.size(), lines.offset()) : binary.rest().size();
+        std::size_t least = 0;
+        for (const Property& p : element.properties) least += ascii ? 0 : size_of(p.list ? p.count_type : p.type);
+        if (ascii) least = 1;
+        if (element.count > room / least) {
+            throw InputError(path + (ascii ? ": truncated: the file ends inside " : ": truncated binary PLY: the file ends inside ") +
+                             element.name + " " + std::to_string(room / least) + " (the header promises " +
+                             std::to_string(element.count) + ")");
+        }
         // (A header cannot make this reserve more than the file could hold: an element takes a byte at least.)
         if (is_vertex) m.points.reserve(m.points.size() + std::min(element.count, text.size()));
         if (is_face) m.faces.reserve(m.faces.size() + std::min(element.count, text.size()));

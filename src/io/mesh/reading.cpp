@@ -13,36 +13,6 @@ std::string lower(std::string text) {
     return text;
 }
 
-std::string read_all(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
-    // In big chunks (a character at a time took a tenth of a second on a 2 M-triangle PLY).
-    std::string data;
-    std::size_t size = 0;
-    // At once when the size is known (a regular file): no growing, no copying.
-    std::error_code error;
-    const std::uintmax_t known = std::filesystem::is_regular_file(path, error) ? std::filesystem::file_size(path, error) : 0;
-    if (!error && known > 0) {
-        data.resize(known);
-        in.read(data.data(), static_cast<std::streamsize>(known));
-        size = static_cast<std::size_t>(in.gcount());
-        if (size < known || in.peek() != std::char_traits<char>::eof()) {
-            in.clear();  // (it changed meanwhile: read on as for a stream)
-        } else {
-            return data;
-        }
-    }
-    for (;;) {
-        data.resize(size + (std::size_t{1} << 22));
-        in.read(data.data() + size, static_cast<std::streamsize>(data.size() - size));
-        size += static_cast<std::size_t>(in.gcount());
-        if (!in) break;
-    }
-    if (in.bad()) throw InputError(path + ": read error");
-    data.resize(size);
-    return data;
-}
-
 Point3 parse_point(const std::string& path, std::size_t line, std::string_view x, std::string_view y, std::string_view z,
                    std::size_t vertex) {
     double c[3];

@@ -18,9 +18,6 @@ namespace toposimp::io::mesh_codec {
 
 std::string lower(std::string text);
 
-// The file's bytes (InputError if it cannot be read).
-std::string read_all(const std::string& path);
-
 // Splits text into lines with their numbers, and lines into whitespace-separated tokens.
 class Lines {
 public:

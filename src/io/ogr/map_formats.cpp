@@ -5,23 +5,23 @@
 namespace toposimp::io {
 namespace {
 
-// driver, extensions, several layers, several files, own writer, keeps the FID column, layer option
+// driver, extensions, several layers, several files, own writer, keeps the FID column, layer option, recommended
 constexpr std::array<MapFormatRules, 12> kRules{{
-    {"ESRI Shapefile", "shp", false, true, false, false, nullptr},
-    {"GPKG", "gpkg", true, false, false, true, nullptr},
-    {"GeoJSON", "geojson json", false, false, true, false, nullptr},
+    {"ESRI Shapefile", "shp", false, true, false, false, nullptr, "Shapefile (.shp)"},
+    {"GPKG", "gpkg", true, false, false, true, nullptr, "GeoPackage (.gpkg)"},
+    {"GeoJSON", "geojson json", false, false, true, false, nullptr, "GeoJSON (.geojson)"},
     // Its spatial index sorts the features: the input order is kept unless asked.
-    {"FlatGeobuf", "fgb", false, false, false, false, "SPATIAL_INDEX=NO"},
+    {"FlatGeobuf", "fgb", false, false, false, false, "SPATIAL_INDEX=NO", "FlatGeobuf (.fgb)"},
     // Read, never written: GDAL 3.6's GML reader parses coordinates inexactly (the read-back refuses).
-    {"GML", "gml", false, false, false, false, nullptr},
+    {"GML", "gml", false, false, false, false, nullptr, nullptr},
     // Geometries dropped unless written as WKT (17 significant digits: ogr_dataset.cpp).
-    {"CSV", "csv", false, false, false, false, "GEOMETRY=AS_WKT"},
-    {"KML", "kml", false, false, false, false, nullptr},
-    {"SQLite", "sqlite", true, false, false, true, nullptr},
-    {"GeoJSONSeq", "geojsonl geojsons", false, false, false, false, nullptr},
-    {"OpenFileGDB", "", true, false, false, false, nullptr},
-    {"FileGDB", "", true, false, false, false, nullptr},
-    {"MapInfo File", "", false, true, false, false, nullptr},
+    {"CSV", "csv", false, false, false, false, "GEOMETRY=AS_WKT", nullptr},
+    {"KML", "kml", false, false, false, false, nullptr, nullptr},
+    {"SQLite", "sqlite", true, false, false, true, nullptr, nullptr},
+    {"GeoJSONSeq", "geojsonl geojsons", false, false, false, false, nullptr, nullptr},
+    {"OpenFileGDB", "", true, false, false, false, nullptr, nullptr},
+    {"FileGDB", "", true, false, false, false, nullptr, nullptr},
+    {"MapInfo File", "", false, true, false, false, nullptr, nullptr},
 }};
 
 }  // namespace
@@ -46,6 +46,16 @@ const char* map_driver_for_extension(std::string_view extension) {
         }
     }
     return nullptr;
+}
+
+std::string recommended_formats_but(std::string_view driver) {
+    std::string text, last;
+    for (const MapFormatRules& rules : kRules) {
+        if (rules.recommended == nullptr || driver == rules.driver) continue;
+        if (!last.empty()) text += (text.empty() ? "" : ", ") + last;
+        last = rules.recommended;
+    }
+    return text.empty() ? last : text + " or " + last;
 }
 
 }  // namespace toposimp::io

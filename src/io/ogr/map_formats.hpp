@@ -6,6 +6,7 @@
 #pragma once
 
 #include <span>
+#include <string>
 #include <string_view>
 
 namespace toposimp::io {
@@ -18,6 +19,7 @@ struct MapFormatRules {
     bool own_writer;         // written by toposimp itself (GDAL 3.6 rounds its coordinates): io/ogr/geojson_writer.cpp
     bool keeps_fid_column;   // the source's FID column name is kept (FID=...), renamed away from any field of that name
     const char* layer_option;  // "KEY=VALUE" toposimp sets unless the user sets KEY (-lco), or null
+    const char* recommended;   // keeps every coordinate (tested): its name for messages that suggest one, or null
 };
 
 std::span<const MapFormatRules> map_format_rules();
@@ -25,5 +27,7 @@ std::span<const MapFormatRules> map_format_rules();
 const MapFormatRules* map_format_rules(std::string_view driver);
 // The driver a lower-case extension (without the dot) names in the table, or null.
 const char* map_driver_for_extension(std::string_view extension);
+// The recommended formats but `driver`'s, for a message: "FlatGeobuf (.fgb), Shapefile (.shp) or GeoJSON (.geojson)".
+std::string recommended_formats_but(std::string_view driver);
 
 }  // namespace toposimp::io

@@ -19,6 +19,7 @@
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <unordered_map>
 
 namespace toposimp::io {
 namespace {
@@ -219,7 +220,14 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
 
     QuietGdal quiet;
     source.ResetReading();
-    while (OGRFeatureUniquePtr feature{source.GetNextFeature()}) {
+    auto read_error = [&] {
+        return InputError("error reading '" + path + "', layer '" + layer->name + "'" + last_gdal_error());
+    };
+    // A feature GDAL could not read is an error at once (a later read may clear GDAL's last error).
+    for (;;) {
+        OGRFeatureUniquePtr feature{source.GetNextFeature()};
+        if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
+        if (!feature) break;
         const std::string label = feature_label(path, source, feature->GetFID());
         Layer::Shape shape;
         shape.first = static_cast<std::uint32_t>(layer->items.size());
@@ -296,9 +304,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         layer->shapes.push_back(shape);
         layer->features.push_back(std::move(feature));
     }
-    if (CPLGetLastErrorType() >= CE_Failure) {
-        throw InputError("error reading '" + path + "', layer '" + layer->name + "'" + last_gdal_error());
-    }
+    if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
     summary_of_layer.features = layer->features.size();
     summary.layers.push_back(summary_of_layer);
     layers.push_back(std::move(layer));
@@ -620,8 +626,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
                                   "' (layer '" + output_name(layer) + "', feature " + std::to_string(layer.features[i]->GetFID()) +
                                   ", " + difference +
-                                  "); toposimp never rounds coordinates: write GeoPackage (.gpkg), FlatGeobuf (.fgb), "
-                                  "Shapefile (.shp) or GeoJSON (.geojson) instead");
+                                  "); toposimp never rounds coordinates: write " + recommended_formats_but(driver_name) + " instead");
             }
         };
         auto check_count = [&](const Data::Layer& layer, std::size_t count) {
@@ -648,9 +653,25 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 OGRLayer* check = written->GetLayerByName(name.c_str());
                 if (check == nullptr && written->GetLayerCount() == 1) check = written->GetLayer(0);
                 if (check == nullptr) throw OutputError("'" + options.path + "': written layer '" + name + "' cannot be read back");
+                // Where the driver stored the input's FIDs, it may hand the features back in FID
+                // order, not in the order written: each is compared with the input feature of its
+                // FID (issue 29: a GeoJSON's "id"s out of order, written to GeoPackage).
+                std::unordered_map<GIntBig, std::size_t> by_fid;
+                if (rules && rules->keeps_fid_column && !layer.fid_column.empty()) {
+                    for (std::size_t k = 0; k < layer.features.size(); ++k) by_fid.emplace(layer.features[k]->GetFID(), k);
+                }
                 std::size_t i = 0;
                 for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
-                    if (i < layer.features.size()) check_geometry(layer, i, feature->GetGeometryRef());
+                    std::size_t at = i;
+                    if (!by_fid.empty()) {
+                        const auto found = by_fid.find(feature->GetFID());
+                        if (found == by_fid.end()) {
+                            throw OutputError("the " + driver_name + " driver wrote a feature with FID " + std::to_string(feature->GetFID()) +
+                                              ", which the input's layer '" + layer.name + "' does not have, to '" + options.path + "'");
+                        }
+                        at = found->second;
+                    }
+                    if (at < layer.features.size()) check_geometry(layer, at, feature->GetGeometryRef());
                 }
                 check_count(layer, i);
             }
@@ -687,7 +708,13 @@ void read_points_of(OGRLayer& layer, const std::string& path, std::vector<Point>
         if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(label() + ": control point has a non-finite coordinate");
         points.push_back(p);
     };
-    while (OGRFeatureUniquePtr feature{layer.GetNextFeature()}) {
+    // A feature GDAL could not read is an error at once: a later read may clear GDAL's last
+    // error (a Shapefile with a .prj did, and a broken record's point was silently left out).
+    CPLErrorReset();
+    for (;;) {
+        OGRFeatureUniquePtr feature{layer.GetNextFeature()};
+        if (CPLGetLastErrorType() >= CE_Failure) throw InputError("error reading '" + path + "'" + last_gdal_error());
+        if (!feature) break;
         current = feature.get();
         const OGRGeometry* geometry = feature->GetGeometryRef();
         if (geometry == nullptr) continue;
@@ -706,14 +733,19 @@ void read_points_of(OGRLayer& layer, const std::string& path, std::vector<Point>
 
 }  // namespace
 
-std::vector<Point> read_control_points(const std::string& spec, unsigned threads) {
-    std::string path = spec, layer_name;
+PointsSpec split_points_spec(const std::string& spec) {
+    PointsSpec split{spec, {}};
     std::error_code error;
     const std::size_t colon = spec.rfind(':');
     if (!std::filesystem::exists(spec, error) && colon != std::string::npos && colon > 0 && spec.rfind("/vsi", 0) != 0) {
-        path = spec.substr(0, colon);
-        layer_name = spec.substr(colon + 1);
+        split.path = spec.substr(0, colon);
+        split.layer = spec.substr(colon + 1);
     }
+    return split;
+}
+
+std::vector<Point> read_control_points(const std::string& spec, unsigned threads) {
+    const auto [path, layer_name] = split_points_spec(spec);
     DatasetPtr dataset = open_vector(path);
     OGRLayer& layer = pick_layer(*dataset, path, layer_name);
     // A GeoPackage is read with SQLite directly (gpkg_points.hpp): ten times less CPU than

@@ -82,4 +82,11 @@ private:
 // GeoPackage on up to `threads` connections at once.
 std::vector<Point> read_control_points(const std::string& spec, unsigned threads = 1);
 
+// "path:layer" split as read_control_points splits it (a path that exists as given is a path).
+struct PointsSpec {
+    std::string path;
+    std::string layer;  // empty: the dataset's only layer
+};
+PointsSpec split_points_spec(const std::string& spec);
+
 }  // namespace toposimp::io
