@@ -5,7 +5,8 @@
 #                             qgis_process for real (without it that test reports itself skipped)
 set -euo pipefail
 packages=(build-essential cmake ninja-build pkg-config file python3
-          libgdal-dev gdal-bin libsqlite3-dev libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev groff-base)
+          libgdal-dev gdal-bin libsqlite3-dev libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev groff-base
+          clang libclang-rt-14-dev libomp-dev)
 for arg in "$@"; do
   case "$arg" in
     --qgis) packages+=(qgis python3-qgis) ;;

@@ -14,7 +14,9 @@
 #include "io/ogr/gdal_env.hpp"
 #include "io/ogr/ogr_dataset.hpp"
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -194,7 +196,7 @@ void write_giscup(const MapOptions& options, const MapInput& input, const map::S
         std::ofstream out(output.staging_path(), std::ios::binary);
         io::write_giscup_lines(out, input.giscup_lines, input.map, result.kept);
         out.close();
-        if (!out) throw io::OutputError("error writing '" + options.output + "'");
+        if (!out) throw io::OutputError("cannot write '" + options.output + "': " + std::strerror(errno));
     }
     output.commit();
 }

@@ -211,7 +211,7 @@ std::vector<std::string> write_output(const MeshInput& input, const io::MeshForm
                                       const MeshCommandOptions& options, const MeshGdal& gdal, spdlog::logger& log) {
     const io::AttributeLayout& layout = input.layout;
     if (format) {
-        std::vector<std::string> unwritten = io::write_mesh(input.mesh, layout, path, format->format, options.ascii);
+        std::vector<std::string> unwritten = io::write_mesh(input.mesh, layout, path, format->format, options.ascii, options.output);
         for (const std::string& column : unwritten) {
             log.warn("{}: {} not written: {} has no place for it", options.output, column, format->title);
         }

@@ -1,6 +1,8 @@
 // Regression tests for issue 29 (hostile and messy input), one per case it found, named after
 // what it found. Each failed before its fix (noted per test).
 #include "cli/cli_fixtures.hpp"
+#include "io/common/errors.hpp"
+#include "io/mesh/mesh_files.hpp"
 #include "io/ogr/map_formats.hpp"
 
 #include <gtest/gtest.h>
@@ -255,6 +257,23 @@ TEST(Issue29, NumericOptionsRefuseNanInfinityAndNegatives) {
     EXPECT_EQ(mesh.code, 2);
     EXPECT_TRUE(files_in(dir).empty());
     EXPECT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "-o", out, "--remove-points", "+5", "-q"}).code, 0);
+}
+
+// Case 14, last part. A full disk was reported as a "write error" on the staging path; now the
+// destination and the system's reason ("No space left on device": /dev/full stands in for a
+// full disk).
+TEST(Issue29, AFullDiskIsReportedAsSuch) {
+    mesh::Mesh tetrahedron;
+    tetrahedron.points = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    tetrahedron.faces = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+    // (Big enough that the buffer is written before the file is closed, as well as at the close.)
+    for (int i = 0; i < 60000; ++i) tetrahedron.points.push_back({0.1 * i, 0.2, 0.3});
+    try {
+        io::write_mesh(tetrahedron, {}, "/dev/full", io::MeshFormat::ply, true, "out.ply");
+        ADD_FAILURE() << "no error writing to /dev/full";
+    } catch (const io::OutputError& error) {
+        EXPECT_NE(std::string(error.what()).find("out.ply: cannot write: No space left on device"), std::string::npos) << error.what();
+    }
 }
 
 }  // namespace

@@ -666,7 +666,7 @@ int coplanar_triangles_meet(const Triangle3& t, const Triangle3& u, PredicateSta
     // inside u (then t's corner does).
     const auto [axis, turn] = area_axis(t, stats);
     if (axis < 0) return -1;
-    auto flat = [axis](Point3 p) { return drop_axis(p, axis); };
+    auto flat = [dropped = axis](Point3 p) { return drop_axis(p, dropped); };  // (clang 14 captures no bindings)
     // Quick rejection: u strictly beyond the line of one of t's edges (side-by-side faces of a
     // flat region, the usual case).
     for (int i = 0; i < 3; ++i) {

@@ -128,7 +128,7 @@ void Simplifier::add_border_planes() {
             }
             borders.clear();
             for (const auto& [w, face] : seen) {
-                const auto times = std::count_if(seen.begin(), seen.end(), [w](const auto& s) { return s.first == w; });
+                const auto times = std::count_if(seen.begin(), seen.end(), [neighbour = w](const auto& s) { return s.first == neighbour; });
                 if (times == 1) borders.emplace_back(w, face);
             }
             std::sort(borders.begin(), borders.end());

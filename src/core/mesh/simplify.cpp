@@ -182,7 +182,7 @@ std::vector<Candidate> Simplifier::block_candidates(int level, const std::uint32
     }
     // Edges with a newly inside end: each once.
     for (const auto& [v, first, size] : newly) {
-        place_edges(v, std::span(neighbours).subspan(first, size), [&](std::uint32_t w) { return (flags_[w] & kNewlyInside) == 0 || w > v; }, level, block, heap);
+        place_edges(v, std::span(neighbours).subspan(first, size), [&, self = v](std::uint32_t w) { return (flags_[w] & kNewlyInside) == 0 || w > self; }, level, block, heap);
     }
     for (std::size_t i = 0; i < count; ++i) flags_[vertices[i]] &= static_cast<std::uint8_t>(~kNewlyInside);
     return heap;

@@ -108,13 +108,13 @@ mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, Me
 }
 
 std::vector<std::string> write_mesh(const mesh::Mesh& m, const AttributeLayout& layout, const std::string& path,
-                                    MeshFormat format, bool ascii) {
+                                    MeshFormat format, bool ascii, const std::string& shown_as) {
     const MeshFormatInfo& codec = info(format);
     std::vector<std::string> unwritable = codec.unwritable(layout);
     const VertexGroups groups = find_groups(layout.vertex);
     const mesh::Attributes vertex_rows = written_values(m.vertex_attributes, layout.vertex, groups.normal);
     const mesh::Attributes face_rows = written_values(m.face_attributes, layout.face, {-1, -1, -1});  // (no normal)
-    MeshWriter out(path);
+    MeshWriter out(path, shown_as);
     codec.write(m, {vertex_rows, face_rows, layout}, out, ascii);
     out.finish();
     return unwritable;

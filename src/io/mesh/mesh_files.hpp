@@ -101,7 +101,8 @@ mesh::Mesh read_mesh(const std::string& path, const MeshReadOptions& options, Me
 // with its type; OBJ: vertex colours, texture coordinates and normals; OFF: those and face
 // colours); integer columns rounded and clamped to their type, normals scaled to unit length.
 // Returns the columns the format has no place for ("vertex quality", ...), which are not written.
+// `shown_as`: the name errors give the file (the destination, when `path` is its staging file).
 std::vector<std::string> write_mesh(const mesh::Mesh& mesh, const AttributeLayout& layout, const std::string& path,
-                                    MeshFormat format, bool ascii);
+                                    MeshFormat format, bool ascii, const std::string& shown_as = {});
 
 }  // namespace toposimp::io

@@ -6,14 +6,16 @@
 
 namespace toposimp::io::mesh_codec {
 
-MeshWriter::MeshWriter(const std::string& path) : path_(path), out_(path, std::ios::binary) {
-    if (!out_) throw OutputError(path + ": cannot create: " + std::strerror(errno));
+MeshWriter::MeshWriter(const std::string& path, const std::string& shown_as)
+    : shown_as_(shown_as.empty() ? path : shown_as), out_(path, std::ios::binary) {
+    if (!out_) throw OutputError(shown_as_ + ": cannot create: " + std::strerror(errno));
 }
 
 void MeshWriter::finish() {
     flush(true);
     out_.close();
-    if (!out_) throw OutputError(path_ + ": write error");
+    // (The reason, "No space left on device" say, not just that it failed.)
+    if (!out_) throw OutputError(shown_as_ + ": cannot write: " + std::strerror(errno));
 }
 
 int column_named(const std::vector<AttributeColumn>& columns, std::string_view name) {

@@ -21,7 +21,8 @@ namespace toposimp::io::mesh_codec {
 // flushed only when it is whole).
 class MeshWriter {
 public:
-    explicit MeshWriter(const std::string& path);
+    // `shown_as`: the name errors give the file (the destination, when `path` is its staging file).
+    MeshWriter(const std::string& path, const std::string& shown_as);
     std::string buffer;
     void flush(bool force = false) {
         if (force || buffer.size() > (1u << 20)) {
@@ -41,7 +42,7 @@ public:
     void finish();
 
 private:
-    std::string path_;
+    std::string shown_as_;
     std::ofstream out_;
 };
 

@@ -7,6 +7,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cerrno>
+#include <cstring>
 #include <fstream>
 
 namespace toposimp::io {
@@ -183,10 +185,11 @@ void append_crs(std::string& out, const OGRSpatialReference* srs, std::vector<st
 
 }  // namespace
 
-std::vector<std::string> write_geojson(const std::string& path, const LayerSource& layer) {
+std::vector<std::string> write_geojson(const std::string& path, const LayerSource& layer, const std::string& shown_as) {
+    const std::string& name = shown_as.empty() ? path : shown_as;
     std::vector<std::string> warnings;
     std::ofstream file(path, std::ios::binary);
-    if (!file) throw OutputError("cannot create '" + path + "'");
+    if (!file) throw OutputError("cannot create '" + name + "': " + std::strerror(errno));
     std::string out = "{\n\"type\":\"FeatureCollection\",\n\"name\":";
     append_json_string(out, layer.name.c_str());
     out += ",\n";
@@ -220,7 +223,7 @@ std::vector<std::string> write_geojson(const std::string& path, const LayerSourc
     out += "\n]\n}\n";
     file << out;
     file.close();
-    if (!file) throw OutputError("error writing '" + path + "'");
+    if (!file) throw OutputError("cannot write '" + name + "': " + std::strerror(errno));
     if (coordinates.dropped_m) warnings.push_back("GeoJSON has no M coordinates: M values were not written");
     return warnings;
 }

@@ -10,6 +10,7 @@
 namespace toposimp::io {
 
 // Writes one FeatureCollection; returns warnings (e.g. M values, which GeoJSON cannot hold).
-std::vector<std::string> write_geojson(const std::string& path, const LayerSource& layer);
+// `shown_as`: the name errors give the file (the destination, when `path` is its staging file).
+std::vector<std::string> write_geojson(const std::string& path, const LayerSource& layer, const std::string& shown_as = {});
 
 }  // namespace toposimp::io

@@ -558,7 +558,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
             warnings.push_back("-lco/-dsco are ignored for GeoJSON: toposimp writes it itself to keep coordinates exact");
         }
-        auto more = write_geojson(output.staging_path(), source_of(*data.layers.front()));
+        auto more = write_geojson(output.staging_path(), source_of(*data.layers.front()), options.path);
         warnings.insert(warnings.end(), more.begin(), more.end());
     } else {
         QuietGdal quiet;

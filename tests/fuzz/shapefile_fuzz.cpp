@@ -1,0 +1,43 @@
+// Fuzz target: the Shapefile record readers (.shp, .shx and .dbf decoded past OGR). The input is
+// split into the three files at two 16-bit lengths it starts with; the readers may refuse the
+// files (std::nullopt, or InputError for a non-finite point), never crash or allocate more than
+// the files hold.
+#include "io/common/errors.hpp"
+#include "io/map/shapefile.hpp"
+
+#include <unistd.h>
+
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+using namespace toposimp;
+
+namespace {
+
+void write(const std::string& path, const std::uint8_t* data, std::size_t size) {
+    if (std::FILE* file = std::fopen(path.c_str(), "wb")) {
+        std::fwrite(data, 1, size, file);
+        std::fclose(file);
+    }
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    if (size < 4) return 0;
+    const std::size_t shx = std::size_t{data[0]} << 8 | data[1], dbf = std::size_t{data[2]} << 8 | data[3];
+    data += 4;
+    size -= 4;
+    const std::size_t shx_size = std::min(shx, size), dbf_size = std::min(dbf, size - shx_size);
+    const std::string stem = "/tmp/toposimp-fuzz-shape-" + std::to_string(::getpid());
+    write(stem + ".shx", data, shx_size);
+    write(stem + ".dbf", data + shx_size, dbf_size);
+    write(stem + ".shp", data + shx_size + dbf_size, size - shx_size - dbf_size);
+    try {
+        io::read_shapefile_points(stem + ".shp");
+    } catch (const io::InputError&) {
+    }
+    io::read_shapefile_shapes(stem + ".shp");
+    return 0;
+}
