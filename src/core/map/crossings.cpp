@@ -39,19 +39,22 @@ void for_each_segment(const MapData& map, std::uint32_t begin, std::uint32_t end
     }
 }
 
-}  // namespace
+// One row's segment boxes, cell after cell: a cell's entries (box, segment) sorted by left edge.
+using CellEntries = std::vector<std::pair<Box, std::uint32_t>>;
 
 // A uniform grid over the segments' boxes, one row of cells at a time: the segments are first
 // distributed to the rows their boxes span (a parallel counting sort), then each row, on its
-// own, to its cells, where the pairs are tested. A pair is tested only in the cell holding the
-// low corner of its boxes' overlap, so once.
-std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
-                                                  exact::PredicateStats& stats, int threads_wanted) {
-    std::vector<SegmentContact> contacts;
+// own, to its cells. Calls visit(worker, entries, first, last, x, y, column, row) for each cell
+// of two or more segments, its entries sorted by left edge, on the thread that owns `worker`
+// (one Worker per thread, made by make_worker(), handed to finish(worker) at the end, one
+// thread at a time). A pair of segments must be tested only in the cell holding the low corner
+// of their boxes' overlap, so once: the visitor checks that with `column` and `row`.
+template <class MakeWorker, class Visit, class Finish>
+void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worker, Visit visit, Finish finish) {
     const auto vertex_count = static_cast<std::uint32_t>(map.vertices.size());
     std::size_t segment_count = 0;
     for (const Chain& chain : map.chains) segment_count += chain.last - chain.first;
-    if (segment_count < 2) return contacts;
+    if (segment_count < 2) return;
     const bool parallel = segment_count >= (1u << 14);
     const int threads = !parallel ? 1 : threads_wanted > 0 ? threads_wanted : omp_get_max_threads();
     const auto share = static_cast<std::size_t>(threads);
@@ -104,10 +107,9 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
 
 #pragma omp parallel num_threads(threads)
     {
-        std::vector<SegmentContact> found;
-        exact::PredicateStats counted;
+        auto worker = make_worker();
         std::vector<std::uint32_t> cell_start(std::size_t{side} + 1);
-        std::vector<std::pair<Box, std::uint32_t>> cells;  // the row's segments, cell after cell
+        CellEntries cells;  // the row's segments, cell after cell
 #pragma omp for schedule(dynamic, 8) nowait
         for (std::uint32_t y = 0; y < side; ++y) {
             const std::size_t begin = row_start[std::size_t{y} * share], end = row_start[std::size_t{y + 1} * share];
@@ -135,32 +137,55 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
                 std::sort(first, last, [](const auto& a, const auto& b) {
                     return a.first.min_x < b.first.min_x || (a.first.min_x == b.first.min_x && a.second < b.second);
                 });
-                for (auto i = first; i != last; ++i) {
-                    const auto& [sb, s] = *i;
-                    for (auto j = i + 1; j != last && j->first.min_x <= sb.max_x; ++j) {
-                        const auto& [tb, t] = *j;
-                        const double low_x = std::max(sb.min_x, tb.min_x), low_y = std::max(sb.min_y, tb.min_y);
-                        if (low_x > std::min(sb.max_x, tb.max_x) || low_y > std::min(sb.max_y, tb.max_y)) continue;
-                        if (column(low_x) != x || row(low_y) != y) continue;  // tested in another cell
-                        const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
-                        if (!exact::improper_contact(p, q, r, u, arithmetic, counted)) continue;
-                        ContactKind kind = ContactKind::touching;
-                        if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
-                            kind = ContactKind::identical;
-                        } else if (exact::proper_crossing(p, q, r, u, arithmetic, counted)) {
-                            kind = ContactKind::crossing;
-                        }
-                        found.push_back({std::min(s, t), std::max(s, t), kind});
-                    }
-                }
+                visit(worker, first, last, x, y, column, row);
             }
         }
 #pragma omp critical(toposimp_segment_contacts)
-        {
-            contacts.insert(contacts.end(), found.begin(), found.end());
-            stats += counted;
-        }
+        finish(worker);
     }
+}
+
+// Do the boxes of a pair overlap, with the low corner of the overlap in cell (x, y)?
+bool tested_here(const Box& a, const Box& b, std::uint32_t x, std::uint32_t y, const Axis& column, const Axis& row) {
+    const double low_x = std::max(a.min_x, b.min_x), low_y = std::max(a.min_y, b.min_y);
+    if (low_x > std::min(a.max_x, b.max_x) || low_y > std::min(a.max_y, b.max_y)) return false;
+    return column(low_x) == x && row(low_y) == y;
+}
+
+}  // namespace
+
+std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
+                                                  exact::PredicateStats& stats, int threads_wanted) {
+    std::vector<SegmentContact> contacts;
+    struct Worker {
+        std::vector<SegmentContact> found;
+        exact::PredicateStats counted;
+    };
+    for_each_cell(
+        map, threads_wanted, [] { return Worker{}; },
+        [&](Worker& worker, CellEntries::iterator first, CellEntries::iterator last, std::uint32_t x, std::uint32_t y,
+            const Axis& column, const Axis& row) {
+            for (auto i = first; i != last; ++i) {
+                const auto& [sb, s] = *i;
+                for (auto j = i + 1; j != last && j->first.min_x <= sb.max_x; ++j) {
+                    const auto& [tb, t] = *j;
+                    if (!tested_here(sb, tb, x, y, column, row)) continue;  // (or tested in another cell)
+                    const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
+                    if (!exact::improper_contact(p, q, r, u, arithmetic, worker.counted)) continue;
+                    ContactKind kind = ContactKind::touching;
+                    if ((same_location(p, r) && same_location(q, u)) || (same_location(p, u) && same_location(q, r))) {
+                        kind = ContactKind::identical;
+                    } else if (exact::proper_crossing(p, q, r, u, arithmetic, worker.counted)) {
+                        kind = ContactKind::crossing;
+                    }
+                    worker.found.push_back({std::min(s, t), std::max(s, t), kind});
+                }
+            }
+        },
+        [&](Worker& worker) {
+            contacts.insert(contacts.end(), worker.found.begin(), worker.found.end());
+            stats += worker.counted;
+        });
     // Sorted, so the result does not depend on which thread found what.
     std::sort(contacts.begin(), contacts.end(), [](const SegmentContact& a, const SegmentContact& b) {
         return a.s < b.s || (a.s == b.s && a.t < b.t);
@@ -168,12 +193,74 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
     return contacts;
 }
 
+// Only whether each segment has a contact, not every contact: a line running back and forth over
+// one stretch (a GPS track repeating a route) has contacts between nearly every pair of its
+// segments, which the contact list held by the billion (issue 29: 100 000 vertices, 7 GB in
+// 60 s and no end). In a cell, a pair of segments both already found improper there is not
+// tested again, and the segments found improper are skipped over at once (a list of the next
+// one not found, compressed as it is walked): a cell whose segments all meet one of them costs
+// a pass, not the square. Each cell settles its segments on its own (a pair is tested in every
+// cell both boxes reach), so the predicates counted, like the result, do not depend on the
+// threads.
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
                                                  exact::PredicateStats& stats, int threads) {
     std::vector<std::uint8_t> improper(map.vertices.size(), 0);
-    for (const SegmentContact& contact : find_segment_contacts(map, arithmetic, stats, threads)) {
-        improper[contact.s] = improper[contact.t] = 1;
-    }
+    struct Worker {
+        std::vector<std::uint32_t> found;  // segments found improper (with repeats across cells)
+        exact::PredicateStats counted;
+        std::vector<std::uint8_t> here;     // per entry of the cell: found improper in this cell
+        std::vector<std::uint32_t> next;    // per entry found: a later entry, no later than the next one not found
+    };
+    for_each_cell(
+        map, threads, [] { return Worker{}; },
+        [&](Worker& worker, CellEntries::iterator first, CellEntries::iterator last, std::uint32_t, std::uint32_t, const Axis&,
+            const Axis&) {
+            const auto count = static_cast<std::uint32_t>(last - first);
+            worker.here.assign(count, 0);
+            worker.next.resize(std::size_t{count} + 1);
+            for (std::uint32_t k = 0; k <= count; ++k) worker.next[k] = k;
+            // The first entry at or after k not found improper yet; every entry passed on the
+            // way then points there (path compression: each is passed over about once).
+            auto open = [&worker, count](std::uint32_t k) {
+                std::uint32_t at = k;
+                while (at < count && worker.here[at]) at = worker.next[at] == at ? at + 1 : worker.next[at];
+                while (k < count && worker.here[k] && k != at) {
+                    const std::uint32_t step = worker.next[k] == k ? k + 1 : worker.next[k];
+                    worker.next[k] = at;
+                    k = step;
+                }
+                return at;
+            };
+            auto test = [&](std::uint32_t i, std::uint32_t j) {
+                const auto& [sb, s] = first[i];
+                const auto& [tb, t] = first[j];
+                // Every cell the two share tests them (not only the one of their overlap's low
+                // corner): a cell then settles its own segments, whatever the others do.
+                if (sb.min_y > tb.max_y || tb.min_y > sb.max_y || tb.min_x > sb.max_x) return;
+                if (!exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1], arithmetic,
+                                             worker.counted)) {
+                    return;
+                }
+                for (const auto& [k, segment] : {std::pair{i, s}, std::pair{j, t}}) {
+                    if (!worker.here[k]) {
+                        worker.here[k] = 1;
+                        worker.found.push_back(segment);
+                    }
+                }
+            };
+            for (std::uint32_t i = 0; i < count; ++i) {
+                const double reach = first[i].first.max_x;
+                if (!worker.here[i]) {
+                    for (std::uint32_t j = i + 1; j < count && first[j].first.min_x <= reach; ++j) test(i, j);
+                } else {
+                    for (std::uint32_t j = open(i + 1); j < count && first[j].first.min_x <= reach; j = open(j + 1)) test(i, j);
+                }
+            }
+        },
+        [&](Worker& worker) {
+            for (const std::uint32_t segment : worker.found) improper[segment] = 1;
+            stats += worker.counted;
+        });
     return improper;
 }
 

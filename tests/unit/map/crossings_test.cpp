@@ -98,5 +98,42 @@ TEST(SegmentContacts, BigMapMatchesEveryPairTest) {
     expect_same_contacts(map);
 }
 
+// find_improper_segments flags exactly the segments in some contact, with the same predicate
+// counts for any thread count, on small and big (parallel) tangled maps.
+TEST(SegmentContacts, ImproperSegmentsAreThoseInAContact) {
+    for (const auto& [seed, chains, steps, extent] : {std::tuple{1, 12, 40, 30}, std::tuple{7, 12, 40, 30}, std::tuple{99, 170, 100, 300}}) {
+        const MapData map = tangled_map(static_cast<std::uint64_t>(seed), chains, steps, extent);
+        std::vector<std::uint8_t> expected(map.vertices.size(), 0);
+        for (const SegmentContact& c : every_pair(map)) expected[c.s] = expected[c.t] = 1;
+        ASSERT_GT(std::count(expected.begin(), expected.end(), 1), 10);
+        std::uint64_t tests_one_thread = 0;
+        for (const int threads : {1, 2, 3}) {
+            exact::PredicateStats stats;
+            EXPECT_EQ(find_improper_segments(map, exact::Arithmetic::exact, stats, threads), expected) << seed << " " << threads;
+            const std::uint64_t tests = stats.filter_decided + stats.expansion_decided + stats.gmp_fallbacks;
+            if (threads == 1) tests_one_thread = tests;
+            EXPECT_EQ(tests, tests_one_thread) << "predicate counts depend on the threads";
+        }
+    }
+}
+
+// Issue 29, case 9: a line running back and forth over one stretch (a GPS track repeating a
+// route) has a contact between nearly every pair of its segments; finding which segments have
+// one took time and memory with their square (100 000 vertices: 7 GB in 60 s, no end). Every
+// segment is found, and in a pass per cell (ctest's timeout would end a quadratic run).
+TEST(SegmentContacts, Issue29BackAndForthLineIsSettledInLinearPasses) {
+    MapData map;
+    std::vector<Point> points;
+    // Along one line (y = 0), each turn a little further or shorter: collinear overlaps throughout.
+    for (int i = 0; i < 40000; ++i) points.push_back({i % 2 == 0 ? 0.1 * (i % 7) : 10.0 - 0.1 * (i % 5), 0.0});
+    map.add_chain(points);
+    exact::PredicateStats stats;
+    const std::vector<std::uint8_t> improper = find_improper_segments(map, exact::Arithmetic::exact, stats, 2);
+    EXPECT_EQ(std::count(improper.begin(), improper.end() - 1, 1), 39999);
+    // Each cell settles its segments in a pass or two, the rest passed over: the tests grow with
+    // the segments times the cells they span (141 here), not with their square (8·10^8 pairs).
+    EXPECT_LT(stats.filter_decided + stats.expansion_decided + stats.gmp_fallbacks, 40000u * 141u * 4u);
+}
+
 }  // namespace
 }  // namespace toposimp::map
