@@ -101,6 +101,11 @@ Mesh scattered(std::mt19937& random, int count, double extent) {
     return m;
 }
 
+Mesh scattered_example() {
+    std::mt19937 random(11);
+    return scattered(random, 80, 2.0);
+}
+
 TEST(Hausdorff, GridSearchFindsTheNearestFaceOfScatteredTriangles) {
     std::mt19937 random(7);
     for (int round = 0; round < 6; ++round) {
@@ -116,6 +121,26 @@ TEST(Hausdorff, GridSearchFindsTheNearestFaceOfNearbySurfaces) {
     const Mesh fine = toposimp::testing::noisy_sphere(3, 0.0, 1);
     const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
     expect_same(fine, coarse);
+}
+
+// Issue 29, case 13: long thin faces (a polygon split into a fan from one corner) are listed only
+// in the cells they meet, in cells sized by their area, and the search still finds every nearest
+// face: a fan against a noisy, shifted fan of another size.
+Mesh fan(int corners, double radius, double lift, int seed) {
+    std::mt19937 random(static_cast<unsigned>(seed));
+    std::uniform_real_distribution<double> noise(-0.01, 0.01);
+    Mesh m;
+    for (int k = 0; k < corners; ++k) {
+        const double angle = 2 * 3.141592653589793 * k / corners;
+        m.points.push_back({radius * std::cos(angle) * (1 + noise(random)), radius * std::sin(angle), lift + noise(random)});
+    }
+    for (int k = 1; k + 1 < corners; ++k) m.faces.push_back({0, static_cast<std::uint32_t>(k), static_cast<std::uint32_t>(k + 1)});
+    return m;
+}
+
+TEST(Hausdorff, Issue29ThinFanFacesAreFoundInTheCellsTheyMeet) {
+    expect_same(fan(400, 1.0, 0.0, 1), fan(150, 1.05, 0.02, 2));
+    expect_same(fan(60, 1.0, 0.0, 3), scattered_example());
 }
 
 // At 2^±500 units squared lengths times squared lengths overflow or underflow; the distances are
