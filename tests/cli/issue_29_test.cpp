@@ -259,6 +259,21 @@ TEST(Issue29, NumericOptionsRefuseNanInfinityAndNegatives) {
     EXPECT_EQ(run_cli({"map", testdata("nh_borders.gpkg"), "-o", out, "--remove-points", "+5", "-q"}).code, 0);
 }
 
+// Found by the OFF fuzz target: a 20-byte OFF file claiming 60 million vertices reserved room
+// for 2^26 of them (1.6 GB) before reading one; under a 1 GB address-space limit the run ended
+// "out of memory" instead of saying the file is truncated.
+TEST(Issue29, OffVertexCountIsHeldAgainstTheFile) {
+    const auto dir = fresh_dir("issue29");
+    write_bytes(dir / "huge.off", "OFF\n60000000 1 0\n0 0 0\n");
+    const std::string command = "ulimit -v 1000000; '" + std::string(TOPOSIMP_BINARY) + "' mesh '" + (dir / "huge.off").string() +
+                                "' -o '" + (dir / "out.ply").string() + "' 2>'" + (dir / "err.txt").string() + "'";
+    const int status = std::system(command.c_str());
+    std::ifstream in(dir / "err.txt");
+    const std::string err((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(WEXITSTATUS(status), 2) << err;
+    EXPECT_NE(err.find("huge.off: truncated: the header promises 60000000 vertices"), std::string::npos) << err;
+}
+
 // Case 14, last part. A full disk was reported as a "write error" on the staging path; now the
 // destination and the system's reason ("No space left on device": /dev/full stands in for a
 // full disk).

@@ -100,7 +100,9 @@ mesh::Mesh read_off(const std::string& path, std::string_view text, const MeshRe
         }
     }
     const auto vertices = static_cast<std::size_t>(counts[0]), faces = static_cast<std::size_t>(counts[1]);
-    m.points.reserve(std::min<std::size_t>(vertices, 1u << 26));
+    // (A count is held against the file before anything is reserved for it: a vertex takes a
+    // line of at least six characters. A 20-byte file claimed 2^26 vertices: 1.6 GB reserved.)
+    m.points.reserve(std::min<std::size_t>(vertices, text.size() / 6));
     const std::size_t before_colour = 3 + (with_normals ? 3 : 0), after_colour = texture ? 2 : 0;
     std::vector<double> normal_values, uv_values, numbers;
     OffColours vertex_colours, face_colours;
