@@ -16,7 +16,13 @@ namespace {
 // A file read front to back through a buffer; every read fails past the end.
 class SequentialFile {
 public:
-    explicit SequentialFile(const std::filesystem::path& path) : in_(path, std::ios::binary) {}
+    // The buffer: a megabyte, or the whole file if it is smaller (no megabyte zeroed for a
+    // .shx of a few records, three files a read).
+    explicit SequentialFile(const std::filesystem::path& path) : in_(path, std::ios::binary) {
+        std::error_code error;
+        const std::uintmax_t size = std::filesystem::file_size(path, error);
+        buffer_.resize(error ? kBuffer : static_cast<std::size_t>(std::clamp<std::uintmax_t>(size, 1, kBuffer)));
+    }
 
     bool is_open() const { return in_.is_open(); }
     std::uint64_t offset() const { return offset_; }
@@ -53,8 +59,9 @@ private:
         return filled_ > 0;
     }
 
+    static constexpr std::size_t kBuffer = std::size_t{1} << 20;
     std::ifstream in_;
-    std::vector<unsigned char> buffer_ = std::vector<unsigned char>(std::size_t{1} << 20);
+    std::vector<unsigned char> buffer_;
     std::size_t filled_ = 0;
     std::size_t at_ = 0;
     std::uint64_t offset_ = 0;
