@@ -173,7 +173,7 @@ TEST(MeshAttributes, OffColoursAreIntegersOrFractionsByTheFile) {
     EXPECT_EQ(names(ints.report.layout.vertex), (std::vector<std::string>{"red", "green", "blue", "alpha"}));
     EXPECT_EQ(ints.report.layout.vertex[0].type, io::ValueType::u8);
     EXPECT_EQ(ints.mesh.vertex_attributes.row(1)[3], 128);
-    const std::string obj = temp_path("attributes-alpha.obj").string();  // OBJ colours have no alpha
+    const std::string obj = temp_path("attributes-off-colours.obj").string();  // OBJ colours have no alpha
     EXPECT_EQ(io::write_mesh(ints.mesh, ints.report.layout, obj, io::MeshFormat::obj, false), (std::vector<std::string>{"vertex alpha"}));
     // Normals, a colour without alpha, texture coordinates, a colour per face split with its quad.
     const Read all = read(write_file("stcn.off",
