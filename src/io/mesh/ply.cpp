@@ -52,17 +52,6 @@ struct Element {
     std::vector<Property> properties;
 };
 
-// The scalar of type T at `bytes`, byte-swapped first if `swap`.
-template <class T>
-double load(const char* bytes, bool swap) {
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, bytes, sizeof(T));
-    if (swap) std::reverse(b, b + sizeof(T));
-    T value;
-    std::memcpy(&value, b, sizeof(T));
-    return static_cast<double>(value);
-}
-
 inline double decode(Scalar type, const char* bytes, bool swap) {
     switch (type) {
         case Scalar::i8: return load<std::int8_t>(bytes, swap);
