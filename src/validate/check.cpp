@@ -2,7 +2,9 @@
 
 #include "core/exact/point_in_ring.hpp"
 #include "core/exact/predicates.hpp"
+#include "core/exact/segments.hpp"
 #include "core/map/crossings.hpp"
+#include "core/map/location_key.hpp"
 #include "core/map/point_grid.hpp"
 #include "io/common/errors.hpp"
 #include "io/ogr/ogr_dataset.hpp"
@@ -16,6 +18,7 @@
 #include <cmath>
 #include <filesystem>
 #include <optional>
+#include <span>
 #include <tuple>
 #include <unordered_map>
 
@@ -130,21 +133,77 @@ struct Matched {
     const Feature* simplified;  // null if lost
 };
 
-// All linework of a side (original or simplified) as one map, each chain tagged with the
-// matched feature it belongs to, so contacts can be counted per pair of features.
-struct Linework {
-    map::MapData map;
-    std::vector<std::uint32_t> feature_of_chain;
-    std::vector<std::uint32_t> chain_of_vertex;
+// All linework of a side (original or simplified), each distinct segment once with the features
+// it belongs to and how often: a border shared by two polygons is one segment of two features,
+// a route a track drives 10 000 times one segment of one feature, 10 000 times. Contacts are
+// then counted per pair of features by multiplying, not by listing every pair of segments
+// (issue 29: 5·10^9 pairs for a 100 000-vertex track back and forth over one stretch).
+class Linework {
+public:
+    struct Member {
+        std::uint32_t feature;
+        std::uint64_t times;
+    };
 
     void add(const Feature& feature, std::uint32_t id) {
         for (const auto& part : feature.parts) {
-            if (part.size() < 2) continue;
-            const std::uint32_t chain = map.add_chain(part);
-            feature_of_chain.push_back(id);
-            chain_of_vertex.resize(map.vertices.size(), chain);
+            for (std::size_t k = 0; k + 1 < part.size(); ++k) {
+                map::LocationKey a(part[k]), b(part[k + 1]);
+                if (b < a) std::swap(a, b);
+                added_.push_back({a, b, id, static_cast<std::uint32_t>(added_.size())});
+            }
         }
     }
+
+    // Groups what was added: afterwards map() holds each distinct segment as a chain of its
+    // own (distinct segment d from vertex 2d), in order of first appearance.
+    void finish() {
+        std::sort(added_.begin(), added_.end(), [](const Added& x, const Added& y) {
+            return std::tie(x.a, x.b, x.order) < std::tie(y.a, y.b, y.order);
+        });
+        struct Group {
+            std::uint32_t first_added, begin, end;
+        };
+        std::vector<Group> groups;
+        for (std::uint32_t k = 0; k < added_.size();) {
+            std::uint32_t end = k + 1;
+            while (end < added_.size() && added_[end].a == added_[k].a && added_[end].b == added_[k].b) ++end;
+            groups.push_back({added_[k].order, k, end});
+            k = end;
+        }
+        std::sort(groups.begin(), groups.end(), [](const Group& x, const Group& y) { return x.first_added < y.first_added; });
+        start_.push_back(0);
+        for (const Group& group : groups) {
+            const Added& one = added_[group.begin];
+            map_.vertices.push_back(one.a.point());
+            map_.vertices.push_back(one.b.point());
+            const auto v = static_cast<std::uint32_t>(map_.vertices.size() - 2);
+            map_.chains.push_back({v, v + 1});
+            // Features were added in increasing order, and the group keeps that order.
+            for (std::uint32_t k = group.begin; k < group.end; ++k) {
+                if (members_.size() > start_.back() && members_.back().feature == added_[k].feature) ++members_.back().times;
+                else members_.push_back({added_[k].feature, 1});
+            }
+            start_.push_back(members_.size());
+        }
+        added_ = {};
+    }
+
+    const map::MapData& map() const { return map_; }
+    std::size_t segments() const { return map_.chains.size(); }
+    std::span<const Member> members(std::size_t segment) const {
+        return {members_.data() + start_[segment], members_.data() + start_[segment + 1]};
+    }
+
+private:
+    struct Added {
+        map::LocationKey a, b;
+        std::uint32_t feature, order;
+    };
+    std::vector<Added> added_;
+    map::MapData map_;
+    std::vector<Member> members_;
+    std::vector<std::size_t> start_;  // per distinct segment, where its members begin
 };
 
 using PairKey = std::pair<std::uint32_t, std::uint32_t>;
@@ -152,19 +211,37 @@ struct PairHash {
     std::size_t operator()(const PairKey& k) const { return std::hash<std::uint64_t>()((std::uint64_t{k.first} << 32) | k.second); }
 };
 struct PairContacts {
-    std::array<std::uint32_t, 3> count{};           // by ContactKind
+    std::array<std::uint64_t, 3> count{};            // by ContactKind
     std::array<map::SegmentContact, 3> first{};      // one example of each kind
 };
 
 std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linework& side, exact::PredicateStats& stats) {
     std::unordered_map<PairKey, PairContacts, PairHash> pairs;
-    for (const map::SegmentContact& contact : map::find_segment_contacts(side.map, exact::Arithmetic::exact, stats)) {
-        std::uint32_t a = side.feature_of_chain[side.chain_of_vertex[contact.s]];
-        std::uint32_t b = side.feature_of_chain[side.chain_of_vertex[contact.t]];
-        if (a > b) std::swap(a, b);
-        PairContacts& entry = pairs[{a, b}];
+    auto add = [&](std::uint32_t a, std::uint32_t b, std::uint64_t times, const map::SegmentContact& contact) {
+        if (times == 0) return;
+        PairContacts& entry = pairs[{std::min(a, b), std::max(a, b)}];
         const auto kind = static_cast<std::size_t>(contact.kind);
-        if (entry.count[kind]++ == 0) entry.first[kind] = contact;
+        if (entry.count[kind] == 0) entry.first[kind] = contact;
+        entry.count[kind] += times;
+    };
+    // Copies of one segment: identical to each other, when a segment meets itself improperly
+    // (anything but a point, which is only its own ends).
+    for (std::uint32_t d = 0; d < side.segments(); ++d) {
+        const std::uint32_t v = 2 * d;
+        const Point p = side.map().vertices[v], q = side.map().vertices[v + 1];
+        if (!exact::improper_contact(p, q, p, q, exact::Arithmetic::exact, stats)) continue;
+        const map::SegmentContact itself{v, v, map::ContactKind::identical};
+        const std::span<const Linework::Member> list = side.members(d);
+        for (std::size_t i = 0; i < list.size(); ++i) {
+            add(list[i].feature, list[i].feature, list[i].times * (list[i].times - 1) / 2, itself);
+            for (std::size_t j = i + 1; j < list.size(); ++j) add(list[i].feature, list[j].feature, list[i].times * list[j].times, itself);
+        }
+    }
+    // Distinct segments that meet: every copy of one meets every copy of the other.
+    for (const map::SegmentContact& contact : map::find_segment_contacts(side.map(), exact::Arithmetic::exact, stats)) {
+        for (const Linework::Member& a : side.members(contact.s / 2)) {
+            for (const Linework::Member& b : side.members(contact.t / 2)) add(a.feature, b.feature, a.times * b.times, contact);
+        }
     }
     return pairs;
 }
@@ -297,10 +374,12 @@ private:
             before_lines.add(*matched_[m].original, m);
             if (matched_[m].simplified) after_lines.add(*matched_[m].simplified, m);
         }
+        before_lines.finish();
+        after_lines.finish();
         const auto before_pairs = count_contacts(before_lines, stats_);
         const auto after_pairs = count_contacts(after_lines, stats_);
         auto location = [&](const Linework& side, const map::SegmentContact& c) {
-            const auto& v = side.map.vertices;
+            const auto& v = side.map().vertices;
             return geos_.meeting_point(v[c.s], v[c.s + 1], v[c.t], v[c.t + 1]);
         };
         auto name_of = [&](std::uint32_t m) { return matched_[m].original->key; };
@@ -308,8 +387,8 @@ private:
             for (const auto& [pair, contacts] : pairs) {
                 const auto other = others.find(pair);
                 for (std::size_t kind = 0; kind < 3; ++kind) {
-                    const std::uint32_t here = contacts.count[kind];
-                    const std::uint32_t there = other == others.end() ? 0 : other->second.count[kind];
+                    const std::uint64_t here = contacts.count[kind];
+                    const std::uint64_t there = other == others.end() ? 0 : other->second.count[kind];
                     // Where: computed only for a pair that is reported.
                     const auto where = [&] { return location(after_side ? after_lines : before_lines, contacts.first[kind]); };
                     const std::string counts = std::to_string(after_side ? there : here) + " before, " +

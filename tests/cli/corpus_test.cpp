@@ -33,7 +33,10 @@ std::vector<LayerCase> corpus_layers(const std::filesystem::path& root) {
         if (!entry.is_regular_file()) continue;
         const std::string path = entry.path().string(), extension = entry.path().extension().string();
         if (extension == ".zip") datasets.push_back("/vsizip/" + path);
-        if (extension == ".shp" || extension == ".gpkg" || extension == ".geojson" || extension == ".gml") datasets.push_back(path);
+        if (extension == ".shp" || extension == ".gpkg" || extension == ".geojson" || extension == ".gml" || extension == ".gpx" ||
+            extension == ".osm") {
+            datasets.push_back(path);
+        }
     }
     std::sort(datasets.begin(), datasets.end());
     std::vector<LayerCase> layers;

@@ -92,6 +92,33 @@ TEST(Issue29, CheckDoesNotCompareTheControlPointLayerItIsGiven) {
     EXPECT_NE(check.out.find("\"features\":27,\"control_points\":26"), std::string::npos) << check.out;
 }
 
+// Case 9. A GPS track driving one route 10 000 times, back and forth (40 000 vertices), and a
+// road across it: the input-crossing search listed every pair of the track's segments (7 GB in
+// 60 s, no end, for 100 000), and so did `check` counting contacts (2·10^8 pairs of identical
+// segments here).
+// Now map pins the whole track (it overlaps itself everywhere) and check counts the copies.
+TEST(Issue29, TrackRepeatingARouteIsSimplifiedAndChecked) {
+    const auto dir = fresh_dir("issue29");
+    std::vector<std::string> route;
+    for (int k = 0; k < 5; ++k) route.push_back(std::to_string(100 * k) + " " + std::to_string(3000 * k + (k % 2 ? 70 : 0)));
+    std::string track = "LINESTRING (" + route.front();
+    for (int pass = 0; pass < 10000; ++pass) {
+        for (std::size_t k = 1; k < route.size(); ++k) track += "," + route[pass % 2 == 0 ? k : route.size() - 1 - k];
+    }
+    const std::string input = (dir / "tracks.gpkg").string(), out = (dir / "out.gpkg").string();
+    track += ")";
+    write_layer(input, "GPKG", wkbLineString, {{track, "track"}, {"LINESTRING (-10 7000,100 7100,200 7000,300 7100,400 7000,510 7100)", "road"}});
+    const CliResult map = run_cli({"map", input, "-o", out, "--keep", "50%", "--json"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    const CliResult check = run_cli({"check", input, out, "--json"});
+    EXPECT_EQ(check.code, 0) << check.out << check.err;
+    EXPECT_NE(check.out.find("\"clean\":true"), std::string::npos) << check.out;
+    // The track is kept whole; the road is free to lose corners away from the crossing.
+    const ReadLayer written = read_layer(out);
+    ASSERT_EQ(written.features.size(), 2u);
+    EXPECT_EQ(written.features[0].coordinates[0].size(), 2u * (4u * 10000u + 1u));  // x, y
+}
+
 const std::string kBinaryFace = "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
 
 std::string triangle_face() { return std::string(1, '\3') + bytes_of<std::int32_t>(0) + bytes_of<std::int32_t>(1) + bytes_of<std::int32_t>(2); }

@@ -15,6 +15,14 @@ Box segment_box(Point a, Point b) {
     return {std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
 }
 
+// A segment's ends in a fixed order (the lower first, by y then x): copies of one segment, in
+// either direction, are computed alike and sort together.
+bool before(Point a, Point b) { return a.y < b.y || (a.y == b.y && a.x < b.x); }
+std::pair<Point, Point> ends_of(const MapData& map, std::uint32_t v) {
+    const Point a = map.vertices[v], b = map.vertices[v + 1];
+    return before(b, a) ? std::pair{b, a} : std::pair{a, b};
+}
+
 // Cell index along one axis: monotone in the coordinate, so a box's cells are those between
 // its corners' cells whatever the rounding.
 struct Axis {
@@ -29,6 +37,39 @@ struct Axis {
     }
 };
 
+// The cells of a grid over the map, and which of them a segment is entered in. A segment is
+// entered in every cell of the rows its box spans, but within a row only in the columns of
+// its part in that row: a line as long as the map, diagonal, is in about 2·side cells, not in
+// side² (issue 29: a track running back and forth along a diagonal).
+//
+// Why no contact is missed: a point P of the segment with row(P.y) = r has (P.y − origin)·scale
+// in [r, r + 1) up to rounding of a few ulps of side, far below a quarter row; so P.y lies in
+// the band widened by a quarter row each way, computed with an error of a few ulps of the
+// coordinates, which `clip` requires to be below 2⁻³⁶ of a cell. The segment's x over that
+// band is interpolated between the band's ends; the interpolation errs by a few ulps of the
+// coordinates plus the slope times the error in y, and the quarter row of slack in y and a
+// quarter column in x cover both. So P.x lies in the part, and P's cell is one the segment is
+// entered in; two segments that meet at P are both in P's cell. A segment within two rows,
+// or a grid too fine for its coordinates, keeps its whole box.
+struct Grid {
+    Axis column, row;
+    double cell_width = 0, cell_height = 0;
+    bool clip = false;
+
+    Box part_in_row(Point a, Point b, std::uint32_t r) const {
+        if (before(b, a)) std::swap(a, b);
+        const Box box = segment_box(a, b);
+        if (!clip || row(box.max_y) - row(box.min_y) < 2) return box;
+        const double low = std::max(box.min_y, row.origin + (static_cast<double>(r) - 0.25) * cell_height);
+        const double high = std::min(box.max_y, row.origin + (static_cast<double>(r) + 1.25) * cell_height);
+        const double dy = b.y - a.y;  // not zero: the segment spans three rows or more
+        const double t_low = std::clamp((low - a.y) / dy, 0.0, 1.0), t_high = std::clamp((high - a.y) / dy, 0.0, 1.0);
+        const double x_low = a.x + t_low * (b.x - a.x), x_high = a.x + t_high * (b.x - a.x);
+        const double slack = 0.25 * cell_width;
+        return {std::max(box.min_x, std::min(x_low, x_high) - slack), low, std::min(box.max_x, std::max(x_low, x_high) + slack), high};
+    }
+};
+
 // Calls visit(v) for each segment (named by its first vertex v) whose first vertex lies in
 // [begin, end), chain by chain.
 template <class Visit>
@@ -39,16 +80,17 @@ void for_each_segment(const MapData& map, std::uint32_t begin, std::uint32_t end
     }
 }
 
-// One row's segment boxes, cell after cell: a cell's entries (box, segment) sorted by left edge.
+// One row's segments, cell after cell: a cell's entries (the segment's part in the row, the
+// segment) sorted by left edge.
 using CellEntries = std::vector<std::pair<Box, std::uint32_t>>;
 
-// A uniform grid over the segments' boxes, one row of cells at a time: the segments are first
+// A uniform grid over the map (see Grid), one row of cells at a time: the segments are first
 // distributed to the rows their boxes span (a parallel counting sort), then each row, on its
-// own, to its cells. Calls visit(worker, entries, first, last, x, y, column, row) for each cell
-// of two or more segments, its entries sorted by left edge, on the thread that owns `worker`
-// (one Worker per thread, made by make_worker(), handed to finish(worker) at the end, one
-// thread at a time). A pair of segments must be tested only in the cell holding the low corner
-// of their boxes' overlap, so once: the visitor checks that with `column` and `row`.
+// own, to the cells of their parts in it. Calls visit(worker, first, last, x, y, grid) for each
+// cell of two or more segments, its entries sorted by left edge, on the thread that owns
+// `worker` (one Worker per thread, made by make_worker(), handed to finish(worker) at the end,
+// one thread at a time). Two segments that meet are both in the cell where they meet; a
+// visitor that wants each pair once checks first_shared_cell.
 template <class MakeWorker, class Visit, class Finish>
 void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worker, Visit visit, Finish finish) {
     const auto vertex_count = static_cast<std::uint32_t>(map.vertices.size());
@@ -70,8 +112,14 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
     }
     const auto side = static_cast<std::uint32_t>(std::clamp(std::floor(std::sqrt(static_cast<double>(segment_count) / 2.0)), 1.0, 4096.0));
     const double width = max_x - min_x, height = max_y - min_y;
-    const Axis column{min_x, width > 0 ? side / width : 0.0, side}, row{min_y, height > 0 ? side / height : 0.0, side};
+    Grid grid{{min_x, width > 0 ? side / width : 0.0, side}, {min_y, height > 0 ? side / height : 0.0, side}, width / side,
+              height / side};
+    const double magnitude = std::max({std::abs(min_x), std::abs(max_x), std::abs(min_y), std::abs(max_y)});
+    grid.clip = std::min(grid.cell_width, grid.cell_height) >= std::ldexp(magnitude, -36);
+    const Axis& row = grid.row;
+    const Axis& column = grid.column;
     auto box_of = [&](std::uint32_t v) { return segment_box(map.vertices[v], map.vertices[v + 1]); };
+    auto part_of = [&](std::uint32_t v, std::uint32_t y) { return grid.part_in_row(map.vertices[v], map.vertices[v + 1], y); };
     auto vertices_of = [&](int t) {
         return std::pair{static_cast<std::uint32_t>(std::uint64_t{vertex_count} * static_cast<std::size_t>(t) / share),
                          static_cast<std::uint32_t>(std::uint64_t{vertex_count} * static_cast<std::size_t>(t + 1) / share)};
@@ -116,28 +164,32 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
             if (end - begin < 2) continue;
             std::fill(cell_start.begin(), cell_start.end(), 0);
             for (std::size_t k = begin; k < end; ++k) {
-                const Box box = box_of(in_rows[k]);
-                for (std::uint32_t x = column(box.min_x), last = column(box.max_x); x <= last; ++x) ++cell_start[x + 1];
+                const Box part = part_of(in_rows[k], y);
+                for (std::uint32_t x = column(part.min_x), last = column(part.max_x); x <= last; ++x) ++cell_start[x + 1];
             }
             for (std::uint32_t x = 0; x < side; ++x) cell_start[x + 1] += cell_start[x];
             cells.resize(cell_start[side]);
             {
                 std::vector<std::uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
                 for (std::size_t k = begin; k < end; ++k) {
-                    const Box box = box_of(in_rows[k]);
-                    for (std::uint32_t x = column(box.min_x), last = column(box.max_x); x <= last; ++x) {
-                        cells[fill[x]++] = {box, in_rows[k]};
+                    const Box part = part_of(in_rows[k], y);
+                    for (std::uint32_t x = column(part.min_x), last = column(part.max_x); x <= last; ++x) {
+                        cells[fill[x]++] = {part, in_rows[k]};
                     }
                 }
             }
             for (std::uint32_t x = 0; x < side; ++x) {
                 const auto first = cells.begin() + cell_start[x], last = cells.begin() + cell_start[x + 1];
                 if (last - first < 2) continue;
-                // By left edge: only boxes starting before one ends can overlap it in x.
-                std::sort(first, last, [](const auto& a, const auto& b) {
-                    return a.first.min_x < b.first.min_x || (a.first.min_x == b.first.min_x && a.second < b.second);
+                // By left edge: only boxes starting before one ends can overlap it in x. Then
+                // by ends, so copies of a segment come together.
+                std::sort(first, last, [&map](const auto& a, const auto& b) {
+                    if (a.first.min_x != b.first.min_x) return a.first.min_x < b.first.min_x;
+                    const auto [p, q] = ends_of(map, a.second);
+                    const auto [r, u] = ends_of(map, b.second);
+                    return std::tuple{p.y, p.x, q.y, q.x, a.second} < std::tuple{r.y, r.x, u.y, u.x, b.second};
                 });
-                visit(worker, first, last, x, y, column, row);
+                visit(worker, first, last, x, y, grid);
             }
         }
 #pragma omp critical(toposimp_segment_contacts)
@@ -145,11 +197,22 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
     }
 }
 
-// Do the boxes of a pair overlap, with the low corner of the overlap in cell (x, y)?
-bool tested_here(const Box& a, const Box& b, std::uint32_t x, std::uint32_t y, const Axis& column, const Axis& row) {
-    const double low_x = std::max(a.min_x, b.min_x), low_y = std::max(a.min_y, b.min_y);
-    if (low_x > std::min(a.max_x, b.max_x) || low_y > std::min(a.max_y, b.max_y)) return false;
-    return column(low_x) == x && row(low_y) == y;
+bool overlap(const Box& a, const Box& b) {
+    return a.min_x <= b.max_x && b.min_x <= a.max_x && a.min_y <= b.max_y && b.min_y <= a.max_y;
+}
+
+// Is cell (x, y) the first the two segments share: the low column of their parts' overlap in
+// row y, and their parts in row y − 1 apart (or one of them not yet there)? Each pair meets
+// this in the first row where their parts overlap, so it is tested at least once; should the
+// rows where the parts overlap have a gap (rounding), it is tested again later, and the
+// caller drops the repeat.
+bool first_shared_cell(const MapData& map, std::uint32_t s, const Box& sb, std::uint32_t t, const Box& tb, std::uint32_t x,
+                       std::uint32_t y, const Grid& grid) {
+    if (!overlap(sb, tb) || grid.column(std::max(sb.min_x, tb.min_x)) != x) return false;
+    if (y == 0) return true;
+    const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
+    if (grid.row(std::min(p.y, q.y)) == y || grid.row(std::min(r.y, u.y)) == y) return true;
+    return !overlap(grid.part_in_row(p, q, y - 1), grid.part_in_row(r, u, y - 1));
 }
 
 }  // namespace
@@ -164,12 +227,12 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
     for_each_cell(
         map, threads_wanted, [] { return Worker{}; },
         [&](Worker& worker, CellEntries::iterator first, CellEntries::iterator last, std::uint32_t x, std::uint32_t y,
-            const Axis& column, const Axis& row) {
+            const Grid& grid) {
             for (auto i = first; i != last; ++i) {
                 const auto& [sb, s] = *i;
                 for (auto j = i + 1; j != last && j->first.min_x <= sb.max_x; ++j) {
                     const auto& [tb, t] = *j;
-                    if (!tested_here(sb, tb, x, y, column, row)) continue;  // (or tested in another cell)
+                    if (!first_shared_cell(map, s, sb, t, tb, x, y, grid)) continue;  // (tested in another cell)
                     const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
                     if (!exact::improper_contact(p, q, r, u, arithmetic, worker.counted)) continue;
                     ContactKind kind = ContactKind::touching;
@@ -186,10 +249,14 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
             contacts.insert(contacts.end(), worker.found.begin(), worker.found.end());
             stats += worker.counted;
         });
-    // Sorted, so the result does not depend on which thread found what.
+    // Sorted, so the result does not depend on which thread found what; a pair tested twice
+    // (see first_shared_cell) once.
     std::sort(contacts.begin(), contacts.end(), [](const SegmentContact& a, const SegmentContact& b) {
         return a.s < b.s || (a.s == b.s && a.t < b.t);
     });
+    contacts.erase(std::unique(contacts.begin(), contacts.end(),
+                               [](const SegmentContact& a, const SegmentContact& b) { return a.s == b.s && a.t == b.t; }),
+                   contacts.end());
     return contacts;
 }
 
@@ -199,24 +266,47 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
 // 60 s and no end). In a cell, a pair of segments both already found improper there is not
 // tested again, and the segments found improper are skipped over at once (a list of the next
 // one not found, compressed as it is walked): a cell whose segments all meet one of them costs
-// a pass, not the square. Each cell settles its segments on its own (a pair is tested in every
-// cell both boxes reach), so the predicates counted, like the result, do not depend on the
-// threads.
+// a pass, not the square. Copies of one segment (the same ends, either way) stand in a cell as
+// one: they meet each other, unless a point, and what meets one meets all — a route driven
+// 25 000 times is a few segments, not 25 000 copies each tested against the next stretch's
+// copies. Each cell settles its segments on its own (a pair is tested in every cell both parts
+// reach), so the predicates counted, like the result, do not depend on the threads.
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
                                                  exact::PredicateStats& stats, int threads) {
     std::vector<std::uint8_t> improper(map.vertices.size(), 0);
     struct Worker {
         std::vector<std::uint32_t> found;  // segments found improper (with repeats across cells)
         exact::PredicateStats counted;
-        std::vector<std::uint8_t> here;     // per entry of the cell: found improper in this cell
+        CellEntries distinct;               // the cell's entries, copies of a segment once
+        std::vector<std::uint32_t> copies;  // per distinct entry, where its copies begin among the entries (and the end)
+        std::vector<std::uint8_t> here;     // per distinct entry: found improper in this cell
         std::vector<std::uint32_t> next;    // per entry found: a later entry, no later than the next one not found
     };
     for_each_cell(
         map, threads, [] { return Worker{}; },
-        [&](Worker& worker, CellEntries::iterator first, CellEntries::iterator last, std::uint32_t, std::uint32_t, const Axis&,
-            const Axis&) {
-            const auto count = static_cast<std::uint32_t>(last - first);
+        [&](Worker& worker, CellEntries::iterator entries, CellEntries::iterator entries_end, std::uint32_t, std::uint32_t,
+            const Grid&) {
+            worker.distinct.clear();
+            worker.copies.clear();
+            for (auto k = entries; k != entries_end;) {
+                const auto [p, q] = ends_of(map, k->second);
+                auto end = k + 1;
+                for (; end != entries_end; ++end) {
+                    const auto [r, u] = ends_of(map, end->second);
+                    if (!same_location(p, r) || !same_location(q, u)) break;
+                }
+                worker.distinct.push_back(*k);
+                worker.copies.push_back(static_cast<std::uint32_t>(k - entries));
+                k = end;
+            }
+            worker.copies.push_back(static_cast<std::uint32_t>(entries_end - entries));
+            const auto first = worker.distinct.begin();
+            const auto count = static_cast<std::uint32_t>(worker.distinct.size());
             worker.here.assign(count, 0);
+            for (std::uint32_t d = 0; d < count; ++d) {
+                const std::uint32_t s = first[d].second;
+                if (worker.copies[d + 1] - worker.copies[d] > 1 && !same_location(map.vertices[s], map.vertices[s + 1])) worker.here[d] = 1;
+            }
             worker.next.resize(std::size_t{count} + 1);
             for (std::uint32_t k = 0; k <= count; ++k) worker.next[k] = k;
             // The first entry at or after k not found improper yet; every entry passed on the
@@ -237,15 +327,9 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 // Every cell the two share tests them (not only the one of their overlap's low
                 // corner): a cell then settles its own segments, whatever the others do.
                 if (sb.min_y > tb.max_y || tb.min_y > sb.max_y || tb.min_x > sb.max_x) return;
-                if (!exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1], arithmetic,
-                                             worker.counted)) {
-                    return;
-                }
-                for (const auto& [k, segment] : {std::pair{i, s}, std::pair{j, t}}) {
-                    if (!worker.here[k]) {
-                        worker.here[k] = 1;
-                        worker.found.push_back(segment);
-                    }
+                if (exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1], arithmetic,
+                                            worker.counted)) {
+                    worker.here[i] = worker.here[j] = 1;
                 }
             };
             for (std::uint32_t i = 0; i < count; ++i) {
@@ -255,6 +339,10 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 } else {
                     for (std::uint32_t j = open(i + 1); j < count && first[j].first.min_x <= reach; j = open(j + 1)) test(i, j);
                 }
+            }
+            for (std::uint32_t d = 0; d < count; ++d) {
+                if (!worker.here[d]) continue;
+                for (std::uint32_t k = worker.copies[d]; k < worker.copies[d + 1]; ++k) worker.found.push_back(entries[k].second);
             }
         },
         [&](Worker& worker) {

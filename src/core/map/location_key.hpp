@@ -18,6 +18,12 @@ struct LocationKey {
         std::memcpy(&x, &px, sizeof x);
         std::memcpy(&y, &py, sizeof y);
     }
+    Point point() const {
+        Point p;
+        std::memcpy(&p.x, &x, sizeof x);
+        std::memcpy(&p.y, &y, sizeof y);
+        return p;
+    }
     friend bool operator==(const LocationKey&, const LocationKey&) = default;
     friend auto operator<=>(const LocationKey&, const LocationKey&) = default;
 };

@@ -117,6 +117,51 @@ TEST(SegmentContacts, ImproperSegmentsAreThoseInAContact) {
     }
 }
 
+// Long segments at every slope, entered only in the cells of their parts in each row: chords
+// across the whole map (steep, shallow, near-axis), at coordinates where the grid's cells are
+// large and small against the coordinates' ulps, and one grid too fine to clip at all.
+TEST(SegmentContacts, LongSegmentsAtEverySlopeMatchEveryPairTest) {
+    for (const auto& [seed, offset, scale] : {std::tuple{3, 0.0, 1.0}, std::tuple{4, 1e6, 1e-3}, std::tuple{5, -3e8, 1e2},
+                                             std::tuple{6, 1e9, 1e-6}, std::tuple{7, 0.0, 1e-300}}) {
+        std::mt19937_64 rng(static_cast<std::uint64_t>(seed));
+        std::uniform_real_distribution<double> unit(0, 100);
+        std::uniform_int_distribution<int> lattice(0, 100), pick(0, 3);
+        MapData map;
+        for (int c = 0; c < 300; ++c) {
+            std::vector<Point> points;
+            for (int k = 0; k < 3; ++k) {
+                double x = unit(rng), y = unit(rng);
+                if (pick(rng) == 0) x = lattice(rng), y = lattice(rng);  // shared lattice points: touches
+                if (k == 1 && pick(rng) == 0) y = points.back().y + 1e-3 * unit(rng);  // near horizontal
+                points.push_back({offset + scale * x, offset + scale * y});
+            }
+            map.add_chain(points);
+        }
+        expect_same_contacts(map);
+        std::vector<std::uint8_t> expected(map.vertices.size(), 0);
+        for (const SegmentContact& contact : every_pair(map)) expected[contact.s] = expected[contact.t] = 1;
+        exact::PredicateStats stats;
+        EXPECT_EQ(find_improper_segments(map, exact::Arithmetic::exact, stats, 2), expected) << seed;
+    }
+}
+
+// Issue 29, case 9, in two dimensions: a track back and forth along a diagonal as long as the
+// map. Each segment's box covers every cell, so entering boxes would put 40 000 segments in
+// 20 000 cells each (8·10^8 entries); entering their parts puts each in a few hundred.
+TEST(SegmentContacts, Issue29BackAndForthDiagonalIsEnteredAlongItsCells) {
+    MapData map;
+    std::vector<Point> points;
+    for (int i = 0; i < 40000; ++i) {
+        const double t = i % 2 == 0 ? 0.5 * (i % 7) : 1000.0 - 0.5 * (i % 5);
+        points.push_back({t, 0.5 * t});
+    }
+    map.add_chain(points);
+    exact::PredicateStats stats;
+    const std::vector<std::uint8_t> improper = find_improper_segments(map, exact::Arithmetic::exact, stats, 2);
+    EXPECT_EQ(std::count(improper.begin(), improper.end() - 1, 1), 39999);
+    EXPECT_LT(stats.filter_decided + stats.expansion_decided + stats.gmp_fallbacks, 40000u * 141u * 4u * 3u);
+}
+
 // Issue 29, case 9: a line running back and forth over one stretch (a GPS track repeating a
 // route) has a contact between nearly every pair of its segments; finding which segments have
 // one took time and memory with their square (100 000 vertices: 7 GB in 60 s, no end). Every
