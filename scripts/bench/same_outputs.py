@@ -3,7 +3,7 @@
 every output is byte-identical and how the times compare (medians). For refactors that must not
 change behaviour:
 
-    scripts/bench/same_outputs.py OLD_BUILD_DIR NEW_BUILD_DIR [--runs 3] [--only map|mesh]
+    scripts/bench/same_outputs.py OLD_BUILD_DIR NEW_BUILD_DIR [--runs 3] [--only map|mesh] [--ignore KEY]
 
 A build dir is one holding the `toposimp` executable (and toposimp-gdal beside it). The data are
 made as scripts/bench/mesh.py makes them (CGAL's demo models, jacksboro, the 2 M terrain) plus
@@ -38,11 +38,11 @@ def sha(path):
 VARYING = {"seconds", "engine_seconds", "peak_memory_mib", "output"}
 
 
-def without_varying(value):
+def without_varying(value, varying):
     if isinstance(value, dict):  # (ordered: the order of the keys is compared too)
-        return collections.OrderedDict((k, without_varying(v)) for k, v in value.items() if k not in VARYING)
+        return collections.OrderedDict((k, without_varying(v, varying)) for k, v in value.items() if k not in varying)
     if isinstance(value, list):
-        return [without_varying(v) for v in value]
+        return [without_varying(v, varying) for v in value]
     return value
 
 
@@ -137,6 +137,8 @@ def main():
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--data", default=os.path.join(ROOT, "build", "bench-data"))
     parser.add_argument("--only", choices=["map", "mesh"])
+    parser.add_argument("--ignore", action="append", default=[],
+                        help="a --json key a change is known to alter (e.g. predicates), left out of the comparison")
     args = parser.parse_args()
     os.makedirs(args.data, exist_ok=True)
     mesh.TOPOSIMP = os.path.join(args.old, "toposimp")  # (jacksboro is triangulated by the old build)
@@ -164,7 +166,7 @@ def main():
                     sys.exit(f"{' '.join(command)} failed ({run.returncode}):\n{run.stderr[-2000:]}")
                 try:
                     parsed = json.loads(run.stdout, object_pairs_hook=collections.OrderedDict)
-                    summary = without_varying(parsed)
+                    summary = without_varying(parsed, VARYING | set(args.ignore))
                     engine[which].append(parsed.get("seconds", {}).get("simplify"))
                 except json.JSONDecodeError:
                     summary = run.stdout  # a table: compared as it is
@@ -187,9 +189,14 @@ def main():
         print(f"| {name} | {'yes' if same else 'NO'} | {old_t:.3f} | {new_t:.3f} | {new_t / old_t:.3f} | {simplify} |", flush=True)
         if not same:
             (old_summary, old_files), (new_summary, new_files) = results["old"], results["new"]
-            keys = sorted(k for k in set(old_summary or {}) | set(new_summary or {})
-                          if (old_summary or {}).get(k) != (new_summary or {}).get(k))
-            print(f"  differ: files {old_files} vs {new_files}; summary keys {keys}", file=sys.stderr)
+            if isinstance(old_summary, str) or isinstance(new_summary, str):
+                lines = sum(a != b for a, b in zip(str(old_summary).splitlines(), str(new_summary).splitlines()))
+                what = f"{lines} lines of the table"
+            else:
+                what = "summary keys " + str(sorted(k for k in set(old_summary or {}) | set(new_summary or {})
+                                                    if (old_summary or {}).get(k) != (new_summary or {}).get(k)))
+            same_files = "the same" if old_files == new_files else f"{old_files} vs {new_files}"
+            print(f"  differ: files {same_files}; {what}", file=sys.stderr)
     sys.exit(1 if differing else 0)
 
 

@@ -90,6 +90,31 @@ def gpkg_blob():
     put("fuzz_gpkg_blob", "empty", header(empty=True) + struct.pack("<BIdd", 1, 1, float("nan"), float("nan")))
 
 
+def gpkg_file():
+    # Whole files: a table "points" (fid, geom) as read_gpkg_points reads it, small pages.
+    import sqlite3
+    import tempfile
+    def header():
+        return b"GP\x00\x01" + struct.pack("<i", 4326)
+    def point(x, y):
+        return header() + struct.pack("<BIdd", 1, 1, x, y)
+    for name, rows in (("few", [(1, point(1.5, 2.5)), (2, None), (5, point(3, 4))]),
+                       ("far-fids", [(-(2 ** 63), point(0, 0)), (2 ** 62, point(1, 1))]),
+                       ("split", [(1, point(0, 0)), (70000, point(1, 1)), (140001, point(2, 2)),
+                                  (140002, header() + struct.pack("<BIIBIdd", 1, 4, 1, 1, 1, 5, 6))])):
+        with tempfile.TemporaryDirectory() as folder:
+            path = os.path.join(folder, "seed.gpkg")
+            db = sqlite3.connect(path)
+            db.execute("PRAGMA page_size = 512")
+            db.execute("CREATE TABLE points (fid INTEGER PRIMARY KEY, geom BLOB)")
+            db.executemany("INSERT INTO points VALUES (?, ?)", rows)
+            db.commit()
+            db.execute("VACUUM")
+            db.close()
+            with open(path, "rb") as f:
+                put("fuzz_gpkg_file", name, f.read())
+
+
 def shapefile():
     # The fuzz input: .shx length and .dbf length (16 bits each), then .shx, .dbf, .shp.
     def shp_header(shape_type, length_bytes):
@@ -115,5 +140,5 @@ def shapefile():
     put("fuzz_shapefile", "multipoint", files(8, [multi]))
 
 
-for make in (obj, off, ply, stl, numbers, giscup, gpkg_blob, shapefile):
+for make in (obj, off, ply, stl, numbers, giscup, gpkg_blob, gpkg_file, shapefile):
     make()
