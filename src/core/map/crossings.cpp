@@ -2,6 +2,7 @@
 
 #include "core/exact/segments.hpp"
 #include "core/fill_later.hpp"
+#include "core/map/location_key.hpp"
 
 #include <omp.h>
 
@@ -80,9 +81,21 @@ void for_each_segment(const MapData& map, std::uint32_t begin, std::uint32_t end
     }
 }
 
-// One row's segments, cell after cell: a cell's entries (the segment's part in the row, the
-// segment) sorted by left edge.
-using CellEntries = std::vector<std::pair<Box, std::uint32_t>>;
+// A segment in a cell: its part in the row, the segment, and a hash of its ends (in either
+// direction), so that copies of a segment sort together without looking its ends up.
+struct Entry {
+    Box part;
+    std::uint32_t segment;
+    std::uint32_t ends;
+};
+// One row's segments, cell after cell, a cell's entries sorted by left edge.
+using CellEntries = std::vector<Entry>;
+
+std::uint32_t ends_hash(const MapData& map, std::uint32_t v) {
+    const auto [p, q] = ends_of(map, v);
+    const std::size_t h = hash_words({LocationKey(p).x, LocationKey(p).y, LocationKey(q).x, LocationKey(q).y});
+    return static_cast<std::uint32_t>(h ^ (h >> 32));
+}
 
 // A uniform grid over the map (see Grid), one row of cells at a time: the segments are first
 // distributed to the rows their boxes span (a parallel counting sort), then each row, on its
@@ -173,8 +186,9 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
                 std::vector<std::uint32_t> fill(cell_start.begin(), cell_start.end() - 1);
                 for (std::size_t k = begin; k < end; ++k) {
                     const Box part = part_of(in_rows[k], y);
+                    const std::uint32_t ends = ends_hash(map, in_rows[k]);
                     for (std::uint32_t x = column(part.min_x), last = column(part.max_x); x <= last; ++x) {
-                        cells[fill[x]++] = {part, in_rows[k]};
+                        cells[fill[x]++] = {part, in_rows[k], ends};
                     }
                 }
             }
@@ -182,12 +196,11 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
                 const auto first = cells.begin() + cell_start[x], last = cells.begin() + cell_start[x + 1];
                 if (last - first < 2) continue;
                 // By left edge: only boxes starting before one ends can overlap it in x. Then
-                // by ends, so copies of a segment come together.
-                std::sort(first, last, [&map](const auto& a, const auto& b) {
-                    if (a.first.min_x != b.first.min_x) return a.first.min_x < b.first.min_x;
-                    const auto [p, q] = ends_of(map, a.second);
-                    const auto [r, u] = ends_of(map, b.second);
-                    return std::tuple{p.y, p.x, q.y, q.x, a.second} < std::tuple{r.y, r.x, u.y, u.x, b.second};
+                // by the hash of the ends, so copies of a segment (the same part, the same
+                // ends) come together unless two hashes collide.
+                std::sort(first, last, [](const Entry& a, const Entry& b) {
+                    if (a.part.min_x != b.part.min_x) return a.part.min_x < b.part.min_x;
+                    return a.ends != b.ends ? a.ends < b.ends : a.segment < b.segment;
                 });
                 visit(worker, first, last, x, y, grid);
             }
@@ -229,9 +242,9 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
         [&](Worker& worker, CellEntries::iterator first, CellEntries::iterator last, std::uint32_t x, std::uint32_t y,
             const Grid& grid) {
             for (auto i = first; i != last; ++i) {
-                const auto& [sb, s] = *i;
-                for (auto j = i + 1; j != last && j->first.min_x <= sb.max_x; ++j) {
-                    const auto& [tb, t] = *j;
+                const auto& [sb, s, s_ends] = *i;
+                for (auto j = i + 1; j != last && j->part.min_x <= sb.max_x; ++j) {
+                    const auto& [tb, t, t_ends] = *j;
                     if (!first_shared_cell(map, s, sb, t, tb, x, y, grid)) continue;  // (tested in another cell)
                     const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
                     if (!exact::improper_contact(p, q, r, u, arithmetic, worker.counted)) continue;
@@ -289,11 +302,13 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
             worker.distinct.clear();
             worker.copies.clear();
             for (auto k = entries; k != entries_end;) {
-                const auto [p, q] = ends_of(map, k->second);
                 auto end = k + 1;
-                for (; end != entries_end; ++end) {
-                    const auto [r, u] = ends_of(map, end->second);
-                    if (!same_location(p, r) || !same_location(q, u)) break;
+                if (end != entries_end && end->ends == k->ends) {
+                    const auto [p, q] = ends_of(map, k->segment);
+                    for (; end != entries_end && end->ends == k->ends; ++end) {
+                        const auto [r, u] = ends_of(map, end->segment);
+                        if (!same_location(p, r) || !same_location(q, u)) break;
+                    }
                 }
                 worker.distinct.push_back(*k);
                 worker.copies.push_back(static_cast<std::uint32_t>(k - entries));
@@ -304,7 +319,7 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
             const auto count = static_cast<std::uint32_t>(worker.distinct.size());
             worker.here.assign(count, 0);
             for (std::uint32_t d = 0; d < count; ++d) {
-                const std::uint32_t s = first[d].second;
+                const std::uint32_t s = first[d].segment;
                 if (worker.copies[d + 1] - worker.copies[d] > 1 && !same_location(map.vertices[s], map.vertices[s + 1])) worker.here[d] = 1;
             }
             worker.next.resize(std::size_t{count} + 1);
@@ -322,8 +337,8 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 return at;
             };
             auto test = [&](std::uint32_t i, std::uint32_t j) {
-                const auto& [sb, s] = first[i];
-                const auto& [tb, t] = first[j];
+                const auto& [sb, s, s_ends] = first[i];
+                const auto& [tb, t, t_ends] = first[j];
                 // Every cell the two share tests them (not only the one of their overlap's low
                 // corner): a cell then settles its own segments, whatever the others do.
                 if (sb.min_y > tb.max_y || tb.min_y > sb.max_y || tb.min_x > sb.max_x) return;
@@ -333,16 +348,16 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 }
             };
             for (std::uint32_t i = 0; i < count; ++i) {
-                const double reach = first[i].first.max_x;
+                const double reach = first[i].part.max_x;
                 if (!worker.here[i]) {
-                    for (std::uint32_t j = i + 1; j < count && first[j].first.min_x <= reach; ++j) test(i, j);
+                    for (std::uint32_t j = i + 1; j < count && first[j].part.min_x <= reach; ++j) test(i, j);
                 } else {
-                    for (std::uint32_t j = open(i + 1); j < count && first[j].first.min_x <= reach; j = open(j + 1)) test(i, j);
+                    for (std::uint32_t j = open(i + 1); j < count && first[j].part.min_x <= reach; j = open(j + 1)) test(i, j);
                 }
             }
             for (std::uint32_t d = 0; d < count; ++d) {
                 if (!worker.here[d]) continue;
-                for (std::uint32_t k = worker.copies[d]; k < worker.copies[d + 1]; ++k) worker.found.push_back(entries[k].second);
+                for (std::uint32_t k = worker.copies[d]; k < worker.copies[d + 1]; ++k) worker.found.push_back(entries[k].segment);
             }
         },
         [&](Worker& worker) {
