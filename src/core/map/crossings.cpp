@@ -3,6 +3,7 @@
 #include "core/exact/segments.hpp"
 #include "core/fill_later.hpp"
 #include "core/map/location_key.hpp"
+#include "core/map/segment_cells.hpp"
 
 #include <omp.h>
 
@@ -12,64 +13,11 @@
 namespace toposimp::map {
 namespace {
 
-Box segment_box(Point a, Point b) {
-    return {std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
-}
-
-// A segment's ends in a fixed order (the lower first, by y then x): copies of one segment, in
-// either direction, are computed alike and sort together.
-bool before(Point a, Point b) { return a.y < b.y || (a.y == b.y && a.x < b.x); }
+// A segment's ends in the fixed order of `before`.
 std::pair<Point, Point> ends_of(const MapData& map, std::uint32_t v) {
     const Point a = map.vertices[v], b = map.vertices[v + 1];
     return before(b, a) ? std::pair{b, a} : std::pair{a, b};
 }
-
-// Cell index along one axis: monotone in the coordinate, so a box's cells are those between
-// its corners' cells whatever the rounding.
-struct Axis {
-    double origin = 0, scale = 0;
-    std::uint32_t count = 1;
-
-    std::uint32_t operator()(double value) const {
-        double t = (value - origin) * scale;
-        if (!(t >= 0.0)) t = 0.0;
-        if (t >= static_cast<double>(count)) return count - 1;
-        return static_cast<std::uint32_t>(t);
-    }
-};
-
-// The cells of a grid over the map, and which of them a segment is entered in. A segment is
-// entered in every cell of the rows its box spans, but within a row only in the columns of
-// its part in that row: a line as long as the map, diagonal, is in about 2·side cells, not in
-// side² (issue 29: a track running back and forth along a diagonal).
-//
-// Why no contact is missed: a point P of the segment with row(P.y) = r has (P.y − origin)·scale
-// in [r, r + 1) up to rounding of a few ulps of side, far below a quarter row; so P.y lies in
-// the band widened by a quarter row each way, computed with an error of a few ulps of the
-// coordinates, which `clip` requires to be below 2⁻³⁶ of a cell. The segment's x over that
-// band is interpolated between the band's ends; the interpolation errs by a few ulps of the
-// coordinates plus the slope times the error in y, and the quarter row of slack in y and a
-// quarter column in x cover both. So P.x lies in the part, and P's cell is one the segment is
-// entered in; two segments that meet at P are both in P's cell. A segment within two rows,
-// or a grid too fine for its coordinates, keeps its whole box.
-struct Grid {
-    Axis column, row;
-    double cell_width = 0, cell_height = 0;
-    bool clip = false;
-
-    Box part_in_row(Point a, Point b, std::uint32_t r) const {
-        if (before(b, a)) std::swap(a, b);
-        const Box box = segment_box(a, b);
-        if (!clip || row(box.max_y) - row(box.min_y) < 2) return box;
-        const double low = std::max(box.min_y, row.origin + (static_cast<double>(r) - 0.25) * cell_height);
-        const double high = std::min(box.max_y, row.origin + (static_cast<double>(r) + 1.25) * cell_height);
-        const double dy = b.y - a.y;  // not zero: the segment spans three rows or more
-        const double t_low = std::clamp((low - a.y) / dy, 0.0, 1.0), t_high = std::clamp((high - a.y) / dy, 0.0, 1.0);
-        const double x_low = a.x + t_low * (b.x - a.x), x_high = a.x + t_high * (b.x - a.x);
-        const double slack = 0.25 * cell_width;
-        return {std::max(box.min_x, std::min(x_low, x_high) - slack), low, std::min(box.max_x, std::max(x_low, x_high) + slack), high};
-    }
-};
 
 // Calls visit(v) for each segment (named by its first vertex v) whose first vertex lies in
 // [begin, end), chain by chain.
@@ -124,11 +72,7 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
         max_y = std::max(max_y, p.y);
     }
     const auto side = static_cast<std::uint32_t>(std::clamp(std::floor(std::sqrt(static_cast<double>(segment_count) / 2.0)), 1.0, 4096.0));
-    const double width = max_x - min_x, height = max_y - min_y;
-    Grid grid{{min_x, width > 0 ? side / width : 0.0, side}, {min_y, height > 0 ? side / height : 0.0, side}, width / side,
-              height / side};
-    const double magnitude = std::max({std::abs(min_x), std::abs(max_x), std::abs(min_y), std::abs(max_y)});
-    grid.clip = std::min(grid.cell_width, grid.cell_height) >= std::ldexp(magnitude, -36);
+    const Grid grid = make_grid({min_x, min_y, max_x, max_y}, side);
     const Axis& row = grid.row;
     const Axis& column = grid.column;
     auto box_of = [&](std::uint32_t v) { return segment_box(map.vertices[v], map.vertices[v + 1]); };
