@@ -202,3 +202,115 @@ std::vector<std::uint64_t> crossings_between_chains(const map::MapData& map, con
 }
 
 }  // namespace toposimp::testing
+
+namespace toposimp::testing {
+namespace {
+
+int ring_sign(const std::vector<Point>& ring) {
+    mpq_class twice_area = 0;
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+        twice_area += mpq_class(ring[i].x) * mpq_class(ring[i + 1].y) - mpq_class(ring[i + 1].x) * mpq_class(ring[i].y);
+    }
+    return sgn(twice_area);
+}
+
+// 2 inside, 1 on, 0 outside the closed ring.
+int where_in_ring(Point p, const std::vector<Point>& ring) {
+    for (std::size_t i = 0; i + 1 < ring.size(); ++i) {
+        if (on_segment(p, ring[i], ring[i + 1])) return 1;
+    }
+    return inside_polygon(p, ring) ? 2 : 0;
+}
+
+bool on_polyline(Point p, const std::vector<Point>& line) {
+    for (std::size_t i = 0; i + 1 < line.size(); ++i) {
+        if (on_segment(p, line[i], line[i + 1])) return true;
+    }
+    return line.size() == 1 && same(p, line.front());
+}
+
+// Per pair of chains (i·n + j, i < j): proper crossings and other improper contacts.
+std::pair<std::vector<std::uint64_t>, std::vector<std::uint64_t>> contacts_between_chains(const std::vector<std::vector<Point>>& chains) {
+    const std::size_t n = chains.size();
+    std::vector<std::uint64_t> crossings(n * n, 0), touchings(n * n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t j = i; j < n; ++j) {
+            for (std::size_t a = 0; a + 1 < chains[i].size(); ++a) {
+                for (std::size_t b = i == j ? a + 2 : 0; b + 1 < chains[j].size(); ++b) {
+                    const Point p = chains[i][a], q = chains[i][a + 1], r = chains[j][b], s = chains[j][b + 1];
+                    if (!improper_contact(p, q, r, s)) continue;
+                    const bool crossing = exact_orient(p, q, r) * exact_orient(p, q, s) < 0 && exact_orient(r, s, p) * exact_orient(r, s, q) < 0;
+                    ++(crossing ? crossings : touchings)[i * n + j];
+                }
+            }
+        }
+    }
+    return {crossings, touchings};
+}
+
+}  // namespace
+
+CheckReport check_rounded(const map::MapData& input, const std::vector<std::uint8_t>& kept, const std::vector<Point>& at,
+                          const std::function<bool(Point)>& on_grid) {
+    CheckReport report;
+    std::vector<std::vector<Point>> before, after;
+    for (std::uint32_t c = 0; c < input.chains.size(); ++c) {
+        const map::Chain chain = input.chains[c];
+        before.emplace_back(input.vertices.begin() + chain.first, input.vertices.begin() + chain.last + 1);
+        after.emplace_back();
+        if (!kept[chain.first] || !kept[chain.last]) report.violations.push_back("chain " + std::to_string(c) + " lost an endpoint");
+        for (std::uint32_t v = chain.first; v <= chain.last; ++v) {
+            if (!kept[v]) continue;
+            after.back().push_back(at[v]);
+            if (!on_grid(at[v]) && !same(at[v], input.vertices[v])) {
+                report.violations.push_back("vertex " + std::to_string(v) + " at " + text(at[v]) + " is neither on the grid nor where it was");
+            }
+        }
+    }
+    const auto [crossings_before, touchings_before] = contacts_between_chains(before);
+    const auto [crossings_after, touchings_after] = contacts_between_chains(after);
+    const std::size_t n = before.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t j = i; j < n; ++j) {
+            if (crossings_before[i * n + j] != crossings_after[i * n + j] || touchings_before[i * n + j] != touchings_after[i * n + j]) {
+                report.violations.push_back("chains " + std::to_string(i) + " and " + std::to_string(j) + ": " +
+                                            std::to_string(crossings_before[i * n + j]) + " crossings and " +
+                                            std::to_string(touchings_before[i * n + j]) + " other contacts before, " +
+                                            std::to_string(crossings_after[i * n + j]) + " and " +
+                                            std::to_string(touchings_after[i * n + j]) + " after");
+            }
+        }
+    }
+    for (std::size_t c = 0; c < n; ++c) {
+        const bool closed = before[c].size() > 3 && same(before[c].front(), before[c].back());
+        if (closed) {
+            std::vector<Point> corners;
+            for (std::size_t k = 0; k + 1 < after[c].size(); ++k) {
+                if (std::none_of(corners.begin(), corners.end(), [&](Point q) { return same(q, after[c][k]); })) corners.push_back(after[c][k]);
+            }
+            if (corners.size() < 3) report.violations.push_back("ring " + std::to_string(c) + " kept fewer than 3 corners");
+            if (ring_sign(before[c]) != ring_sign(after[c])) report.violations.push_back("ring " + std::to_string(c) + " changed orientation");
+            for (const Point q : input.control_points) {
+                if (where_in_ring(q, before[c]) != where_in_ring(q, after[c])) {
+                    report.violations.push_back("control point " + text(q) + " changed place against ring " + std::to_string(c));
+                }
+            }
+            continue;
+        }
+        // The loop: input forward, output back.
+        std::vector<Point> loop = before[c];
+        loop.insert(loop.end(), after[c].rbegin(), after[c].rend());
+        for (const Point q : input.control_points) {
+            const bool on_both = on_polyline(q, before[c]) && on_polyline(q, after[c]);
+            if (on_both) continue;
+            bool on_loop = false;
+            for (std::size_t k = 0; k < loop.size() && !on_loop; ++k) on_loop = on_segment(q, loop[k], loop[(k + 1) % loop.size()]);
+            if (on_loop || inside_polygon(q, loop)) {
+                report.violations.push_back("control point " + text(q) + " was passed over by chain " + std::to_string(c));
+            }
+        }
+    }
+    return report;
+}
+
+}  // namespace toposimp::testing

@@ -6,6 +6,7 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,16 @@ CheckReport check_simplification(const map::MapData& input, const std::vector<st
 
 // Is the input itself planar in the sense above (the precondition of the promises)?
 CheckReport check_planar(const map::MapData& input);
+
+// The promises for a simplified map written at positions `at` (rounded: not the input's): every
+// chain keeps its ends (moved or not); per pair of chains, as many proper crossings and as many
+// other contacts as in the input; each closed chain keeps at least 3 distinct corners, its
+// orientation, and every control point inside, on or outside it as before; no control point
+// lies inside the loop an open chain makes with its output (input forward, output back) or on
+// it, other than on both; each output vertex is where `on_grid` accepts it or listed in
+// `off_grid` at its input location.
+CheckReport check_rounded(const map::MapData& input, const std::vector<std::uint8_t>& kept, const std::vector<Point>& at,
+                          const std::function<bool(Point)>& on_grid);
 
 // For each pair of chains (i < j, at i·n + j): how many proper crossings their kept segments have.
 std::vector<std::uint64_t> crossings_between_chains(const map::MapData& map, const std::vector<std::uint8_t>& kept);

@@ -1,0 +1,116 @@
+// The grid of published coordinates: the multiples k·s of a decimal step s = m·10^e, each taken
+// as the double nearest to k·s — the double a reader gets when it parses the decimal text of
+// k·s. A coordinate put on this grid is written by a shortest round-trip printer as that short
+// decimal (GeoJSON: 12.3457, not 12.345700000000001) and reads back bit for bit everywhere.
+#pragma once
+
+#include <charconv>
+#include <cmath>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+
+namespace toposimp::map {
+
+__extension__ using Int128 = __int128;            // (GCC and Clang)
+__extension__ using UInt128 = unsigned __int128;
+
+struct GridStep {
+    std::int64_t mantissa = 1;  // m > 0, at most 15 digits
+    int exponent = 0;           // e
+
+    // "0.0001", "1e-4", "25", "2.5E3": a positive decimal; nullopt for anything else (zero,
+    // negative, not finite, more than 15 significant digits, exponent beyond ±300).
+    static std::optional<GridStep> parse(std::string_view text) {
+        std::string digits;
+        int exponent = 0;
+        bool point = false, any = false;
+        std::size_t at = 0;
+        for (; at < text.size(); ++at) {
+            const char c = text[at];
+            if (c >= '0' && c <= '9') {
+                any = true;
+                if (digits.empty() && c == '0') {
+                    if (point) --exponent;
+                    continue;
+                }
+                digits += c;
+                if (point) --exponent;
+            } else if (c == '.' && !point) {
+                point = true;
+            } else {
+                break;
+            }
+        }
+        if (!any) return std::nullopt;
+        if (at < text.size()) {
+            if (text[at] != 'e' && text[at] != 'E') return std::nullopt;
+            std::string_view rest = text.substr(at + 1);
+            if (!rest.empty() && rest.front() == '+') rest.remove_prefix(1);
+            int written = 0;
+            const auto result = std::from_chars(rest.data(), rest.data() + rest.size(), written);
+            if (result.ec != std::errc() || result.ptr != rest.data() + rest.size() || written < -400 || written > 400) return std::nullopt;
+            exponent += written;
+        }
+        while (!digits.empty() && digits.back() == '0') {
+            digits.pop_back();
+            ++exponent;
+        }
+        if (digits.empty() || digits.size() > 15 || exponent < -300 || exponent > 300) return std::nullopt;
+        return GridStep{std::stoll(digits), exponent};
+    }
+
+    // A step of 10^-d: d decimals.
+    static GridStep decimals(int d) { return {1, -d}; }
+
+    // The double nearest to k·s.
+    double at(std::int64_t k) const {
+        // |k| < 2^62 and m < 10^15 < 2^50: the product fits in 128 bits.
+        const Int128 product = static_cast<Int128>(k) * mantissa;
+        UInt128 magnitude = product < 0 ? static_cast<UInt128>(-product) : static_cast<UInt128>(product);
+        char text[64];
+        char* end = text + sizeof text;
+        char* p = end;
+        do {
+            *--p = static_cast<char>('0' + static_cast<int>(magnitude % 10));
+            magnitude /= 10;
+        } while (magnitude != 0);
+        if (product < 0) *--p = '-';
+        std::string number(p, end);
+        number += 'e';
+        number += std::to_string(exponent);
+        double value = 0;
+        std::from_chars(number.data(), number.data() + number.size(), value);
+        return value;
+    }
+
+    double step() const { return at(1); }
+
+    // The index k of a grid value nearest to x (the lower on a tie); nullopt when |x| / s
+    // reaches 2^62 (a grid too fine for the coordinates).
+    std::optional<std::int64_t> nearest(double x) const {
+        const double q = x / step();
+        if (!(std::abs(q) < 0x1p62)) return std::nullopt;
+        const auto k = static_cast<std::int64_t>(std::llround(q));
+        std::int64_t best = k - 1;
+        double best_distance = std::abs(at(k - 1) - x);
+        for (const std::int64_t c : {k, k + 1}) {
+            const double distance = std::abs(at(c) - x);
+            if (distance < best_distance) best = c, best_distance = distance;
+        }
+        return best;
+    }
+
+    // The step as text, e.g. "0.0001" or "25".
+    std::string text() const {
+        std::string digits = std::to_string(mantissa);
+        if (exponent >= 0) return digits + std::string(static_cast<std::size_t>(exponent), '0');
+        const auto shift = static_cast<std::size_t>(-exponent);
+        if (digits.size() <= shift) digits.insert(0, shift - digits.size() + 1, '0');
+        digits.insert(digits.size() - shift, ".");
+        return digits;
+    }
+};
+
+}  // namespace toposimp::map
