@@ -7,6 +7,7 @@
 #include "cli/json.hpp"
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
+#include "core/map/rounding.hpp"
 #include "core/map/simplify.hpp"
 #include "io/common/errors.hpp"
 #include "io/common/output_file.hpp"
@@ -25,6 +26,7 @@
 #include <optional>
 #include <ostream>
 #include <sstream>
+#include <stdexcept>
 #include <thread>
 
 namespace toposimp::cli {
@@ -37,6 +39,10 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
         "no control point (exact predicates), so no new crossing or touching appears and no control point changes\n"
         "side; crossings in the input are kept as they are. Output vertices are a subset of the input's,\n"
         "coordinates untouched, each line keeping its first and last vertex.\n"
+        "--precision/--decimals put every written x and y on a grid (multiples of the step, as the doubles a reader\n"
+        "parses from their short decimal text), moving each location only where that is safe by the same exact rules:\n"
+        "a vertex whose grid point is its neighbour's is removed; one that no grid point nearby can serve is written\n"
+        "where it was (counted in --json and -v). Z and M values are written as they are.\n"
         "Exit status: 0 ok, 1 --validate found a violation (no output written), 2 usage or input error.");
     map->add_option("input", options.input, "Input line layer (any OGR source; with --giscup, a GIS Cup lines file)")->required();
     map->add_option("-o,--output", options.output, "Output file (format from the extension or -f); /vsistdout/ for stdout")
@@ -67,6 +73,12 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
             if (a != b) a->excludes(b);
         }
     }
+    auto* precision = map->add_option("--precision", options.precision,
+                                      "Write x and y on the grid of multiples of STEP (map units, e.g. 0.0001), topology kept");
+    auto* decimals = map->add_option("--decimals", options.decimals, "Write x and y with D decimals at most: --precision 1e-D")
+                         ->check(CLI::Range(0, 300));
+    precision->excludes(decimals);
+    decimals->excludes(precision);
     map->add_option("--arithmetic", options.arithmetic,
                     "exact (default: float filter, GMP fallback), rational (all GMP, as EPLSimp), "
                     "float (naive doubles as TopoVW: UNSAFE, for experiments only)")
@@ -116,6 +128,16 @@ std::string describe(const map::StopCriterion& stop) {
         case map::Target::max: text << "max"; break;
     }
     return text.str();
+}
+
+// The grid of --precision or --decimals; nullopt for full precision. Sets `problem` when the
+// step is not a positive decimal.
+std::optional<map::GridStep> grid_of(const MapOptions& options, std::string& problem) {
+    if (options.decimals >= 0) return map::GridStep::decimals(options.decimals);
+    if (options.precision.empty()) return std::nullopt;
+    const std::optional<map::GridStep> grid = map::GridStep::parse(options.precision);
+    if (!grid) problem = "--precision: '" + options.precision + "' is not a positive decimal step (e.g. 0.0001, 1e-4 or 25)";
+    return grid;
 }
 
 exact::Arithmetic arithmetic_of(const std::string& name) {
@@ -234,8 +256,40 @@ void write_layers(const MapOptions& options, const MapInput& input, const map::S
 }
 
 struct Timings {
-    double read = 0, simplify = 0, write = 0, total = 0;
+    double read = 0, simplify = 0, round = 0, write = 0, total = 0;
 };
+
+// Puts the kept vertices of `input` on the grid (their coordinates in input.map replaced) and
+// drops those rounding removed from `result`.
+map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, const map::GridStep& grid,
+                                exact::Arithmetic arithmetic, spdlog::logger& log) {
+    map::RoundingResult rounded;
+    try {
+        rounded = map::round_to_grid(input.map, result.kept, {grid, arithmetic});
+    } catch (const std::invalid_argument& error) {
+        throw io::InputError(std::string(error.what()) + " (--precision)");
+    }
+    for (std::size_t v = 0; v < rounded.kept.size(); ++v) {
+        if (rounded.kept[v]) input.map.vertices[v] = rounded.at[v];
+    }
+    result.kept = std::move(rounded.kept);
+    result.stats.vertices_out -= rounded.stats.removed;
+    const map::RoundingStats& stats = rounded.stats;
+    log.debug("grid {}: {} locations, {} already on it, {} moved to the nearest grid point, {} to another, {} vertices removed "
+              "(their grid point was a neighbour's), {} left off the grid, {} on rings written as given, {} passes",
+              grid.text(), stats.locations, stats.already_on_grid, stats.moved_nearest, stats.moved_other, stats.removed,
+              stats.off_grid, stats.frozen, stats.passes);
+    if (stats.off_grid > 0) {
+        std::string where;
+        for (std::size_t k = 0; k < rounded.off_grid.size() && k < 3; ++k) {
+            const Point p = input.map.vertices[rounded.off_grid[k]];
+            where += fmt::format("{}({}, {})", k ? ", " : "", p.x, p.y);
+        }
+        log.warn("{} locations are written off the grid {}: no grid point near them keeps the topology (e.g. at {}{})",
+                 stats.off_grid, grid.text(), where, stats.off_grid > 3 ? ", …" : "");
+    }
+    return stats;
+}
 
 // The messages after a run: target missed, refusals, predicates, memory, the one-line summary.
 void report(const map::SimplifyStats& stats, const map::StopCriterion& stop, const Timings& time, const MapOptions& options,
@@ -260,7 +314,8 @@ void report(const map::SimplifyStats& stats, const map::StopCriterion& stop, con
 }
 
 std::string json_summary(const MapOptions& options, const map::StopCriterion& stop, const map::SimplifyStats& stats,
-                         const Timings& time, std::uint64_t features) {
+                         const Timings& time, std::uint64_t features, const std::optional<map::GridStep>& grid,
+                         const map::RoundingStats& rounding) {
     JsonWriter json;
     json.field("command", "map").field("input", options.input).field("output", options.output);
     json.field("features", features).field("vertices_in", stats.vertices_in).field("vertices_out", stats.vertices_out);
@@ -281,10 +336,26 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
         .field("sweep", stats.seconds_sweep)
         .end();
     add_predicates(json, stats.predicates);
+    if (grid) {
+        json.object("rounding")
+            .field("grid", grid->text())
+            .field("locations", rounding.locations)
+            .field("already_on_grid", rounding.already_on_grid)
+            .field("moved_nearest", rounding.moved_nearest)
+            .field("moved_other", rounding.moved_other)
+            .field("removed", rounding.removed)
+            .field("off_grid", rounding.off_grid)
+            .field("frozen", rounding.frozen)
+            .field("passes", rounding.passes)
+            .field("predicates", rounding.predicates.filter_decided + rounding.predicates.expansion_decided +
+                                     rounding.predicates.gmp_fallbacks)
+            .end();
+    }
     json.object("seconds")
         .field("read", time.read)
-        .field("simplify", time.simplify)
-        .field("write", time.write)
+        .field("simplify", time.simplify);
+    if (grid) json.field("round", time.round);
+    json.field("write", time.write)
         .field("total", time.total)
         .end();
     json.field("peak_memory_mib", peak_memory_mib());
@@ -298,8 +369,14 @@ int run_map(const MapOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
     const std::optional<map::StopCriterion> stop = stop_criterion(options, problem);
-    if (!stop) {
+    const std::optional<map::GridStep> grid = grid_of(options, problem);
+    if (!stop || !problem.empty()) {
         log->error("{}", problem);
+        return kUsageError;
+    }
+    if (grid && options.validate) {
+        log->error("--validate cannot check rounded output yet (toposimp check takes output vertices from the input); "
+                   "run without --precision/--decimals, or check the unrounded output");
         return kUsageError;
     }
     io::set_config_options(options.config);
@@ -338,8 +415,17 @@ int run_map(const MapOptions& options, Context& context) {
         // The engine builds chains, indexes and ranks inside simplify().
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        const map::SimplifyResult result = map::simplify_releasing_points(input.map, simplify_options);
+        // Rounding needs the control points again; without it the engine may free them early.
+        map::SimplifyResult result = grid ? map::simplify(input.map, simplify_options)
+                                          : map::simplify_releasing_points(input.map, simplify_options);
         time.simplify = seconds_since(simplify_start);
+        map::RoundingStats rounding;
+        if (grid) {
+            progress.phase("rounding to " + grid->text());
+            const auto round_start = Clock::now();
+            rounding = round_output(input, result, *grid, simplify_options.arithmetic, *log);
+            time.round = seconds_since(round_start);
+        }
 
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
@@ -355,7 +441,7 @@ int run_map(const MapOptions& options, Context& context) {
         report(result.stats, *stop, time, options, context.err_is_terminal, *log);
         if (options.json) {
             const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
-            (output_is_stdout ? context.err : context.out) << json_summary(options, *stop, result.stats, time, input.features());
+            (output_is_stdout ? context.err : context.out) << json_summary(options, *stop, result.stats, time, input.features(), grid, rounding);
         }
         return kOk;
     });

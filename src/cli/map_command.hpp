@@ -26,6 +26,8 @@ struct MapOptions {
     double remove_points = -1;
     double max_area = -1;
     bool max = false;
+    std::string precision;  // --precision STEP (grid of published coordinates), empty: full precision
+    int decimals = -1;      // --decimals D: --precision 1e-D
     std::string arithmetic = "exact";
     int threads = 0;  // 0: all cores (or OMP_NUM_THREADS)
     bool giscup = false;

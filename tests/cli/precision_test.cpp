@@ -1,0 +1,111 @@
+// --precision and --decimals: every written x and y on the grid (or reported off it), and
+// `toposimp check` finding nothing but the moved vertices (not_subset, which rounding is).
+#include "cli/cli_fixtures.hpp"
+
+#include <gtest/gtest.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+
+namespace toposimp::testing {
+namespace {
+
+// Is `value` the double a reader parses from its shortest text with at most `decimals` decimals?
+bool has_decimals_at_most(double value, int decimals) {
+    char text[64];
+    const auto end = std::to_chars(text, text + sizeof text, value, std::chars_format::fixed).ptr;
+    const std::string written(text, end);
+    const auto point = written.find('.');
+    return point == std::string::npos || static_cast<int>(written.size() - point - 1) <= decimals;
+}
+
+std::string contents(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+std::uint64_t json_number(const std::string& json, const std::string& key) {
+    const auto at = json.find("\"" + key + "\":");
+    if (at == std::string::npos) return ~0ull;
+    return std::stoull(json.substr(at + key.size() + 3));
+}
+
+TEST(Precision, EveryCoordinateOnTheGridAndTheTopologyKept) {
+    const auto dir = fresh_dir("precision");
+    const std::string input = testdata("ne_states_slice.gpkg");
+    for (const int decimals : {1, 2, 3}) {
+        SCOPED_TRACE(decimals);
+        const std::string out = (dir / ("states" + std::to_string(decimals) + ".gpkg")).string();
+        const CliResult map = run_cli({"map", input, "-o", out, "--keep", "20%", "--decimals", std::to_string(decimals), "--json"});
+        ASSERT_EQ(map.code, 0) << map.err;
+        const std::uint64_t off_grid = json_number(map.out, "off_grid");
+        ASSERT_NE(off_grid, ~0ull) << map.out;
+        EXPECT_GT(json_number(map.out, "moved_nearest"), 0u);
+        std::uint64_t on = 0;
+        std::set<std::pair<double, double>> off;  // locations written off the grid
+        for (const ReadFeature& feature : read_layer(out).features) {
+            for (const auto& part : feature.coordinates) {
+                for (std::size_t k = 0; k + 1 < part.size(); k += 2) {
+                    if (has_decimals_at_most(part[k], decimals) && has_decimals_at_most(part[k + 1], decimals)) ++on;
+                    else off.insert({part[k], part[k + 1]});
+                }
+            }
+        }
+        EXPECT_GT(on, 500u);
+        EXPECT_LE(off.size(), off_grid + json_number(map.out, "frozen"));  // only those reported
+        // Every kind of violation but not_subset (the rounded vertices are not the input's).
+        const CliResult check = run_cli({"check", input, out, "--json"});
+        const auto begin = check.out.find("\"counts\":{");
+        ASSERT_NE(begin, std::string::npos) << check.out;
+        const std::string counts = check.out.substr(begin + 10, check.out.find('}', begin) - begin - 10);
+        std::size_t kinds = 0;
+        for (std::size_t at = 0; at < counts.size();) {
+            const std::size_t end = std::min(counts.find(',', at), counts.size());
+            const std::string entry = counts.substr(at, end - at);
+            const std::string kind = entry.substr(1, entry.find('"', 1) - 1);
+            ++kinds;
+            if (kind != "not_subset") {
+                EXPECT_EQ(entry.substr(entry.find(':') + 1), "0") << entry;
+            }
+            at = end + 1;
+        }
+        EXPECT_GT(kinds, 10u) << counts;
+    }
+}
+
+TEST(Precision, AStepInMapUnitsAndTheSameGridAsDecimals) {
+    const auto dir = fresh_dir("precision");
+    const std::string input = testdata("ne_states_slice.gpkg");
+    const std::string a = (dir / "a.geojson").string(), b = (dir / "b.geojson").string();
+    ASSERT_EQ(run_cli({"map", input, "-o", a, "--decimals", "2"}).code, 0);
+    ASSERT_EQ(run_cli({"map", input, "-o", b, "--precision", "0.01"}).code, 0);
+    EXPECT_EQ(contents(a), contents(b));
+    const CliResult coarse = run_cli({"map", input, "-o", (dir / "c.geojson").string(), "--precision", "0.5", "--json"});
+    ASSERT_EQ(coarse.code, 0) << coarse.err;
+    EXPECT_NE(coarse.out.find("\"grid\":\"0.5\""), std::string::npos) << coarse.out;
+}
+
+TEST(Precision, BadStepsAreRefused) {
+    const auto dir = fresh_dir("precision");
+    const std::string input = testdata("ne_states_slice.gpkg"), out = (dir / "out.gpkg").string();
+    for (const char* step : {"0", "-0.1", "abc", "1e999", "nan"}) {
+        const CliResult result = run_cli({"map", input, "-o", out, "--precision", step});
+        EXPECT_EQ(result.code, 2) << step;
+        EXPECT_NE(result.err.find("--precision"), std::string::npos) << result.err;
+    }
+    EXPECT_EQ(run_cli({"map", input, "-o", out, "--precision", "0.1", "--decimals", "2"}).code, 2);
+    EXPECT_EQ(run_cli({"map", input, "-o", out, "--decimals", "-1"}).code, 2);
+    const CliResult fine = run_cli({"map", input, "-o", out, "--precision", "1e-300"});
+    EXPECT_EQ(fine.code, 2);
+    EXPECT_NE(fine.err.find("too fine"), std::string::npos) << fine.err;
+    const CliResult validate = run_cli({"map", input, "-o", out, "--decimals", "3", "--validate"});
+    EXPECT_EQ(validate.code, 2);
+    EXPECT_TRUE(files_in(dir).empty());
+}
+
+}  // namespace
+}  // namespace toposimp::testing
