@@ -69,19 +69,20 @@ struct GridStep {
         // |k| < 2^62 and m < 10^15 < 2^50: the product fits in 128 bits.
         const Int128 product = static_cast<Int128>(k) * mantissa;
         UInt128 magnitude = product < 0 ? static_cast<UInt128>(-product) : static_cast<UInt128>(product);
-        char text[64];
-        char* end = text + sizeof text;
-        char* p = end;
+        // The digits of k·m backwards to the middle of the buffer, then "e" and the exponent.
+        char text[96];
+        char* const middle = text + 48;
+        char* p = middle;
         do {
             *--p = static_cast<char>('0' + static_cast<int>(magnitude % 10));
             magnitude /= 10;
         } while (magnitude != 0);
         if (product < 0) *--p = '-';
-        std::string number(p, end);
-        number += 'e';
-        number += std::to_string(exponent);
+        char* end = middle;
+        *end++ = 'e';
+        end = std::to_chars(end, text + sizeof text, exponent).ptr;
         double value = 0;
-        std::from_chars(number.data(), number.data() + number.size(), value);
+        std::from_chars(p, end, value);
         return value;
     }
 
@@ -107,9 +108,9 @@ struct GridStep {
         std::string digits = std::to_string(mantissa);
         if (exponent >= 0) return digits + std::string(static_cast<std::size_t>(exponent), '0');
         const auto shift = static_cast<std::size_t>(-exponent);
-        if (digits.size() <= shift) digits.insert(0, shift - digits.size() + 1, '0');
-        digits.insert(digits.size() - shift, ".");
-        return digits;
+        if (digits.size() <= shift) digits = std::string(shift - digits.size() + 1, '0') + digits;
+        const std::size_t whole = digits.size() - shift;
+        return digits.substr(0, whole) + "." + digits.substr(whole);
     }
 };
 
