@@ -1,8 +1,9 @@
 #!/usr/bin/python3
 """Published precision on Natural Earth states with the GeoNames cities (issue 30): toposimp's own
 rounding (`map --decimals D`) against rounding its full-precision output afterwards with GDAL's
-GeoJSON writer (COORDINATE_PRECISION=D), each counted by `toposimp check` (every kind but
-not_subset, which any rounding is by definition). Prints a Markdown table.
+GeoJSON writer (COORDINATE_PRECISION=D), each counted by `toposimp check --decimals D` (every
+kind; given the grid, check takes a vertex on it up to a step from an original vertex for that
+vertex). Prints a Markdown table.
 
     scripts/bench/precision.py [--build build/release] [--data build/bench-data] [--keep 10%]
 
@@ -20,10 +21,11 @@ sys.path.insert(0, HERE)
 import same_outputs  # noqa: E402  (the Natural Earth data maker)
 
 
-def violations(toposimp, states, output, cities):
-    run = subprocess.run([toposimp, "check", states, output, "-p", cities, "--json"], capture_output=True, text=True)
+def violations(toposimp, states, output, cities, decimals):
+    run = subprocess.run([toposimp, "check", states, output, "-p", cities, "--decimals", str(decimals), "--json"],
+                         capture_output=True, text=True)
     counts = json.loads(run.stdout)["counts"]
-    return {kind: n for kind, n in counts.items() if n and kind != "not_subset"}
+    return {kind: n for kind, n in counts.items() if n}
 
 
 def main():
@@ -37,8 +39,8 @@ def main():
     with tempfile.TemporaryDirectory() as out:
         full = os.path.join(out, "full.gpkg")
         subprocess.run([toposimp, "map", states, "-p", cities, "--keep", args.keep, "-o", full, "-q"], check=True)
-        print(f"Natural Earth states + GeoNames cities, `--keep {args.keep}`; violations by `toposimp check` "
-              "(all kinds but not_subset)\n")
+        print(f"Natural Earth states + GeoNames cities, `--keep {args.keep}`; violations by `toposimp check "
+              "--decimals D` (every kind)\n")
         print("| decimals | GDAL GeoJSON of the full-precision output | toposimp `--decimals` | toposimp: moved to nearest / "
               "other grid point / removed / left off the grid (of all locations) | rounding s |")
         print("|---|---|---|---|---|")
@@ -50,7 +52,7 @@ def main():
                                   rounded, "--json", "-q"], capture_output=True, text=True, check=True)
             summary = json.loads(run.stdout)
             r = summary["rounding"]
-            g, t = violations(toposimp, states, gdal, cities), violations(toposimp, states, rounded, cities)
+            g, t = violations(toposimp, states, gdal, cities, decimals), violations(toposimp, states, rounded, cities, decimals)
             text = lambda found: (f"{sum(found.values())} (" + ", ".join(f"{n} {k}" for k, n in sorted(found.items())) + ")") if found else "0"
             print(f"| {decimals} | {text(g)} | {text(t)} | {r['moved_nearest']} / {r['moved_other']} / {r['removed']} / "
                   f"{r['off_grid']} (of {r['locations']}) | {summary['seconds']['round']:.3f} |", flush=True)

@@ -29,6 +29,12 @@ CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
         ->allow_extra_args(false);
     check->add_option("-L,--simplified-layer", options.check.simplified_layer,
                       "The simplified dataset's layer to compare with the one original layer (-l), whatever its name");
+    auto* precision = check->add_option("--precision", options.precision,
+                                        "The simplified output was rounded onto the grid of multiples of STEP (toposimp map "
+                                        "--precision): a vertex on it stands for an original vertex up to a step away");
+    auto* decimals = check->add_option("--decimals", options.decimals, "The same as --precision 1e-D")->check(CLI::Range(0, 300));
+    precision->excludes(decimals);
+    decimals->excludes(precision);
     check->add_flag("--json", options.json, "Print the report as JSON instead of a table");
     check->add_option("--geojson-errors", options.geojson_errors,
                       "Also write each violation as a GeoJSON point with its kind and detail (for QGIS)");
@@ -98,8 +104,17 @@ std::string violations_geojson(const validate::CheckReport& report) {
 }
 
 // parse (done) → check → write the GeoJSON of the violations → report.
-int run_check(const CheckCommandOptions& options, Context& context) {
-    auto log = make_logger(context.err, options.verbosity, options.quiet);
+int run_check(const CheckCommandOptions& command, Context& context) {
+    auto log = make_logger(context.err, command.verbosity, command.quiet);
+    CheckCommandOptions options = command;
+    if (options.decimals >= 0) options.check.grid = map::GridStep::decimals(options.decimals);
+    if (!options.precision.empty()) {
+        options.check.grid = map::GridStep::parse(options.precision);
+        if (!options.check.grid) {
+            log->error("--precision: '{}' is not a positive decimal step (e.g. 0.0001, 1e-4 or 25)", options.precision);
+            return kUsageError;
+        }
+    }
     return guarded(*log, [&] {
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         progress.phase("checking " + options.check.simplified + " against " + options.check.original);

@@ -12,6 +12,8 @@ namespace toposimp::cli {
 
 struct CheckCommandOptions {
     validate::CheckOptions check;
+    std::string precision;  // --precision STEP: the simplified output was rounded onto this grid
+    int decimals = -1;      // --decimals D: --precision 1e-D
     bool json = false;
     std::string geojson_errors;
     bool quiet = false;

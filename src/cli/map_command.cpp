@@ -225,8 +225,8 @@ void write_giscup(const MapOptions& options, const MapInput& input, const map::S
 
 // The layers through OGR; with --validate, `toposimp check` on the written file first, which
 // leaves no output if it finds anything.
-void write_layers(const MapOptions& options, const MapInput& input, const map::SimplifyResult& result, Context& context,
-                  Progress& progress, spdlog::logger& log) {
+void write_layers(const MapOptions& options, const MapInput& input, const map::SimplifyResult& result,
+                  const std::optional<map::GridStep>& grid, Context& context, Progress& progress, spdlog::logger& log) {
     io::WriteOptions write;
     write.path = options.output;
     write.format = options.format;
@@ -243,6 +243,7 @@ void write_layers(const MapOptions& options, const MapInput& input, const map::S
             check.simplified = written;
             check.points = options.points;
             check.layers = options.layers;
+            check.grid = grid;
             const validate::CheckReport report = validate::check(check);
             if (!report.clean()) {
                 progress.done();
@@ -374,11 +375,7 @@ int run_map(const MapOptions& options, Context& context) {
         log->error("{}", problem);
         return kUsageError;
     }
-    if (grid && options.validate) {
-        log->error("--validate cannot check rounded output yet (toposimp check takes output vertices from the input); "
-                   "run without --precision/--decimals, or check the unrounded output");
-        return kUsageError;
-    }
+
     io::set_config_options(options.config);
 
     map::SimplifyOptions simplify_options;
@@ -432,7 +429,7 @@ int run_map(const MapOptions& options, Context& context) {
         if (options.giscup) {
             write_giscup(options, input, result, context.out);
         } else {
-            write_layers(options, input, result, context, progress, *log);
+            write_layers(options, input, result, grid, context, progress, *log);
         }
         time.write = seconds_since(write_start);
         time.total = seconds_since(start);

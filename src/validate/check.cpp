@@ -61,10 +61,34 @@ namespace {
 
 using io::InputError;
 
+// Does a simplified vertex stand for an original one: the same location, or, for output rounded
+// onto a grid, a grid point of the 3×3 around the original's nearest one (where toposimp map
+// --precision may put it)? Decided on the grid's integer indices: exact.
+class VertexMatch {
+public:
+    explicit VertexMatch(const std::optional<map::GridStep>& grid) : grid_(grid) {}
+
+    bool operator()(Point original, Point simplified) const {
+        if (same_location(original, simplified)) return true;
+        if (!grid_) return false;
+        return near(original.x, simplified.x) && near(original.y, simplified.y);
+    }
+
+private:
+    bool near(double original, double simplified) const {
+        const std::optional<std::int64_t> k = grid_->nearest(simplified), o = grid_->nearest(original);
+        if (!k || !o || grid_->at(*k) != simplified) return false;  // not on the grid
+        return *k >= *o - 1 && *k <= *o + 1;
+    }
+
+    const std::optional<map::GridStep>& grid_;
+};
+
 // Is `simplified` an order-preserving subset of `original` with the same ends (lines), or of
 // some rotation of the ring, forwards or backwards (rings)? Fills the original index of each
 // simplified vertex.
-bool match_line(const std::vector<Point>& original, const std::vector<Point>& simplified, std::vector<std::size_t>& at) {
+bool match_line(const std::vector<Point>& original, const std::vector<Point>& simplified, std::vector<std::size_t>& at,
+                const VertexMatch& same_location) {
     at.clear();
     if (original.empty() || simplified.size() < 2) {
         std::size_t i = 0;
@@ -91,7 +115,7 @@ bool match_line(const std::vector<Point>& original, const std::vector<Point>& si
     return true;
 }
 
-bool match_ring(const std::vector<Point>& original, std::vector<Point> simplified, bool& reversed) {
+bool match_ring(const std::vector<Point>& original, std::vector<Point> simplified, bool& reversed, const VertexMatch& same_location) {
     if (original.size() < 2 || simplified.size() < 2) return false;
     const std::size_t n = original.size() - 1;  // without the closing vertex
     simplified.pop_back();
@@ -251,7 +275,7 @@ std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linewor
 // and last the report's order.
 class Checker {
 public:
-    explicit Checker(const CheckOptions& options) : options_(options) {}
+    explicit Checker(const CheckOptions& options) : options_(options), matches_vertex_(options.grid) {}
 
     CheckReport run() {
         match_features();
@@ -340,7 +364,7 @@ private:
                 const auto& b = after->parts[k];
                 if (before.type == Feature::Type::polygons) {
                     bool reversed = false;
-                    if (!match_ring(a, b, reversed)) {
+                    if (!match_ring(a, b, reversed, matches_vertex_)) {
                         violation(ViolationKind::not_subset, layer, before.key, b.empty() ? somewhere : b[0], "ring " + std::to_string(k));
                         continue;
                     }
@@ -350,7 +374,7 @@ private:
                     } else if (area_sign(b) != area_sign(a) * (reversed ? -1 : 1)) {
                         violation(ViolationKind::ring_flipped, layer, before.key, b[0], "ring " + std::to_string(k));
                     }
-                } else if (!match_line(a, b, matches[k])) {
+                } else if (!match_line(a, b, matches[k], matches_vertex_)) {
                     violation(ViolationKind::not_subset, layer, before.key, b.empty() ? somewhere : b[0], "line " + std::to_string(k));
                     matches[k].clear();
                 }
@@ -492,17 +516,32 @@ private:
             if (before.type != Feature::Type::lines) continue;
             for (std::size_t k = 0; k < line_matches_[m].size(); ++k) {
                 const auto& at = line_matches_[m][k];
+                const std::vector<Point>& output = matched_[m].simplified->parts[k];
                 for (std::size_t i = 0; i + 1 < at.size(); ++i) {
-                    if (at[i + 1] <= at[i] + 1) continue;
-                    const std::span<const Point> detour(before.parts[k].data() + at[i], at[i + 1] - at[i] + 1);
+                    // The original stretch, closed by the output segment (ends moved, when
+                    // rounded: the stretch and the segment then bound what the move swept).
+                    const Point a = before.parts[k][at[i]], b = before.parts[k][at[i + 1]];
+                    const Point a_out = output[i], b_out = output[i + 1];
+                    const bool moved = !same_location(a, a_out) || !same_location(b, b_out);
+                    if (at[i + 1] <= at[i] + 1 && !moved) continue;
+                    std::vector<Point> detour(before.parts[k].begin() + static_cast<std::ptrdiff_t>(at[i]),
+                                              before.parts[k].begin() + static_cast<std::ptrdiff_t>(at[i + 1]) + 1);
+                    if (!same_location(b, b_out)) detour.push_back(b_out);
+                    if (!same_location(a, a_out)) detour.push_back(a_out);
+                    detour.push_back(a);
                     Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
                     for (const Point q : detour) box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
                     grid.any_in_cells(box, [&](std::uint32_t, Point q) {
-                        if (!box_contains(box, q) || same_location(q, detour.front()) || same_location(q, detour.back())) return false;
+                        // A point at an end that stayed is on the line before and after.
+                        if (!box_contains(box, q) || (same_location(q, a) && same_location(a, a_out)) ||
+                            (same_location(q, b) && same_location(b, b_out))) {
+                            return false;
+                        }
                         if (exact::locate_in_ring(detour, q, stats_) != exact::RingLocation::outside) {
                             violation(ViolationKind::point_changed_side, layer_of(m), before.key, q,
-                                      "swept by the segment replacing vertices " + std::to_string(at[i]) + "…" +
-                                          std::to_string(at[i + 1]) + " of line " + std::to_string(k));
+                                      std::string(moved ? "swept by the rounded segment standing for vertices "
+                                                        : "swept by the segment replacing vertices ") +
+                                          std::to_string(at[i]) + "…" + std::to_string(at[i + 1]) + " of line " + std::to_string(k));
                         }
                         return false;
                     });
@@ -521,6 +560,7 @@ private:
     }
 
     const CheckOptions& options_;
+    VertexMatch matches_vertex_;
     std::vector<Layer> original_, simplified_;
     std::vector<Matched> matched_;
     std::vector<std::vector<std::vector<std::size_t>>> line_matches_;  // per feature, per line: original index of each vertex

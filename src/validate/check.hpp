@@ -7,9 +7,12 @@
 // depends on rounding. Each violation says which one decided.
 #pragma once
 
+#include "core/map/grid_step.hpp"
+
 #include <cstdint>
 #include <map>
 #include <span>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +26,10 @@ struct CheckOptions {
     std::vector<std::string> layers; // layers to compare; empty: every layer of the original
     std::string simplified_layer;    // the simplified dataset's layer to compare with the one
                                      // original layer, whatever its name; empty: match by name
+    std::optional<map::GridStep> grid;  // the simplified output was rounded onto this grid
+                                        // (toposimp map --precision): a simplified vertex on the
+                                        // grid matches an original vertex whose nearest grid
+                                        // point is at most one step away in x and in y
 };
 
 // What a simplification can break, in report order. Their names and meanings: kinds().

@@ -102,9 +102,38 @@ TEST(Precision, BadStepsAreRefused) {
     const CliResult fine = run_cli({"map", input, "-o", out, "--precision", "1e-300"});
     EXPECT_EQ(fine.code, 2);
     EXPECT_NE(fine.err.find("too fine"), std::string::npos) << fine.err;
-    const CliResult validate = run_cli({"map", input, "-o", out, "--decimals", "3", "--validate"});
-    EXPECT_EQ(validate.code, 2);
     EXPECT_TRUE(files_in(dir).empty());
+}
+
+// check --decimals / --precision: a vertex on the grid up to a step from an original vertex
+// stands for it; --validate passes the grid on.
+TEST(Precision, CheckAcceptsRoundedVerticesAndStillFindsWhatRoundingBroke) {
+    const auto dir = fresh_dir("precision");
+    const std::string input = testdata("ne_states_slice.gpkg"), out = (dir / "out.gpkg").string();
+    ASSERT_EQ(run_cli({"map", input, "-o", out, "--decimals", "2", "--validate"}).code, 0);
+    const CliResult strict = run_cli({"check", input, out, "--json"});
+    EXPECT_EQ(strict.code, 1);
+    EXPECT_NE(strict.out.find("\"not_subset\":"), std::string::npos);
+    const CliResult rounded = run_cli({"check", input, out, "--decimals", "2", "--json"});
+    EXPECT_EQ(rounded.code, 0) << rounded.out;
+    EXPECT_EQ(run_cli({"check", input, out, "--precision", "0.01"}).code, 0);
+    EXPECT_EQ(run_cli({"check", input, out, "--precision", "zero"}).code, 2);
+
+    // A line rounded across a control point (the apex 0.004 above it goes to 0 at 2 decimals),
+    // and a vertex put two steps away: found with the grid given.
+    const std::string original = (dir / "line.gpkg").string(), simplified = (dir / "rounded.gpkg").string();
+    write_layer(original, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0.004,2 0)", "a"}});
+    write_layer(simplified, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0,2 0)", "a"}});
+    const std::string points = (dir / "points.gpkg").string();
+    write_layer(points, "GPKG", wkbPoint, {{"POINT (1 0.003)", "p"}}, "points");
+    const CliResult swept = run_cli({"check", original, simplified, "-p", points, "--decimals", "2", "--json"});
+    EXPECT_EQ(swept.code, 1);
+    EXPECT_NE(swept.out.find("\"point_changed_side\":2"), std::string::npos) << swept.out;  // by both segments
+    EXPECT_NE(swept.out.find("swept by the rounded segment"), std::string::npos) << swept.out;
+    EXPECT_EQ(run_cli({"check", original, simplified, "--decimals", "2"}).code, 0);  // no points: a clean rounding
+    write_layer(simplified, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0.02,2 0)", "a"}}, "lines");
+    const CliResult far = run_cli({"check", original, simplified, "--decimals", "2", "--json"});
+    EXPECT_NE(far.out.find("\"not_subset\":1"), std::string::npos) << far.out;
 }
 
 }  // namespace
