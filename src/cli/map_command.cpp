@@ -152,6 +152,7 @@ struct MapInput {
     map::MapData map;
     std::optional<io::OgrDataset> dataset;
     io::GiscupLines giscup_lines;
+    std::size_t written_points = 0;  // control points [0, n) are the dataset's own point features
 
     std::uint64_t features() const { return dataset ? dataset->summary().features() : map.chains.size(); }
 };
@@ -195,6 +196,7 @@ MapInput read_layers(const MapOptions& options, spdlog::logger& log) {
         const std::string extension = std::filesystem::path(options.output).extension().string();
         const bool prj_as_file = (extension == ".shp" || extension == ".SHP") && io::is_shapefile_output(options.output, options.format);
         input.dataset.emplace(io::OgrDataset::read(options.input, options.layers, input.map, prj_as_file));
+        input.written_points = input.map.control_points.size();
     } catch (...) {
         if (points.valid()) points.wait();
         throw;
@@ -266,7 +268,9 @@ map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, co
                                 exact::Arithmetic arithmetic, spdlog::logger& log) {
     map::RoundingResult rounded;
     try {
-        rounded = map::round_to_grid(input.map, result.kept, {grid, arithmetic});
+        map::RoundingOptions rounding{grid, arithmetic};
+        rounding.written_points = input.written_points;
+        rounded = map::round_to_grid(input.map, result.kept, rounding);
     } catch (const std::invalid_argument& error) {
         throw io::InputError(std::string(error.what()) + " (--precision)");
     }
@@ -274,12 +278,17 @@ map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, co
         if (rounded.kept[v]) input.map.vertices[v] = rounded.at[v];
     }
     result.kept = std::move(rounded.kept);
+    if (input.dataset && !rounded.points.empty()) input.dataset->move_points(rounded.points);
     result.stats.vertices_out -= rounded.stats.removed;
     const map::RoundingStats& stats = rounded.stats;
     log.debug("grid {}: {} locations, {} already on it, {} moved to the nearest grid point, {} to another, {} vertices removed "
               "(their grid point was a neighbour's), {} left off the grid, {} on rings written as given, {} passes",
               grid.text(), stats.locations, stats.already_on_grid, stats.moved_nearest, stats.moved_other, stats.removed,
               stats.off_grid, stats.frozen, stats.passes);
+    if (stats.points_off_grid > 0) {
+        log.warn("{} point features are written off the grid {}: on a line, or no way to the grid point without touching one",
+                 stats.points_off_grid, grid.text());
+    }
     if (stats.off_grid > 0) {
         std::string where;
         for (std::size_t k = 0; k < rounded.off_grid.size() && k < 3; ++k) {
@@ -347,6 +356,8 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
             .field("removed", rounding.removed)
             .field("off_grid", rounding.off_grid)
             .field("frozen", rounding.frozen)
+            .field("points_on_grid", rounding.points_moved)
+            .field("points_off_grid", rounding.points_off_grid)
             .field("passes", rounding.passes)
             .field("predicates", rounding.predicates.filter_decided + rounding.predicates.expansion_decided +
                                      rounding.predicates.gmp_fallbacks)

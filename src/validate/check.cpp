@@ -103,7 +103,7 @@ bool match_line(const std::vector<Point>& original, const std::vector<Point>& si
     // line ending in a repeated vertex Z, Z simplified to A, Z matched Z to the first copy and
     // was reported not a subset: issue 29.)
     const std::size_t last = original.size() - 1;
-    if (!same_location(simplified.front(), original.front()) || !same_location(simplified.back(), original[last])) return false;
+    if (!same_location(original.front(), simplified.front()) || !same_location(original[last], simplified.back())) return false;
     at.push_back(0);
     std::size_t i = 1;
     for (std::size_t k = 1; k + 1 < simplified.size(); ++k) {

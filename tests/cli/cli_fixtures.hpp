@@ -136,6 +136,11 @@ inline ReadLayer read_layer(const std::string& path, int index = 0) {
                 case wkbMultiPolygon:
                     for (const OGRPolygon* part : *geometry->toMultiPolygon()) add_polygon(*part);
                     break;
+                case wkbPoint: {
+                    const OGRPoint& point = *geometry->toPoint();
+                    if (!point.IsEmpty()) read.coordinates.push_back({point.getX(), point.getY()});
+                    break;
+                }
                 default: break;
             }
         }

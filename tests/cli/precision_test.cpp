@@ -105,6 +105,28 @@ TEST(Precision, BadStepsAreRefused) {
     EXPECT_TRUE(files_in(dir).empty());
 }
 
+// The point features of the layers simplified go on the grid too (they are written out), and the
+// check with the grid given finds everything in place.
+TEST(Precision, PointLayersGoOnTheGridToo) {
+    const auto dir = fresh_dir("precision");
+    const std::string input = testdata("nh_borders.gpkg"), out = (dir / "out.gpkg").string();
+    const CliResult map = run_cli({"map", input, "-o", out, "--decimals", "2", "--json"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    const std::uint64_t on = json_number(map.out, "points_on_grid"), off = json_number(map.out, "points_off_grid");
+    const ReadLayer places = read_layer(out, 1);
+    ASSERT_EQ(places.name, "places");
+    EXPECT_EQ(on + off, places.features.size());
+    EXPECT_GT(on, 0u);
+    std::uint64_t written_on = 0;
+    for (const ReadFeature& feature : places.features) {
+        const auto& xy = feature.coordinates.at(0);
+        written_on += has_decimals_at_most(xy[0], 2) && has_decimals_at_most(xy[1], 2);
+    }
+    EXPECT_EQ(written_on, on);
+    const CliResult check = run_cli({"check", input, out, "-l", "borders", "-p", input + ":places", "--decimals", "2"});
+    EXPECT_EQ(check.code, 0) << check.out;
+}
+
 // check --decimals / --precision: a vertex on the grid up to a step from an original vertex
 // stands for it; --validate passes the grid on.
 TEST(Precision, CheckAcceptsRoundedVerticesAndStillFindsWhatRoundingBroke) {

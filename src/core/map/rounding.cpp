@@ -146,6 +146,7 @@ public:
             pending = std::move(left);
             if (!progress && pass > 0) break;
         }
+        round_points();
         stats.off_grid = pending.size();
         for (const std::uint32_t l : pending) result_.off_grid.push_back(vertices_[vertex_start_[l]]);
         result_.at = map_.vertices;
@@ -153,6 +154,7 @@ public:
             if (kept_[v]) result_.at[v] = pos_[location_[v]];
         }
         result_.kept = std::move(kept_);
+        result_.points.assign(point_at_.begin(), point_at_.begin() + static_cast<std::ptrdiff_t>(options_.written_points));
         result_.stats.predicates = predicates_;
         return std::move(result_);
     }
@@ -236,6 +238,14 @@ private:
         });
         locations_.emplace(std::span<const Point>(orig_));
         if (!map_.control_points.empty()) controls_.emplace(std::span<const Point>(map_.control_points));
+        point_at_ = map_.control_points;
+        for (std::size_t k = 0; k < options_.written_points; ++k) {
+            const Point p = map_.control_points[k];
+            if (!options_.grid.nearest(p.x) || !options_.grid.nearest(p.y)) {
+                throw std::invalid_argument("the grid step " + options_.grid.text() + " is too fine for coordinates as large as (" +
+                                            std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
+            }
+        }
     }
 
     Point nearest(Point p) const {
@@ -261,6 +271,32 @@ private:
             if (!same_location(q, pos_[l])) out.push_back(q);
         }
         return out;
+    }
+
+    // The written control points, each to its nearest grid point when the path there touches no
+    // live segment (closed: not even at an end) — it then crosses nothing and leaves no line it
+    // was on. After the lines, so that they see the points where they were.
+    void round_points() {
+        for (std::size_t k = 0; k < options_.written_points; ++k) {
+            const Point p = point_at_[k], t = nearest(p);
+            if (same_location(p, t)) {
+                ++result_.stats.points_moved;
+                continue;
+            }
+            const bool touched = segments_->any(widened(box_of({p, t}), reach_), [&](std::uint32_t s) {
+                const std::uint32_t e = next_[s];
+                if (!kept_[s] || e == kNone) return false;
+                const Point u = pos_[location_[s]], w = pos_[location_[e]];
+                return exact::improper_contact(p, t, u, w, options_.arithmetic, predicates_) || same_location(p, u) ||
+                       same_location(p, w) || same_location(t, u) || same_location(t, w);
+            });
+            if (touched) {
+                ++result_.stats.points_off_grid;
+            } else {
+                point_at_[k] = t;
+                ++result_.stats.points_moved;
+            }
+        }
     }
 
     // Puts location l at `target`: true if moved, false if its vertex was removed instead,
@@ -293,7 +329,9 @@ private:
         const bool taken = locations_->any_in_cells(widened(box_of({target}), reach_), [&](std::uint32_t id, Point) {
             return id != l && !dead_[id] && same_location(pos_[id], target);
         });
-        if (taken || (controls_ && controls_->any_in_cells(box_of({p, target}), [&](std::uint32_t, Point q) { return same_location(q, p); }))) {
+        if (taken || (controls_ && controls_->any_in_cells(widened(box_of({p}), reach_), [&](std::uint32_t id, Point) {
+                          return same_location(point_at_[id], p);
+                      }))) {
             return false;
         }
         const bool crossed = segments_->any(widened(box_of({p, target}), reach_), [&](std::uint32_t s) {
@@ -352,7 +390,8 @@ private:
         });
         if (location_inside) return false;
         if (!controls_) return true;
-        return !controls_->any_in_cells(box, [&](std::uint32_t, Point q) {
+        return !controls_->any_in_cells(widened(box, reach_), [&](std::uint32_t id, Point) {
+            const Point q = point_at_[id];
             if (!inside(q, box)) return false;
             for (const Point at : points_allowed) {
                 if (same_location(q, at)) return false;
@@ -401,6 +440,7 @@ private:
     double reach_ = 0;
     std::optional<SegmentIndex> segments_;
     std::optional<PointGrid> locations_, controls_;
+    std::vector<Point> point_at_;  // per control point: where it is (the written ones move)
     exact::PredicateStats predicates_;
     RoundingResult result_;
 };

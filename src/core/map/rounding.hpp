@@ -32,6 +32,10 @@
 // is: off the grid, reported, never a broken promise. Vertices of frozen chains (degenerate
 // input rings, written as given) stay where they are too.
 //
+// Control points that are written too (the point features of the layers being simplified) go on
+// the grid as well, each only if its path from where it is to the grid point meets no live
+// segment or location at all (so it crosses nothing, and a point on a line stays where it is).
+//
 // Sequential and in input order, so the result is the same on any machine and thread count.
 #pragma once
 
@@ -48,6 +52,7 @@ struct RoundingOptions {
     GridStep grid;
     exact::Arithmetic arithmetic = exact::Arithmetic::exact;
     int passes = 6;  // passes over the locations not yet on the grid (the first tries only the nearest point)
+    std::size_t written_points = 0;  // control points [0, n) are written out: put them on the grid too
 };
 
 struct RoundingStats {
@@ -58,6 +63,8 @@ struct RoundingStats {
     std::uint64_t removed = 0;          // vertices removed: their grid point was a neighbour's
     std::uint64_t off_grid = 0;         // locations left where they were: no grid point was safe
     std::uint64_t frozen = 0;           // locations on frozen chains, left as given
+    std::uint64_t points_moved = 0;     // written control points put on the grid (or on it already)
+    std::uint64_t points_off_grid = 0;  // written control points left where they were
     std::uint32_t passes = 0;
     exact::PredicateStats predicates;
 };
@@ -66,6 +73,7 @@ struct RoundingResult {
     std::vector<Point> at;                // per vertex: where it is written (meaningful where kept)
     std::vector<std::uint8_t> kept;       // the kept vertices after rounding (a subset of those given)
     std::vector<std::uint32_t> off_grid;  // one vertex per location left off the grid, in input order
+    std::vector<Point> points;            // the written control points [0, written_points), where they are written
     RoundingStats stats;
 };
 

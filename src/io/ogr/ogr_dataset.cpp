@@ -64,6 +64,7 @@ struct OgrDataset::Data {
         std::vector<Shape> shapes;
         std::vector<std::uint32_t> items;
         std::vector<std::unique_ptr<OGRGeometry>> untouched;
+        std::vector<std::uint32_t> untouched_points;  // per untouched geometry: its first control point
 
         Layer() = default;
         Layer(const Layer&) = delete;
@@ -271,6 +272,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                     shape.kind = Layer::Kind::untouched;
                     shape.first = static_cast<std::uint32_t>(layer->untouched.size());
                     shape.count = 1;
+                    layer->untouched_points.push_back(static_cast<std::uint32_t>(map.control_points.size()));
                     auto add = [&](const OGRPoint& point) {
                         if (point.IsEmpty()) return;
                         const Point p{point.getX(), point.getY()};
@@ -521,6 +523,26 @@ CPLStringList layer_options_for(const MapFormatRules* rules, const std::vector<s
 }
 
 }  // namespace
+
+void OgrDataset::move_points(std::span<const Point> points) {
+    for (auto& layer : data_->layers) {
+        for (std::size_t g = 0; g < layer->untouched.size(); ++g) {
+            std::uint32_t next = layer->untouched_points[g];
+            auto place = [&](OGRPoint& point) {
+                if (point.IsEmpty() || next >= points.size()) return;
+                point.setX(points[next].x);
+                point.setY(points[next].y);
+                ++next;
+            };
+            OGRGeometry& geometry = *layer->untouched[g];
+            if (wkbFlatten(geometry.getGeometryType()) == wkbPoint) {
+                place(*geometry.toPoint());
+            } else {
+                for (OGRPoint* point : *geometry.toMultiPoint()) place(*point);
+            }
+        }
+    }
+}
 
 std::vector<std::string> OgrDataset::write(const WriteOptions& options, const map::MapData& map,
                                            const std::vector<std::uint8_t>& kept) const {

@@ -10,6 +10,7 @@
 #include <functional>
 #include <iosfwd>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -70,6 +71,10 @@ public:
     // Returns warnings worth telling the user (e.g. values a format cannot hold).
     std::vector<std::string> write(const WriteOptions& options, const map::MapData& map,
                                    const std::vector<std::uint8_t>& kept) const;
+
+    // Moves the point features (written unchanged otherwise) to `points`: the map's control
+    // points as read from this dataset, in the same order (rounding put them on a grid).
+    void move_points(std::span<const Point> points);
 
     struct Data;  // layers, their definitions and attributes, the shared coverage
 

@@ -118,6 +118,52 @@ TEST(Rounding, VertexOnItsNeighboursGridPointIsRemoved) {
     EXPECT_EQ(result.kept[1], 0);
 }
 
+// Written control points (point features) go on the grid too, unless their way there touches a
+// line. The point on the line's middle vertex holds that vertex where it is (and stays with it);
+// the line's ends go down to y = 0; the point below the line goes down to (1, 0), still below.
+TEST(Rounding, WrittenPointsGoOnTheGridWithoutCrossingALine) {
+    MapData map;
+    map.add_chain({{0, 0.00004}, {1, 0.00004}, {2, 0.00004}});
+    map.control_points = {{1, 0.00001}, {5.00004, 5.00004}, {1, 0.00004}};
+    RoundingOptions options{GridStep::decimals(4)};
+    options.written_points = 3;
+    const RoundingResult result = round_to_grid(map, std::vector<std::uint8_t>(map.vertices.size(), 1), options);
+    ASSERT_EQ(result.points.size(), 3u);
+    EXPECT_EQ(result.at[0].y, 0.0);
+    EXPECT_EQ(result.at[1].y, 0.00004);
+    EXPECT_EQ(result.at[2].y, 0.0);
+    EXPECT_EQ(result.stats.off_grid, 1u);
+    EXPECT_EQ(result.points[0].x, 1.0);
+    EXPECT_EQ(result.points[0].y, 0.0);
+    EXPECT_EQ(result.points[1].x, 5.0);
+    EXPECT_EQ(result.points[1].y, 5.0);
+    EXPECT_EQ(result.points[2].x, 1.0);
+    EXPECT_EQ(result.points[2].y, 0.00004);
+    EXPECT_EQ(result.stats.points_moved, 2u);
+    EXPECT_EQ(result.stats.points_off_grid, 1u);
+
+    // A point whose way to its grid point would cross the line stays where it is.
+    MapData across;
+    across.add_chain({{0, 0.00004}, {1, 0.00004}, {2, 0.00004}});
+    across.control_points = {{1, 0.00007}};  // nearest grid point (1, 0.0001); the line goes to 0
+    across.control_points.push_back({1, 0.00004});  // holds the middle vertex at 0.00004
+    RoundingOptions one{GridStep::decimals(4)};
+    one.written_points = 1;
+    const RoundingResult kept = round_to_grid(across, std::vector<std::uint8_t>(across.vertices.size(), 1), one);
+    EXPECT_EQ(kept.points[0].y, 0.0001);  // way up, away from the line: fine
+    // Points just below the line's first segment, wherever the line and they go, stay below it.
+    for (const double x : {0.25, 0.5, 0.75}) {
+        for (const double y : {0.00001, 0.00003, 0.0000399}) {
+            across.control_points[0] = {x, y};
+            const RoundingResult r = round_to_grid(across, std::vector<std::uint8_t>(across.vertices.size(), 1), one);
+            exact::PredicateStats stats;
+            EXPECT_EQ(exact::orient2d(r.at[0], r.at[1], r.points[0], stats), exact::orient2d(across.vertices[0], across.vertices[1], across.control_points[0], stats))
+                << x << " " << y << " went to " << r.points[0].x << " " << r.points[0].y;
+            EXPECT_EQ(r.stats.points_moved + r.stats.points_off_grid, 1u);
+        }
+    }
+}
+
 // Random maps (planar, and with roads crossing them), simplified, then rounded at grids from a
 // thousandth of the map to a tenth of it: every promise holds (independent checker), and most
 // locations reach the grid.
