@@ -182,7 +182,7 @@ void Coverage::build(MapData& map) {
     degenerate_.swap(degenerate);
 }
 
-std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept) const {
+std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order) const {
     std::vector<std::uint32_t> all;
     for (std::uint32_t u = uses_start_[ring]; u < uses_start_[ring + 1]; ++u) {
         const Chain chain = map_->chains[uses_[u].chain];
@@ -194,7 +194,7 @@ std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std
     }
     if (degenerate_[ring]) return all;  // frozen: exactly as given
     all.pop_back();  // the closing vertex; closed again below
-    std::rotate(all.begin(), all.begin() + (kept[all[start_offset_[ring]]] ? start_offset_[ring] : 0), all.end());
+    if (!arc_order) std::rotate(all.begin(), all.begin() + (kept[all[start_offset_[ring]]] ? start_offset_[ring] : 0), all.end());
     std::vector<std::uint32_t> ring_out;
     for (const std::uint32_t v : all) {
         if (kept[v]) ring_out.push_back(v);

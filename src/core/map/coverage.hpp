@@ -27,8 +27,18 @@ public:
     void build(MapData& map);
 
     // The ring rebuilt from its arcs' kept vertices, as map vertex ids, closed (last = first).
-    // Starts at the ring's first input vertex if it was kept.
-    std::vector<std::uint32_t> ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept) const;
+    // Starts at the ring's first input vertex if it was kept (`arc_order` false), or where its
+    // first arc starts (true: as a TopoJSON reader rebuilds it from the arcs).
+    std::vector<std::uint32_t> ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order = false) const;
+
+    // A ring's arcs in order: the chain (its index in the map) and whether it runs backwards.
+    struct ArcUse {
+        std::uint32_t chain;
+        bool reversed;
+    };
+    std::span<const ArcUse> ring_arcs(std::uint32_t ring) const {
+        return {uses_.data() + uses_start_[ring], uses_.data() + uses_start_[ring + 1]};
+    }
 
     // For map vertex v created by build(): the index of the input ring point it came from (in
     // add_ring order, counting every point given, closing vertex included), for Z/M and the like.
@@ -41,10 +51,6 @@ public:
     std::uint64_t degenerate_ring_count() const { return degenerate_rings_; }
 
 private:
-    struct ArcUse {
-        std::uint32_t chain;
-        bool reversed;
-    };
 
     std::vector<Point> points_;               // every ring point as given
     std::vector<std::uint32_t> ring_start_;   // into points_

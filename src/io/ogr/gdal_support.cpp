@@ -95,7 +95,10 @@ GDALDriver* vector_driver_for(const std::string& path, const std::string& format
     if (driver == nullptr || !driver->GetMetadataItem(GDAL_DCAP_VECTOR)) {
         throw OutputError("unknown vector output format '" + name + "' (see `ogrinfo --formats`)");
     }
-    if (!driver->GetMetadataItem(GDAL_DCAP_CREATE)) throw OutputError("GDAL cannot create '" + name + "' files");
+    const MapFormatRules* rules = map_format_rules(driver->GetDescription());
+    if (!driver->GetMetadataItem(GDAL_DCAP_CREATE) && !(rules && rules->own_writer)) {
+        throw OutputError("GDAL cannot create '" + name + "' files");
+    }
     return driver;
 }
 

@@ -185,6 +185,24 @@ void append_crs(std::string& out, const OGRSpatialReference* srs, std::vector<st
 
 }  // namespace
 
+void append_properties(std::string& out, const OGRFeature& feature, const OGRFeatureDefn& definition) {
+    out += '{';
+    bool first = true;
+    for (int field = 0; field < definition.GetFieldCount(); ++field) {
+        if (!feature.IsFieldSet(field)) continue;
+        if (!first) out += ',';
+        first = false;
+        append_json_string(out, definition.GetFieldDefn(field)->GetNameRef());
+        out += ':';
+        if (feature.IsFieldNull(field)) {
+            out += "null";
+        } else {
+            append_property(out, feature, field);
+        }
+    }
+    out += '}';
+}
+
 std::vector<std::string> write_geojson(const std::string& path, const LayerSource& layer, const std::string& shown_as) {
     const std::string& name = shown_as.empty() ? path : shown_as;
     std::vector<std::string> warnings;
@@ -198,21 +216,9 @@ std::vector<std::string> write_geojson(const std::string& path, const LayerSourc
     CoordinateWriter coordinates{out};
     for (std::size_t i = 0; i < layer.feature_count; ++i) {
         const OGRFeature& feature = *layer.feature(i);
-        out += i ? ",\n{\"type\":\"Feature\",\"properties\":{" : "{\"type\":\"Feature\",\"properties\":{";
-        bool first = true;
-        for (int field = 0; field < layer.definition->GetFieldCount(); ++field) {
-            if (!feature.IsFieldSet(field)) continue;
-            if (!first) out += ',';
-            first = false;
-            append_json_string(out, layer.definition->GetFieldDefn(field)->GetNameRef());
-            out += ':';
-            if (feature.IsFieldNull(field)) {
-                out += "null";
-            } else {
-                append_property(out, feature, field);
-            }
-        }
-        out += "},\"geometry\":";
+        out += i ? ",\n{\"type\":\"Feature\",\"properties\":" : "{\"type\":\"Feature\",\"properties\":";
+        append_properties(out, feature, *layer.definition);
+        out += ",\"geometry\":";
         coordinates.geometry(layer.geometry(i).get());
         out += '}';
         if (out.size() > (1 << 20)) {

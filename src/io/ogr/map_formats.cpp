@@ -6,10 +6,12 @@ namespace toposimp::io {
 namespace {
 
 // driver, extensions, several layers, several files, own writer, keeps the FID column, layer option, recommended
-constexpr std::array<MapFormatRules, 12> kRules{{
+constexpr std::array<MapFormatRules, 13> kRules{{
     {"ESRI Shapefile", "shp", false, true, false, false, nullptr, "Shapefile (.shp)"},
     {"GPKG", "gpkg", true, false, false, true, nullptr, "GeoPackage (.gpkg)"},
     {"GeoJSON", "geojson json", false, false, true, false, nullptr, "GeoJSON (.geojson)"},
+    // GDAL reads it only: toposimp writes it (io/ogr/topojson_writer.cpp), one object per layer.
+    {"TopoJSON", "topojson", true, false, true, false, nullptr, "TopoJSON (.topojson)"},
     // Its spatial index sorts the features: the input order is kept unless asked.
     {"FlatGeobuf", "fgb", false, false, false, false, "SPATIAL_INDEX=NO", "FlatGeobuf (.fgb)"},
     // Read, never written: GDAL 3.6's GML reader parses coordinates inexactly (the read-back refuses).

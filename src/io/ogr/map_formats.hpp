@@ -16,7 +16,7 @@ struct MapFormatRules {
     const char* extensions;  // that name this driver, space-separated, lower case ("" if GDAL's list decides)
     bool several_layers;     // one file holds several layers (else one layer per file)
     bool several_files;      // a dataset is several files, so it cannot go to stdout
-    bool own_writer;         // written by toposimp itself (GDAL 3.6 rounds its coordinates): io/ogr/geojson_writer.cpp
+    bool own_writer;         // written by toposimp itself (GDAL 3.6 rounds GeoJSON, cannot write TopoJSON): io/ogr/*_writer.cpp
     bool keeps_fid_column;   // the source's FID column name is kept (FID=...), renamed away from any field of that name
     const char* layer_option;  // "KEY=VALUE" toposimp sets unless the user sets KEY (-lco), or null
     const char* recommended;   // keeps every coordinate (tested): its name for messages that suggest one, or null

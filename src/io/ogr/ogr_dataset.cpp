@@ -7,6 +7,7 @@
 #include "io/map/shapefile.hpp"
 #include "io/ogr/gdal_support.hpp"
 #include "io/ogr/geojson_writer.hpp"
+#include "io/ogr/topojson_writer.hpp"
 #include "io/ogr/map_formats.hpp"
 
 #include <cpl_conv.h>
@@ -92,8 +93,12 @@ struct OgrDataset::Data {
 
     void read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file);
 
+    // `arc_order`: rings start where their first arc does (as a TopoJSON reader rebuilds them).
     std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
-                                                const std::vector<std::uint8_t>& kept) const;
+                                                const std::vector<std::uint8_t>& kept, bool arc_order = false) const;
+
+    // The geometry as TopoJSON arc references: arc i is map chain i.
+    TopoGeometry topo_geometry(const Layer& layer, std::size_t index) const;
 };
 
 namespace {
@@ -359,7 +364,7 @@ OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::stri
 }
 
 std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
-                                                              const std::vector<std::uint8_t>& kept) const {
+                                                              const std::vector<std::uint8_t>& kept, bool arc_order) const {
     using Kind = Layer::Kind;
     const Layer::Shape& shape = layer.shapes[index];
     const std::vector<std::uint32_t>& items = layer.items;
@@ -405,7 +410,7 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
                 for (std::uint32_t r = 0; r < rings; ++r) {
                     auto ring = std::make_unique<OGRLinearRing>();
                     zm_flags(*ring);
-                    fill(*ring, coverage.ring_vertices(items[k++], kept));
+                    fill(*ring, coverage.ring_vertices(items[k++], kept, arc_order));
                     polygon->addRingDirectly(ring.release());
                 }
                 return polygon;
@@ -524,6 +529,56 @@ CPLStringList layer_options_for(const MapFormatRules* rules, const std::vector<s
 
 }  // namespace
 
+TopoGeometry OgrDataset::Data::topo_geometry(const Layer& layer, std::size_t index) const {
+    using Kind = Layer::Kind;
+    using Type = TopoGeometry::Type;
+    const Layer::Shape& shape = layer.shapes[index];
+    const std::vector<std::uint32_t>& items = layer.items;
+    TopoGeometry topo;
+    topo.has_z = OGR_GT_HasZ(shape.type);
+    topo.has_m = OGR_GT_HasM(shape.type);
+    switch (shape.kind) {
+        case Kind::null: return topo;
+        case Kind::untouched: {
+            const OGRGeometry& geometry = *layer.untouched[shape.first];
+            auto add = [&](const OGRPoint& point) {
+                if (!point.IsEmpty()) topo.points.push_back({point.getX(), point.getY()});
+            };
+            if (wkbFlatten(geometry.getGeometryType()) == wkbPoint) {
+                topo.type = Type::point;
+                add(*geometry.toPoint());
+            } else {
+                topo.type = Type::multi_point;
+                for (const OGRPoint* point : *geometry.toMultiPoint()) add(*point);
+            }
+            return topo;
+        }
+        case Kind::lines:
+            topo.type = wkbFlatten(shape.type) == wkbLineString ? Type::line_string : Type::multi_line_string;
+            for (std::uint32_t k = 0; k < shape.count; ++k) {
+                const std::uint32_t chain = items[shape.first + k];
+                topo.lines.push_back(chain == kEmptyPart ? std::vector<std::int64_t>{} : std::vector<std::int64_t>{chain});
+            }
+            return topo;
+        case Kind::polygons: {
+            topo.type = wkbFlatten(shape.type) == wkbPolygon ? Type::polygon : Type::multi_polygon;
+            std::uint32_t k = shape.first;
+            while (k < shape.first + shape.count) {
+                auto& polygon = topo.polygons.emplace_back();
+                const std::uint32_t rings = items[k++];
+                for (std::uint32_t r = 0; r < rings; ++r) {
+                    auto& ring = polygon.emplace_back();
+                    for (const map::Coverage::ArcUse use : coverage.ring_arcs(items[k++])) {
+                        ring.push_back(use.reversed ? ~static_cast<std::int64_t>(use.chain) : static_cast<std::int64_t>(use.chain));
+                    }
+                }
+            }
+            return topo;
+        }
+    }
+    return topo;
+}
+
 void OgrDataset::move_points(std::span<const Point> points) {
     for (auto& layer : data_->layers) {
         for (std::size_t g = 0; g < layer->untouched.size(); ++g) {
@@ -575,12 +630,36 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         source.geometry = [&data, &layer, &map, &kept](std::size_t i) { return data.build_geometry(layer, i, map, kept); };
         return source;
     };
+    const bool topology = driver_name == "TopoJSON";
     if (rules && rules->own_writer) {
-        // GDAL 3.6's GeoJSON writer rounds coordinates: toposimp writes GeoJSON itself.
+        // GDAL 3.6's GeoJSON writer rounds coordinates, and GDAL cannot write TopoJSON: toposimp
+        // writes both itself.
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
-            warnings.push_back("-lco/-dsco are ignored for GeoJSON: toposimp writes it itself to keep coordinates exact");
+            warnings.push_back("-lco/-dsco are ignored for " + driver_name + ": toposimp writes it itself to keep coordinates exact");
         }
-        auto more = write_geojson(output.staging_path(), source_of(*data.layers.front()), options.path);
+        std::vector<std::string> more;
+        if (topology) {
+            std::vector<TopologyLayer> layers;
+            for (const auto& layer_pointer : data.layers) {
+                const Data::Layer& layer = *layer_pointer;
+                TopologyLayer topo;
+                topo.name = output_name(layer);
+                topo.definition = layer.definition;
+                topo.feature_count = layer.features.size();
+                topo.feature = [&layer](std::size_t i) { return layer.features[i].get(); };
+                topo.geometry = [&data, &layer](std::size_t i) { return data.topo_geometry(layer, i); };
+                layers.push_back(std::move(topo));
+            }
+            auto arc = [&map, &kept](std::size_t a, std::vector<Point>& positions) {
+                positions.clear();
+                for (std::uint32_t v = map.chains[a].first; v <= map.chains[a].last; ++v) {
+                    if (kept[v]) positions.push_back(map.vertices[v]);
+                }
+            };
+            more = write_topojson(output.staging_path(), layers, map.chains.size(), arc, options.path);
+        } else {
+            more = write_geojson(output.staging_path(), source_of(*data.layers.front()), options.path);
+        }
         warnings.insert(warnings.end(), more.begin(), more.end());
     } else {
         QuietGdal quiet;
@@ -643,7 +722,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     {
         auto check_geometry = [&](const Data::Layer& layer, std::size_t i, const OGRGeometry* actual) {
             std::string difference;
-            const auto expected = data.build_geometry(layer, i, map, kept);
+            const auto expected = data.build_geometry(layer, i, map, kept, topology);
             if (!same_coordinates(expected.get(), actual, difference)) {
                 throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
                                   "' (layer '" + output_name(layer) + "', feature " + std::to_string(layer.features[i]->GetFID()) +

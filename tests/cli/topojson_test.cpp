@@ -1,0 +1,96 @@
+// TopoJSON output: one object per layer, shared borders written once as arcs used by both
+// polygons (one of them reversed), points as coordinates, attributes as properties; GDAL reads
+// it back with the same features and coordinates bit for bit (toposimp's own read-back checks
+// that before moving the file into place; here again from outside).
+#include "cli/cli_fixtures.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <fstream>
+#include <iterator>
+#include <regex>
+#include <set>
+
+namespace toposimp::testing {
+namespace {
+
+std::string contents(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// A ring's vertices from its first smallest (x, y) on, without the closing one: rings compared
+// whatever vertex they start at (TopoJSON rings start where their first arc does).
+std::vector<std::pair<double, double>> canonical_ring(const std::vector<double>& flat) {
+    std::vector<std::pair<double, double>> ring;
+    for (std::size_t k = 0; k + 1 < flat.size(); k += 2) ring.emplace_back(flat[k], flat[k + 1]);
+    if (!ring.empty()) ring.pop_back();
+    std::rotate(ring.begin(), std::min_element(ring.begin(), ring.end()), ring.end());
+    return ring;
+}
+
+TEST(TopoJson, SharedBordersAreArcsWrittenOnceAndGdalReadsTheSameFeatures) {
+    const auto dir = fresh_dir("topojson");
+    const std::string input = testdata("ne_states_slice.gpkg");
+    const std::string topo = (dir / "states.topojson").string(), gpkg = (dir / "states.gpkg").string();
+    const CliResult map = run_cli({"map", input, "-o", topo, "--keep", "20%"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    ASSERT_EQ(run_cli({"map", input, "-o", gpkg, "--keep", "20%"}).code, 0);
+    const std::string text = contents(topo);
+    EXPECT_EQ(text.rfind("{\"type\":\"Topology\"", 0), 0u);
+    EXPECT_NE(text.find("\"bbox\":["), std::string::npos);
+    EXPECT_NE(text.find("\"objects\":{\"states\":{\"type\":\"GeometryCollection\""), std::string::npos);
+    // Shared borders: some arc is used forwards by one ring and backwards (~i) by another.
+    std::set<long> forwards, backwards;
+    const std::regex arcs(R"re("arcs":(\[[-0-9,\[\]]*\]))re");
+    const std::regex number(R"(-?[0-9]+)");
+    for (auto m = std::sregex_iterator(text.begin(), text.end(), arcs); m != std::sregex_iterator(); ++m) {
+        const std::string list = (*m)[1];
+        for (auto n = std::sregex_iterator(list.begin(), list.end(), number); n != std::sregex_iterator(); ++n) {
+            const long value = std::stol(n->str());
+            (value < 0 ? backwards : forwards).insert(value < 0 ? ~value : value);
+        }
+    }
+    std::vector<long> shared;
+    std::set_intersection(forwards.begin(), forwards.end(), backwards.begin(), backwards.end(), std::back_inserter(shared));
+    EXPECT_GT(shared.size(), 10u);
+
+    const ReadLayer from_topology = read_layer(topo), from_gpkg = read_layer(gpkg);
+    ASSERT_EQ(from_topology.features.size(), from_gpkg.features.size());
+    for (std::size_t i = 0; i < from_gpkg.features.size(); ++i) {
+        const ReadFeature &a = from_topology.features[i], &b = from_gpkg.features[i];
+        EXPECT_EQ(a.name, b.name);
+        ASSERT_EQ(a.coordinates.size(), b.coordinates.size()) << b.name;
+        for (std::size_t k = 0; k < b.coordinates.size(); ++k) {
+            EXPECT_EQ(canonical_ring(a.coordinates[k]), canonical_ring(b.coordinates[k])) << b.name << " ring " << k;
+        }
+    }
+}
+
+TEST(TopoJson, SeveralLayersLinesPointsAndAGrid) {
+    const auto dir = fresh_dir("topojson");
+    const std::string input = testdata("nh_borders.gpkg"), topo = (dir / "nh.topojson").string();
+    const CliResult map = run_cli({"map", input, "-o", topo, "-f", "TopoJSON", "--decimals", "1", "--json"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    const std::string text = contents(topo);
+    EXPECT_NE(text.find("\"borders\":{\"type\":\"GeometryCollection\""), std::string::npos);
+    EXPECT_NE(text.find("\"places\":{\"type\":\"GeometryCollection\""), std::string::npos);
+    EXPECT_NE(text.find("{\"type\":\"LineString\",\"arcs\":["), std::string::npos);
+    EXPECT_NE(text.find("{\"type\":\"Point\",\"coordinates\":["), std::string::npos);
+    // On the grid: no position with more than one decimal (none is reported off it here).
+    EXPECT_NE(map.out.find("\"off_grid\":0,"), std::string::npos) << map.out;
+    EXPECT_NE(map.out.find("\"points_off_grid\":0"), std::string::npos) << map.out;
+    const std::string arcs = text.substr(text.find("\"arcs\":[["));
+    EXPECT_FALSE(std::regex_search(arcs, std::regex(R"(\.[0-9]{2})"))) << arcs.substr(0, 300);
+    EXPECT_EQ(read_layer(topo, 0).features.size(), 27u);
+    EXPECT_EQ(read_layer(topo, 1).features.size(), 26u);
+    // A file of that name is refused without --overwrite; standard output works too.
+    EXPECT_EQ(run_cli({"map", input, "-o", topo, "-f", "TopoJSON"}).code, 2);
+    const CliResult piped = run_cli({"map", input, "-o", "/vsistdout/", "-f", "TopoJSON"});
+    ASSERT_EQ(piped.code, 0) << piped.err;
+    EXPECT_EQ(piped.out.rfind("{\"type\":\"Topology\"", 0), 0u) << piped.out.substr(0, 200);
+}
+
+}  // namespace
+}  // namespace toposimp::testing
