@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Long fuzz runs by CPU time, not wall time: each target runs in 5-minute slices (at low
+# priority, so builds and tests go first) until the CPU seconds it has used, summed over every
+# run of this script on this machine, reach the budget. The sums are kept in
+# build/fuzz/long/cpu.tsv (target, CPU seconds, executions); findings go to
+# build/fuzz/tests/fuzz/artifacts/<target>/ as with scripts/fuzz.sh.
+# Usage: scripts/fuzz_long.sh [CPU SECONDS per target, default 3600] [target ...]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+budget=${1:-3600}
+shift || true
+cmake --preset fuzz >/dev/null
+cmake --build --preset fuzz -j "$(nproc)" --target fuzzers >/dev/null
+fuzz=build/fuzz/tests/fuzz
+long=build/fuzz/long
+mkdir -p "$long"
+touch "$long/cpu.tsv"
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(fuzz_shapefile fuzz_ply fuzz_gpkg_file fuzz_gpkg_blob fuzz_off fuzz_obj fuzz_stl fuzz_giscup fuzz_numbers)
+used() { awk -v t="$1" '$1 == t { s += $2 } END { print s + 0 }' "$long/cpu.tsv"; }
+for target in "${targets[@]}"; do
+  mkdir -p "$fuzz/work/$target" "$fuzz/artifacts/$target"
+  while [ "$(used "$target" | cut -d. -f1)" -lt "$budget" ]; do
+    /usr/bin/time -f "%U %S" -o "$long/$target.time" nice -n 19 "$fuzz/$target" "$fuzz/work/$target" \
+      "tests/fuzz/corpus/$target" -max_total_time=300 -timeout=10 -rss_limit_mb=2048 \
+      -artifact_prefix="$fuzz/artifacts/$target/" -print_final_stats=1 > "$long/$target.log" 2>&1 || {
+        echo "$target: finding, see $fuzz/artifacts/$target/ and $long/$target.log"; exit 1; }
+    read -r user system < "$long/$target.time"
+    runs=$(awk '/stat::number_of_executed_units/ { print $2 }' "$long/$target.log")
+    printf "%s\t%s\t%s\n" "$target" "$(awk -v u="$user" -v s="$system" "BEGIN { print u + s }")" "${runs:-0}" >> "$long/cpu.tsv"
+  done
+  echo "$target: $(used "$target") CPU seconds in all, no finding"
+done
