@@ -77,8 +77,15 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
                                       "Write x and y on the grid of multiples of STEP (map units, e.g. 0.0001), topology kept");
     auto* decimals = map->add_option("--decimals", options.decimals, "Write x and y with D decimals at most: --precision 1e-D")
                          ->check(CLI::Range(0, 300));
-    precision->excludes(decimals);
-    decimals->excludes(precision);
+    auto* quantize = map->add_option("--quantize", options.quantize,
+                                     "TopoJSON: quantize positions to an N×N grid over the output's extent (transform, integer "
+                                     "delta arcs), topology kept; refused if some location cannot be put on it")
+                         ->check(CLI::Range(2, 1 << 30));
+    for (CLI::Option* a : {precision, decimals, quantize}) {
+        for (CLI::Option* b : {precision, decimals, quantize}) {
+            if (a != b) a->excludes(b);
+        }
+    }
     map->add_option("--arithmetic", options.arithmetic,
                     "exact (default: float filter, GMP fallback), rational (all GMP, as EPLSimp), "
                     "float (naive doubles as TopoVW: UNSAFE, for experiments only)")
@@ -228,7 +235,7 @@ void write_giscup(const MapOptions& options, const MapInput& input, const map::S
 // The layers through OGR; with --validate, `toposimp check` on the written file first, which
 // leaves no output if it finds anything.
 void write_layers(const MapOptions& options, const MapInput& input, const map::SimplifyResult& result,
-                  const std::optional<map::GridStep>& grid, Context& context, Progress& progress, spdlog::logger& log) {
+                  const std::optional<map::OutputGrid>& grid, Context& context, Progress& progress, spdlog::logger& log) {
     io::WriteOptions write;
     write.path = options.output;
     write.format = options.format;
@@ -237,6 +244,9 @@ void write_layers(const MapOptions& options, const MapInput& input, const map::S
     write.dataset_options = options.dataset_options;
     write.overwrite = options.overwrite;
     write.stdout_stream = &context.out;
+    if (options.quantize > 0) {
+        write.transform = io::TopoTransform{grid->x.scale, grid->y.scale, grid->x.translate, grid->y.translate};
+    }
     if (options.validate) {
         write.before_commit = [&](const std::string& written) {
             progress.phase("validating");
@@ -262,9 +272,28 @@ struct Timings {
     double read = 0, simplify = 0, round = 0, write = 0, total = 0;
 };
 
+// The grid of a quantized TopoJSON: `quantize` steps across the extent of what is written (the
+// kept vertices and the point features), as topojson and mapshaper choose it.
+map::OutputGrid quantized_grid(const MapInput& input, const std::vector<std::uint8_t>& kept, int quantize) {
+    Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};
+    auto add = [&](Point p) {
+        extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
+    };
+    for (std::size_t v = 0; v < kept.size(); ++v) {
+        if (kept[v]) add(input.map.vertices[v]);
+    }
+    for (std::size_t k = 0; k < input.written_points; ++k) add(input.map.control_points[k]);
+    if (!(extent.min_x <= extent.max_x)) extent = {0, 0, 0, 0};
+    auto axis = [&](double low, double high) {
+        const double scale = high > low ? (high - low) / (quantize - 1) : 1.0;
+        return map::AxisGrid::quantized(scale, low);
+    };
+    return {axis(extent.min_x, extent.max_x), axis(extent.min_y, extent.max_y)};
+}
+
 // Puts the kept vertices of `input` on the grid (their coordinates in input.map replaced) and
 // drops those rounding removed from `result`.
-map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, const map::GridStep& grid,
+map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, const map::OutputGrid& grid,
                                 exact::Arithmetic arithmetic, spdlog::logger& log) {
     map::RoundingResult rounded;
     try {
@@ -324,7 +353,7 @@ void report(const map::SimplifyStats& stats, const map::StopCriterion& stop, con
 }
 
 std::string json_summary(const MapOptions& options, const map::StopCriterion& stop, const map::SimplifyStats& stats,
-                         const Timings& time, std::uint64_t features, const std::optional<map::GridStep>& grid,
+                         const Timings& time, std::uint64_t features, const std::optional<map::OutputGrid>& grid,
                          const map::RoundingStats& rounding) {
     JsonWriter json;
     json.field("command", "map").field("input", options.input).field("output", options.output);
@@ -381,7 +410,8 @@ int run_map(const MapOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
     const std::optional<map::StopCriterion> stop = stop_criterion(options, problem);
-    const std::optional<map::GridStep> grid = grid_of(options, problem);
+    const std::optional<map::GridStep> decimal_grid = grid_of(options, problem);
+    const bool rounds = decimal_grid || options.quantize > 0;
     if (!stop || !problem.empty()) {
         log->error("{}", problem);
         return kUsageError;
@@ -413,6 +443,9 @@ int run_map(const MapOptions& options, Context& context) {
         // An output that cannot be written fails now, not after reading and simplifying.
         io::OutputFile::check_destination(options.output, options.overwrite);
         if (!options.giscup) io::check_vector_output(options.output, options.format);
+        if (options.quantize > 0 && (options.giscup || !io::is_topojson_output(options.output, options.format))) {
+            throw io::OutputError("--quantize writes a quantized TopoJSON: name the output .topojson or use -f TopoJSON");
+        }
 
         progress.phase("reading " + options.input);
         MapInput input = options.giscup ? read_giscup(options) : read_layers(options, *log);
@@ -424,15 +457,26 @@ int run_map(const MapOptions& options, Context& context) {
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
         // Rounding needs the control points again; without it the engine may free them early.
-        map::SimplifyResult result = grid ? map::simplify(input.map, simplify_options)
-                                          : map::simplify_releasing_points(input.map, simplify_options);
+        map::SimplifyResult result = rounds ? map::simplify(input.map, simplify_options)
+                                            : map::simplify_releasing_points(input.map, simplify_options);
         time.simplify = seconds_since(simplify_start);
         map::RoundingStats rounding;
+        std::optional<map::OutputGrid> grid;
+        if (decimal_grid) grid = map::OutputGrid(*decimal_grid);
+        if (options.quantize > 0) grid = quantized_grid(input, result.kept, options.quantize);
         if (grid) {
             progress.phase("rounding to " + grid->text());
             const auto round_start = Clock::now();
             rounding = round_output(input, result, *grid, simplify_options.arithmetic, *log);
             time.round = seconds_since(round_start);
+            // A quantized TopoJSON has no way to write a position off its grid.
+            const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
+            if (options.quantize > 0 && off > 0) {
+                throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid without "
+                                                 "changing the topology (see the warnings above); quantize finer (e.g. --quantize {}) "
+                                                 "or write TopoJSON unquantized",
+                                                 options.quantize, off, static_cast<long long>(options.quantize) * 10));
+            }
         }
 
         progress.phase("writing " + options.output);

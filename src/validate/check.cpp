@@ -15,8 +15,12 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <optional>
 #include <span>
 #include <tuple>
@@ -66,22 +70,22 @@ using io::InputError;
 // --precision may put it)? Decided on the grid's integer indices: exact.
 class VertexMatch {
 public:
-    explicit VertexMatch(const std::optional<map::GridStep>& grid) : grid_(grid) {}
+    explicit VertexMatch(const std::optional<map::OutputGrid>& grid) : grid_(grid) {}
 
     bool operator()(Point original, Point simplified) const {
         if (same_location(original, simplified)) return true;
         if (!grid_) return false;
-        return near(original.x, simplified.x) && near(original.y, simplified.y);
+        return near(grid_->x, original.x, simplified.x) && near(grid_->y, original.y, simplified.y);
     }
 
 private:
-    bool near(double original, double simplified) const {
-        const std::optional<std::int64_t> k = grid_->nearest(simplified), o = grid_->nearest(original);
-        if (!k || !o || grid_->at(*k) != simplified) return false;  // not on the grid
+    static bool near(const map::AxisGrid& axis, double original, double simplified) {
+        const std::optional<std::int64_t> k = axis.nearest(simplified), o = axis.nearest(original);
+        if (!k || !o || axis.at(*k) != simplified) return false;  // not on the grid
         return *k >= *o - 1 && *k <= *o + 1;
     }
 
-    const std::optional<map::GridStep>& grid_;
+    const std::optional<map::OutputGrid>& grid_;
 };
 
 // Is `simplified` an order-preserving subset of `original` with the same ends (lines), or of
@@ -571,6 +575,52 @@ private:
 
 }  // namespace
 
-CheckReport check(const CheckOptions& options) { return Checker(options).run(); }
+namespace {
+
+// The grid of a quantized TopoJSON, from its "transform" member: nullopt if `path` is no such
+// file. A light scan, not a JSON parser: toposimp and the common tools write the member as
+// {"scale":[kx,ky],"translate":[dx,dy]} (either order).
+std::optional<map::OutputGrid> topojson_grid(const std::string& path) {
+    std::string extension = std::filesystem::path(path).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+    if (extension != ".topojson") return std::nullopt;
+    std::ifstream in(path, std::ios::binary);
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const std::size_t at = text.find("\"transform\"");
+    if (at == std::string::npos) return std::nullopt;
+    auto pair_after = [&](const char* key) -> std::optional<std::array<double, 2>> {
+        const std::size_t found = text.find(key, at);
+        if (found == std::string::npos || found > at + 400) return std::nullopt;
+        std::size_t p = text.find('[', found);
+        std::array<double, 2> values{};
+        for (double& value : values) {
+            if (p == std::string::npos) return std::nullopt;
+            ++p;
+            while (p < text.size() && std::isspace(static_cast<unsigned char>(text[p]))) ++p;
+            const auto result = std::from_chars(text.data() + p, text.data() + text.size(), value);
+            if (result.ec != std::errc()) return std::nullopt;
+            p = text.find_first_of(",]", static_cast<std::size_t>(result.ptr - text.data()));
+        }
+        return values;
+    };
+    const auto scale = pair_after("\"scale\""), translate = pair_after("\"translate\"");
+    if (!scale || !translate || !((*scale)[0] > 0) || !((*scale)[1] > 0)) {
+        throw InputError("'" + path + "': its \"transform\" is not {\"scale\":[kx,ky],\"translate\":[dx,dy]} with positive scales");
+    }
+    return map::OutputGrid(map::AxisGrid::quantized((*scale)[0], (*translate)[0]), map::AxisGrid::quantized((*scale)[1], (*translate)[1]));
+}
+
+}  // namespace
+
+CheckReport check(const CheckOptions& options) {
+    if (!options.grid) {
+        if (std::optional<map::OutputGrid> grid = topojson_grid(options.simplified)) {
+            CheckOptions quantized = options;
+            quantized.grid = grid;
+            return Checker(quantized).run();
+        }
+    }
+    return Checker(options).run();
+}
 
 }  // namespace toposimp::validate

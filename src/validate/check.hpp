@@ -26,7 +26,7 @@ struct CheckOptions {
     std::vector<std::string> layers; // layers to compare; empty: every layer of the original
     std::string simplified_layer;    // the simplified dataset's layer to compare with the one
                                      // original layer, whatever its name; empty: match by name
-    std::optional<map::GridStep> grid;  // the simplified output was rounded onto this grid
+    std::optional<map::OutputGrid> grid;  // the simplified output was rounded onto this grid
                                         // (toposimp map --precision): a simplified vertex on the
                                         // grid matches an original vertex whose nearest grid
                                         // point is at most one step away in x and in y

@@ -92,5 +92,38 @@ TEST(TopoJson, SeveralLayersLinesPointsAndAGrid) {
     EXPECT_EQ(piped.out.rfind("{\"type\":\"Topology\"", 0), 0u) << piped.out.substr(0, 200);
 }
 
+// --quantize N: a transform and integer, delta-encoded arcs; every position one the transform
+// decodes to exactly (GDAL reads them back bit for bit, toposimp's own read-back checks that),
+// and check reads the grid from the transform. A grid too coarse for the topology is refused,
+// with nothing left behind; so is --quantize for anything but TopoJSON.
+TEST(TopoJson, QuantizedKeepsTheTopologyOrIsRefused) {
+    const auto dir = fresh_dir("topojson");
+    const std::string input = testdata("ne_states_slice.gpkg"), topo = (dir / "q.topojson").string();
+    const CliResult map = run_cli({"map", input, "-o", topo, "--keep", "20%", "--quantize", "10000", "--json"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    const std::string text = contents(topo);
+    EXPECT_NE(text.find("\"transform\":{\"scale\":["), std::string::npos);
+    const std::string arcs = text.substr(text.find("\"arcs\":[["));
+    EXPECT_FALSE(std::regex_search(arcs, std::regex(R"([0-9]\.[0-9])"))) << "arcs hold integers only";
+    const CliResult check = run_cli({"check", input, topo, "--json"});
+    EXPECT_EQ(check.code, 0) << check.out.substr(0, 1500);
+    // Unquantized TopoJSON has no transform: checked as it is.
+    const std::string plain = (dir / "plain.topojson").string();
+    ASSERT_EQ(run_cli({"map", input, "-o", plain, "--keep", "20%"}).code, 0);
+    EXPECT_EQ(run_cli({"check", input, plain}).code, 0);
+
+    const CliResult coarse = run_cli({"map", input, "-o", (dir / "coarse.topojson").string(), "--keep", "20%", "--quantize", "100"});
+    EXPECT_EQ(coarse.code, 2);
+    EXPECT_NE(coarse.err.find("--quantize 100:"), std::string::npos) << coarse.err;
+    EXPECT_NE(coarse.err.find("--quantize 1000"), std::string::npos) << coarse.err;
+    const CliResult not_topology = run_cli({"map", input, "-o", (dir / "q.gpkg").string(), "--quantize", "10000"});
+    EXPECT_EQ(not_topology.code, 2);
+    EXPECT_NE(not_topology.err.find("TopoJSON"), std::string::npos) << not_topology.err;
+    EXPECT_EQ(run_cli({"map", input, "-o", (dir / "r.topojson").string(), "--quantize", "10000", "--decimals", "3"}).code, 2);
+    std::vector<std::string> files = files_in(dir);
+    std::sort(files.begin(), files.end());
+    EXPECT_EQ(files, (std::vector<std::string>{"plain.topojson", "q.topojson"}));
+}
+
 }  // namespace
 }  // namespace toposimp::testing

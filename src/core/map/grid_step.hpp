@@ -4,7 +4,9 @@
 // decimal (GeoJSON: 12.3457, not 12.345700000000001) and reads back bit for bit everywhere.
 #pragma once
 
+#include <algorithm>
 #include <charconv>
+#include <cstdio>
 #include <cmath>
 #include <cstdint>
 #include <optional>
@@ -111,6 +113,73 @@ struct GridStep {
         if (digits.size() <= shift) digits = std::string(shift - digits.size() + 1, '0') + digits;
         const std::size_t whole = digits.size() - shift;
         return digits.substr(0, whole) + "." + digits.substr(whole);
+    }
+};
+
+// One axis of the grid of published coordinates: the decimal multiples of a step, or the
+// positions a quantized TopoJSON decodes to — q·scale + translate, the product and the sum each
+// rounded to double, as its clients compute them (no fused multiply-add: ISO C++ mode, and no
+// FMA instructions in the baseline x86-64 target).
+struct AxisGrid {
+    std::optional<GridStep> decimal;  // the decimal grid, when set
+    double scale = 1, translate = 0;  // otherwise the quantized one
+
+    static AxisGrid of(const GridStep& step) {
+        AxisGrid grid;
+        grid.decimal = step;
+        return grid;
+    }
+    static AxisGrid quantized(double scale, double translate) {
+        AxisGrid grid;
+        grid.scale = scale;
+        grid.translate = translate;
+        return grid;
+    }
+
+    double at(std::int64_t k) const {
+        if (decimal) return decimal->at(k);
+        const double product = static_cast<double>(k) * scale;
+        return product + translate;
+    }
+    double step() const { return decimal ? decimal->step() : scale; }
+
+    // The index of a grid value nearest to x; nullopt when the grid is too fine for it.
+    std::optional<std::int64_t> nearest(double x) const {
+        if (decimal) return decimal->nearest(x);
+        const double q = (x - translate) / scale;
+        if (!(std::abs(q) < 0x1p52)) return std::nullopt;
+        const auto k = static_cast<std::int64_t>(std::llround(q));
+        std::int64_t best = k - 1;
+        double best_distance = std::abs(at(k - 1) - x);
+        for (const std::int64_t c : {k, k + 1}) {
+            const double distance = std::abs(at(c) - x);
+            if (distance < best_distance) best = c, best_distance = distance;
+        }
+        return best;
+    }
+
+    // Is x a value of the grid?
+    bool holds(double x) const {
+        const std::optional<std::int64_t> k = nearest(x);
+        return k && at(*k) == x;
+    }
+};
+
+// The grid of published coordinates, per axis: one decimal step for both (--precision), or a
+// TopoJSON quantization (its own scale and translate per axis).
+struct OutputGrid {
+    AxisGrid x, y;
+
+    OutputGrid() = default;
+    OutputGrid(const GridStep& step) : x(AxisGrid::of(step)), y(AxisGrid::of(step)) {}  // NOLINT: a step is a grid
+    OutputGrid(const AxisGrid& along_x, const AxisGrid& along_y) : x(along_x), y(along_y) {}
+
+    double step() const { return std::max(x.step(), y.step()); }
+    std::string text() const {
+        if (x.decimal) return x.decimal->text();
+        char text[160];
+        std::snprintf(text, sizeof text, "quantized: scale %.17g, %.17g; translate %.17g, %.17g", x.scale, y.scale, x.translate, y.translate);
+        return text;
     }
 };
 

@@ -219,8 +219,8 @@ private:
         if (orig_.empty()) extent = {0, 0, 0, 0};
         const double magnitude = std::max({std::abs(extent.min_x), std::abs(extent.max_x), std::abs(extent.min_y), std::abs(extent.max_y)});
         for (const Point p : orig_) {
-            if (!options_.grid.nearest(p.x) || !options_.grid.nearest(p.y)) {
-                throw std::invalid_argument("the grid step " + options_.grid.text() + " is too fine for coordinates as large as " +
+            if (!options_.grid.x.nearest(p.x) || !options_.grid.y.nearest(p.y)) {
+                throw std::invalid_argument("the grid " + options_.grid.text() + " is too fine for coordinates as large as " +
                                             std::to_string(magnitude));
             }
         }
@@ -241,27 +241,27 @@ private:
         point_at_ = map_.control_points;
         for (std::size_t k = 0; k < options_.written_points; ++k) {
             const Point p = map_.control_points[k];
-            if (!options_.grid.nearest(p.x) || !options_.grid.nearest(p.y)) {
-                throw std::invalid_argument("the grid step " + options_.grid.text() + " is too fine for coordinates as large as (" +
+            if (!options_.grid.x.nearest(p.x) || !options_.grid.y.nearest(p.y)) {
+                throw std::invalid_argument("the grid " + options_.grid.text() + " is too fine for coordinates as large as (" +
                                             std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
             }
         }
     }
 
     Point nearest(Point p) const {
-        const GridStep& grid = options_.grid;
-        return {grid.at(*grid.nearest(p.x)), grid.at(*grid.nearest(p.y))};
+        const OutputGrid& grid = options_.grid;
+        return {grid.x.at(*grid.x.nearest(p.x)), grid.y.at(*grid.y.nearest(p.y))};
     }
 
     // The grid points of the 3×3 around the nearest one, nearest first.
     std::vector<Point> candidates(std::uint32_t l) const {
-        const GridStep& grid = options_.grid;
+        const OutputGrid& grid = options_.grid;
         const Point p = orig_[l];
-        const std::int64_t kx = *grid.nearest(p.x), ky = *grid.nearest(p.y);
+        const std::int64_t kx = *grid.x.nearest(p.x), ky = *grid.y.nearest(p.y);
         std::vector<std::pair<double, Point>> around;
         for (std::int64_t dy = -1; dy <= 1; ++dy) {
             for (std::int64_t dx = -1; dx <= 1; ++dx) {
-                const Point q{grid.at(kx + dx), grid.at(ky + dy)};
+                const Point q{grid.x.at(kx + dx), grid.y.at(ky + dy)};
                 around.push_back({(q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y), q});
             }
         }
@@ -354,11 +354,13 @@ private:
         if (la == lc) return false;
         const Point a = pos_[la], p = pos_[l], c = pos_[lc];
         if (!triangle_clear(a, p, c, {la, lc, l}, {a, c})) return false;
-        for (const auto& [from, to, own] : {std::tuple{a, p, before}, std::tuple{p, c, v}}) {
-            const bool met = segments_->any(widened(box_of({from, to}), reach_), [&](std::uint32_t s) {
+        // Its two segments meet nothing (but each other).
+        for (const std::array<Point, 2> segment : {std::array{a, p}, std::array{p, c}}) {
+            const bool met = segments_->any(widened(box_of({segment[0], segment[1]}), reach_), [&](std::uint32_t s) {
                 const std::uint32_t t = next_[s];
                 if (!kept_[s] || t == kNone || s == before || s == v) return false;
-                return exact::improper_contact(from, to, pos_[location_[s]], pos_[location_[t]], options_.arithmetic, predicates_);
+                return exact::improper_contact(segment[0], segment[1], pos_[location_[s]], pos_[location_[t]], options_.arithmetic,
+                                               predicates_);
             });
             if (met) return false;
         }

@@ -49,7 +49,7 @@
 namespace toposimp::map {
 
 struct RoundingOptions {
-    GridStep grid;
+    OutputGrid grid;
     exact::Arithmetic arithmetic = exact::Arithmetic::exact;
     int passes = 6;  // passes over the locations not yet on the grid (the first tries only the nearest point)
     std::size_t written_points = 0;  // control points [0, n) are written out: put them on the grid too
@@ -78,7 +78,7 @@ struct RoundingResult {
 };
 
 // Rounds the kept vertices of `map` onto options.grid. Throws std::invalid_argument if the grid
-// is too fine for the coordinates (|x| / step ≥ 2^62).
+// is too fine for the coordinates (|x| / step ≥ 2^62, or 2^52 for a quantized grid).
 RoundingResult round_to_grid(const MapData& map, const std::vector<std::uint8_t>& kept, const RoundingOptions& options);
 
 }  // namespace toposimp::map

@@ -17,6 +17,8 @@ void check_vector_output(const std::string& path, const std::string& format);
 
 // Will `path` be written by GDAL's Shapefile driver?
 bool is_shapefile_output(const std::string& path, const std::string& format);
+// Is the output (path, -f format) TopoJSON?
+bool is_topojson_output(const std::string& path, const std::string& format);
 
 // The GDAL release this was built against and runs with, for --version.
 std::string gdal_version();

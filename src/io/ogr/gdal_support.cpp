@@ -109,6 +109,10 @@ void set_config_options(const std::vector<std::pair<std::string, std::string>>& 
 
 void check_vector_output(const std::string& path, const std::string& format) { vector_driver_for(path, format); }
 
+bool is_topojson_output(const std::string& path, const std::string& format) {
+    return vector_driver_for(path, format)->GetDescription() == std::string("TopoJSON");
+}
+
 bool is_shapefile_output(const std::string& path, const std::string& format) {
     return vector_driver_for(path, format)->GetDescription() == std::string("ESRI Shapefile");
 }

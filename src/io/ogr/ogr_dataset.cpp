@@ -631,6 +631,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         return source;
     };
     const bool topology = driver_name == "TopoJSON";
+    if (options.transform && !topology) throw OutputError("a quantized output (--quantize) is TopoJSON: name it .topojson or use -f TopoJSON");
     if (rules && rules->own_writer) {
         // GDAL 3.6's GeoJSON writer rounds coordinates, and GDAL cannot write TopoJSON: toposimp
         // writes both itself.
@@ -656,7 +657,8 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                     if (kept[v]) positions.push_back(map.vertices[v]);
                 }
             };
-            more = write_topojson(output.staging_path(), layers, map.chains.size(), arc, options.path);
+            more = write_topojson(output.staging_path(), layers, map.chains.size(), arc, options.path,
+                                  options.transform ? &*options.transform : nullptr);
         } else {
             more = write_geojson(output.staging_path(), source_of(*data.layers.front()), options.path);
         }

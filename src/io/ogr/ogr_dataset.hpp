@@ -5,11 +5,13 @@
 #pragma once
 
 #include "core/map/map_data.hpp"
+#include "io/ogr/topo_transform.hpp"
 
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -47,6 +49,7 @@ struct WriteOptions {
     std::vector<std::string> dataset_options;  // -dsco KEY=VALUE
     bool overwrite = false;
     std::ostream* stdout_stream = nullptr;     // where /vsistdout/ output goes
+    std::optional<TopoTransform> transform;   // TopoJSON only: quantized with this transform
     // Called with the written (and verified) file before it is moved into place; throwing
     // from it leaves no output.
     std::function<void(const std::string& written)> before_commit;

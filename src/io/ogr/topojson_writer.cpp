@@ -54,8 +54,25 @@ struct Extent {
 
 std::vector<std::string> write_topojson(const std::string& path, std::span<const TopologyLayer> layers, std::size_t arc_count,
                                         const std::function<void(std::size_t, std::vector<Point>&)>& arc,
-                                        const std::string& shown_as) {
+                                        const std::string& shown_as, const TopoTransform* transform) {
     const std::string& name = shown_as.empty() ? path : shown_as;
+    // With a transform: the integer a coordinate stands for, checked to decode back to it.
+    auto quantum = [&](double value, double scale, double translate) {
+        const auto q = static_cast<std::int64_t>(std::llround((value - translate) / scale));
+        for (const std::int64_t c : {q, q - 1, q + 1}) {
+            const double product = static_cast<double>(c) * scale;
+            if (product + translate == value) return c;
+        }
+        throw OutputError("cannot write '" + name + "': a coordinate (" + std::to_string(value) + ") is not on the quantization grid");
+    };
+    auto position = [&](std::string& out, Point p) {
+        if (!transform) return append_position(out, p);
+        out += '[';
+        out += std::to_string(quantum(p.x, transform->scale_x, transform->translate_x));
+        out += ',';
+        out += std::to_string(quantum(p.y, transform->scale_y, transform->translate_y));
+        out += ']';
+    };
     std::vector<std::string> warnings;
     std::ofstream file(path, std::ios::binary);
     if (!file) throw OutputError("cannot create '" + name + "': " + std::strerror(errno));
@@ -66,10 +83,26 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
     for (std::size_t a = 0; a < arc_count; ++a) {
         arc(a, positions);
         if (a) arcs += ",\n";
-        append_list(arcs, positions, [&](Point p) {
-            extent.add(p);
-            append_position(arcs, p);
-        });
+        if (transform) {
+            // Delta-encoded: the first position as it is, then each as the step from the last.
+            arcs += '[';
+            std::int64_t last_x = 0, last_y = 0;
+            for (std::size_t k = 0; k < positions.size(); ++k) {
+                extent.add(positions[k]);
+                const std::int64_t qx = quantum(positions[k].x, transform->scale_x, transform->translate_x);
+                const std::int64_t qy = quantum(positions[k].y, transform->scale_y, transform->translate_y);
+                if (k) arcs += ',';
+                arcs += '[' + std::to_string(qx - last_x) + ',' + std::to_string(qy - last_y) + ']';
+                last_x = qx;
+                last_y = qy;
+            }
+            arcs += ']';
+        } else {
+            append_list(arcs, positions, [&](Point p) {
+                extent.add(p);
+                append_position(arcs, p);
+            });
+        }
     }
     arcs += "]";
     bool dropped_z = false, dropped_m = false;
@@ -94,14 +127,14 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
                         objects += "[]";
                     } else {
                         extent.add(geometry.points.front());
-                        append_position(objects, geometry.points.front());
+                        position(objects, geometry.points.front());
                     }
                     break;
                 case Type::multi_point:
                     objects += "\"MultiPoint\",\"coordinates\":";
                     append_list(objects, geometry.points, [&](Point p) {
                         extent.add(p);
-                        append_position(objects, p);
+                        position(objects, p);
                     });
                     break;
                 case Type::line_string:
@@ -145,6 +178,17 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
         out += ',';
         append_number(out, extent.max_y);
         out += "],\n";
+    }
+    if (transform) {
+        out += "\"transform\":{\"scale\":[";
+        append_number(out, transform->scale_x);
+        out += ',';
+        append_number(out, transform->scale_y);
+        out += "],\"translate\":[";
+        append_number(out, transform->translate_x);
+        out += ',';
+        append_number(out, transform->translate_y);
+        out += "]},\n";
     }
     file << out << objects << ",\n" << arcs << "}\n";
     file.close();

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "core/geometry.hpp"
+#include "io/ogr/topo_transform.hpp"
 
 #include <ogrsf_frmts.h>
 
@@ -38,9 +39,11 @@ struct TopologyLayer {
 };
 
 // Writes a Topology of `layers` whose arcs are arc(0) … arc(arc_count − 1), each a list of
-// positions. Returns warnings (Z or M values left out). `shown_as`: the name errors give the file.
+// positions. With a transform, every position must be one it decodes to exactly (OutputError
+// otherwise); arcs are then written as integer deltas, points as integers. Returns warnings (Z or
+// M values left out). `shown_as`: the name errors give the file.
 std::vector<std::string> write_topojson(const std::string& path, std::span<const TopologyLayer> layers, std::size_t arc_count,
                                         const std::function<void(std::size_t, std::vector<Point>&)>& arc,
-                                        const std::string& shown_as = {});
+                                        const std::string& shown_as = {}, const TopoTransform* transform = nullptr);
 
 }  // namespace toposimp::io
