@@ -18,6 +18,20 @@ namespace toposimp::map {
 __extension__ using Int128 = __int128;            // (GCC and Clang)
 __extension__ using UInt128 = unsigned __int128;
 
+// The index among round(q) − 1, round(q), round(q) + 1 whose value at(k) is nearest to x (the
+// lowest on a tie): q, the approximate index, may be off by the rounding of its computation.
+template <class At>
+std::int64_t nearest_index(double x, double q, At&& at) {
+    const auto k = static_cast<std::int64_t>(std::llround(q));
+    std::int64_t best = k - 1;
+    double best_distance = std::abs(at(k - 1) - x);
+    for (const std::int64_t c : {k, k + 1}) {
+        const double distance = std::abs(at(c) - x);
+        if (distance < best_distance) best = c, best_distance = distance;
+    }
+    return best;
+}
+
 struct GridStep {
     std::int64_t mantissa = 1;  // m > 0, at most 15 digits
     int exponent = 0;           // e
@@ -95,14 +109,7 @@ struct GridStep {
     std::optional<std::int64_t> nearest(double x) const {
         const double q = x / step();
         if (!(std::abs(q) < 0x1p62)) return std::nullopt;
-        const auto k = static_cast<std::int64_t>(std::llround(q));
-        std::int64_t best = k - 1;
-        double best_distance = std::abs(at(k - 1) - x);
-        for (const std::int64_t c : {k, k + 1}) {
-            const double distance = std::abs(at(c) - x);
-            if (distance < best_distance) best = c, best_distance = distance;
-        }
-        return best;
+        return nearest_index(x, q, [this](std::int64_t k) { return at(k); });
     }
 
     // The step as text, e.g. "0.0001" or "25".
@@ -148,14 +155,7 @@ struct AxisGrid {
         if (decimal) return decimal->nearest(x);
         const double q = (x - translate) / scale;
         if (!(std::abs(q) < 0x1p52)) return std::nullopt;
-        const auto k = static_cast<std::int64_t>(std::llround(q));
-        std::int64_t best = k - 1;
-        double best_distance = std::abs(at(k - 1) - x);
-        for (const std::int64_t c : {k, k + 1}) {
-            const double distance = std::abs(at(c) - x);
-            if (distance < best_distance) best = c, best_distance = distance;
-        }
-        return best;
+        return nearest_index(x, q, [this](std::int64_t k) { return at(k); });
     }
 
     // Is x a value of the grid?
