@@ -3,7 +3,10 @@
 rounding (`map --decimals D`) against rounding its full-precision output afterwards with GDAL's
 GeoJSON writer (COORDINATE_PRECISION=D), each counted by `toposimp check --decimals D` (every
 kind; given the grid, check takes a vertex on it up to a step from an original vertex for that
-vertex). Prints a Markdown table.
+vertex); then quantized TopoJSON, toposimp's `--quantize N` against mapshaper's
+`-o format=topojson quantization=N` of the same full-precision output (check reads the grid
+from the transform). Prints Markdown tables. mapshaper comes from npm (scripts/bench/fetch-data.sh
+installs it into --data).
 
     scripts/bench/precision.py [--build build/release] [--data build/bench-data] [--keep 10%]
 
@@ -56,6 +59,25 @@ def main():
             text = lambda found: (f"{sum(found.values())} (" + ", ".join(f"{n} {k}" for k, n in sorted(found.items())) + ")") if found else "0"
             print(f"| {decimals} | {text(g)} | {text(t)} | {r['moved_nearest']} / {r['moved_other']} / {r['removed']} / "
                   f"{r['off_grid']} (of {r['locations']}) | {summary['seconds']['round']:.3f} |", flush=True)
+        mapshaper = os.path.join(args.data, "node_modules", ".bin", "mapshaper")
+        full_geojson = os.path.join(out, "full.geojson")
+        subprocess.run([toposimp, "map", states, "-p", cities, "--keep", args.keep, "-o", full_geojson, "-q"], check=True)
+        print(f"\nQuantized TopoJSON of the same run; violations by `toposimp check` with the transform's grid\n")
+        print("| quantization | mapshaper `quantization=N` | toposimp `--quantize N` | size: mapshaper / toposimp (bytes) |")
+        print("|---|---|---|---|")
+        for n in (10000, 100000, 1000000):
+            theirs, ours = os.path.join(out, f"mapshaper{n}.topojson"), os.path.join(out, f"toposimp{n}.topojson")
+            subprocess.run([mapshaper, "-i", full_geojson, "-o", "format=topojson", f"quantization={n}", theirs],
+                           check=True, capture_output=True)
+            run = subprocess.run([toposimp, "map", states, "-p", cities, "--keep", args.keep, "--quantize", str(n), "-o", ours, "-q"],
+                                 capture_output=True, text=True)
+            def counted(path):
+                check = subprocess.run([toposimp, "check", states, path, "-p", cities, "--json"], capture_output=True, text=True)
+                found = {k: v for k, v in json.loads(check.stdout)["counts"].items() if v}
+                return (f"{sum(found.values())} (" + ", ".join(f"{v} {k}" for k, v in sorted(found.items())) + ")") if found else "0"
+            toposimp_cell = counted(ours) if run.returncode == 0 else "refused: " + run.stderr.strip().splitlines()[-1][:120]
+            size = f"{os.path.getsize(theirs)} / {os.path.getsize(ours) if run.returncode == 0 else '–'}"
+            print(f"| {n} | {counted(theirs)} | {toposimp_cell} | {size} |", flush=True)
 
 
 if __name__ == "__main__":
