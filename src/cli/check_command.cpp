@@ -31,7 +31,7 @@ CLI::App* add_check_command(CLI::App& app, CheckCommandOptions& options) {
                       "The simplified dataset's layer to compare with the one original layer (-l), whatever its name");
     auto* precision = check->add_option("--precision", options.precision,
                                         "The simplified output was rounded onto the grid of multiples of STEP (toposimp map "
-                                        "--precision): a vertex on it stands for an original vertex up to a step away");
+                                        "--precision): a vertex on it stands for an original vertex up to two steps away");
     auto* decimals = check->add_option("--decimals", options.decimals, "The same as --precision 1e-D")->check(CLI::Range(0, 300));
     precision->excludes(decimals);
     decimals->excludes(precision);

@@ -383,6 +383,7 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
             .field("moved_nearest", rounding.moved_nearest)
             .field("moved_other", rounding.moved_other)
             .field("removed", rounding.removed)
+            .field("removed_off_grid", rounding.removed_off_grid)
             .field("off_grid", rounding.off_grid)
             .field("frozen", rounding.frozen)
             .field("points_on_grid", rounding.points_moved)

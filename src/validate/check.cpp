@@ -66,7 +66,7 @@ namespace {
 using io::InputError;
 
 // Does a simplified vertex stand for an original one: the same location, or, for output rounded
-// onto a grid, a grid point of the 3×3 around the original's nearest one (where toposimp map
+// onto a grid, a grid point of the 5×5 around the original's nearest one (where toposimp map
 // --precision may put it)? Decided on the grid's integer indices: exact.
 class VertexMatch {
 public:
@@ -82,7 +82,7 @@ private:
     static bool near(const map::AxisGrid& axis, double original, double simplified) {
         const std::optional<std::int64_t> k = axis.nearest(simplified), o = axis.nearest(original);
         if (!k || !o || axis.at(*k) != simplified) return false;  // not on the grid
-        return *k >= *o - 1 && *k <= *o + 1;
+        return *k >= *o - 2 && *k <= *o + 2;
     }
 
     const std::optional<map::OutputGrid>& grid_;

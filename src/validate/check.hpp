@@ -29,7 +29,7 @@ struct CheckOptions {
     std::optional<map::OutputGrid> grid;  // the simplified output was rounded onto this grid
                                         // (toposimp map --precision): a simplified vertex on the
                                         // grid matches an original vertex whose nearest grid
-                                        // point is at most one step away in x and in y
+                                        // point is at most two steps away in x and in y
 };
 
 // What a simplification can break, in report order. Their names and meanings: kinds().

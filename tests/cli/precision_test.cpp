@@ -142,7 +142,7 @@ TEST(Precision, CheckAcceptsRoundedVerticesAndStillFindsWhatRoundingBroke) {
     EXPECT_EQ(run_cli({"check", input, out, "--precision", "zero"}).code, 2);
 
     // A line rounded across a control point (the apex 0.004 above it goes to 0 at 2 decimals),
-    // and a vertex put two steps away: found with the grid given.
+    // and a vertex put three steps away: found with the grid given.
     const std::string original = (dir / "line.gpkg").string(), simplified = (dir / "rounded.gpkg").string();
     write_layer(original, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0.004,2 0)", "a"}});
     write_layer(simplified, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0,2 0)", "a"}});
@@ -153,7 +153,7 @@ TEST(Precision, CheckAcceptsRoundedVerticesAndStillFindsWhatRoundingBroke) {
     EXPECT_NE(swept.out.find("\"point_changed_side\":2"), std::string::npos) << swept.out;  // by both segments
     EXPECT_NE(swept.out.find("swept by the rounded segment"), std::string::npos) << swept.out;
     EXPECT_EQ(run_cli({"check", original, simplified, "--decimals", "2"}).code, 0);  // no points: a clean rounding
-    write_layer(simplified, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0.02,2 0)", "a"}}, "lines");
+    write_layer(simplified, "GPKG", wkbLineString, {{"LINESTRING (0 0,1 0.03,2 0)", "a"}}, "lines");
     const CliResult far = run_cli({"check", original, simplified, "--decimals", "2", "--json"});
     EXPECT_NE(far.out.find("\"not_subset\":1"), std::string::npos) << far.out;
 }

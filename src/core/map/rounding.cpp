@@ -125,13 +125,28 @@ public:
                 pending.push_back(l);
             }
         }
-        for (int pass = 0; pass < options_.passes && !pending.empty(); ++pass) {
+        // Passes: the nearest grid point first, then the 3×3 around it as neighbours settle; for
+        // what is left, the 5×5, and, last, taking the vertex out where the simplifier's rules
+        // allow (a vertex not written needs no grid point); then the grid points again, since
+        // a removal frees its neighbours.
+        const int wide_from = options_.passes;
+        for (int pass = 0; pass < options_.passes + 3 && !pending.empty(); ++pass) {
             ++stats.passes;
             std::vector<std::uint32_t> left;
+            const bool removing = pass == wide_from + 1;
             for (const std::uint32_t l : pending) {
                 const Point near = nearest(orig_[l]);
                 bool done = false;
-                for (const Point target : pass == 0 ? std::vector<Point>{near} : candidates(l)) {
+                if (removing) {
+                    if (vertex_start_[l + 1] - vertex_start_[l] == 1 && try_remove(vertices_[vertex_start_[l]])) {
+                        ++stats.removed;
+                        ++stats.removed_off_grid;
+                        continue;
+                    }
+                    left.push_back(l);
+                    continue;
+                }
+                for (const Point target : pass == 0 ? std::vector<Point>{near} : candidates(l, pass >= wide_from ? 2 : 1)) {
                     const std::optional<bool> moved = attempt(l, target);
                     if (!moved) continue;
                     done = true;
@@ -144,7 +159,7 @@ public:
             }
             const bool progress = left.size() < pending.size();
             pending = std::move(left);
-            if (!progress && pass > 0) break;
+            if (!progress && pass > 0 && pass < wide_from) pass = wide_from - 1;  // on to the 5×5
         }
         round_points();
         stats.off_grid = pending.size();
@@ -224,9 +239,9 @@ private:
                                             std::to_string(magnitude));
             }
         }
-        // The farthest a location moves: a grid point of the 3×3 around its nearest one, each
-        // within 1.5 steps in x and y, plus the rounding of grid values to doubles.
-        reach_ = 2.25 * options_.grid.step() + std::ldexp(magnitude, -48);
+        // The farthest a location moves: a grid point of the 5×5 around its nearest one, within
+        // 2.5 steps in x and in y, plus the rounding of grid values to doubles.
+        reach_ = 2.75 * options_.grid.step() + std::ldexp(magnitude, -48);
         std::size_t segments = 0;
         for (std::uint32_t v = 0; v < next_.size(); ++v) segments += next_[v] != kNone;
         const auto side = static_cast<std::uint32_t>(std::clamp(std::floor(std::sqrt(static_cast<double>(segments) / 2.0)), 1.0, 4096.0));
@@ -253,14 +268,14 @@ private:
         return {grid.x.at(*grid.x.nearest(p.x)), grid.y.at(*grid.y.nearest(p.y))};
     }
 
-    // The grid points of the 3×3 around the nearest one, nearest first.
-    std::vector<Point> candidates(std::uint32_t l) const {
+    // The grid points of the (2·radius + 1)² around the nearest one, nearest first.
+    std::vector<Point> candidates(std::uint32_t l, std::int64_t radius) const {
         const OutputGrid& grid = options_.grid;
         const Point p = orig_[l];
         const std::int64_t kx = *grid.x.nearest(p.x), ky = *grid.y.nearest(p.y);
         std::vector<std::pair<double, Point>> around;
-        for (std::int64_t dy = -1; dy <= 1; ++dy) {
-            for (std::int64_t dx = -1; dx <= 1; ++dx) {
+        for (std::int64_t dy = -radius; dy <= radius; ++dy) {
+            for (std::int64_t dx = -radius; dx <= radius; ++dx) {
                 const Point q{grid.x.at(kx + dx), grid.y.at(ky + dy)};
                 around.push_back({(q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y), q});
             }

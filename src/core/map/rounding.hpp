@@ -28,9 +28,11 @@
 // of kept vertices then drops below the target, and the stats say by how much.
 //
 // A location that no grid point serves — in a first pass its nearest grid point, in later
-// passes any of the 3×3 around it, nearest first, as neighbours move — stays exactly where it
-// is: off the grid, reported, never a broken promise. Vertices of frozen chains (degenerate
-// input rings, written as given) stay where they are too.
+// passes any of the 3×3 around it, nearest first, as neighbours move, then the 5×5 — is taken
+// out when it is a single vertex inside a chain and the simplifier's rules allow (then the
+// grid points are tried again for the rest); otherwise it stays exactly where it is: off the
+// grid, reported, never a broken promise. Vertices of frozen chains (degenerate input rings,
+// written as given) stay where they are too.
 //
 // Control points that are written too (the point features of the layers being simplified) go on
 // the grid as well, each only if its path from where it is to the grid point meets no live
@@ -60,7 +62,8 @@ struct RoundingStats {
     std::uint64_t already_on_grid = 0;  // on their grid point from the start
     std::uint64_t moved_nearest = 0;    // moved to the nearest grid point
     std::uint64_t moved_other = 0;      // moved to another grid point of the 3×3 around
-    std::uint64_t removed = 0;          // vertices removed: their grid point was a neighbour's
+    std::uint64_t removed = 0;          // vertices removed: their grid point was a neighbour's, or none was safe
+    std::uint64_t removed_off_grid = 0; //   of which: no grid point near was safe (taken out instead)
     std::uint64_t off_grid = 0;         // locations left where they were: no grid point was safe
     std::uint64_t frozen = 0;           // locations on frozen chains, left as given
     std::uint64_t points_moved = 0;     // written control points put on the grid (or on it already)
