@@ -244,7 +244,9 @@ private:
         reach_ = 2.75 * options_.grid.step() + std::ldexp(magnitude, -48);
         std::size_t segments = 0;
         for (std::uint32_t v = 0; v < next_.size(); ++v) segments += next_[v] != kNone;
-        const auto side = static_cast<std::uint32_t>(std::clamp(std::floor(std::sqrt(static_cast<double>(segments) / 2.0)), 1.0, 4096.0));
+        // About a quarter of a segment per cell: coastlines crowd some cells, and a query tests
+        // every segment of its cells.
+        const auto side = static_cast<std::uint32_t>(std::clamp(std::floor(std::sqrt(static_cast<double>(segments) * 4.0)), 1.0, 8192.0));
         segments_.emplace(make_grid(extent, side), side, map_.vertices.size());
         segments_->build([&](auto visit) {
             for (std::uint32_t v = 0; v < next_.size(); ++v) {
