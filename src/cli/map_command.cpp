@@ -7,6 +7,7 @@
 #include "cli/json.hpp"
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
+#include "core/map/levels.hpp"
 #include "core/map/rounding.hpp"
 #include "core/map/simplify.hpp"
 #include "io/common/errors.hpp"
@@ -67,7 +68,10 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
                                      "Remove vertices whose effective area is at most A (map units squared)")
                          ->check(number_at_least(0));
     auto* max = map->add_flag("--max", options.max, "Remove every vertex that can be removed");
-    const std::vector<CLI::Option*> criteria{keep, keep_points, remove_points, max_area, max};
+    auto* levels = map->add_option("--levels", options.levels,
+                                   "Nested levels in one run, finest first, e.g. 20%,5%,1% (shares, or vertex counts): each a "
+                                   "subset of the one before; -o holds {level}, replaced by each level's name (20pct, 5000)");
+    const std::vector<CLI::Option*> criteria{keep, keep_points, remove_points, max_area, max, levels};
     for (CLI::Option* a : criteria) {
         for (CLI::Option* b : criteria) {
             if (a != b) a->excludes(b);
@@ -404,19 +408,70 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
     return json.line();
 }
 
+// --levels: the targets, finest first, and each one's name in the output pattern ("20%" →
+// "20pct", "5000" → "5000"); sets `problem` for anything else.
+struct Level {
+    map::StopCriterion stop;
+    std::string name;
+};
+std::vector<Level> levels_of(const MapOptions& options, std::string& problem) {
+    std::vector<Level> levels;
+    std::stringstream list(options.levels);
+    std::string token;
+    while (std::getline(list, token, ',')) {
+        Level level;
+        const bool count = !token.empty() && token.find_first_not_of("0123456789") == std::string::npos && token != "0";
+        if (count && token.size() > 1 && std::stod(token) >= 2) {
+            level.stop = {map::Target::keep_points, std::stod(token)};
+            level.name = token;
+        } else {
+            const std::optional<double> share = parse_share(token, "vertices", problem);
+            if (!share) {
+                problem = "--levels: '" + token + "' is neither a share (20% or 0.2) nor a vertex count";
+                return {};
+            }
+            level.stop = {map::Target::keep_fraction, *share};
+            std::ostringstream name;
+            name << *share * 100 << "pct";
+            level.name = name.str();
+        }
+        if (!levels.empty() && levels.back().stop.target == level.stop.target && !(level.stop.value < levels.back().stop.value)) {
+            problem = "--levels go from the finest to the coarsest: '" + token + "' keeps no fewer vertices than the level before it";
+            return {};
+        }
+        levels.push_back(level);
+    }
+    if (levels.empty()) problem = "--levels takes a list such as 20%,5%,1%";
+    if (options.output.find("{level}") == std::string::npos) {
+        problem = "--levels writes one output per level: put {level} in -o (e.g. -o states_{level}.gpkg)";
+    }
+    return levels;
+}
+
+std::string output_of(const std::string& pattern, const std::string& level) {
+    std::string path = pattern;
+    for (std::size_t at = path.find("{level}"); at != std::string::npos; at = path.find("{level}", at + level.size())) {
+        path.replace(at, 7, level);
+    }
+    return path;
+}
+
 }  // namespace
 
-// parse (done) → read → simplify → write → report.
+// parse (done) → read → simplify (once, or to each level) → per output: round → write → report.
 int run_map(const MapOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
     const std::optional<map::StopCriterion> stop = stop_criterion(options, problem);
     const std::optional<map::GridStep> decimal_grid = grid_of(options, problem);
+    std::vector<Level> levels;
+    if (!options.levels.empty()) levels = levels_of(options, problem);
     const bool rounds = decimal_grid || options.quantize > 0;
     if (!stop || !problem.empty()) {
         log->error("{}", problem);
         return kUsageError;
     }
+    if (levels.empty()) levels.push_back({*stop, ""});
 
     io::set_config_options(options.config);
 
@@ -442,10 +497,13 @@ int run_map(const MapOptions& options, Context& context) {
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         simplify_options.progress = [&progress](double done) { progress.update(done); };
         // An output that cannot be written fails now, not after reading and simplifying.
-        io::OutputFile::check_destination(options.output, options.overwrite);
-        if (!options.giscup) io::check_vector_output(options.output, options.format);
-        if (options.quantize > 0 && (options.giscup || !io::is_topojson_output(options.output, options.format))) {
-            throw io::OutputError("--quantize writes a quantized TopoJSON: name the output .topojson or use -f TopoJSON");
+        for (const Level& level : levels) {
+            const std::string output = output_of(options.output, level.name);
+            io::OutputFile::check_destination(output, options.overwrite);
+            if (!options.giscup) io::check_vector_output(output, options.format);
+            if (options.quantize > 0 && (options.giscup || !io::is_topojson_output(output, options.format))) {
+                throw io::OutputError("--quantize writes a quantized TopoJSON: name the output .topojson or use -f TopoJSON");
+            }
         }
 
         progress.phase("reading " + options.input);
@@ -457,44 +515,78 @@ int run_map(const MapOptions& options, Context& context) {
         // The engine builds chains, indexes and ranks inside simplify().
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        // Rounding needs the control points again; without it the engine may free them early.
-        map::SimplifyResult result = rounds ? map::simplify(input.map, simplify_options)
-                                            : map::simplify_releasing_points(input.map, simplify_options);
+        std::vector<map::SimplifyResult> results;
+        if (options.levels.empty()) {
+            // Rounding needs the control points again; without it the engine may free them early.
+            results.push_back(rounds ? map::simplify(input.map, simplify_options)
+                                     : map::simplify_releasing_points(input.map, simplify_options));
+        } else {
+            std::vector<map::StopCriterion> targets;
+            for (const Level& level : levels) targets.push_back(level.stop);
+            results = map::simplify_levels(input.map, simplify_options, targets);
+        }
         time.simplify = seconds_since(simplify_start);
-        map::RoundingStats rounding;
-        std::optional<map::OutputGrid> grid;
-        if (decimal_grid) grid = map::OutputGrid(*decimal_grid);
-        if (options.quantize > 0) grid = quantized_grid(input, result.kept, options.quantize);
-        if (grid) {
-            progress.phase("rounding to " + grid->text());
-            const auto round_start = Clock::now();
-            rounding = round_output(input, result, *grid, simplify_options.arithmetic, *log);
-            time.round = seconds_since(round_start);
-            // A quantized TopoJSON has no way to write a position off its grid.
-            const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
-            if (options.quantize > 0 && off > 0) {
-                throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid without "
-                                                 "changing the topology (see the warnings above); quantize finer (e.g. --quantize {}) "
-                                                 "or write TopoJSON unquantized",
-                                                 options.quantize, off, static_cast<long long>(options.quantize) * 10));
+
+        const std::vector<Point> vertices = levels.size() > 1 && rounds ? input.map.vertices : std::vector<Point>{};
+        std::vector<std::string> summaries;
+        for (std::size_t k = 0; k < levels.size(); ++k) {
+            map::SimplifyResult& result = results[k];
+            MapOptions level_options = options;
+            level_options.output = output_of(options.output, levels[k].name);
+            map::RoundingStats rounding;
+            std::optional<map::OutputGrid> grid;
+            if (decimal_grid) grid = map::OutputGrid(*decimal_grid);
+            if (options.quantize > 0) grid = quantized_grid(input, result.kept, options.quantize);
+            if (grid) {
+                progress.phase("rounding to " + grid->text());
+                const auto round_start = Clock::now();
+                if (k > 0) input.map.vertices = vertices;  // each level rounded from where its vertices were
+                rounding = round_output(input, result, *grid, simplify_options.arithmetic, *log);
+                time.round += seconds_since(round_start);
+                // A quantized TopoJSON has no way to write a position off its grid.
+                const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
+                if (options.quantize > 0 && off > 0) {
+                    throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid "
+                                                     "without changing the topology (see the warnings above); quantize finer (e.g. "
+                                                     "--quantize {}) or write TopoJSON unquantized",
+                                                     options.quantize, off, static_cast<long long>(options.quantize) * 10));
+                }
+            }
+
+            progress.phase("writing " + level_options.output);
+            const auto write_start = Clock::now();
+            if (options.giscup) {
+                write_giscup(level_options, input, result, context.out);
+            } else {
+                write_layers(level_options, input, result, grid, context, progress, *log);
+                // The point features back where they were, for the next level's rounding.
+                if (grid && input.written_points > 0) {
+                    input.dataset->move_points(std::span<const Point>(input.map.control_points.data(), input.written_points));
+                }
+            }
+            time.write += seconds_since(write_start);
+            time.total = seconds_since(start);
+            if (k + 1 == levels.size()) progress.done();
+            report(result.stats, levels[k].stop, time, level_options, context.err_is_terminal, *log);
+            if (options.json) {
+                summaries.push_back(json_summary(level_options, levels[k].stop, result.stats, time, input.features(), grid, rounding));
             }
         }
-
-        progress.phase("writing " + options.output);
-        const auto write_start = Clock::now();
-        if (options.giscup) {
-            write_giscup(options, input, result, context.out);
-        } else {
-            write_layers(options, input, result, grid, context, progress, *log);
-        }
-        time.write = seconds_since(write_start);
-        time.total = seconds_since(start);
-        progress.done();
-
-        report(result.stats, *stop, time, options, context.err_is_terminal, *log);
         if (options.json) {
             const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
-            (output_is_stdout ? context.err : context.out) << json_summary(options, *stop, result.stats, time, input.features(), grid, rounding);
+            std::ostream& out = output_is_stdout ? context.err : context.out;
+            if (options.levels.empty()) {
+                out << summaries.front();
+            } else {
+                // One object: the levels' summaries in order, finest first.
+                out << "{\"command\":\"map\",\"levels\":[";
+                for (std::size_t k = 0; k < summaries.size(); ++k) {
+                    std::string line = summaries[k];
+                    while (!line.empty() && line.back() == '\n') line.pop_back();
+                    out << (k ? "," : "") << line;
+                }
+                out << "]}\n";
+            }
         }
         return kOk;
     });

@@ -29,6 +29,7 @@ struct MapOptions {
     std::string precision;  // --precision STEP (grid of published coordinates), empty: full precision
     int decimals = -1;      // --decimals D: --precision 1e-D
     int quantize = 0;       // --quantize N: quantized TopoJSON on an N×N grid over the output's extent
+    std::string levels;     // --levels 20%,5%,1%: nested levels, one output each (-o holds {level})
     std::string arithmetic = "exact";
     int threads = 0;  // 0: all cores (or OMP_NUM_THREADS)
     bool giscup = false;
