@@ -65,8 +65,8 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
     auto* remove_points = map->add_option("--remove-points", options.remove_points, "Remove N vertices (GIS Cup 2014)")
                               ->check(number_at_least(0));
     auto* max_area = map->add_option("--max-area", options.max_area,
-                                     "Remove vertices whose effective area is at most A (map units squared)")
-                         ->check(number_at_least(0));
+                                     "Remove vertices whose effective area is at most A (map units squared; with --spherical "
+                                     "m², or A with a unit: 5km2, 20ha, 3000m2)");
     auto* max = map->add_flag("--max", options.max, "Remove every vertex that can be removed");
     auto* levels = map->add_option("--levels", options.levels,
                                    "Nested levels in one run, finest first, e.g. 20%,5%,1% (shares, or vertex counts): each a "
@@ -90,6 +90,12 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
             if (a != b) a->excludes(b);
         }
     }
+    map->add_option("--weighting", options.weighting,
+                    "Weighted Visvalingam: rank by effective area × (1 − K·cos θ), so sharp angles go first (mapshaper's "
+                    "default, K = 0.7); 0, the default, is plain Visvalingam–Whyatt")
+        ->check(CLI::Range(0.0, 1.0));
+    map->add_flag("--spherical", options.spherical,
+                  "Rank by areas on the sphere (m²), for longitude/latitude input: a triangle near a pole ranks by its true size");
     map->add_option("--arithmetic", options.arithmetic,
                     "exact (default: float filter, GMP fallback), rational (all GMP, as EPLSimp), "
                     "float (naive doubles as TopoVW: UNSAFE, for experiments only)")
@@ -111,6 +117,34 @@ CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
 
 namespace {
 
+// --max-area: a number (map units², or m² with --spherical), or with --spherical a number with a
+// unit: m2, ha, km2.
+std::optional<double> area_of(const std::string& text, bool spherical, std::string& problem) {
+    static const std::pair<const char*, double> kUnits[] = {{"km2", 1e6}, {"ha", 1e4}, {"m2", 1.0}};
+    std::string number = text;
+    double unit = 1.0;
+    for (const auto& [suffix, factor] : kUnits) {
+        const std::string ending(suffix);
+        if (number.size() > ending.size() && number.compare(number.size() - ending.size(), ending.size(), ending) == 0) {
+            if (!spherical) {
+                problem = "--max-area " + text + ": a unit needs --spherical (longitude, latitude input, areas in m²); "
+                          "without it areas are in map units squared";
+                return std::nullopt;
+            }
+            number.resize(number.size() - ending.size());
+            unit = factor;
+            break;
+        }
+    }
+    double value = 0;
+    std::istringstream parse(number);
+    if (!(parse >> value) || !parse.eof() || !std::isfinite(value) || value < 0) {
+        problem = "--max-area takes a non-negative area such as 0.01, or with --spherical 5km2, not '" + text + "'";
+        return std::nullopt;
+    }
+    return value * unit;
+}
+
 std::optional<map::StopCriterion> stop_criterion(const MapOptions& options, std::string& problem) {
     map::StopCriterion stop;
     if (options.max) {
@@ -119,8 +153,10 @@ std::optional<map::StopCriterion> stop_criterion(const MapOptions& options, std:
         stop = {map::Target::keep_points, std::floor(options.keep_points)};
     } else if (options.remove_points >= 0) {
         stop = {map::Target::remove_points, std::floor(options.remove_points)};
-    } else if (options.max_area >= 0) {
-        stop = {map::Target::max_area, options.max_area};
+    } else if (!options.max_area.empty()) {
+        const std::optional<double> area = area_of(options.max_area, options.spherical, problem);
+        if (!area) return std::nullopt;
+        stop = {map::Target::max_area, *area};
     } else if (!options.keep.empty()) {
         const std::optional<double> share = parse_share(options.keep, "vertices", problem);
         if (!share) return std::nullopt;
@@ -372,6 +408,7 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
         .field("coincident_segment", stats.blocked_by_coincidence)
         .end();
     json.field("pinned_by_crossing", stats.pinned_by_crossing).field("arithmetic", options.arithmetic);
+    json.object("ranking").field("weighting", options.weighting).field("spherical", options.spherical).end();
     json.object("parallel").field("threads", stats.threads).field("levels", stats.levels).field("rounds", stats.rounds).end();
     json.object("engine_seconds")
         .field("index", stats.seconds_index)
@@ -479,6 +516,11 @@ int run_map(const MapOptions& options, Context& context) {
     simplify_options.stop = *stop;
     simplify_options.arithmetic = arithmetic_of(options.arithmetic);
     simplify_options.threads = options.threads;
+    simplify_options.ranking = {options.weighting, options.spherical};
+    if (options.spherical && options.giscup) {
+        log->error("--spherical takes longitude, latitude layers; GIS Cup text has no CRS");
+        return kUsageError;
+    }
     if (options.validate && options.giscup) {
         log->error("--validate reads the output with GDAL; GIS Cup text is not a GDAL format");
         return kUsageError;
@@ -509,6 +551,14 @@ int run_map(const MapOptions& options, Context& context) {
         progress.phase("reading " + options.input);
         MapInput input = options.giscup ? read_giscup(options) : read_layers(options, *log);
         time.read = seconds_since(start);
+        if (options.spherical) {
+            for (const io::LayerSummary& layer : input.dataset->summary().layers) {
+                if (!layer.geographic) {
+                    throw io::InputError("--spherical ranks by areas on the sphere and needs longitude, latitude: '" + options.input +
+                                         "', layer '" + layer.layer + "' is not in a geographic CRS");
+                }
+            }
+        }
         log->debug("{} chains, {} vertices, {} control points", input.map.chains.size(), input.map.vertices.size(),
                    input.map.control_points.size());
 

@@ -24,7 +24,9 @@ struct MapOptions {
     std::string keep;
     double keep_points = -1;
     double remove_points = -1;
-    double max_area = -1;
+    std::string max_area;     // --max-area A: map units², or with --spherical m2, ha or km2
+    double weighting = 0;     // --weighting K: weighted Visvalingam (mapshaper's default: 0.7)
+    bool spherical = false;   // --spherical: areas on the sphere, for longitude, latitude input
     bool max = false;
     std::string precision;  // --precision STEP (grid of published coordinates), empty: full precision
     int decimals = -1;      // --decimals D: --precision 1e-D

@@ -59,5 +59,30 @@ TEST(Levels, BadLevelsAreRefusedBeforeReading) {
     EXPECT_TRUE(files_in(dir).empty());
 }
 
+// --weighting and --spherical order the removals only: the output still checks clean; spherical
+// ranking needs longitude, latitude (NH borders are in Web Mercator: refused, naming the layer),
+// and only then may --max-area carry a unit.
+TEST(Ranking, WeightedAndSphericalRunsAreCleanAndUnitsNeedTheSphere) {
+    const auto dir = fresh_dir("ranking");
+    const std::string states = testdata("ne_states_slice.gpkg"), out = (dir / "states.gpkg").string();
+    const CliResult weighted = run_cli({"map", states, "-o", out, "--keep", "20%", "--weighting", "0.7", "--spherical", "--json"});
+    ASSERT_EQ(weighted.code, 0) << weighted.err;
+    EXPECT_NE(weighted.out.find("\"ranking\":{\"weighting\":0.7,\"spherical\":true}"), std::string::npos) << weighted.out;
+    EXPECT_EQ(run_cli({"check", states, out}).code, 0);
+    const CliResult area = run_cli({"map", states, "-o", out, "--overwrite", "--max-area", "20km2", "--spherical", "--json"});
+    ASSERT_EQ(area.code, 0) << area.err;
+    EXPECT_NE(area.out.find("effective area <= 2e+07"), std::string::npos) << area.out;
+    EXPECT_EQ(run_cli({"check", states, out}).code, 0);
+
+    const CliResult unit = run_cli({"map", states, "-o", (dir / "u.gpkg").string(), "--max-area", "20km2"});
+    EXPECT_EQ(unit.code, 2);
+    EXPECT_NE(unit.err.find("--spherical"), std::string::npos) << unit.err;
+    const CliResult projected = run_cli({"map", testdata("nh_borders.gpkg"), "-o", (dir / "nh.gpkg").string(), "--spherical"});
+    EXPECT_EQ(projected.code, 2);
+    EXPECT_NE(projected.err.find("layer 'borders'"), std::string::npos) << projected.err;
+    EXPECT_EQ(run_cli({"map", states, "-o", (dir / "w.gpkg").string(), "--weighting", "1.5"}).code, 2);
+    EXPECT_FALSE(std::filesystem::exists(dir / "u.gpkg") || std::filesystem::exists(dir / "nh.gpkg") || std::filesystem::exists(dir / "w.gpkg"));
+}
+
 }  // namespace
 }  // namespace toposimp::testing

@@ -76,6 +76,41 @@ double effective_area(Point a, Point b, Point c) {
     return area >= 0.0 ? area : std::numeric_limits<double>::infinity();
 }
 
+struct Vector3 {
+    double x, y, z;
+};
+
+Vector3 on_sphere(Point degrees) {
+    constexpr double kRadius = 6371008.8;  // the Earth's mean radius (IUGG), metres
+    constexpr double kRadians = 3.14159265358979323846 / 180.0;
+    const double longitude = degrees.x * kRadians, latitude = degrees.y * kRadians;
+    return {kRadius * std::cos(latitude) * std::cos(longitude), kRadius * std::cos(latitude) * std::sin(longitude),
+            kRadius * std::sin(latitude)};
+}
+
+// The rank of vertex b between a and c (Ranking): the area of the triangle, in the plane or
+// between the points on the sphere, weighted by 1 − k·cos of the angle at b. Plain doubles:
+// an order, not a decision; NaN ranks last.
+double rank_of(Point a, Point b, Point c, const Ranking& ranking) {
+    if (!ranking.spherical && ranking.weighting == 0) return effective_area(a, b, c);
+    double area = 0, cosine = 0;
+    if (ranking.spherical) {
+        const Vector3 p = on_sphere(a), q = on_sphere(b), r = on_sphere(c);
+        const Vector3 u{p.x - q.x, p.y - q.y, p.z - q.z}, v{r.x - q.x, r.y - q.y, r.z - q.z};
+        const Vector3 n{u.y * v.z - u.z * v.y, u.z * v.x - u.x * v.z, u.x * v.y - u.y * v.x};
+        area = 0.5 * std::sqrt(n.x * n.x + n.y * n.y + n.z * n.z);
+        const double lengths = std::sqrt((u.x * u.x + u.y * u.y + u.z * u.z) * (v.x * v.x + v.y * v.y + v.z * v.z));
+        cosine = lengths > 0 ? (u.x * v.x + u.y * v.y + u.z * v.z) / lengths : 0;
+    } else {
+        area = effective_area(a, b, c);
+        const double ux = a.x - b.x, uy = a.y - b.y, vx = c.x - b.x, vy = c.y - b.y;
+        const double lengths = std::sqrt((ux * ux + uy * uy) * (vx * vx + vy * vy));
+        cosine = lengths > 0 ? (ux * vx + uy * vy) / lengths : 0;
+    }
+    const double rank = area * (1.0 - ranking.weighting * cosine);
+    return rank >= 0.0 ? rank : std::numeric_limits<double>::infinity();
+}
+
 using Clock = std::chrono::steady_clock;
 
 // Seconds since `start`, which moves on to now.
@@ -326,7 +361,7 @@ private:
     }
 
     double area_of(std::uint32_t v) const {
-        return effective_area(map_.vertices[prev_[v]], map_.vertices[v], map_.vertices[next_[v]]);
+        return rank_of(map_.vertices[prev_[v]], map_.vertices[v], map_.vertices[next_[v]], options_.ranking);
     }
 
     // ---- the sweep -----------------------------------------------------------------------

@@ -58,8 +58,21 @@ struct StopCriterion {
     double value = 0.1;
 };
 
+// The order of removals (never whether one is safe: the rules above decide that, exactly).
+struct Ranking {
+    // Weighted Visvalingam (mapshaper's default method): the effective area times 1 − k·cos θ,
+    // θ the angle at the vertex, so vertices at sharp angles (spikes) go earlier; 0 is plain
+    // Visvalingam–Whyatt, the default here (the dissertation's order). mapshaper uses k = 0.7.
+    double weighting = 0;
+    // The vertices are longitude, latitude in degrees: areas (and angles) are taken between the
+    // points on a sphere of the Earth's mean radius (6 371 008.8 m), in m², so a triangle near a
+    // pole ranks by its true size, not by its size in degrees².
+    bool spherical = false;
+};
+
 struct SimplifyOptions {
     StopCriterion stop;
+    Ranking ranking;  // the order of removals; a max_area stop compares with these values
     exact::Arithmetic arithmetic = exact::Arithmetic::exact;
     // Threads to use; 0 = OpenMP's default (all cores unless OMP_NUM_THREADS says otherwise).
     // The result does not depend on it.

@@ -221,6 +221,11 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     } else if (const OGRSpatialReference* srs = source.GetSpatialRef()) {
         layer->srs.reset(srs->Clone());
     }
+    {
+        QuietGdal quiet;
+        const OGRSpatialReference* srs = layer->srs ? layer->srs.get() : source.GetSpatialRef();
+        summary_of_layer.geographic = srs != nullptr && srs->IsGeographic();
+    }
     layer->definition = source.GetLayerDefn();
     layer->definition->Reference();
 

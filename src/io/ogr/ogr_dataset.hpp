@@ -28,6 +28,7 @@ struct LayerSummary {
     std::uint64_t line_features = 0;
     bool has_z = false;
     bool has_m = false;
+    bool geographic = false;  // its CRS is longitude, latitude (degrees)
 };
 
 struct DatasetSummary {

@@ -50,3 +50,66 @@ TEST(Levels, NestedEachCleanAndCountedAgainstTheInput) {
 
 }  // namespace
 }  // namespace toposimp::map
+
+namespace toposimp::map {
+namespace {
+
+// Which of two bumps on a line goes first, with one vertex to remove.
+std::uint32_t first_removed(const MapData& map, const Ranking& ranking) {
+    SimplifyOptions options;
+    options.ranking = ranking;
+    options.stop = {Target::remove_points, 1};
+    const SimplifyResult result = simplify(map, options);
+    for (std::uint32_t v = 0; v < result.kept.size(); ++v) {
+        if (!result.kept[v]) return v;
+    }
+    return ~0u;
+}
+
+// A triangle near the pole is smaller than one at the equator with the same size in degrees²:
+// on the sphere it ranks by its true size.
+TEST(Ranking, SphericalAreasRankAHighLatitudeTriangleByItsTrueSize) {
+    MapData map;
+    // Bump 1 at the equator, 0.010 degrees high; bump 2 at 80° N, 0.011 degrees high (bigger in
+    // degrees², about 0.19 times the size on the Earth).
+    map.add_chain({{0, 0}, {0.5, 0.010}, {1, 0}});
+    map.add_chain({{0, 80}, {0.5, 80.011}, {1, 80}});
+    EXPECT_EQ(first_removed(map, {}), 1u);                // plain: the equator's, smaller in degrees²
+    EXPECT_EQ(first_removed(map, {0, true}), 4u);         // on the sphere: the polar one
+}
+
+// Weighted Visvalingam removes a spike before a blunt bump of the same area.
+TEST(Ranking, WeightingRemovesSharpAnglesFirst) {
+    MapData map;
+    map.add_chain({{0, 0}, {0.05, 1.0}, {0.1, 0}});    // a spike: area 0.05, angle about 6°
+    map.add_chain({{10, 0}, {10.5, 0.099}, {11, 0}});  // blunt: area 0.0495, angle about 157°
+    EXPECT_EQ(first_removed(map, {}), 4u);           // plain: the smaller area
+    EXPECT_EQ(first_removed(map, {0.7, false}), 1u); // weighted: the spike
+}
+
+// Weighted and spherical ranking: clean by the independent checker and the same on any number of
+// threads.
+TEST(Ranking, WeightedSphericalIsCleanAndThreadIndependent) {
+    for (std::uint64_t seed = 1; seed <= 15; ++seed) {
+        std::mt19937_64 rng(seed);
+        testing::RandomMapOptions random;
+        random.origin_x = -30;
+        random.origin_y = 40;
+        random.extent = 40;  // degrees, up to 80° N
+        const MapData map = testing::random_planar_map(rng, random);
+        SimplifyOptions options;
+        options.ranking = {0.7, true};
+        options.stop = {Target::keep_fraction, 0.3};
+        options.parallel_threshold = 0;
+        options.threads = 1;
+        const SimplifyResult one = simplify(map, options);
+        options.threads = 3;
+        const SimplifyResult three = simplify(map, options);
+        EXPECT_EQ(one.kept, three.kept) << seed;
+        const testing::CheckReport report = testing::check_simplification(map, one.kept);
+        EXPECT_TRUE(report.ok()) << seed << report.summary();
+    }
+}
+
+}  // namespace
+}  // namespace toposimp::map
