@@ -2,8 +2,10 @@
 """Reads toposimp's TopoJSON back with the reference client, npm's topojson-client (topo2geo),
 and compares every feature with toposimp's GeoPackage output of the same run (decoded here
 from its WKB): the same coordinates bit for bit (rings compared whatever vertex they start at:
-a TopoJSON ring starts where its first arc does) and the same attributes. Installs
-topojson-client into build/npm on first use.
+a TopoJSON ring starts where its first arc does) and the same attributes. Also one TopoJSON of
+nested --levels (positions ranked by a third coordinate): topojson-simplify's simplify(topology, k)
+must give back level k, the same as the level's own file. Installs topojson-client and
+topojson-simplify into build/npm on first use.
 
     scripts/topojson_client.py [--build build/dev]"""
 import argparse
@@ -90,8 +92,8 @@ def main():
     args = parser.parse_args()
     npm = os.path.join(ROOT, "build", "npm")
     topo2geo = os.path.join(npm, "node_modules", ".bin", "topo2geo")
-    if not os.path.exists(topo2geo):
-        subprocess.run(["npm", "install", "--silent", "--prefix", npm, "topojson-client@3"], check=True)
+    if not os.path.exists(os.path.join(npm, "node_modules", "topojson-simplify")):
+        subprocess.run(["npm", "install", "--silent", "--prefix", npm, "topojson-client@3", "topojson-simplify@3"], check=True)
     toposimp = os.path.join(args.build, "toposimp")
     failures = 0
     with tempfile.TemporaryDirectory() as out:
@@ -122,6 +124,32 @@ def main():
                 print(f"{data} {' '.join(options)}, layer {layer}: {len(client)} features, "
                       f"{'the same' if same else 'DIFFERENT'} through topojson-client")
                 failures += not same
+        # Nested levels in one ranked TopoJSON against one file per level.
+        source = os.path.join(ROOT, "testdata", "ne_states_slice.gpkg")
+        levels = ["60%", "30%", "22%"]
+        ranked = os.path.join(out, "ranked.topojson")
+        subprocess.run([toposimp, "map", source, "--levels", ",".join(levels), "-o", ranked, "-q"], check=True)
+        subprocess.run([toposimp, "map", source, "--levels", ",".join(levels), "-o", os.path.join(out, "level_{level}.gpkg"), "-q"],
+                       check=True)
+        script = os.path.join(out, "level.js")
+        with open(script, "w") as f:
+            f.write("const fs = require('fs'), simplify = require('topojson-simplify'), client = require('topojson-client');\n"
+                    "const [file, object, weight, out] = process.argv.slice(2);\n"
+                    "const level = simplify.simplify(JSON.parse(fs.readFileSync(file, 'utf8')), Number(weight));\n"
+                    "fs.writeFileSync(out, JSON.stringify(client.feature(level, level.objects[object])));\n")
+        for k, level in enumerate(levels, 1):
+            shown = os.path.join(out, f"shown{k}.geojson")
+            subprocess.run(["node", script, ranked, "states", str(k), shown], check=True,
+                           env=dict(os.environ, NODE_PATH=os.path.join(npm, "node_modules")))
+            client = json.load(open(shown))["features"]
+            ours = gpkg_features(os.path.join(out, f"level_{level.replace('%', 'pct')}.gpkg"), "states")
+            def flat(geometry):  # without the rank
+                kind, parts = canonical(geometry)
+                return (kind, [[[(p[0], p[1]) for p in ring] for ring in polygon] for polygon in parts])
+            same = len(ours) == len(client) and all(flat(g) == flat(b["geometry"]) for (_, g), b in zip(ours, client))
+            print(f"ranked TopoJSON of --levels {','.join(levels)}: topojson-simplify weight {k} gives level {level}: "
+                  f"{'the same' if same else 'DIFFERENT'}")
+            failures += not same
     sys.exit(1 if failures else 0)
 
 

@@ -16,6 +16,8 @@
 #include "io/ogr/gdal_env.hpp"
 #include "io/ogr/ogr_dataset.hpp"
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cstring>
@@ -275,7 +277,8 @@ void write_giscup(const MapOptions& options, const MapInput& input, const map::S
 // The layers through OGR; with --validate, `toposimp check` on the written file first, which
 // leaves no output if it finds anything.
 void write_layers(const MapOptions& options, const MapInput& input, const map::SimplifyResult& result,
-                  const std::optional<map::OutputGrid>& grid, Context& context, Progress& progress, spdlog::logger& log) {
+                  const std::optional<map::OutputGrid>& grid, Context& context, Progress& progress, spdlog::logger& log,
+                  const std::vector<std::uint8_t>* ranks = nullptr) {
     io::WriteOptions write;
     write.path = options.output;
     write.format = options.format;
@@ -284,6 +287,7 @@ void write_layers(const MapOptions& options, const MapInput& input, const map::S
     write.dataset_options = options.dataset_options;
     write.overwrite = options.overwrite;
     write.stdout_stream = &context.out;
+    write.vertex_ranks = ranks;
     if (options.quantize > 0) {
         write.transform = io::TopoTransform{grid->x.scale, grid->y.scale, grid->x.translate, grid->y.translate};
     }
@@ -445,6 +449,17 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
     return json.line();
 }
 
+// --levels into one TopoJSON (no {level} in -o): each arc position gets a third coordinate, the
+// number of levels that keep it.
+bool ranked_levels(const MapOptions& options) {
+    std::string extension = std::filesystem::path(options.output).extension().string();
+    std::transform(extension.begin(), extension.end(), extension.begin(), [](unsigned char c) { return std::tolower(c); });
+    std::string format = options.format;
+    std::transform(format.begin(), format.end(), format.begin(), [](unsigned char c) { return std::tolower(c); });
+    return !options.levels.empty() && options.output.find("{level}") == std::string::npos &&
+           (format == "topojson" || (format.empty() && extension == ".topojson"));
+}
+
 // --levels: the targets, finest first, and each one's name in the output pattern ("20%" →
 // "20pct", "5000" → "5000"); sets `problem` for anything else.
 struct Level {
@@ -479,8 +494,13 @@ std::vector<Level> levels_of(const MapOptions& options, std::string& problem) {
         levels.push_back(level);
     }
     if (levels.empty()) problem = "--levels takes a list such as 20%,5%,1%";
-    if (options.output.find("{level}") == std::string::npos) {
-        problem = "--levels writes one output per level: put {level} in -o (e.g. -o states_{level}.gpkg)";
+    if (options.output.find("{level}") == std::string::npos && !ranked_levels(options)) {
+        problem = "--levels writes one output per level: put {level} in -o (e.g. -o states_{level}.gpkg), or write one "
+                  "TopoJSON whose positions carry their level as a third coordinate (-o states.topojson)";
+    }
+    if (ranked_levels(options) && (!options.precision.empty() || options.decimals >= 0 || options.quantize > 0)) {
+        problem = "one TopoJSON of all --levels holds the finest level's coordinates, which rounding each level would move "
+                  "apart: round with one file per level ({level} in -o)";
     }
     return levels;
 }
@@ -578,6 +598,16 @@ int run_map(const MapOptions& options, Context& context) {
         time.simplify = seconds_since(simplify_start);
 
         const std::vector<Point> vertices = levels.size() > 1 && rounds ? input.map.vertices : std::vector<Point>{};
+        // One TopoJSON of all levels: the finest level's arcs, each position ranked by the number
+        // of levels that keep it (a viewer shows level k by the positions ranked k or more).
+        const bool ranked = ranked_levels(options);
+        std::vector<std::uint8_t> ranks;
+        if (ranked) {
+            ranks.assign(input.map.vertices.size(), 0);
+            for (const map::SimplifyResult& level : results) {
+                for (std::size_t v = 0; v < ranks.size(); ++v) ranks[v] = static_cast<std::uint8_t>(ranks[v] + level.kept[v]);
+            }
+        }
         std::vector<std::string> summaries;
         for (std::size_t k = 0; k < levels.size(); ++k) {
             map::SimplifyResult& result = results[k];
@@ -605,10 +635,12 @@ int run_map(const MapOptions& options, Context& context) {
 
             progress.phase("writing " + level_options.output);
             const auto write_start = Clock::now();
-            if (options.giscup) {
+            if (ranked && k > 0) {
+                // (Written with the first level.)
+            } else if (options.giscup) {
                 write_giscup(level_options, input, result, context.out);
             } else {
-                write_layers(level_options, input, result, grid, context, progress, *log);
+                write_layers(level_options, input, result, grid, context, progress, *log, ranked ? &ranks : nullptr);
                 // The point features back where they were, for the next level's rounding.
                 if (grid && input.written_points > 0) {
                     input.dataset->move_points(std::span<const Point>(input.map.control_points.data(), input.written_points));

@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <iterator>
+#include <regex>
 #include <set>
 
 namespace toposimp::testing {
@@ -40,6 +43,34 @@ TEST(Levels, OneRunWritesNestedLevelsEachClean) {
         }
         before = here;
     }
+}
+
+// All levels in one TopoJSON: the finest level's arcs, each position carrying as a third
+// coordinate the number of levels that keep it, so that the positions ranked k or more are level k
+// (topojson-simplify's simplify(topology, k); scripts/topojson_client.py checks that with npm's
+// packages). Rounding would move the levels apart: refused.
+TEST(Levels, OneTopoJsonRanksEachPositionByTheLevelsThatKeepIt) {
+    const auto dir = fresh_dir("levels");
+    const std::string input = testdata("ne_states_slice.gpkg"), topo = (dir / "ranked.topojson").string();
+    const CliResult map = run_cli({"map", input, "--levels", "60%,30%,22%", "-o", topo, "--json"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    std::vector<std::uint64_t> kept;
+    for (std::size_t at = map.out.find("\"vertices_out\":"); at != std::string::npos; at = map.out.find("\"vertices_out\":", at + 1)) {
+        kept.push_back(std::stoull(map.out.substr(at + 15)));
+    }
+    ASSERT_EQ(kept.size(), 3u);
+    std::ifstream in(topo);
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const std::string arcs = text.substr(text.rfind("\"arcs\":[["));  // the topology's, after the objects
+    std::vector<std::uint64_t> ranked(4, 0);
+    const std::regex position(R"(\[-?[0-9.e+-]+,-?[0-9.e+-]+,([0-9]+)\])");
+    for (auto m = std::sregex_iterator(arcs.begin(), arcs.end(), position); m != std::sregex_iterator(); ++m) {
+        const int rank = std::stoi((*m)[1]);
+        ASSERT_TRUE(rank >= 1 && rank <= 3) << m->str();
+        for (int k = 1; k <= rank; ++k) ++ranked[k];
+    }
+    for (int k = 1; k <= 3; ++k) EXPECT_EQ(ranked[k], kept[k - 1]) << "level " << k;
+    EXPECT_EQ(run_cli({"map", input, "--levels", "60%,30%", "-o", (dir / "r.topojson").string(), "--decimals", "2"}).code, 2);
 }
 
 TEST(Levels, BadLevelsAreRefusedBeforeReading) {

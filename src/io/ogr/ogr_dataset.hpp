@@ -51,6 +51,7 @@ struct WriteOptions {
     bool overwrite = false;
     std::ostream* stdout_stream = nullptr;     // where /vsistdout/ output goes
     std::optional<TopoTransform> transform;   // TopoJSON only: quantized with this transform
+    const std::vector<std::uint8_t>* vertex_ranks = nullptr;  // TopoJSON only: per map vertex, a third coordinate
     // Called with the written (and verified) file before it is moved into place; throwing
     // from it leaves no output.
     std::function<void(const std::string& written)> before_commit;

@@ -53,7 +53,7 @@ struct Extent {
 }  // namespace
 
 std::vector<std::string> write_topojson(const std::string& path, std::span<const TopologyLayer> layers, std::size_t arc_count,
-                                        const std::function<void(std::size_t, std::vector<Point>&)>& arc,
+                                        const std::function<void(std::size_t, std::vector<Point>&, std::vector<int>& ranks)>& arc,
                                         const std::string& shown_as, const TopoTransform* transform) {
     const std::string& name = shown_as.empty() ? path : shown_as;
     // With a transform: the integer a coordinate stands for, checked to decode back to it.
@@ -80,8 +80,16 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
     Extent extent;
     std::string arcs = "\"arcs\":[";
     std::vector<Point> positions;
+    std::vector<int> ranks;
+    // The rank, when there is one, as a third coordinate: `out` ends with the position's ']'.
+    auto rank = [&](std::string& out, std::size_t k) {
+        if (ranks.empty()) return;
+        out.pop_back();
+        out += ',' + std::to_string(ranks[k]) + ']';
+    };
     for (std::size_t a = 0; a < arc_count; ++a) {
-        arc(a, positions);
+        ranks.clear();
+        arc(a, positions, ranks);
         if (a) arcs += ",\n";
         if (transform) {
             // Delta-encoded: the first position as it is, then each as the step from the last.
@@ -93,15 +101,20 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
                 const std::int64_t qy = quantum(positions[k].y, transform->scale_y, transform->translate_y);
                 if (k) arcs += ',';
                 arcs += '[' + std::to_string(qx - last_x) + ',' + std::to_string(qy - last_y) + ']';
+                rank(arcs, k);
                 last_x = qx;
                 last_y = qy;
             }
             arcs += ']';
         } else {
-            append_list(arcs, positions, [&](Point p) {
-                extent.add(p);
-                append_position(arcs, p);
-            });
+            arcs += '[';
+            for (std::size_t k = 0; k < positions.size(); ++k) {
+                if (k) arcs += ',';
+                extent.add(positions[k]);
+                append_position(arcs, positions[k]);
+                rank(arcs, k);
+            }
+            arcs += ']';
         }
     }
     arcs += "]";

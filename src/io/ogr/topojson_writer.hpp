@@ -39,11 +39,12 @@ struct TopologyLayer {
 };
 
 // Writes a Topology of `layers` whose arcs are arc(0) … arc(arc_count − 1), each a list of
-// positions. With a transform, every position must be one it decodes to exactly (OutputError
+// positions and, when `ranks` is filled, a third coordinate per position (nested levels: how many
+// levels keep the vertex, so that a viewer shows level k by the positions ranked k or more). With a transform, every position must be one it decodes to exactly (OutputError
 // otherwise); arcs are then written as integer deltas, points as integers. Returns warnings (Z or
 // M values left out). `shown_as`: the name errors give the file.
 std::vector<std::string> write_topojson(const std::string& path, std::span<const TopologyLayer> layers, std::size_t arc_count,
-                                        const std::function<void(std::size_t, std::vector<Point>&)>& arc,
+                                        const std::function<void(std::size_t, std::vector<Point>&, std::vector<int>& ranks)>& arc,
                                         const std::string& shown_as = {}, const TopoTransform* transform = nullptr);
 
 }  // namespace toposimp::io
