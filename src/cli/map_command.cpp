@@ -37,11 +37,12 @@ namespace toposimp::cli {
 CLI::App* add_map_command(CLI::App& app, MapOptions& options) {
     CLI::App* map = app.add_subcommand("map", "Simplify line layers, keeping their topology and control points' sides");
     map->footer(
-        "Stopping criteria (one; default --keep 10%): --keep, --keep-points, --remove-points, --max-area, --max.\n"
+        "Stopping criteria (one; default --keep 10%): --keep, --keep-points, --remove-points, --max-area, --max; or\n"
+        "--levels for several nested ones in one run.\n"
         "A vertex is removed only if the closed triangle it forms with its neighbours holds no other vertex and\n"
         "no control point (exact predicates), so no new crossing or touching appears and no control point changes\n"
         "side; crossings in the input are kept as they are. Output vertices are a subset of the input's,\n"
-        "coordinates untouched, each line keeping its first and last vertex.\n"
+        "coordinates untouched (unless rounded, below), each line keeping its first and last vertex.\n"
         "--precision/--decimals put every written x and y on a grid (multiples of the step, as the doubles a reader\n"
         "parses from their short decimal text), moving each location only where that is safe by the same exact rules:\n"
         "a vertex whose grid point is its neighbour's is removed; one that no grid point nearby can serve is written\n"
