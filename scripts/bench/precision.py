@@ -78,6 +78,20 @@ def main():
             toposimp_cell = counted(ours) if run.returncode == 0 else "refused: " + run.stderr.strip().splitlines()[-1][:120]
             size = f"{os.path.getsize(theirs)} / {os.path.getsize(ours) if run.returncode == 0 else '–'}"
             print(f"| {n} | {counted(theirs)} | {toposimp_cell} | {size} |", flush=True)
+        print(f"\nGeoJSON at D decimals of the same run: mapshaper's `-o precision=` on the full-precision output "
+              f"against toposimp `--decimals D`; violations by `toposimp check --decimals D`\n")
+        print("| decimals | mapshaper `precision=` | toposimp `--decimals` | size: mapshaper / toposimp (bytes) |")
+        print("|---|---|---|---|")
+        for decimals in (4, 3, 2):
+            theirs = os.path.join(out, f"mapshaper{decimals}.geojson")
+            ours = os.path.join(out, f"toposimp{decimals}.geojson")
+            subprocess.run([mapshaper, "-i", full_geojson, "-o", f"precision={10 ** -decimals:.{decimals}f}", theirs],
+                           check=True, capture_output=True)
+            subprocess.run([toposimp, "map", states, "-p", cities, "--keep", args.keep, "--decimals", str(decimals), "-o", ours, "-q"],
+                           check=True)
+            g, t = violations(toposimp, states, theirs, cities, decimals), violations(toposimp, states, ours, cities, decimals)
+            text = lambda found: (f"{sum(found.values())} (" + ", ".join(f"{n} {k}" for k, n in sorted(found.items())) + ")") if found else "0"
+            print(f"| {decimals} | {text(g)} | {text(t)} | {os.path.getsize(theirs)} / {os.path.getsize(ours)} |", flush=True)
 
 
 if __name__ == "__main__":

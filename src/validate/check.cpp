@@ -119,8 +119,18 @@ bool match_line(const std::vector<Point>& original, const std::vector<Point>& si
     return true;
 }
 
-bool match_ring(const std::vector<Point>& original, std::vector<Point> simplified, bool& reversed, const VertexMatch& same_location) {
-    if (original.size() < 2 || simplified.size() < 2) return false;
+// Which ways the simplified ring runs along the original (an order-preserving subset of some
+// rotation): forwards, backwards, or both — both can match when a grid is given and the ring is
+// no bigger than a few grid steps, every vertex then standing for several (issue 30: a ring
+// rewound by the writer was reported flipped).
+struct RingMatch {
+    bool forwards = false, backwards = false;
+    bool any() const { return forwards || backwards; }
+};
+
+RingMatch match_ring(const std::vector<Point>& original, std::vector<Point> simplified, const VertexMatch& same_location) {
+    RingMatch match;
+    if (original.size() < 2 || simplified.size() < 2) return match;
     const std::size_t n = original.size() - 1;  // without the closing vertex
     simplified.pop_back();
     for (const bool backwards : {false, true}) {
@@ -132,12 +142,12 @@ bool match_ring(const std::vector<Point>& original, std::vector<Point> simplifie
                 if (same_location(original[(start + step) % n], simplified[k])) ++k;
             }
             if (k == simplified.size()) {
-                reversed = backwards;
-                return true;
+                (backwards ? match.backwards : match.forwards) = true;
+                break;
             }
         }
     }
-    return false;
+    return match;
 }
 
 int area_sign(const std::vector<Point>& ring) {
@@ -367,15 +377,16 @@ private:
                 const auto& a = before.parts[k];
                 const auto& b = after->parts[k];
                 if (before.type == Feature::Type::polygons) {
-                    bool reversed = false;
-                    if (!match_ring(a, b, reversed, matches_vertex_)) {
+                    const RingMatch match = match_ring(a, b, matches_vertex_);
+                    if (!match.any()) {
                         violation(ViolationKind::not_subset, layer, before.key, b.empty() ? somewhere : b[0], "ring " + std::to_string(k));
                         continue;
                     }
                     if (b.size() < 4 || distinct_locations(b) < 3 || area_sign(b) == 0) {
                         violation(ViolationKind::ring_collapsed, layer, before.key, b[0],
                                   "ring " + std::to_string(k) + " has " + std::to_string(b.size()) + " vertices");
-                    } else if (area_sign(b) != area_sign(a) * (reversed ? -1 : 1)) {
+                    } else if (!(match.forwards && area_sign(b) == area_sign(a)) && !(match.backwards && area_sign(b) == -area_sign(a))) {
+                        // (Flipped: no way it runs along the original turns as the original does.)
                         violation(ViolationKind::ring_flipped, layer, before.key, b[0], "ring " + std::to_string(k));
                     }
                 } else if (!match_line(a, b, matches[k], matches_vertex_)) {

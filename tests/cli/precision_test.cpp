@@ -158,5 +158,24 @@ TEST(Precision, CheckAcceptsRoundedVerticesAndStillFindsWhatRoundingBroke) {
     EXPECT_NE(far.out.find("\"not_subset\":1"), std::string::npos) << far.out;
 }
 
+// A ring a few grid steps across, rounded and written the other way round (as writers that follow
+// RFC 7946 rewind rings): every vertex stands for every original one, so it matches forwards and
+// backwards; check found it "flipped" by taking the forward match. Orientation is now judged
+// against every way the ring can run along the original. A truly flipped ring is still found.
+TEST(Precision, CheckDoesNotCallARewoundTinyRingFlipped) {
+    const auto dir = fresh_dir("precision");
+    const std::string original = (dir / "o.gpkg").string(), rewound = (dir / "r.gpkg").string(), flipped = (dir / "f.gpkg").string();
+    write_layer(original, "GPKG", wkbPolygon, {{"POLYGON ((0.001 0.001,0.001 0.019,0.019 0.01,0.001 0.001))", "t"}}, "rings");
+    write_layer(rewound, "GPKG", wkbPolygon, {{"POLYGON ((0 0,0.02 0.01,0 0.02,0 0))", "t"}}, "rings");
+    const CliResult check = run_cli({"check", original, rewound, "--decimals", "2", "--json"});
+    EXPECT_EQ(check.code, 0) << check.out;
+    // A U-shape whose three corners, in its own order, turn the other way: flipped, grid or not
+    // (CheckCli.RingFlipped without a grid).
+    write_layer(original, "GPKG", wkbPolygon, {{"POLYGON ((0 0,4 0,4 4,3 4,3 1,1 1,1 4,0 4,0 0))", "t"}}, "rings");
+    write_layer(flipped, "GPKG", wkbPolygon, {{"POLYGON ((4 4,3 1,1 4,4 4))", "t"}}, "rings");
+    const CliResult really = run_cli({"check", original, flipped, "--decimals", "2", "--json"});
+    EXPECT_NE(really.out.find("\"ring_flipped\":1"), std::string::npos) << really.out;
+}
+
 }  // namespace
 }  // namespace toposimp::testing
