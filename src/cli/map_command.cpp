@@ -514,6 +514,116 @@ std::string output_of(const std::string& pattern, const std::string& level) {
     return path;
 }
 
+// Every output the run will write can be written: fails now, not after reading and simplifying.
+void check_outputs(const MapOptions& options, const std::vector<Level>& levels) {
+    for (const Level& level : levels) {
+        const std::string output = output_of(options.output, level.name);
+        io::OutputFile::check_destination(output, options.overwrite);
+        if (!options.giscup) io::check_vector_output(output, options.format);
+        if (options.quantize > 0 && (options.giscup || !io::is_topojson_output(output, options.format))) {
+            throw io::OutputError("--quantize writes a quantized TopoJSON: name the output .topojson or use -f TopoJSON");
+        }
+    }
+}
+
+void check_spherical(const MapOptions& options, const MapInput& input) {
+    if (!options.spherical) return;
+    for (const io::LayerSummary& layer : input.dataset->summary().layers) {
+        if (!layer.geographic) {
+            throw io::InputError("--spherical ranks by areas on the sphere and needs longitude, latitude: '" + options.input +
+                                 "', layer '" + layer.layer + "' is not in a geographic CRS");
+        }
+    }
+}
+
+// One result per level (one level: the run's own target).
+std::vector<map::SimplifyResult> simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
+                                              const std::vector<Level>& levels, bool rounds) {
+    if (options.levels.empty()) {
+        // Rounding needs the control points again; without it the engine may free them early.
+        std::vector<map::SimplifyResult> results;
+        results.push_back(rounds ? map::simplify(input.map, simplify_options) : map::simplify_releasing_points(input.map, simplify_options));
+        return results;
+    }
+    std::vector<map::StopCriterion> targets;
+    for (const Level& level : levels) targets.push_back(level.stop);
+    return map::simplify_levels(input.map, simplify_options, targets);
+}
+
+// One TopoJSON of all levels: per vertex, the number of levels that keep it (a viewer shows level
+// k by the positions ranked k or more).
+std::vector<std::uint8_t> level_ranks(const std::vector<map::SimplifyResult>& results, std::size_t vertices) {
+    std::vector<std::uint8_t> ranks(vertices, 0);
+    for (const map::SimplifyResult& level : results) {
+        for (std::size_t v = 0; v < vertices; ++v) ranks[v] = static_cast<std::uint8_t>(ranks[v] + level.kept[v]);
+    }
+    return ranks;
+}
+
+// The JSON summary: the run's, or one object listing the levels' in order, finest first.
+void print_summaries(const MapOptions& options, const std::vector<std::string>& summaries, Context& context) {
+    const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
+    std::ostream& out = output_is_stdout ? context.err : context.out;
+    if (options.levels.empty()) {
+        out << summaries.front();
+        return;
+    }
+    out << "{\"command\":\"map\",\"levels\":[";
+    for (std::size_t k = 0; k < summaries.size(); ++k) {
+        std::string line = summaries[k];
+        while (!line.empty() && line.back() == '\n') line.pop_back();
+        out << (k ? "," : "") << line;
+    }
+    out << "]}\n";
+}
+
+// What each output needs besides its result: the grid, the vertices to round from, the ranks.
+struct Publishing {
+    std::optional<map::GridStep> decimal_grid;
+    std::vector<Point> vertices;       // as simplified, before rounding (several rounded levels)
+    std::vector<std::uint8_t> ranks;   // one ranked TopoJSON of all levels
+    bool ranked = false;
+};
+
+// One output: round (if asked), write, put the point features back; returns its rounding.
+map::RoundingStats publish(const MapOptions& options, const Publishing& publishing, std::size_t k, MapInput& input,
+                           map::SimplifyResult& result, std::optional<map::OutputGrid>& grid, exact::Arithmetic arithmetic,
+                           Timings& time, Context& context, Progress& progress, spdlog::logger& log) {
+    map::RoundingStats rounding;
+    if (publishing.decimal_grid) grid = map::OutputGrid(*publishing.decimal_grid);
+    if (options.quantize > 0) grid = quantized_grid(input, result.kept, options.quantize);
+    if (grid) {
+        progress.phase("rounding to " + grid->text());
+        const auto round_start = Clock::now();
+        if (k > 0) input.map.vertices = publishing.vertices;  // each level rounded from where its vertices were
+        rounding = round_output(input, result, *grid, arithmetic, log);
+        time.round += seconds_since(round_start);
+        // A quantized TopoJSON has no way to write a position off its grid.
+        const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
+        if (options.quantize > 0 && off > 0) {
+            throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid "
+                                             "without changing the topology (see the warnings above); quantize finer (e.g. "
+                                             "--quantize {}) or write TopoJSON unquantized",
+                                             options.quantize, off, static_cast<long long>(options.quantize) * 10));
+        }
+    }
+    progress.phase("writing " + options.output);
+    const auto write_start = Clock::now();
+    if (publishing.ranked && k > 0) {
+        // (Written with the first level.)
+    } else if (options.giscup) {
+        write_giscup(options, input, result, context.out);
+    } else {
+        write_layers(options, input, result, grid, context, progress, log, publishing.ranked ? &publishing.ranks : nullptr);
+        // The point features back where they were, for the next level's rounding.
+        if (grid && input.written_points > 0) {
+            input.dataset->move_points(std::span<const Point>(input.map.control_points.data(), input.written_points));
+        }
+    }
+    time.write += seconds_since(write_start);
+    return rounding;
+}
+
 }  // namespace
 
 // parse (done) → read → simplify (once, or to each level) → per output: round → write → report.
@@ -521,10 +631,12 @@ int run_map(const MapOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
     std::string problem;
     const std::optional<map::StopCriterion> stop = stop_criterion(options, problem);
-    const std::optional<map::GridStep> decimal_grid = grid_of(options, problem);
+    Publishing publishing;
+    publishing.decimal_grid = grid_of(options, problem);
+    publishing.ranked = ranked_levels(options);
     std::vector<Level> levels;
     if (!options.levels.empty()) levels = levels_of(options, problem);
-    const bool rounds = decimal_grid || options.quantize > 0;
+    const bool rounds = publishing.decimal_grid || options.quantize > 0;
     if (!stop || !problem.empty()) {
         log->error("{}", problem);
         return kUsageError;
@@ -559,118 +671,38 @@ int run_map(const MapOptions& options, Context& context) {
         Timings time;
         Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
         simplify_options.progress = [&progress](double done) { progress.update(done); };
-        // An output that cannot be written fails now, not after reading and simplifying.
-        for (const Level& level : levels) {
-            const std::string output = output_of(options.output, level.name);
-            io::OutputFile::check_destination(output, options.overwrite);
-            if (!options.giscup) io::check_vector_output(output, options.format);
-            if (options.quantize > 0 && (options.giscup || !io::is_topojson_output(output, options.format))) {
-                throw io::OutputError("--quantize writes a quantized TopoJSON: name the output .topojson or use -f TopoJSON");
-            }
-        }
+        check_outputs(options, levels);
 
         progress.phase("reading " + options.input);
         MapInput input = options.giscup ? read_giscup(options) : read_layers(options, *log);
         time.read = seconds_since(start);
-        if (options.spherical) {
-            for (const io::LayerSummary& layer : input.dataset->summary().layers) {
-                if (!layer.geographic) {
-                    throw io::InputError("--spherical ranks by areas on the sphere and needs longitude, latitude: '" + options.input +
-                                         "', layer '" + layer.layer + "' is not in a geographic CRS");
-                }
-            }
-        }
+        check_spherical(options, input);
         log->debug("{} chains, {} vertices, {} control points", input.map.chains.size(), input.map.vertices.size(),
                    input.map.control_points.size());
 
         // The engine builds chains, indexes and ranks inside simplify().
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        std::vector<map::SimplifyResult> results;
-        if (options.levels.empty()) {
-            // Rounding needs the control points again; without it the engine may free them early.
-            results.push_back(rounds ? map::simplify(input.map, simplify_options)
-                                     : map::simplify_releasing_points(input.map, simplify_options));
-        } else {
-            std::vector<map::StopCriterion> targets;
-            for (const Level& level : levels) targets.push_back(level.stop);
-            results = map::simplify_levels(input.map, simplify_options, targets);
-        }
+        std::vector<map::SimplifyResult> results = simplify_all(input, simplify_options, options, levels, rounds);
         time.simplify = seconds_since(simplify_start);
 
-        const std::vector<Point> vertices = levels.size() > 1 && rounds ? input.map.vertices : std::vector<Point>{};
-        // One TopoJSON of all levels: the finest level's arcs, each position ranked by the number
-        // of levels that keep it (a viewer shows level k by the positions ranked k or more).
-        const bool ranked = ranked_levels(options);
-        std::vector<std::uint8_t> ranks;
-        if (ranked) {
-            ranks.assign(input.map.vertices.size(), 0);
-            for (const map::SimplifyResult& level : results) {
-                for (std::size_t v = 0; v < ranks.size(); ++v) ranks[v] = static_cast<std::uint8_t>(ranks[v] + level.kept[v]);
-            }
-        }
+        if (levels.size() > 1 && rounds) publishing.vertices = input.map.vertices;
+        if (publishing.ranked) publishing.ranks = level_ranks(results, input.map.vertices.size());
         std::vector<std::string> summaries;
         for (std::size_t k = 0; k < levels.size(); ++k) {
-            map::SimplifyResult& result = results[k];
             MapOptions level_options = options;
             level_options.output = output_of(options.output, levels[k].name);
-            map::RoundingStats rounding;
             std::optional<map::OutputGrid> grid;
-            if (decimal_grid) grid = map::OutputGrid(*decimal_grid);
-            if (options.quantize > 0) grid = quantized_grid(input, result.kept, options.quantize);
-            if (grid) {
-                progress.phase("rounding to " + grid->text());
-                const auto round_start = Clock::now();
-                if (k > 0) input.map.vertices = vertices;  // each level rounded from where its vertices were
-                rounding = round_output(input, result, *grid, simplify_options.arithmetic, *log);
-                time.round += seconds_since(round_start);
-                // A quantized TopoJSON has no way to write a position off its grid.
-                const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
-                if (options.quantize > 0 && off > 0) {
-                    throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid "
-                                                     "without changing the topology (see the warnings above); quantize finer (e.g. "
-                                                     "--quantize {}) or write TopoJSON unquantized",
-                                                     options.quantize, off, static_cast<long long>(options.quantize) * 10));
-                }
-            }
-
-            progress.phase("writing " + level_options.output);
-            const auto write_start = Clock::now();
-            if (ranked && k > 0) {
-                // (Written with the first level.)
-            } else if (options.giscup) {
-                write_giscup(level_options, input, result, context.out);
-            } else {
-                write_layers(level_options, input, result, grid, context, progress, *log, ranked ? &ranks : nullptr);
-                // The point features back where they were, for the next level's rounding.
-                if (grid && input.written_points > 0) {
-                    input.dataset->move_points(std::span<const Point>(input.map.control_points.data(), input.written_points));
-                }
-            }
-            time.write += seconds_since(write_start);
+            const map::RoundingStats rounding = publish(level_options, publishing, k, input, results[k], grid, simplify_options.arithmetic,
+                                                        time, context, progress, *log);
             time.total = seconds_since(start);
             if (k + 1 == levels.size()) progress.done();
-            report(result.stats, levels[k].stop, time, level_options, context.err_is_terminal, *log);
+            report(results[k].stats, levels[k].stop, time, level_options, context.err_is_terminal, *log);
             if (options.json) {
-                summaries.push_back(json_summary(level_options, levels[k].stop, result.stats, time, input.features(), grid, rounding));
+                summaries.push_back(json_summary(level_options, levels[k].stop, results[k].stats, time, input.features(), grid, rounding));
             }
         }
-        if (options.json) {
-            const bool output_is_stdout = options.output == "/vsistdout/" || options.output == "-";
-            std::ostream& out = output_is_stdout ? context.err : context.out;
-            if (options.levels.empty()) {
-                out << summaries.front();
-            } else {
-                // One object: the levels' summaries in order, finest first.
-                out << "{\"command\":\"map\",\"levels\":[";
-                for (std::size_t k = 0; k < summaries.size(); ++k) {
-                    std::string line = summaries[k];
-                    while (!line.empty() && line.back() == '\n') line.pop_back();
-                    out << (k ? "," : "") << line;
-                }
-                out << "]}\n";
-            }
-        }
+        if (options.json) print_summaries(options, summaries, context);
         return kOk;
     });
 }
