@@ -80,6 +80,10 @@ public:
 
 private:
     static bool near(const map::AxisGrid& axis, double original, double simplified) {
+        // Two grid indices from the original's nearest lie within 2.5 steps of it (and the
+        // rounding of grid values): farther is no match, decided without the grid's arithmetic.
+        const double reach = 3 * axis.step() + std::ldexp(std::max(std::abs(original), std::abs(simplified)), -48);
+        if (!(std::abs(simplified - original) <= reach)) return false;
         const std::optional<std::int64_t> k = axis.nearest(simplified), o = axis.nearest(original);
         if (!k || !o || axis.at(*k) != simplified) return false;  // not on the grid
         return *k >= *o - 2 && *k <= *o + 2;

@@ -46,6 +46,13 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
     return dir;
 }
 
+// A TopoJSON text's arcs member (toposimp writes it after the objects, before the bounding box
+// that ends the file).
+inline std::string arcs_of(const std::string& text) {
+    const std::size_t begin = text.rfind("\"arcs\":[["), end = text.find("\"bbox\"", begin);
+    return text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+}
+
 inline std::string testdata(const std::string& name) { return std::string(TOPOSIMP_SOURCE_DIR) + "/testdata/" + name; }
 
 struct FeatureSpec {

@@ -61,7 +61,7 @@ TEST(Levels, OneTopoJsonRanksEachPositionByTheLevelsThatKeepIt) {
     ASSERT_EQ(kept.size(), 3u);
     std::ifstream in(topo);
     const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-    const std::string arcs = text.substr(text.rfind("\"arcs\":[["));  // the topology's, after the objects
+    const std::string arcs = arcs_of(text);
     std::vector<std::uint64_t> ranked(4, 0);
     const std::regex position(R"(\[-?[0-9.e+-]+,-?[0-9.e+-]+,([0-9]+)\])");
     for (auto m = std::sregex_iterator(arcs.begin(), arcs.end(), position); m != std::sregex_iterator(); ++m) {

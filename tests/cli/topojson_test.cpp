@@ -81,7 +81,7 @@ TEST(TopoJson, SeveralLayersLinesPointsAndAGrid) {
     // On the grid: no position with more than one decimal (none is reported off it here).
     EXPECT_NE(map.out.find("\"off_grid\":0,"), std::string::npos) << map.out;
     EXPECT_NE(map.out.find("\"points_off_grid\":0"), std::string::npos) << map.out;
-    const std::string arcs = text.substr(text.rfind("\"arcs\":[["));  // the topology's, after the objects
+    const std::string arcs = arcs_of(text);
     EXPECT_FALSE(std::regex_search(arcs, std::regex(R"(\.[0-9]{2})"))) << arcs.substr(0, 300);
     EXPECT_EQ(read_layer(topo, 0).features.size(), 27u);
     EXPECT_EQ(read_layer(topo, 1).features.size(), 26u);
@@ -103,7 +103,7 @@ TEST(TopoJson, QuantizedKeepsTheTopologyOrIsRefused) {
     ASSERT_EQ(map.code, 0) << map.err;
     const std::string text = contents(topo);
     EXPECT_NE(text.find("\"transform\":{\"scale\":["), std::string::npos);
-    const std::string arcs = text.substr(text.rfind("\"arcs\":[["));  // the topology's, after the objects
+    const std::string arcs = arcs_of(text);
     EXPECT_FALSE(std::regex_search(arcs, std::regex(R"([0-9]\.[0-9])"))) << "arcs hold integers only";
     const CliResult check = run_cli({"check", input, topo, "--json"});
     EXPECT_EQ(check.code, 0) << check.out.substr(0, 1500);

@@ -76,50 +76,29 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
     std::vector<std::string> warnings;
     std::ofstream file(path, std::ios::binary);
     if (!file) throw OutputError("cannot create '" + name + "': " + std::strerror(errno));
-    // The arcs first (into their own text), for the bounding box that comes before them.
-    Extent extent;
-    std::string arcs = "\"arcs\":[";
-    std::vector<Point> positions;
-    std::vector<int> ranks;
-    // The rank, when there is one, as a third coordinate: `out` ends with the position's ']'.
-    auto rank = [&](std::string& out, std::size_t k) {
-        if (ranks.empty()) return;
-        out.pop_back();
-        out += ',' + std::to_string(ranks[k]) + ']';
+    // Written as it goes, a megabyte at a time: the header, the objects, the arcs, and last the
+    // bounding box, known only then (member order is free in JSON).
+    auto flush = [&](std::string& text) {
+        if (text.size() < (1 << 20)) return;
+        file << text;
+        text.clear();
     };
-    for (std::size_t a = 0; a < arc_count; ++a) {
-        ranks.clear();
-        arc(a, positions, ranks);
-        if (a) arcs += ",\n";
-        if (transform) {
-            // Delta-encoded: the first position as it is, then each as the step from the last.
-            arcs += '[';
-            std::int64_t last_x = 0, last_y = 0;
-            for (std::size_t k = 0; k < positions.size(); ++k) {
-                extent.add(positions[k]);
-                const std::int64_t qx = quantum(positions[k].x, transform->scale_x, transform->translate_x);
-                const std::int64_t qy = quantum(positions[k].y, transform->scale_y, transform->translate_y);
-                if (k) arcs += ',';
-                arcs += '[' + std::to_string(qx - last_x) + ',' + std::to_string(qy - last_y) + ']';
-                rank(arcs, k);
-                last_x = qx;
-                last_y = qy;
-            }
-            arcs += ']';
-        } else {
-            arcs += '[';
-            for (std::size_t k = 0; k < positions.size(); ++k) {
-                if (k) arcs += ',';
-                extent.add(positions[k]);
-                append_position(arcs, positions[k]);
-                rank(arcs, k);
-            }
-            arcs += ']';
-        }
+    Extent extent;
+    std::string out = "{\"type\":\"Topology\",\n";
+    if (transform) {
+        out += "\"transform\":{\"scale\":[";
+        append_number(out, transform->scale_x);
+        out += ',';
+        append_number(out, transform->scale_y);
+        out += "],\"translate\":[";
+        append_number(out, transform->translate_x);
+        out += ',';
+        append_number(out, transform->translate_y);
+        out += "]},\n";
     }
-    arcs += "]";
     bool dropped_z = false, dropped_m = false;
-    std::string objects = "\"objects\":{";
+    std::string& objects = out;
+    objects += "\"objects\":{";
     for (std::size_t l = 0; l < layers.size(); ++l) {
         const TopologyLayer& layer = layers[l];
         if (l) objects += ",\n";
@@ -176,13 +155,55 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
             objects += ",\"properties\":";
             append_properties(objects, *layer.feature(i), *layer.definition);
             objects += '}';
+            flush(objects);
         }
         objects += "\n]}";
     }
     objects += "}";
-    std::string out = "{\"type\":\"Topology\",\n";
+    std::string& arcs = out;
+    arcs += ",\n\"arcs\":[";
+    std::vector<Point> positions;
+    std::vector<int> ranks;
+    // The rank, when there is one, as a third coordinate: `text` ends with the position's ']'.
+    auto rank = [&](std::string& text, std::size_t k) {
+        if (ranks.empty()) return;
+        text.pop_back();
+        text += ',' + std::to_string(ranks[k]) + ']';
+    };
+    for (std::size_t a = 0; a < arc_count; ++a) {
+        ranks.clear();
+        arc(a, positions, ranks);
+        if (a) arcs += ",\n";
+        if (transform) {
+            // Delta-encoded: the first position as it is, then each as the step from the last.
+            arcs += '[';
+            std::int64_t last_x = 0, last_y = 0;
+            for (std::size_t k = 0; k < positions.size(); ++k) {
+                extent.add(positions[k]);
+                const std::int64_t qx = quantum(positions[k].x, transform->scale_x, transform->translate_x);
+                const std::int64_t qy = quantum(positions[k].y, transform->scale_y, transform->translate_y);
+                if (k) arcs += ',';
+                arcs += '[' + std::to_string(qx - last_x) + ',' + std::to_string(qy - last_y) + ']';
+                rank(arcs, k);
+                last_x = qx;
+                last_y = qy;
+            }
+            arcs += ']';
+        } else {
+            arcs += '[';
+            for (std::size_t k = 0; k < positions.size(); ++k) {
+                if (k) arcs += ',';
+                extent.add(positions[k]);
+                append_position(arcs, positions[k]);
+                rank(arcs, k);
+            }
+            arcs += ']';
+        }
+        flush(arcs);
+    }
+    arcs += "]";
     if (extent.min_x <= extent.max_x) {
-        out += "\"bbox\":[";
+        out += ",\n\"bbox\":[";
         append_number(out, extent.min_x);
         out += ',';
         append_number(out, extent.min_y);
@@ -190,20 +211,9 @@ std::vector<std::string> write_topojson(const std::string& path, std::span<const
         append_number(out, extent.max_x);
         out += ',';
         append_number(out, extent.max_y);
-        out += "],\n";
+        out += "]";
     }
-    if (transform) {
-        out += "\"transform\":{\"scale\":[";
-        append_number(out, transform->scale_x);
-        out += ',';
-        append_number(out, transform->scale_y);
-        out += "],\"translate\":[";
-        append_number(out, transform->translate_x);
-        out += ',';
-        append_number(out, transform->translate_y);
-        out += "]},\n";
-    }
-    file << out << objects << ",\n" << arcs << "}\n";
+    file << out << "}\n";
     file.close();
     if (!file) throw OutputError("cannot write '" + name + "': " + std::strerror(errno));
     if (dropped_z) warnings.push_back("TopoJSON positions are written as x, y: Z values were not written");
