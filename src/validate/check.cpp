@@ -25,6 +25,7 @@
 #include <span>
 #include <tuple>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace toposimp::validate {
 namespace {
@@ -257,6 +258,71 @@ struct PairContacts {
     std::array<map::SegmentContact, 3> first{};      // one example of each kind
 };
 
+// Distinct segments of a side that lie on one line, so that their overlaps along it are counted
+// by a sweep rather than pair by pair (issue 29: a track driven 400 times along one straight road,
+// its vertices elsewhere each time, has 10^7 overlapping pairs, every one a slow exact test of
+// collinear points). Segments are bucketed by a rounded key of their line (its direction, its
+// distance from the origin); in a bucket, a group is every segment whose two ends are exactly
+// collinear with the group's first segment. The key only decides what is tried together: two
+// segments of one line that round into different buckets stay apart and are tested as a pair,
+// as before; slower, never wrong.
+struct LineGroups {
+    std::vector<std::uint32_t> line_of;               // per vertex of side.map(): its segment's group, or kNoLine
+    std::vector<std::vector<std::uint32_t>> members;  // per group, its distinct segments
+};
+
+LineGroups find_line_groups(const Linework& side, exact::PredicateStats& stats) {
+    const auto& vertices = side.map().vertices;
+    LineGroups groups;
+    groups.line_of.assign(vertices.size(), map::kNoLine);
+    double scale = 0;
+    for (const Point p : vertices) scale = std::max({scale, std::abs(p.x), std::abs(p.y)});
+    struct Keyed {
+        long long angle, offset;
+        std::uint32_t segment;
+    };
+    std::vector<Keyed> keyed;
+    for (std::uint32_t d = 0; d < side.segments(); ++d) {
+        Point a = vertices[2 * d], b = vertices[2 * d + 1];
+        if (std::tie(b.x, b.y) < std::tie(a.x, a.y)) std::swap(a, b);
+        const double dx = b.x - a.x, dy = b.y - a.y;
+        if (dx == 0 && dy == 0) continue;  // a point lies on no one line
+        const double angle = std::atan2(dy, dx);                                   // (−π/2, π/2]
+        const double offset = (a.x * dy - a.y * dx) / std::hypot(dx, dy) / scale;  // within ±√2
+        if (!std::isfinite(angle) || !std::isfinite(offset)) continue;            // (overflow: tested pairwise)
+        constexpr double kSteps = 0x1p30;
+        keyed.push_back({std::llround(angle * kSteps), std::llround(offset * kSteps), d});
+    }
+    std::sort(keyed.begin(), keyed.end(), [](const Keyed& x, const Keyed& y) {
+        return std::tie(x.angle, x.offset, x.segment) < std::tie(y.angle, y.offset, y.segment);
+    });
+    std::vector<std::uint32_t> open, rest;
+    for (std::size_t k = 0; k < keyed.size();) {
+        std::size_t end = k + 1;
+        while (end < keyed.size() && keyed[end].angle == keyed[k].angle && keyed[end].offset == keyed[k].offset) ++end;
+        open.clear();
+        for (std::size_t i = k; i < end; ++i) open.push_back(keyed[i].segment);
+        k = end;
+        // A bucket of many distinct lines (made to be, most likely) leaves the rest pairwise.
+        for (int tries = 0; open.size() >= 2 && tries < 16; ++tries) {
+            const Point p = vertices[2 * open[0]], q = vertices[2 * open[0] + 1];
+            std::vector<std::uint32_t> group{open[0]};
+            rest.clear();
+            for (std::size_t i = 1; i < open.size(); ++i) {
+                const Point r = vertices[2 * open[i]], u = vertices[2 * open[i] + 1];
+                const bool on_line = exact::orient2d(p, q, r, stats) == 0 && exact::orient2d(p, q, u, stats) == 0;
+                (on_line ? group : rest).push_back(open[i]);
+            }
+            if (group.size() >= 2) {
+                for (const std::uint32_t d : group) groups.line_of[2 * d] = static_cast<std::uint32_t>(groups.members.size());
+                groups.members.push_back(std::move(group));
+            }
+            open.swap(rest);
+        }
+    }
+    return groups;
+}
+
 std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linework& side, exact::PredicateStats& stats) {
     std::unordered_map<PairKey, PairContacts, PairHash> pairs;
     auto add = [&](std::uint32_t a, std::uint32_t b, std::uint64_t times, const map::SegmentContact& contact) {
@@ -280,9 +346,63 @@ std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linewor
         }
     }
     // Distinct segments that meet: every copy of one meets every copy of the other.
-    for (const map::SegmentContact& contact : map::find_segment_contacts(side.map(), exact::Arithmetic::exact, stats)) {
+    const LineGroups lines = find_line_groups(side, stats);
+    for (const map::SegmentContact& contact : map::find_segment_contacts(side.map(), exact::Arithmetic::exact, stats, 0, lines.line_of)) {
         for (const Linework::Member& a : side.members(contact.s / 2)) {
             for (const Linework::Member& b : side.members(contact.t / 2)) add(a.feature, b.feature, a.times * b.times, contact);
+        }
+    }
+    // Distinct segments of one line meet (improperly) where they overlap by more than a point:
+    // meeting in one point, that is an end of both. A sweep along the line (along x, or y if it
+    // is upright: every point of the line has its own): a segment starting meets every segment
+    // still open (ends go before starts at one place), counted per feature by its open copies.
+    struct Open {
+        std::uint64_t times = 0;
+        std::vector<std::uint32_t> segments;  // as opened; the closed are dropped from the back when met
+    };
+    struct Event {
+        double at;
+        bool starts;
+        std::uint32_t segment;
+    };
+    const auto& vertices = side.map().vertices;
+    for (const std::vector<std::uint32_t>& group : lines.members) {
+        const bool upright = vertices[2 * group[0]].x == vertices[2 * group[0] + 1].x;
+        std::vector<Event> events;
+        for (const std::uint32_t d : group) {
+            const Point p = vertices[2 * d], q = vertices[2 * d + 1];
+            const double a = upright ? p.y : p.x, b = upright ? q.y : q.x;
+            events.push_back({std::min(a, b), true, d});
+            events.push_back({std::max(a, b), false, d});
+        }
+        std::sort(events.begin(), events.end(), [](const Event& x, const Event& y) {
+            return std::tie(x.at, x.starts, x.segment) < std::tie(y.at, y.starts, y.segment);
+        });
+        std::unordered_map<std::uint32_t, Open> open;
+        std::vector<std::uint32_t> open_features;  // those with copies open, in the order they opened
+        std::unordered_set<std::uint32_t> closed;
+        for (const Event& event : events) {
+            const std::span<const Linework::Member> list = side.members(event.segment);
+            if (!event.starts) {
+                closed.insert(event.segment);
+                for (const Linework::Member& m : list) {
+                    if ((open[m.feature].times -= m.times) == 0) std::erase(open_features, m.feature);
+                }
+                continue;
+            }
+            for (const std::uint32_t g : open_features) {
+                Open& other = open[g];
+                while (closed.contains(other.segments.back())) other.segments.pop_back();
+                const std::uint32_t met = other.segments.back();
+                const map::SegmentContact contact{2 * std::min(event.segment, met), 2 * std::max(event.segment, met), map::ContactKind::touching};
+                for (const Linework::Member& m : list) add(m.feature, g, m.times * other.times, contact);
+            }
+            for (const Linework::Member& m : list) {
+                Open& mine = open[m.feature];
+                if (mine.times == 0) open_features.push_back(m.feature);
+                mine.times += m.times;
+                mine.segments.push_back(event.segment);
+            }
         }
     }
     return pairs;

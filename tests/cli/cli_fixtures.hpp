@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <ogrsf_frmts.h>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -51,6 +52,17 @@ inline std::filesystem::path fresh_dir(const std::string& name) {
 inline std::string arcs_of(const std::string& text) {
     const std::size_t begin = text.rfind("\"arcs\":[["), end = text.find("\"bbox\"", begin);
     return text.substr(begin, end == std::string::npos ? std::string::npos : end - begin);
+}
+
+// A line as WKT, every coordinate round-tripping.
+inline std::string line_wkt(const std::vector<Point>& points) {
+    std::string wkt = "LINESTRING (";
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        char text[64];
+        std::snprintf(text, sizeof text, "%s%.17g %.17g", i ? ", " : "", points[i].x, points[i].y);
+        wkt += text;
+    }
+    return wkt + ")";
 }
 
 inline std::string testdata(const std::string& name) { return std::string(TOPOSIMP_SOURCE_DIR) + "/testdata/" + name; }

@@ -10,16 +10,6 @@
 namespace toposimp::testing {
 namespace {
 
-std::string line_wkt(const std::vector<Point>& points) {
-    std::string wkt = "LINESTRING (";
-    for (std::size_t i = 0; i < points.size(); ++i) {
-        char text[64];
-        std::snprintf(text, sizeof text, "%s%.17g %.17g", i ? ", " : "", points[i].x, points[i].y);
-        wkt += text;
-    }
-    return wkt + ")";
-}
-
 // Every line of every layer of `path`, as chains (all vertices kept).
 map::MapData as_map(const std::string& path) {
     map::MapData map;

@@ -175,7 +175,8 @@ bool first_shared_cell(const MapData& map, std::uint32_t s, const Box& sb, std::
 }  // namespace
 
 std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
-                                                  exact::PredicateStats& stats, int threads_wanted) {
+                                                  exact::PredicateStats& stats, int threads_wanted,
+                                                  std::span<const std::uint32_t> line_of) {
     std::vector<SegmentContact> contacts;
     struct Worker {
         std::vector<SegmentContact> found;
@@ -189,6 +190,7 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
                 const auto& [sb, s, s_ends] = *i;
                 for (auto j = i + 1; j != last && j->part.min_x <= sb.max_x; ++j) {
                     const auto& [tb, t, t_ends] = *j;
+                    if (!line_of.empty() && line_of[s] != kNoLine && line_of[s] == line_of[t]) continue;
                     if (!first_shared_cell(map, s, sb, t, tb, x, y, grid)) continue;  // (tested in another cell)
                     const Point p = map.vertices[s], q = map.vertices[s + 1], r = map.vertices[t], u = map.vertices[t + 1];
                     if (!exact::improper_contact(p, q, r, u, arithmetic, worker.counted)) continue;

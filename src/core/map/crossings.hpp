@@ -14,6 +14,7 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace toposimp::map {
@@ -35,8 +36,13 @@ struct SegmentContact {
 // Every pair of segments of the map that meets other than at a shared end location, decided
 // exactly; candidate pairs come from a uniform grid over segment boxes, each tested once. On
 // `threads` threads (0: OpenMP's default); the result is the same for any number.
+// `line_of`, if given, holds per segment (by first vertex) a group, or kNoLine: two segments of
+// one group are neither tested nor listed (the caller, who knows them to lie on one line, counts
+// their overlaps along it).
+inline constexpr std::uint32_t kNoLine = UINT32_MAX;
 std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Arithmetic arithmetic,
-                                                  exact::PredicateStats& stats, int threads = 0);
+                                                  exact::PredicateStats& stats, int threads = 0,
+                                                  std::span<const std::uint32_t> line_of = {});
 
 // Per vertex v: 1 if the segment from v to the next vertex of its chain meets another segment of
 // the map improperly (any contact above).
