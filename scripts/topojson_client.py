@@ -124,32 +124,34 @@ def main():
                 print(f"{data} {' '.join(options)}, layer {layer}: {len(client)} features, "
                       f"{'the same' if same else 'DIFFERENT'} through topojson-client")
                 failures += not same
-        # Nested levels in one ranked TopoJSON against one file per level.
+        # Nested levels in one ranked TopoJSON against one file per level, at full precision and
+        # rounded (the coarser levels keep the first level's rounded positions).
         source = os.path.join(ROOT, "testdata", "ne_states_slice.gpkg")
         levels = ["60%", "30%", "22%"]
-        ranked = os.path.join(out, "ranked.topojson")
-        subprocess.run([toposimp, "map", source, "--levels", ",".join(levels), "-o", ranked, "-q"], check=True)
-        subprocess.run([toposimp, "map", source, "--levels", ",".join(levels), "-o", os.path.join(out, "level_{level}.gpkg"), "-q"],
-                       check=True)
         script = os.path.join(out, "level.js")
         with open(script, "w") as f:
             f.write("const fs = require('fs'), simplify = require('topojson-simplify'), client = require('topojson-client');\n"
                     "const [file, object, weight, out] = process.argv.slice(2);\n"
                     "const level = simplify.simplify(JSON.parse(fs.readFileSync(file, 'utf8')), Number(weight));\n"
                     "fs.writeFileSync(out, JSON.stringify(client.feature(level, level.objects[object])));\n")
-        for k, level in enumerate(levels, 1):
-            shown = os.path.join(out, f"shown{k}.geojson")
-            subprocess.run(["node", script, ranked, "states", str(k), shown], check=True,
-                           env=dict(os.environ, NODE_PATH=os.path.join(npm, "node_modules")))
-            client = json.load(open(shown))["features"]
-            ours = gpkg_features(os.path.join(out, f"level_{level.replace('%', 'pct')}.gpkg"), "states")
-            def flat(geometry):  # without the rank
-                kind, parts = canonical(geometry)
-                return (kind, [[[(p[0], p[1]) for p in ring] for ring in polygon] for polygon in parts])
-            same = len(ours) == len(client) and all(flat(g) == flat(b["geometry"]) for (_, g), b in zip(ours, client))
-            print(f"ranked TopoJSON of --levels {','.join(levels)}: topojson-simplify weight {k} gives level {level}: "
-                  f"{'the same' if same else 'DIFFERENT'}")
-            failures += not same
+        for rounding in ([], ["--decimals", "3"]):
+            ranked = os.path.join(out, "ranked.topojson")
+            subprocess.run([toposimp, "map", source, "--levels", ",".join(levels), "-o", ranked, "-q", "--overwrite"] + rounding, check=True)
+            subprocess.run([toposimp, "map", source, "--levels", ",".join(levels), "-o", os.path.join(out, "level_{level}.gpkg"), "-q",
+                            "--overwrite"] + rounding, check=True)
+            for k, level in enumerate(levels, 1):
+                shown = os.path.join(out, f"shown{k}.geojson")
+                subprocess.run(["node", script, ranked, "states", str(k), shown], check=True,
+                               env=dict(os.environ, NODE_PATH=os.path.join(npm, "node_modules")))
+                client = json.load(open(shown))["features"]
+                ours = gpkg_features(os.path.join(out, f"level_{level.replace('%', 'pct')}.gpkg"), "states")
+                def flat(geometry):  # without the rank
+                    kind, parts = canonical(geometry)
+                    return (kind, [[[(p[0], p[1]) for p in ring] for ring in polygon] for polygon in parts])
+                same = len(ours) == len(client) and all(flat(g) == flat(b["geometry"]) for (_, g), b in zip(ours, client))
+                print(f"ranked TopoJSON of --levels {','.join(levels)} {' '.join(rounding)}: topojson-simplify weight {k} gives "
+                      f"level {level}: {'the same' if same else 'DIFFERENT'}")
+                failures += not same
     sys.exit(1 if failures else 0)
 
 

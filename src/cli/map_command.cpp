@@ -8,6 +8,7 @@
 #include "cli/logging.hpp"
 #include "cli/progress.hpp"
 #include "core/map/levels.hpp"
+#include "core/map/location_key.hpp"
 #include "core/map/rounding.hpp"
 #include "core/map/simplify.hpp"
 #include "io/common/errors.hpp"
@@ -336,24 +337,31 @@ map::OutputGrid quantized_grid(const MapInput& input, const std::vector<std::uin
     return {axis(extent.min_x, extent.max_x), axis(extent.min_y, extent.max_y)};
 }
 
-// Puts the kept vertices of `input` on the grid (their coordinates in input.map replaced) and
-// drops those rounding removed from `result`.
-map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, const map::OutputGrid& grid,
-                                exact::Arithmetic arithmetic, spdlog::logger& log) {
-    map::RoundingResult rounded;
+// The grid of what is published, given what the (first) level keeps; none without rounding.
+std::optional<map::OutputGrid> output_grid(const MapOptions& options, const std::optional<map::GridStep>& decimal_grid,
+                                           const MapInput& input, const std::vector<std::uint8_t>& kept) {
+    if (decimal_grid) return map::OutputGrid(*decimal_grid);
+    if (options.quantize > 0) return quantized_grid(input, kept, options.quantize);
+    return std::nullopt;
+}
+
+// Runs `round` (the rounding of rounding.hpp), with a grid too fine for the coordinates as bad input.
+template <class Round>
+auto rounding_input(Round&& round) {
     try {
-        map::RoundingOptions rounding{grid, arithmetic};
-        rounding.written_points = input.written_points;
-        rounded = map::round_to_grid(input.map, result.kept, rounding);
+        return round();
     } catch (const std::invalid_argument& error) {
         throw io::InputError(std::string(error.what()) + " (--precision)");
     }
+}
+
+// Puts what `rounded` keeps where it is written (its coordinates in input.map replaced, the point
+// features too), and says what the rounding cost.
+map::RoundingStats apply_rounding(MapInput& input, const map::RoundingResult& rounded, const map::OutputGrid& grid, spdlog::logger& log) {
     for (std::size_t v = 0; v < rounded.kept.size(); ++v) {
         if (rounded.kept[v]) input.map.vertices[v] = rounded.at[v];
     }
-    result.kept = std::move(rounded.kept);
     if (input.dataset && !rounded.points.empty()) input.dataset->move_points(rounded.points);
-    result.stats.vertices_out -= rounded.stats.removed;
     const map::RoundingStats& stats = rounded.stats;
     log.debug("grid {}: {} locations, {} already on it, {} moved to the nearest grid point, {} to another, {} vertices removed "
               "(their grid point was a neighbour's), {} left off the grid, {} on rings written as given, {} passes",
@@ -373,6 +381,18 @@ map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, co
                  stats.off_grid, grid.text(), where, stats.off_grid > 3 ? ", …" : "");
     }
     return stats;
+}
+
+// Puts the kept vertices of `input` on the grid (their coordinates in input.map replaced) and
+// drops those rounding removed from `result`.
+map::RoundingStats round_output(MapInput& input, map::SimplifyResult& result, const map::OutputGrid& grid,
+                                exact::Arithmetic arithmetic, spdlog::logger& log) {
+    map::RoundingOptions rounding{grid, arithmetic};
+    rounding.written_points = input.written_points;
+    map::RoundingResult rounded = rounding_input([&] { return map::round_to_grid(input.map, result.kept, rounding); });
+    result.kept = rounded.kept;
+    result.stats.vertices_out -= rounded.stats.removed;
+    return apply_rounding(input, rounded, grid, log);
 }
 
 // The messages after a run: target missed, refusals, predicates, memory, the one-line summary.
@@ -499,9 +519,10 @@ std::vector<Level> levels_of(const MapOptions& options, std::string& problem) {
         problem = "--levels writes one output per level: put {level} in -o (e.g. -o states_{level}.gpkg), or write one "
                   "TopoJSON whose positions carry their level as a third coordinate (-o states.topojson)";
     }
-    if (ranked_levels(options) && (!options.precision.empty() || options.decimals >= 0 || options.quantize > 0)) {
-        problem = "one TopoJSON of all --levels holds the finest level's coordinates, which rounding each level would move "
-                  "apart: round with one file per level ({level} in -o)";
+    if (ranked_levels(options) && options.quantize > 0) {
+        problem = "one TopoJSON of all --levels cannot be quantized: its arcs would be delta-encoded, and a viewer dropping the "
+                  "positions of a level would shift the rest; round with --precision or --decimals, or write one file per "
+                  "level ({level} in -o)";
     }
     return levels;
 }
@@ -536,18 +557,53 @@ void check_spherical(const MapOptions& options, const MapInput& input) {
     }
 }
 
-// One result per level (one level: the run's own target).
-std::vector<map::SimplifyResult> simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
-                                              const std::vector<Level>& levels, bool rounds) {
+// One result per level (one level: the run's own target). Levels on a grid are rounded as they
+// are simplified (levels.hpp); a single run is rounded when it is published.
+map::Levels simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
+                         const std::vector<Level>& levels, const std::optional<map::GridStep>& decimal_grid) {
+    const bool rounds = decimal_grid || options.quantize > 0;
     if (options.levels.empty()) {
         // Rounding needs the control points again; without it the engine may free them early.
-        std::vector<map::SimplifyResult> results;
-        results.push_back(rounds ? map::simplify(input.map, simplify_options) : map::simplify_releasing_points(input.map, simplify_options));
-        return results;
+        map::Levels one;
+        one.results.push_back(rounds ? map::simplify(input.map, simplify_options) : map::simplify_releasing_points(input.map, simplify_options));
+        return one;
     }
     std::vector<map::StopCriterion> targets;
     for (const Level& level : levels) targets.push_back(level.stop);
-    return map::simplify_levels(input.map, simplify_options, targets);
+    if (!rounds) return map::simplify_levels(input.map, simplify_options, targets);
+    map::LevelRounding rounding;
+    rounding.grid = [&](const std::vector<std::uint8_t>& kept) { return *output_grid(options, decimal_grid, input, kept); };
+    rounding.options.arithmetic = simplify_options.arithmetic;
+    rounding.options.written_points = input.written_points;
+    return rounding_input([&] { return map::simplify_levels(input.map, simplify_options, targets, &rounding); });
+}
+
+// A level after the first, on the grid the first was rounded to: where its kept locations and
+// written points are (on the grid or, as the first level left them, off it).
+map::RoundingStats locations_on_grid(const MapInput& input, const std::vector<std::uint8_t>& kept, const map::OutputGrid& grid) {
+    map::RoundingStats stats;
+    auto on_grid = [&](Point p) { return grid.x.holds(p.x) && grid.y.holds(p.y); };
+    std::vector<map::LocationKey> locations;
+    for (std::size_t v = 0; v < kept.size(); ++v) {
+        if (kept[v]) locations.emplace_back(input.map.vertices[v]);
+    }
+    std::sort(locations.begin(), locations.end());
+    locations.erase(std::unique(locations.begin(), locations.end()), locations.end());
+    stats.locations = locations.size();
+    for (const map::LocationKey& location : locations) ++(on_grid(location.point()) ? stats.already_on_grid : stats.off_grid);
+    for (std::size_t k = 0; k < input.written_points; ++k) ++(on_grid(input.map.control_points[k]) ? stats.points_moved : stats.points_off_grid);
+    return stats;
+}
+
+// A quantized TopoJSON has no way to write a position off its grid.
+void refuse_off_grid(const MapOptions& options, const map::RoundingStats& rounding) {
+    const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
+    if (options.quantize > 0 && off > 0) {
+        throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid "
+                                         "without changing the topology (see the warnings above); quantize finer (e.g. "
+                                         "--quantize {}) or write TopoJSON unquantized",
+                                         options.quantize, off, static_cast<long long>(options.quantize) * 10));
+    }
 }
 
 // One TopoJSON of all levels: per vertex, the number of levels that keep it (a viewer shows level
@@ -577,35 +633,28 @@ void print_summaries(const MapOptions& options, const std::vector<std::string>& 
     out << "]}\n";
 }
 
-// What each output needs besides its result: the grid, the vertices to round from, the ranks.
+// What each output needs besides its result: the grid, the levels' rounding, the ranks.
 struct Publishing {
     std::optional<map::GridStep> decimal_grid;
-    std::vector<Point> vertices;       // as simplified, before rounding (several rounded levels)
-    std::vector<std::uint8_t> ranks;   // one ranked TopoJSON of all levels
+    std::optional<map::RoundingResult> levels_rounding;  // levels: the first one's, done (and applied) as they were simplified
+    std::vector<std::uint8_t> ranks;                      // one ranked TopoJSON of all levels
     bool ranked = false;
 };
 
-// One output: round (if asked), write, put the point features back; returns its rounding.
+// One output: round (a single run, if asked), write; returns its rounding.
 map::RoundingStats publish(const MapOptions& options, const Publishing& publishing, std::size_t k, MapInput& input,
                            map::SimplifyResult& result, std::optional<map::OutputGrid>& grid, exact::Arithmetic arithmetic,
                            Timings& time, Context& context, Progress& progress, spdlog::logger& log) {
     map::RoundingStats rounding;
-    if (publishing.decimal_grid) grid = map::OutputGrid(*publishing.decimal_grid);
-    if (options.quantize > 0) grid = quantized_grid(input, result.kept, options.quantize);
-    if (grid) {
+    if (publishing.levels_rounding) {
+        grid = publishing.levels_rounding->grid;
+        rounding = k == 0 ? publishing.levels_rounding->stats : locations_on_grid(input, result.kept, *grid);
+    } else if ((grid = output_grid(options, publishing.decimal_grid, input, result.kept))) {
         progress.phase("rounding to " + grid->text());
         const auto round_start = Clock::now();
-        if (k > 0) input.map.vertices = publishing.vertices;  // each level rounded from where its vertices were
         rounding = round_output(input, result, *grid, arithmetic, log);
         time.round += seconds_since(round_start);
-        // A quantized TopoJSON has no way to write a position off its grid.
-        const std::uint64_t off = rounding.off_grid + rounding.frozen + rounding.points_off_grid;
-        if (options.quantize > 0 && off > 0) {
-            throw io::InputError(fmt::format("--quantize {}: {} locations or points cannot be put on the quantization grid "
-                                             "without changing the topology (see the warnings above); quantize finer (e.g. "
-                                             "--quantize {}) or write TopoJSON unquantized",
-                                             options.quantize, off, static_cast<long long>(options.quantize) * 10));
-        }
+        refuse_off_grid(options, rounding);
     }
     progress.phase("writing " + options.output);
     const auto write_start = Clock::now();
@@ -615,10 +664,6 @@ map::RoundingStats publish(const MapOptions& options, const Publishing& publishi
         write_giscup(options, input, result, context.out);
     } else {
         write_layers(options, input, result, grid, context, progress, log, publishing.ranked ? &publishing.ranks : nullptr);
-        // The point features back where they were, for the next level's rounding.
-        if (grid && input.written_points > 0) {
-            input.dataset->move_points(std::span<const Point>(input.map.control_points.data(), input.written_points));
-        }
     }
     time.write += seconds_since(write_start);
     return rounding;
@@ -636,7 +681,6 @@ int run_map(const MapOptions& options, Context& context) {
     publishing.ranked = ranked_levels(options);
     std::vector<Level> levels;
     if (!options.levels.empty()) levels = levels_of(options, problem);
-    const bool rounds = publishing.decimal_grid || options.quantize > 0;
     if (!stop || !problem.empty()) {
         log->error("{}", problem);
         return kUsageError;
@@ -683,10 +727,16 @@ int run_map(const MapOptions& options, Context& context) {
         // The engine builds chains, indexes and ranks inside simplify().
         progress.phase("simplifying");
         const auto simplify_start = Clock::now();
-        std::vector<map::SimplifyResult> results = simplify_all(input, simplify_options, options, levels, rounds);
+        map::Levels simplified = simplify_all(input, simplify_options, options, levels, publishing.decimal_grid);
+        std::vector<map::SimplifyResult>& results = simplified.results;
         time.simplify = seconds_since(simplify_start);
-
-        if (levels.size() > 1 && rounds) publishing.vertices = input.map.vertices;
+        if (simplified.rounding) {
+            time.round = simplified.rounding->seconds;
+            time.simplify -= time.round;
+            apply_rounding(input, *simplified.rounding, simplified.rounding->grid, *log);
+            refuse_off_grid(options, simplified.rounding->stats);
+            publishing.levels_rounding = std::move(simplified.rounding);
+        }
         if (publishing.ranked) publishing.ranks = level_ranks(results, input.map.vertices.size());
         std::vector<std::string> summaries;
         for (std::size_t k = 0; k < levels.size(); ++k) {

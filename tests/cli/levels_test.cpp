@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <fstream>
 #include <iterator>
 #include <regex>
@@ -70,7 +71,61 @@ TEST(Levels, OneTopoJsonRanksEachPositionByTheLevelsThatKeepIt) {
         for (int k = 1; k <= rank; ++k) ++ranked[k];
     }
     for (int k = 1; k <= 3; ++k) EXPECT_EQ(ranked[k], kept[k - 1]) << "level " << k;
-    EXPECT_EQ(run_cli({"map", input, "--levels", "60%,30%", "-o", (dir / "r.topojson").string(), "--decimals", "2"}).code, 2);
+    // Quantized, its arcs would be delta-encoded: dropping a level's positions would shift the rest.
+    const CliResult quantized = run_cli({"map", input, "--levels", "60%,30%", "-o", (dir / "r.topojson").string(), "--quantize", "100000"});
+    EXPECT_EQ(quantized.code, 2);
+    EXPECT_NE(quantized.err.find("delta-encoded"), std::string::npos) << quantized.err;
+}
+
+// Levels on a grid: the first level rounded, the coarser ones simplified from it, so every
+// level's locations are on the grid and among the level before's; each checked clean against the
+// input on the grid; one ranked TopoJSON at 3 decimals too, its positions on the grid.
+TEST(Levels, RoundedLevelsAreNestedToTheLocation) {
+    const auto dir = fresh_dir("levels");
+    const std::string input = testdata("ne_states_slice.gpkg");
+    const std::string pattern = (dir / "states_{level}.geojson").string();
+    const CliResult map = run_cli({"map", input, "-o", pattern, "--levels", "60%,35%,25%", "--decimals", "2", "--json"});
+    ASSERT_EQ(map.code, 0) << map.err;
+    auto on_grid = [](double value) {
+        const double scaled = value * 100;
+        return std::abs(scaled - std::nearbyint(scaled)) < 1e-6;  // (the test's own rough look at the text)
+    };
+    std::set<std::pair<double, double>> before;
+    std::size_t off = 0;
+    for (const char* name : {"60pct", "35pct", "25pct"}) {
+        const std::string out = (dir / ("states_" + std::string(name) + ".geojson")).string();
+        const CliResult check = run_cli({"check", input, out, "--decimals", "2"});
+        EXPECT_EQ(check.code, 0) << name << ": " << check.out;
+        const std::set<std::pair<double, double>> here = locations(out);
+        for (const auto& [x, y] : here) off += !on_grid(x) || !on_grid(y);
+        if (!before.empty()) {
+            for (const auto& location : here) EXPECT_TRUE(before.count(location)) << name << " has a location the level before lacks";
+            EXPECT_LT(here.size(), before.size());
+        }
+        before = here;
+    }
+    // What the JSON says is off the grid is what the files hold.
+    std::size_t said = 0;
+    for (std::size_t at = map.out.find("\"off_grid\":"); at != std::string::npos; at = map.out.find("\"off_grid\":", at + 1)) {
+        said += std::stoull(map.out.substr(at + 11));
+    }
+    EXPECT_EQ(off, said) << map.out;
+    const std::string topo = (dir / "ranked.topojson").string();
+    const CliResult ranked = run_cli({"map", input, "--levels", "50%,20%", "-o", topo, "--decimals", "3"});
+    ASSERT_EQ(ranked.code, 0) << ranked.err;
+    std::ifstream in(topo);
+    const std::string text{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    const std::string arcs = arcs_of(text);
+    const std::regex position(R"(\[(-?[0-9.e+-]+),(-?[0-9.e+-]+),([0-9]+)\])");
+    std::size_t positions = 0;
+    for (auto m = std::sregex_iterator(arcs.begin(), arcs.end(), position); m != std::sregex_iterator(); ++m, ++positions) {
+        for (int axis = 1; axis <= 2; ++axis) {
+            const std::string digits = (*m)[axis].str();
+            const auto dot = digits.find('.');
+            EXPECT_TRUE(dot == std::string::npos || digits.size() - dot - 1 <= 3) << m->str();
+        }
+    }
+    EXPECT_GT(positions, 100u);
 }
 
 TEST(Levels, BadLevelsAreRefusedBeforeReading) {

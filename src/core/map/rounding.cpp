@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <span>
@@ -467,7 +468,11 @@ private:
 }  // namespace
 
 RoundingResult round_to_grid(const MapData& map, const std::vector<std::uint8_t>& kept, const RoundingOptions& options) {
-    return Rounder(map, kept, options).run();
+    const auto start = std::chrono::steady_clock::now();
+    RoundingResult result = Rounder(map, kept, options).run();
+    result.grid = options.grid;
+    result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return result;
 }
 
 }  // namespace toposimp::map

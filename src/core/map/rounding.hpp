@@ -73,11 +73,13 @@ struct RoundingStats {
 };
 
 struct RoundingResult {
+    OutputGrid grid;                      // the grid rounded to
     std::vector<Point> at;                // per vertex: where it is written (meaningful where kept)
     std::vector<std::uint8_t> kept;       // the kept vertices after rounding (a subset of those given)
     std::vector<std::uint32_t> off_grid;  // one vertex per location left off the grid, in input order
     std::vector<Point> points;            // the written control points [0, written_points), where they are written
     RoundingStats stats;
+    double seconds = 0;
 };
 
 // Rounds the kept vertices of `map` onto options.grid. Throws std::invalid_argument if the grid

@@ -23,9 +23,9 @@ TEST(Levels, NestedEachCleanAndCountedAgainstTheInput) {
         SimplifyOptions options;
         options.parallel_threshold = 0;
         options.threads = 1;
-        const std::vector<SimplifyResult> one = simplify_levels(map, options, levels);
+        const std::vector<SimplifyResult> one = simplify_levels(map, options, levels).results;
         options.threads = 3;
-        const std::vector<SimplifyResult> three = simplify_levels(map, options, levels);
+        const std::vector<SimplifyResult> three = simplify_levels(map, options, levels).results;
         ASSERT_EQ(one.size(), levels.size());
         for (std::size_t k = 0; k < levels.size(); ++k) {
             SCOPED_TRACE("seed " + std::to_string(seed) + ", level " + std::to_string(k));
@@ -46,6 +46,46 @@ TEST(Levels, NestedEachCleanAndCountedAgainstTheInput) {
             }
         }
     }
+}
+
+// Levels on a grid: the first rounded, the coarser simplified from it. Each level keeps every
+// promise against the input at the rounded positions, is on the grid wherever the first is, and
+// keeps a subset of the level before at the same positions; the same on any number of threads.
+TEST(Levels, RoundedLevelsAreNestedOnTheGridAndClean) {
+    const std::vector<StopCriterion> levels{{Target::keep_fraction, 0.5}, {Target::keep_fraction, 0.25}, {Target::keep_points, 30}};
+    std::uint64_t moved = 0;
+    for (std::uint64_t seed = 1; seed <= 25; ++seed) {
+        std::mt19937_64 rng(seed);
+        testing::RandomMapOptions random;
+        random.roads = seed % 3 == 0 ? 2 : 0;
+        const MapData map = testing::random_planar_map(rng, random);
+        const GridStep step = *GridStep::parse(seed % 2 ? "1" : "5");
+        auto on_grid = [&](Point p) { return step.at(*step.nearest(p.x)) == p.x && step.at(*step.nearest(p.y)) == p.y; };
+        LevelRounding rounding;
+        rounding.grid = [&](const std::vector<std::uint8_t>&) { return OutputGrid(step); };
+        SimplifyOptions options;
+        options.parallel_threshold = 0;
+        options.threads = 1;
+        const Levels one = simplify_levels(map, options, levels, &rounding);
+        options.threads = 3;
+        const Levels three = simplify_levels(map, options, levels, &rounding);
+        ASSERT_TRUE(one.rounding && three.rounding);
+        const std::vector<Point>& at = one.rounding->at;
+        for (std::size_t k = 0; k < levels.size(); ++k) {
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", level " + std::to_string(k));
+            EXPECT_EQ(one.results[k].kept, three.results[k].kept) << "depends on the threads";
+            const testing::CheckReport report = testing::check_rounded(map, one.results[k].kept, at, on_grid);
+            EXPECT_TRUE(report.ok()) << report.summary();
+            for (std::size_t v = 0; k > 0 && v < map.vertices.size(); ++v) {
+                EXPECT_LE(one.results[k].kept[v], one.results[k - 1].kept[v]) << v;
+            }
+        }
+        for (std::size_t v = 0; v < map.vertices.size(); ++v) {
+            EXPECT_TRUE(!one.results[0].kept[v] || (at[v].x == three.rounding->at[v].x && at[v].y == three.rounding->at[v].y));
+            if (one.results[0].kept[v] && (at[v].x != map.vertices[v].x || at[v].y != map.vertices[v].y)) ++moved;
+        }
+    }
+    EXPECT_GT(moved, 0u) << "the grids moved nothing: the test tests nothing";
 }
 
 }  // namespace
