@@ -84,6 +84,21 @@ struct GridStep {
     double at(std::int64_t k) const {
         // |k| < 2^62 and m < 10^15 < 2^50: the product fits in 128 bits.
         const Int128 product = static_cast<Int128>(k) * mantissa;
+        // Clinger's fast path: k·m and 10^|e| both exact doubles, so one IEEE multiplication or
+        // division, correctly rounded, gives the double nearest to k·m·10^e, as parsing would.
+        constexpr Int128 kExact = Int128{1} << 53;
+        if (product <= kExact && product >= -kExact && exponent >= -22 && exponent <= 22) {
+            constexpr double kPowers[] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                          1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+            const auto exact = static_cast<double>(product);
+            return exponent >= 0 ? exact * kPowers[exponent] : exact / kPowers[-exponent];
+        }
+        return parsed_at(k);
+    }
+
+    // The same, by writing k·m·10^e as text and parsing it (any k, m and e).
+    double parsed_at(std::int64_t k) const {
+        const Int128 product = static_cast<Int128>(k) * mantissa;
         UInt128 magnitude = product < 0 ? static_cast<UInt128>(-product) : static_cast<UInt128>(product);
         // The digits of k·m backwards to the middle of the buffer, then "e" and the exponent.
         char text[96];

@@ -50,6 +50,26 @@ TEST(GridStep, ParsesDecimalsAndGivesTheDoublesReadersGet) {
     EXPECT_FALSE(GridStep::decimals(4).nearest(1e300));  // the grid is too fine for the coordinates
 }
 
+// The fast path of GridStep::at (one IEEE operation on exact operands) gives the double that
+// parsing the decimal text gives, for any step and index, at the edges of the fast path too.
+TEST(GridStep, FastPathIsTheParsedValue) {
+    std::mt19937_64 rng(30);
+    for (int trial = 0; trial < 200000; ++trial) {
+        const GridStep step{static_cast<std::int64_t>(rng() % 1000000) + 1, static_cast<int>(rng() % 61) - 30};
+        const int bits = static_cast<int>(rng() % 62);
+        auto k = static_cast<std::int64_t>(rng() >> (64 - bits));
+        if (rng() % 2) k = -k;
+        if (std::abs(static_cast<double>(k) * static_cast<double>(step.mantissa)) >= 0x1p62) continue;
+        ASSERT_EQ(step.at(k), step.parsed_at(k)) << step.mantissa << "e" << step.exponent << " at " << k;
+    }
+    for (const std::int64_t k : {(std::int64_t{1} << 53) - 1, std::int64_t{1} << 53, (std::int64_t{1} << 53) + 1}) {
+        for (const int e : {-23, -22, -1, 0, 22, 23}) {
+            EXPECT_EQ((GridStep{1, e}.at(k)), (GridStep{1, e}.parsed_at(k))) << k << "e" << e;
+            EXPECT_EQ((GridStep{1, e}.at(-k)), (GridStep{1, e}.parsed_at(-k))) << k << "e" << e;
+        }
+    }
+}
+
 // A sliver ring whose apex is 0.4 steps above its base: the nearest grid point puts the apex on
 // the base line (area 0). It must keep its orientation: the apex goes one step up, or stays.
 TEST(Rounding, SliverKeepsItsOrientation) {
