@@ -119,6 +119,31 @@ def main():
         if checked.returncode != 0 or not report["clean"] or report["features"] != 27:
             fail("the map output is not a clean simplification: " + checked.stdout + checked.stderr)
 
+        # map rounded to 3 decimals with weighted ranking: clean on the grid.
+        rounded = os.path.join(tmp, "borders_rounded.gpkg")
+        code, results, text = qgis.run("toposimp:map", INPUT=gpkg + "|layername=borders",
+                                       POINTS=gpkg + "|layername=places", PERCENT=20, DECIMALS=3, WEIGHTING=0.7,
+                                       OUTPUT=rounded)
+        if code != 0 or not os.path.exists(rounded):
+            fail("toposimp:map with DECIMALS: exit {}\n{}".format(code, text))
+        checked = toposimp(binary, "check", gpkg, rounded, "-l", "borders", "--points", gpkg + ":places",
+                           "--decimals", "3", "--json")
+        if checked.returncode != 0 or not json.loads(checked.stdout)["clean"]:
+            fail("the rounded map output is not clean on its grid: " + checked.stdout + checked.stderr)
+        from osgeo import ogr  # (QGIS depends on GDAL's Python bindings)
+
+        def points(geometry):
+            if geometry.GetGeometryCount() == 0:
+                return geometry.GetPoints() or []
+            return [p for k in range(geometry.GetGeometryCount()) for p in points(geometry.GetGeometryRef(k))]
+        source = ogr.Open(rounded)  # (held: its layer and features die with it)
+        off = []
+        for feature in source.GetLayer(0):
+            off += [(x, y) for x, y in points(feature.GetGeometryRef())[:] if
+                    abs(x * 1000 - round(x * 1000)) > 1e-6 or abs(y * 1000 - round(y * 1000)) > 1e-6]
+        if off:
+            fail("toposimp:map with DECIMALS=3 wrote coordinates off the grid, e.g. {}".format(off[:3]))
+
         # check, through QGIS, with the violations layer written.
         errors = os.path.join(tmp, "violations.geojson")
         code, results, text = qgis.run("toposimp:check", ORIGINAL=gpkg + "|layername=borders", SIMPLIFIED=out,

@@ -53,10 +53,21 @@ class MapArgs(unittest.TestCase):
         self.assertIn("--points", cli_args.map_args("a", "b", points_path="p.shp"))
         self.assertEqual(cli_args.map_args("a", "b", points_path="p.shp")[5], "p.shp")
 
+    def test_rounding_and_ranking(self):
+        def options_of(**values):
+            args = cli_args.map_args("in.gpkg", "out.gpkg", **values)
+            return args[6:args.index("--overwrite")]
+        self.assertEqual(options_of(decimals=4), ["--decimals", "4"])
+        self.assertEqual(options_of(precision=0.25), ["--precision", "0.25"])
+        self.assertEqual(options_of(weighting=0.7, spherical=True), ["--weighting", "0.7", "--spherical"])
+        self.assertEqual(options_of(decimals=0, weighting=0), ["--decimals", "0", "--weighting", "0"])
+
     def test_bad_values_are_refused_with_a_message(self):
         cases = [dict(percent=101), dict(percent=-1), dict(target=1), dict(target=1, count=2.5),
                  dict(target=2, count=-3), dict(target=3, area=-1), dict(target=5), dict(arithmetic=3),
-                 dict(percent=float("nan")), dict(threads=-1)]
+                 dict(percent=float("nan")), dict(threads=-1), dict(decimals=3, precision=0.1),
+                 dict(decimals=-1), dict(decimals=2.5), dict(decimals=16), dict(precision=0),
+                 dict(weighting=1.5), dict(weighting=-0.1)]
         for values in cases:
             with self.subTest(values=values), self.assertRaises(ArgumentError) as raised:
                 cli_args.map_args("a", "b", **values)
@@ -131,6 +142,16 @@ class ArgumentsTheExecutableAccepts(unittest.TestCase):
                         **values))
                     self.assertTrue(holds(summary), summary)
                     self.assertEqual(summary["control_points"], 26)
+            # Rounded and ranked: every coordinate written on the 0.001 grid, the run clean.
+            summary, _ = self.run_tool(cli_args.map_args(gpkg, out, input_layer="borders", points_path=gpkg,
+                                                         points_layer="places", decimals=3, weighting=0.7,
+                                                         validate=True))
+            self.assertEqual(summary["rounding"]["grid"], "0.001")
+            self.assertEqual(summary["ranking"]["weighting"], 0.7)
+            states = os.path.join(TESTDATA, "ne_states_slice.gpkg")
+            summary, _ = self.run_tool(cli_args.map_args(states, out, spherical=True, precision=0.05))
+            self.assertTrue(summary["ranking"]["spherical"], summary)
+            self.assertEqual(summary["rounding"]["grid"], "0.05")
             summary, stderr = self.run_tool(cli_args.map_args(gpkg, out, input_layer="borders", validate=True,
                                                               points_path=gpkg, points_layer="places",
                                                               arithmetic=1, output_layer="renamed"))

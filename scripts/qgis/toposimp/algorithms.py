@@ -123,7 +123,11 @@ class MapAlgorithm(ToposimpAlgorithm):
             "Stop when: a share of the vertices is left (Share, %), N vertices are left or removed "
             "(N), every vertex with effective area up to A is gone (A), or nothing more can go.\n"
             "Validate runs toposimp check on the result before writing it; on a violation nothing "
-            "is written and the algorithm fails.")
+            "is written and the algorithm fails.\n"
+            "Round to D decimals (or, advanced, to a grid step) puts every written coordinate on that "
+            "grid with the same promises; a location no grid point near it can serve stays where it "
+            "is, with a warning. Advanced: weighted effective area (mapshaper's weighting) and areas "
+            "on the sphere only change the order in which vertices go.")
 
     def initAlgorithm(self, config=None):
         self.addParameter(QgsProcessingParameterFeatureSource(
@@ -145,6 +149,17 @@ class MapAlgorithm(ToposimpAlgorithm):
             "ARITHMETIC", "Arithmetic", options=[label for _, label in cli_args.ARITHMETIC], defaultValue=0)))
         self.addParameter(QgsProcessingParameterBoolean(
             "VALIDATE", "Validate the result before writing it", defaultValue=False))
+        self.addParameter(QgsProcessingParameterNumber(
+            "DECIMALS", "Round to D decimals, topology kept", QgsProcessingParameterNumber.Integer,
+            minValue=0, maxValue=15, optional=True))
+        self.addParameter(_advanced(QgsProcessingParameterNumber(
+            "PRECISION", "Round to a grid step (map units), topology kept", QgsProcessingParameterNumber.Double,
+            minValue=0.0, optional=True)))
+        self.addParameter(_advanced(QgsProcessingParameterNumber(
+            "WEIGHTING", "Weighted effective area (0: plain Visvalingam, 0.7: mapshaper's default)",
+            QgsProcessingParameterNumber.Double, minValue=0.0, maxValue=1.0, optional=True)))
+        self.addParameter(_advanced(QgsProcessingParameterBoolean(
+            "SPHERICAL", "Effective areas on the sphere (longitude, latitude layers)", defaultValue=False)))
         self.addParameter(_advanced(QgsProcessingParameterNumber(
             "THREADS", "Threads (0: all cores)", QgsProcessingParameterNumber.Integer,
             defaultValue=0, minValue=0)))
@@ -168,7 +183,11 @@ class MapAlgorithm(ToposimpAlgorithm):
                 area=self.optional_double(parameters, "AREA", context),
                 arithmetic=self.parameterAsEnum(parameters, "ARITHMETIC", context),
                 validate=self.parameterAsBool(parameters, "VALIDATE", context),
-                threads=self.parameterAsInt(parameters, "THREADS", context))
+                threads=self.parameterAsInt(parameters, "THREADS", context),
+                decimals=self.optional_int(parameters, "DECIMALS", context),
+                precision=self.optional_double(parameters, "PRECISION", context),
+                weighting=self.optional_double(parameters, "WEIGHTING", context),
+                spherical=self.parameterAsBool(parameters, "SPHERICAL", context))
         except cli_args.ArgumentError as error:
             raise QgsProcessingException(str(error))
         code, summary = self.run_toposimp(args, feedback)

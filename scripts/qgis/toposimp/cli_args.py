@@ -108,8 +108,11 @@ def _common(threads, progress):
 
 def map_args(input_path, output_path, input_layer=None, output_layer=None, points_path=None,
              points_layer=None, target=0, percent=10.0, count=None, area=None, arithmetic=0,
-             validate=False, threads=0, overwrite=True, progress=True):
-    """Arguments of `toposimp map` (without the executable)."""
+             validate=False, threads=0, overwrite=True, progress=True, decimals=None, precision=None,
+             weighting=None, spherical=False):
+    """Arguments of `toposimp map` (without the executable). `decimals` or `precision` (a grid
+    step in map units) round the output onto a grid without changing its topology; `weighting`
+    (0 to 1) ranks by weighted effective area, `spherical` by areas on the sphere."""
     if not input_path:
         raise ArgumentError("no input layer")
     args = ["map", input_path, "-o", output_path]
@@ -133,6 +136,22 @@ def map_args(input_path, output_path, input_layer=None, output_layer=None, point
     mode = _key(ARITHMETIC, arithmetic, "arithmetic")
     if mode != "exact":
         args += ["--arithmetic", mode]
+    if decimals is not None and precision is not None:
+        raise ArgumentError("round to a number of decimals or to a grid step, not both")
+    if decimals is not None:
+        if float(decimals) < 0 or float(decimals) > 15 or not float(decimals).is_integer():
+            raise ArgumentError("decimals: {!r} is not a whole number from 0 to 15".format(decimals))
+        args += ["--decimals", str(int(decimals))]
+    if precision is not None:
+        if not float(precision) > 0:
+            raise ArgumentError("grid step: {!r} is not positive".format(precision))
+        args += ["--precision", _number(precision)]
+    if weighting is not None:
+        if not 0 <= float(weighting) <= 1:
+            raise ArgumentError("weighting: {!r} is not between 0 and 1".format(weighting))
+        args += ["--weighting", _number(weighting)]
+    if spherical:
+        args.append("--spherical")
     if validate:
         args.append("--validate")
     if overwrite:
