@@ -31,6 +31,8 @@ bool endpoint_of(Point x, Point a, Point b) { return same_location(x, a) || same
 
 }  // namespace
 
+int orientation(Point a, Point b, Point c, Arithmetic arithmetic, PredicateStats& stats) { return Orienter{arithmetic, stats}(a, b, c); }
+
 bool improper_contact(Point p, Point q, Point r, Point s, Arithmetic arithmetic, PredicateStats& stats) {
     // Disjoint boxes: no contact (exact comparisons).
     if (std::max(p.x, q.x) < std::min(r.x, s.x) || std::max(r.x, s.x) < std::min(p.x, q.x) ||
@@ -40,9 +42,13 @@ bool improper_contact(Point p, Point q, Point r, Point s, Arithmetic arithmetic,
     const Orienter orient{arithmetic, stats};
     const bool pq_point = same_location(p, q), rs_point = same_location(r, s);
     const int o1 = pq_point ? 0 : orient(p, q, r), o2 = pq_point ? 0 : orient(p, q, s);
+    int o3 = 0, o4 = 0;  // orientations of p and q against rs, once computed
+    bool rs_known = rs_point;
     if (!pq_point && !rs_point) {
         if (o1 * o2 > 0) return false;  // r and s strictly on one side of pq
-        const int o3 = orient(r, s, p), o4 = orient(r, s, q);
+        o3 = orient(r, s, p);
+        o4 = orient(r, s, q);
+        rs_known = true;
         if (o3 * o4 > 0) return false;
         if (o1 * o2 < 0 && o3 * o4 < 0) return true;  // proper crossing
         if (o1 == 0 && o2 == 0) {
@@ -61,7 +67,10 @@ bool improper_contact(Point p, Point q, Point r, Point s, Arithmetic arithmetic,
     };
     if (on_segment(r, p, q, o1) && !endpoint_of(r, p, q)) return true;
     if (on_segment(s, p, q, o2) && !endpoint_of(s, p, q)) return true;
-    const int o3 = rs_point ? 0 : orient(r, s, p), o4 = rs_point ? 0 : orient(r, s, q);
+    if (!rs_known) {
+        o3 = orient(r, s, p);
+        o4 = orient(r, s, q);
+    }
     if (on_segment(p, r, s, o3) && !endpoint_of(p, r, s)) return true;
     if (on_segment(q, r, s, o4) && !endpoint_of(q, r, s)) return true;
     return false;

@@ -5,6 +5,9 @@
 
 namespace toposimp::exact {
 
+// The side of ab that c lies on (1 left, -1 right, 0 on the line) in the given arithmetic.
+int orientation(Point a, Point b, Point c, Arithmetic arithmetic, PredicateStats& stats);
+
 // Do the closed segments pq and rs meet anywhere other than at a location that is an endpoint of
 // both? That is a crossing, a T-contact (an endpoint inside the other segment), or a collinear
 // overlap — a contact a planar map does not have. Segments may be degenerate (p = q).

@@ -154,6 +154,20 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
     }
 }
 
+// Segments s and t one after the other in a chain (the second starts at the first's end vertex),
+// with three distinct locations p, q, u not on one line: two segments sharing the end q and not
+// collinear meet in q alone, an end of both. One orientation instead of improper_contact's
+// several, for the pair a cell holds most often (issue 34). Anything else: false, and the full
+// test decides.
+bool only_their_shared_end(const MapData& map, std::uint32_t s, std::uint32_t t, exact::Arithmetic arithmetic,
+                           exact::PredicateStats& stats) {
+    if (t + 1 == s) std::swap(s, t);
+    if (s + 1 != t) return false;  // (t a segment starting at s's end vertex: the same chain)
+    const Point p = map.vertices[s], q = map.vertices[t], u = map.vertices[t + 1];
+    if (same_location(p, q) || same_location(q, u) || same_location(p, u)) return false;
+    return exact::orientation(p, q, u, arithmetic, stats) != 0;
+}
+
 bool overlap(const Box& a, const Box& b) {
     return a.min_x <= b.max_x && b.min_x <= a.max_x && a.min_y <= b.max_y && b.min_y <= a.max_y;
 }
@@ -288,6 +302,7 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 // Every cell the two share tests them (not only the one of their overlap's low
                 // corner): a cell then settles its own segments, whatever the others do.
                 if (sb.min_y > tb.max_y || tb.min_y > sb.max_y || tb.min_x > sb.max_x) return;
+                if (only_their_shared_end(map, s, t, arithmetic, worker.counted)) return;
                 if (exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1], arithmetic,
                                             worker.counted)) {
                     worker.here[i] = worker.here[j] = 1;
