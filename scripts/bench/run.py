@@ -1,14 +1,17 @@
 #!/usr/bin/env python3
 """toposimp against its peers on the same data, on the same machine, in the same run.
 
-For each dataset and target (--keep 50% and --max) it times toposimp (exact, float, rational;
-1 thread and all threads), mapshaper (-simplify visvalingam, at the fraction toposimp kept) and ogr2ogr -simplify (GEOS
-TopologyPreservingSimplifier, tolerance searched to the same fraction) with /usr/bin/time over
+For each dataset and target (--keep 50%, 10%, 1% and --max) it times toposimp (exact, float, rational;
+1 thread and all threads), mapshaper (-simplify visvalingam, at the fraction toposimp kept), ogr2ogr -simplify (GEOS
+TopologyPreservingSimplifier, tolerance searched to the same fraction) and, on polygon layers, GEOS ≥ 3.12's
+CoverageSimplifier (build/peers/coverage_simplify from scripts/bench/build-geos.sh, when built; tolerance
+searched likewise) with /usr/bin/time over
 several runs, checks every output with `toposimp check` against the same control points, and
 writes BENCHMARKS.md (medians and ratios), with toposimp's phases per mode and thread count in the
 layout of the dissertation's Tables 3.1/3.2. Data: scripts/bench/fetch-data.sh.
 
-  scripts/bench/run.py [--data DIR] [--runs N] [--datasets td1,td2,ne,gshhg] [--out BENCHMARKS.md] [--append]
+  scripts/bench/run.py [--data DIR] [--runs N] [--datasets td1,td2,ne,gshhg] [--targets 50%,10%,1%,max]
+                      [--out BENCHMARKS.md] [--append]
 """
 import argparse
 import json
@@ -29,7 +32,8 @@ RATIONAL_LIMIT = 500_000
 DATASETS = {
     'td1': dict(lines='td1_lines.shp', points='td1_points.shp', title='GIS Cup 2014 td1 (NH county borders)'),
     'td2': dict(lines='td2_lines.shp', points='td2_points.shp', title='GIS Cup 2014 td2 (MA county borders)'),
-    'ne': dict(lines='ne_states.shp', points='cities.shp', title='Natural Earth states/provinces (polygons) + GeoNames cities'),
+    'ne': dict(lines='ne_states.shp', points='cities.shp', title='Natural Earth states/provinces (polygons) + GeoNames cities',
+               polygons=True),
     'gshhg': dict(lines='gshhg.shp', points='gshhg_points.gpkg',
                   title='GSHHG full-resolution shorelines, level 1 + 10 M control points'),
 }
@@ -105,6 +109,9 @@ def main():
     parser.add_argument('--binary', default=os.path.join(REPO, 'build', 'release', 'toposimp'))
     parser.add_argument('--runs', type=int, default=3)
     parser.add_argument('--datasets', default='td1,td2,ne,gshhg')
+    parser.add_argument('--targets', default='50%,10%,1%,max')
+    parser.add_argument('--coverage', default=os.path.join(REPO, 'build', 'peers', 'coverage_simplify'),
+                        help="GEOS CoverageSimplifier driver (scripts/bench/build-geos.sh); skipped if absent")
     parser.add_argument('--out', default=os.path.join(REPO, 'BENCHMARKS.md'))
     parser.add_argument('--append', action='store_true', help='add the datasets to an existing report')
     args = parser.parse_args()
@@ -118,7 +125,7 @@ def main():
         total = vertex_count(lines)
         runs = args.runs
         rows, phase_rows, identical = [], [], []
-        for target in ('50%', 'max'):
+        for target in args.targets.split(','):
             def out(tag):
                 return os.path.join(work, '%s_%s_%s.shp' % (name, target.strip('%'), tag))
             flag = ['--keep', target] if target != 'max' else ['--max']
@@ -156,25 +163,31 @@ def main():
             path = out('mapshaper')
             command = [mapshaper, '-i', lines, '-simplify', 'visvalingam', 'keep-shapes', '%.4f%%' % (100 * share), '-o', path, 'force']
             results['mapshaper'] = (path, timed(command, runs))
-            # ogr2ogr -simplify: tolerance searched (bisection on a log scale) to keep about as many vertices.
-            lo, hi = 1e-9, 1e6
-            best = None
-            for _ in range(14 if total < 2_000_000 else 7):
-                tolerance = (lo * hi) ** 0.5
-                path = out('ogr2ogr')
+            # ogr2ogr -simplify and GEOS's CoverageSimplifier: tolerance searched (bisection on a log
+            # scale) to keep about as many vertices.
+            def searched(tag, make):
+                lo, hi = 1e-9, 1e6
+                best = None
+                for _ in range(14 if total < 2_000_000 else 7):
+                    tolerance = (lo * hi) ** 0.5
+                    path = out(tag)
+                    remove_shapefile(path)
+                    subprocess.run(make(path, tolerance), check=True, capture_output=True)
+                    n = vertex_count(path)
+                    if best is None or abs(n - kept) < abs(best[1] - kept):
+                        best = (tolerance, n)
+                    if n > kept:
+                        lo = tolerance
+                    else:
+                        hi = tolerance
+                path = out(tag)
                 remove_shapefile(path)
-                subprocess.run(['ogr2ogr', path, lines, '-simplify', '%g' % tolerance], check=True, capture_output=True)
-                n = vertex_count(path)
-                if best is None or abs(n - kept) < abs(best[1] - kept):
-                    best = (tolerance, n)
-                if n > kept:
-                    lo = tolerance
-                else:
-                    hi = tolerance
-            path = out('ogr2ogr')
-            remove_shapefile(path)
-            command = ['ogr2ogr', path, lines, '-simplify', '%g' % best[0]]
-            results['ogr2ogr -simplify %g' % best[0]] = (path, timed(command, runs))
+                return path, make(path, best[0]), best[0]
+            path, command, tolerance = searched('ogr2ogr', lambda path, t: ['ogr2ogr', path, lines, '-simplify', '%g' % t])
+            results['ogr2ogr -simplify %g' % tolerance] = (path, timed(command, runs))
+            if spec.get('polygons') and os.path.exists(args.coverage):
+                path, command, tolerance = searched('geos_coverage', lambda path, t: [args.coverage, lines, path, '%g' % t])
+                results['GEOS CoverageSimplifier %g' % tolerance] = (path, timed(command, runs))
             base_wall = results[base_tag][1][0]
             for tool, (path, (wall, cpu, rss)) in results.items():
                 rows.append('| %s | %s | %d (%.1f%%) | %.3f | %.2f | %.0f | %.2f | %s |' % (
@@ -198,6 +211,10 @@ def main():
     versions = [subprocess.run([args.binary, '--version'], capture_output=True, text=True).stdout.strip(),
                 'mapshaper ' + subprocess.run([mapshaper, '-v'], capture_output=True, text=True).stdout.strip(),
                 subprocess.run(['ogr2ogr', '--version'], capture_output=True, text=True).stdout.strip()]
+    if os.path.exists(args.coverage):
+        geos_config = os.path.join(os.path.dirname(args.coverage), 'geos', 'bin', 'geos-config')
+        version = subprocess.run([geos_config, '--version'], capture_output=True, text=True).stdout.strip() if os.path.exists(geos_config) else '?'
+        versions.append('GEOS %s (CoverageSimplifier, built from source)' % version)
     if args.append:
         with open(args.out, 'a') as f:
             f.write('\nAppended by `scripts/bench/run.py %s` on %s.\n\n%s' % (' '.join(sys.argv[1:]), time.strftime('%Y-%m-%d'), '\n'.join(sections)))
@@ -216,7 +233,7 @@ def main():
                 'toposimp runs on 1 thread and on all threads (`-j`); its output is byte-identical either way. '
                 'Vertices are counted in the written features (a border shared by two polygons counts twice). '
                 'Every output is checked against the input and the same control points with `toposimp check` '
-                '(exact). mapshaper and ogr2ogr have no control points: their violations are what they would '
+                '(exact). mapshaper, ogr2ogr and GEOS\'s CoverageSimplifier have no control points: their violations are what they would '
                 'break.\n\n%s' % (
                     ' '.join(sys.argv[1:]), time.strftime('%Y-%m-%d'), cpu, os.cpu_count(), int(memory) / 1048576,
                     '; '.join(versions), '\n'.join(sections)) + kept_after)
