@@ -205,8 +205,8 @@ public:
         auto start = Clock::now();
         index_points();
         set_up_levels();
-        build_chains();
         find_shared_locations();
+        build_chains();
         stats_.seconds_index = lap(start);
         pin_crossings();
         stats_.seconds_crossings = lap(start);
@@ -300,7 +300,13 @@ private:
         return chain.last > chain.first && same_location(map_.vertices[chain.first], map_.vertices[chain.last]);
     }
 
+    // A ring's distinct locations: all its vertices but the closing one when none of the others
+    // shares its location with any vertex (shared_, which says so for every vertex of the map);
+    // else counted.
     std::uint32_t count_distinct_locations(const Chain& chain) const {
+        bool alone = true;
+        for (std::uint32_t v = chain.first + 1; v < chain.last && alone; ++v) alone = !shared_[v];
+        if (alone) return chain.last - chain.first;
         std::vector<LocationKey> keys;
         keys.reserve(chain.last - chain.first);
         for (std::uint32_t v = chain.first; v < chain.last; ++v) keys.emplace_back(map_.vertices[v]);
@@ -310,33 +316,51 @@ private:
 
     // Vertices whose location another vertex holds too (a node, a ring's closing vertex, a
     // duplicate, a touch), found cell by cell in the grid: only segments ending at such a
-    // location can ever coincide with another segment.
+    // location can ever coincide with another segment. A cell is sorted by x, so points at one
+    // location lie in one run of equal x (−0 and 0 alike), nearly always a run of one.
     void find_shared_locations() {
         shared_.assign(vertex_count_, 0);
         const std::uint32_t columns = grid_->columns(), rows = grid_->rows();
 #pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
         {
-            std::vector<std::pair<LocationKey, std::uint32_t>> here;
+            std::vector<std::pair<std::uint64_t, std::uint32_t>> by_y;  // scratch of mark_shared
 #pragma omp for schedule(dynamic, 16)
             for (std::uint32_t y = 0; y < rows; ++y) {
                 for (std::uint32_t x = 0; x < columns; ++x) {
                     const auto ids = grid_->cell_ids(x, y);
                     const auto points = grid_->cell_points(x, y);
-                    here.clear();
-                    for (std::size_t k = 0; k < ids.size(); ++k) {
-                        if (ids[k] < vertex_count_) here.emplace_back(LocationKey(points[k]), ids[k]);
-                    }
-                    std::sort(here.begin(), here.end());
-                    for (std::size_t i = 0; i < here.size();) {
+                    for (std::size_t i = 0; i < ids.size();) {
                         std::size_t j = i + 1;
-                        while (j < here.size() && here[j].first == here[i].first) ++j;
-                        if (j - i > 1) {
-                            for (std::size_t k = i; k < j; ++k) shared_[here[k].second] = 1;
-                        }
+                        while (j < ids.size() && LocationKey(points[j]).x == LocationKey(points[i]).x) ++j;
+                        if (j - i > 1) mark_shared(ids.subspan(i, j - i), points.subspan(i, j - i), by_y);
                         i = j;
                     }
                 }
             }
+        }
+    }
+
+    // Points of one cell with one x: the vertices among them at one y share a location (a few
+    // compared pair by pair, more sorted by y).
+    void mark_shared(std::span<const std::uint32_t> ids, std::span<const Point> points,
+                     std::vector<std::pair<std::uint64_t, std::uint32_t>>& by_y) {
+        if (ids.size() <= 8) {
+            for (std::size_t a = 0; a < ids.size(); ++a) {
+                for (std::size_t b = a + 1; b < ids.size(); ++b) {
+                    if (ids[a] < vertex_count_ && ids[b] < vertex_count_ && LocationKey(points[a]) == LocationKey(points[b])) {
+                        shared_[ids[a]] = shared_[ids[b]] = 1;
+                    }
+                }
+            }
+            return;
+        }
+        by_y.clear();
+        for (std::size_t k = 0; k < ids.size(); ++k) {
+            if (ids[k] < vertex_count_) by_y.emplace_back(LocationKey(points[k]).y, ids[k]);
+        }
+        std::sort(by_y.begin(), by_y.end());
+        for (std::size_t k = 0; k + 1 < by_y.size(); ++k) {
+            if (by_y[k].first == by_y[k + 1].first) shared_[by_y[k].second] = shared_[by_y[k + 1].second] = 1;
         }
     }
 

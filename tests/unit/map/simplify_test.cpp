@@ -124,6 +124,27 @@ TEST(MapSimplify, SelfTouchingLoopDoesNotFoldBackOnItself) {
     EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
 }
 
+// Shared locations are found among points of one x in a grid cell, pair by pair for a few and
+// sorted by y for more (issue 34). Two lines from (0, 0) to (0, 2), one bent, one straight, and
+// lines of 12 vertices on x = 0 just below and above them (runs of 14 points of x = 0 in a
+// cell): the bent line must not straighten onto the straight one; with short runs, the same.
+TEST(MapSimplify, SharedLocationsOnALongRunOfOneX) {
+    for (const int filler : {12, 2}) {
+        MapData map;
+        map.add_chain({{0, 0}, {1, 1}, {0, 2}});
+        map.add_chain({{-0.0, 0}, {0, 2}});  // (−0: the same location)
+        std::vector<Point> below, above;
+        for (int k = 1; k <= filler; ++k) below.push_back({0, -0.001 * k});
+        for (int k = 1; k <= filler; ++k) above.push_back({0, 2 + 0.001 * k});
+        map.add_chain(below);
+        map.add_chain(above);
+        const SimplifyResult result = simplify_max(map);
+        EXPECT_TRUE(result.kept[1]) << filler << ": the bent line straightened onto the other";
+        EXPECT_EQ(result.stats.blocked_by_coincidence, 1u) << filler;
+        EXPECT_TRUE(testing::check_simplification(map, result.kept).ok());
+    }
+}
+
 TEST(MapSimplify, DuplicateAndCollinearVerticesGo) {
     MapData map;
     map.add_chain({{0, 0}, {1, 0}, {1, 0}, {2, 0}, {3, 0}, {3, 0}});
