@@ -204,6 +204,33 @@ TEST(MapCli, MultiLineStringsAndEmptyGeometriesSurvive) {
     EXPECT_EQ(written.features[2].name, "empty");
 }
 
+// A PolyLine Shapefile is decoded from its records straight into the map (issue 34): one-part
+// and multi-part records, a null shape, and the same output as from a GeoPackage of the same lines.
+TEST(MapCli, ShapefileRecordsReadStraightGiveTheSameOutput) {
+    const auto dir = fresh_dir("shp-records");
+    const std::vector<FeatureSpec> lines{{"LINESTRING (0 0, 1 1, 2 0, 3 1.5, 4 0)", "one"},
+                                         {"MULTILINESTRING ((0 5, 1 6, 2 5), (10 10, 11 12, 12 10, 13 12.5))", "two"},
+                                         {"", "null"},
+                                         {"LINESTRING (0 -3, 1 -2, 2 -3.5, 3 -2)", "three"}};
+    const std::string shp = (dir / "in.shp").string(), gpkg = (dir / "in.gpkg").string();
+    write_layer(shp, "ESRI Shapefile", wkbLineString, lines, "in");
+    write_layer(gpkg, "GPKG", wkbMultiLineString, lines, "in");
+    const std::string from_shp = (dir / "from_shp.shp").string(), from_gpkg = (dir / "from_gpkg.shp").string();  // (the straight path: Shapefile to Shapefile)
+    for (const auto& [input, out] : {std::pair{shp, from_shp}, std::pair{gpkg, from_gpkg}}) {
+        const CliResult result = run_cli({"map", input, "--keep", "60%", "-o", out});
+        ASSERT_EQ(result.code, 0) << input << ": " << result.err;
+    }
+    const ReadLayer a = read_layer(from_shp), b = read_layer(from_gpkg);
+    ASSERT_EQ(a.features.size(), 4u);
+    ASSERT_EQ(b.features.size(), 4u);
+    for (std::size_t k = 0; k < 4; ++k) {
+        EXPECT_EQ(a.features[k].coordinates, b.features[k].coordinates) << k;
+        EXPECT_EQ(a.features[k].null_geometry, b.features[k].null_geometry) << k;
+    }
+    EXPECT_EQ(a.features[1].coordinates.size(), 2u);
+    EXPECT_TRUE(a.features[2].null_geometry);
+}
+
 TEST(MapCli, OverwriteIsExplicit) {
     const auto dir = fresh_dir("overwrite");
     const std::string out = (dir / "out.shp").string();

@@ -4,6 +4,7 @@
 #include "core/geometry.hpp"
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 namespace toposimp::map {
@@ -22,7 +23,8 @@ struct MapData {
     std::vector<std::uint8_t> frozen;   // per chain (or empty): 1 = keep every vertex, an obstacle only
 
     // Appends a chain made of `points`; returns its index.
-    std::uint32_t add_chain(const std::vector<Point>& points) {
+    std::uint32_t add_chain(const std::vector<Point>& points) { return add_chain(std::span<const Point>(points)); }
+    std::uint32_t add_chain(std::span<const Point> points) {
         const auto first = static_cast<std::uint32_t>(vertices.size());
         vertices.insert(vertices.end(), points.begin(), points.end());
         chains.push_back({first, static_cast<std::uint32_t>(vertices.size() - 1)});
