@@ -40,20 +40,23 @@ for page in toposimp toposimp-map toposimp-mesh toposimp-check; do
     [ -z "$warnings" ] || fail "man $page: $warnings"
 done
 
-# The QGIS plugin: its files, and its QGIS-free modules import from the installed folder.
+# The QGIS plugin: its files, and its QGIS-free modules import from the installed folder, in
+# Debian's Python (where apt puts QGIS's and GDAL's modules; another python3 may come first on PATH).
+python=/usr/bin/python3
+[ -x "$python" ] || python=python3
 plugins="$prefix/share/qgis/python/plugins"
 for file in __init__.py metadata.txt plugin.py provider.py settings.py algorithms.py cli_args.py runner.py icon.svg; do
     [ -f "$plugins/toposimp/$file" ] || fail "plugin file $file not installed"
 done
 grep -q '^hasProcessingProvider=yes' "$plugins/toposimp/metadata.txt" || fail "metadata without hasProcessingProvider"
-python3 -c "import sys; sys.path.insert(0, sys.argv[1]); from toposimp import cli_args, runner; \
+"$python" -c "import sys; sys.path.insert(0, sys.argv[1]); from toposimp import cli_args, runner; \
 assert runner.find_executable(sys.argv[2]) == sys.argv[2]" "$plugins" "$prefix/bin/toposimp" \
     || fail "the installed plugin's modules do not import"
 
 # The installed provider with the installed executable, in a real QGIS when there is one.
 status=0
 TOPOSIMP_BINARY="$prefix/bin/toposimp" TOPOSIMP_QGIS_PLUGINS="$plugins" \
-    python3 "$source_dir/scripts/qgis/tests/qgis_process_test.py" || status=$?
+    "$python" "$source_dir/scripts/qgis/tests/qgis_process_test.py" || status=$?
 if [ "$status" -eq 77 ]; then
     echo "note: qgis_process not installed; the installed provider was not run in QGIS"
 elif [ "$status" -ne 0 ]; then

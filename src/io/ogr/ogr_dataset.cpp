@@ -12,11 +12,17 @@
 
 #include <cpl_conv.h>
 #include <cpl_error.h>
+#include <cpl_vsi.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -162,6 +168,39 @@ void set_point(OGRSimpleCurve& line, int i, Point p, bool with_z, bool with_m, d
 // A .shp record's shape as OGR reads a PolyLine: one part a LineString, more a
 // MultiLineString.
 // A Shapefile record as OGR reads it: a one-part record a LineString, more a MultiLineString.
+// A folder in GDAL's memory file system, removed with what it holds when it goes.
+class MemoryFolder {
+public:
+    MemoryFolder() {
+        static std::atomic<unsigned> count{0};
+        path_ = "/vsimem/toposimp-" + std::to_string(getpid()) + "-" + std::to_string(count++);
+        VSIMkdir(path_.c_str(), 0755);
+    }
+    ~MemoryFolder() { VSIRmdirRecursive(path_.c_str()); }
+    MemoryFolder(const MemoryFolder&) = delete;
+    MemoryFolder& operator=(const MemoryFolder&) = delete;
+    const std::string& path() const { return path_; }
+
+    // Copies every file to `folder` on disk, in one write each; `shown_as` names the output in errors.
+    void copy_to(const std::filesystem::path& folder, const std::string& shown_as) const {
+        const CPLStringList names(VSIReadDir(path_.c_str()));
+        for (int k = 0; k < names.size(); ++k) {
+            const std::string name = names[k];
+            vsi_l_offset length = 0;
+            const GByte* bytes = VSIGetMemFileBuffer((path_ + "/" + name).c_str(), &length, FALSE);
+            if (bytes == nullptr) continue;  // (a folder)
+            std::ofstream out(folder / name, std::ios::binary);
+            out.write(reinterpret_cast<const char*>(bytes), static_cast<std::streamsize>(length));
+            out.close();
+            // (The reason, "No space left on device" say, not just that it failed.)
+            if (!out) throw OutputError("cannot write '" + shown_as + "': " + std::strerror(errno));
+        }
+    }
+
+private:
+    std::string path_;
+};
+
 std::unique_ptr<OGRGeometry> shape_geometry(const ShapeRecord& record) {
     auto part = [&](std::size_t k) {
         const std::size_t first = record.part_starts[k];
@@ -717,7 +756,14 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         for (const auto& option : options.dataset_options) dataset_options.AddString(option.c_str());
         // CSV writes WKT: ask for 17 significant digits (the read-back below checks the result).
         CPLConfigOptionSetter precision("OGR_WKT_PRECISION", "17", true);
-        DatasetPtr dataset(driver->Create(output.staging_path().c_str(), 0, 0, 0, GDT_Unknown, dataset_options.List()));
+        // A Shapefile is written record by record, each with seeks and small writes (730 000
+        // system calls for GSHHG's 180 000 lines, most of the write): it is written in memory,
+        // then copied to the staging folder a file at a time. The bytes are GDAL's either way.
+        std::optional<MemoryFolder> memory;
+        if (driver_name == "ESRI Shapefile") memory.emplace();
+        const std::string create_at =
+            memory ? memory->path() + "/" + std::filesystem::path(output.staging_path()).filename().string() : output.staging_path();
+        DatasetPtr dataset(driver->Create(create_at.c_str(), 0, 0, 0, GDT_Unknown, dataset_options.List()));
         if (!dataset) throw OutputError("cannot create '" + options.path + "' (" + driver_name + ")" + last_gdal_error());
         for (const auto& layer_pointer : data.layers) {
             const Data::Layer& layer = *layer_pointer;
@@ -755,6 +801,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         }
         dataset.reset();
         if (CPLGetLastErrorType() >= CE_Failure) throw OutputError("error writing '" + options.path + "'" + last_gdal_error());
+        if (memory) memory->copy_to(std::filesystem::path(output.staging_path()).parent_path(), options.path);
         // A Shapefile input's .prj read as a file (read_layer) goes next to the output as it is.
         for (const auto& layer : data.layers) {
             if (layer->prj.empty()) continue;
