@@ -278,6 +278,15 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         }
     }
     if (records) {
+        // Room for every record's points at once: the map's arrays grow once, not by doubling
+        // (each doubling a copy of all the coordinates read so far).
+        std::size_t points = 0, parts = 0;
+        for (const ShapeRecord& record : *records) {
+            points += record.xy.size();
+            parts += record.part_starts.size();
+        }
+        map.vertices.reserve(map.vertices.size() + points);
+        map.chains.reserve(map.chains.size() + parts);
         for (const char* extension : {".prj", ".PRJ"}) {
             std::error_code error;
             if (std::filesystem::exists(std::filesystem::path(shp).replace_extension(extension), error)) {
