@@ -165,9 +165,6 @@ void set_point(OGRSimpleCurve& line, int i, Point p, bool with_z, bool with_m, d
     }
 }
 
-// A .shp record's shape as OGR reads a PolyLine: one part a LineString, more a
-// MultiLineString.
-// A Shapefile record as OGR reads it: a one-part record a LineString, more a MultiLineString.
 // A folder in GDAL's memory file system, removed with what it holds when it goes.
 class MemoryFolder {
 public:
@@ -201,6 +198,8 @@ private:
     std::string path_;
 };
 
+// A .shp record's shape as OGR reads a PolyLine: one part a LineString, more a
+// MultiLineString.
 std::unique_ptr<OGRGeometry> shape_geometry(const ShapeRecord& record) {
     auto part = [&](std::size_t k) {
         const std::size_t first = record.part_starts[k];
