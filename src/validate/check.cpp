@@ -263,59 +263,66 @@ struct PairContacts {
 // its vertices elsewhere each time, has 10^7 overlapping pairs, every one a slow exact test of
 // collinear points). Segments are bucketed by a rounded key of their line (its direction, its
 // distance from the origin); in a bucket, a group is every segment whose two ends are exactly
-// collinear with the group's first segment. The key only decides what is tried together: two
-// segments of one line that round into different buckets stay apart and are tested as a pair,
-// as before; slower, never wrong.
+// collinear with the group's first segment, when there are four or more. The key only decides
+// what is tried together: two segments of one line that round into different buckets (or a
+// small group) stay apart and are tested as a pair, as before; slower, never wrong.
 struct LineGroups {
-    std::vector<std::uint32_t> line_of;               // per vertex of side.map(): its segment's group, or kNoLine
+    std::vector<std::uint32_t> line_of;               // per vertex of side.map(): its segment's group, or kNoLine; empty if none
     std::vector<std::vector<std::uint32_t>> members;  // per group, its distinct segments
 };
 
 LineGroups find_line_groups(const Linework& side, exact::PredicateStats& stats) {
+    // Lines shared by a few segments cost little pair by pair; grouping pays for many.
+    constexpr std::size_t kMinGroup = 4;
     const auto& vertices = side.map().vertices;
     LineGroups groups;
-    groups.line_of.assign(vertices.size(), map::kNoLine);
     double scale = 0;
     for (const Point p : vertices) scale = std::max({scale, std::abs(p.x), std::abs(p.y)});
     struct Keyed {
-        long long angle, offset;
+        std::uint64_t key;  // a hash of the rounded line: buckets that collide are split below
         std::uint32_t segment;
     };
     std::vector<Keyed> keyed;
+    keyed.reserve(side.segments());
     for (std::uint32_t d = 0; d < side.segments(); ++d) {
         Point a = vertices[2 * d], b = vertices[2 * d + 1];
         if (std::tie(b.x, b.y) < std::tie(a.x, a.y)) std::swap(a, b);
         const double dx = b.x - a.x, dy = b.y - a.y;
         if (dx == 0 && dy == 0) continue;  // a point lies on no one line
-        const double angle = std::atan2(dy, dx);                                   // (−π/2, π/2]
-        const double offset = (a.x * dy - a.y * dx) / std::hypot(dx, dy) / scale;  // within ±√2
-        if (!std::isfinite(angle) || !std::isfinite(offset)) continue;            // (overflow: tested pairwise)
+        // The direction scaled so that its larger component is ±1, and the line's offset from
+        // the origin in the same scale, against the coordinates' size.
+        const double m = std::max(std::abs(dx), std::abs(dy)), ux = dx / m, uy = dy / m;
+        const double offset = (a.x * uy - a.y * ux) / scale;
+        if (!std::isfinite(ux) || !std::isfinite(uy) || !std::isfinite(offset)) continue;  // (overflow: tested pairwise)
         constexpr double kSteps = 0x1p30;
-        keyed.push_back({std::llround(angle * kSteps), std::llround(offset * kSteps), d});
+        auto word = [&](double value) { return static_cast<std::uint64_t>(std::llround(value * kSteps)); };
+        keyed.push_back({map::hash_words({word(ux), word(uy), word(offset)}), d});
     }
-    std::sort(keyed.begin(), keyed.end(), [](const Keyed& x, const Keyed& y) {
-        return std::tie(x.angle, x.offset, x.segment) < std::tie(y.angle, y.offset, y.segment);
-    });
-    std::vector<std::uint32_t> open, rest;
+    std::sort(keyed.begin(), keyed.end(),
+              [](const Keyed& x, const Keyed& y) { return std::tie(x.key, x.segment) < std::tie(y.key, y.segment); });
+    std::vector<std::uint32_t> open, rest, group;
     for (std::size_t k = 0; k < keyed.size();) {
         std::size_t end = k + 1;
-        while (end < keyed.size() && keyed[end].angle == keyed[k].angle && keyed[end].offset == keyed[k].offset) ++end;
+        while (end < keyed.size() && keyed[end].key == keyed[k].key) ++end;
         open.clear();
-        for (std::size_t i = k; i < end; ++i) open.push_back(keyed[i].segment);
+        if (end - k >= kMinGroup) {
+            for (std::size_t i = k; i < end; ++i) open.push_back(keyed[i].segment);
+        }
         k = end;
         // A bucket of many distinct lines (made to be, most likely) leaves the rest pairwise.
-        for (int tries = 0; open.size() >= 2 && tries < 16; ++tries) {
+        for (int tries = 0; open.size() >= kMinGroup && tries < 16; ++tries) {
             const Point p = vertices[2 * open[0]], q = vertices[2 * open[0] + 1];
-            std::vector<std::uint32_t> group{open[0]};
+            group.assign(1, open[0]);
             rest.clear();
             for (std::size_t i = 1; i < open.size(); ++i) {
                 const Point r = vertices[2 * open[i]], u = vertices[2 * open[i] + 1];
                 const bool on_line = exact::orient2d(p, q, r, stats) == 0 && exact::orient2d(p, q, u, stats) == 0;
                 (on_line ? group : rest).push_back(open[i]);
             }
-            if (group.size() >= 2) {
+            if (group.size() >= kMinGroup) {
+                if (groups.line_of.empty()) groups.line_of.assign(vertices.size(), map::kNoLine);
                 for (const std::uint32_t d : group) groups.line_of[2 * d] = static_cast<std::uint32_t>(groups.members.size());
-                groups.members.push_back(std::move(group));
+                groups.members.push_back(group);
             }
             open.swap(rest);
         }

@@ -36,6 +36,7 @@ Levels simplify_levels(const MapData& map, const SimplifyOptions& options, std::
             if (done.kept[v]) result.kept[source[v]] = 1;
         }
         out.results.push_back(std::move(result));
+        if (out.results.size() == levels.size()) break;
         // The next level starts from this one, where it is written.
         const std::vector<Point>& at = first && out.rounding ? out.rounding->at : from.vertices;
         MapData next;
