@@ -13,10 +13,10 @@ rm -rf out/cpack
 rm -f out/toposimp-qgis-plugin.zip
 python3 - <<'PY'
 import os, zipfile
-# The zip holds the folder toposimp/ (QGIS installs a plugin zip by its top folder).
+# The zip holds the folder toposimp_processing/ (QGIS installs a plugin zip by its top folder).
 with zipfile.ZipFile("out/toposimp-qgis-plugin.zip", "w", zipfile.ZIP_DEFLATED) as archive:
-    for name in sorted(os.listdir("scripts/qgis/toposimp")):
+    for name in sorted(os.listdir("scripts/qgis/toposimp_processing")):
         if not name.endswith(".pyc") and name != "__pycache__":
-            archive.write(os.path.join("scripts/qgis/toposimp", name), "toposimp/" + name)
+            archive.write(os.path.join("scripts/qgis/toposimp_processing", name), "toposimp_processing/" + name)
 PY
 ls -l out/toposimp_*.deb out/toposimp-qgis-plugin.zip

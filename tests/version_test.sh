@@ -13,6 +13,6 @@ esac
 for page in "$source"/man/*.1; do
   grep -q "^\.TH .* \"toposimp $version\"" "$page" || { echo "$page: its .TH line does not say toposimp $version"; status=1; }
 done
-grep -qx "version=$version" "$source/scripts/qgis/toposimp/metadata.txt" ||
-  { echo "scripts/qgis/toposimp/metadata.txt: not version=$version"; status=1; }
+grep -qx "version=$version" "$source/scripts/qgis/toposimp_processing/metadata.txt" ||
+  { echo "scripts/qgis/toposimp_processing/metadata.txt: not version=$version"; status=1; }
 exit $status

@@ -1,6 +1,8 @@
 // The toposimp command line as a library: tests call run() in-process.
 #pragma once
 
+#include <atomic>
+#include <functional>
 #include <iosfwd>
 #include <string>
 #include <vector>
@@ -14,6 +16,10 @@ struct Context {
     std::ostream& out;                // results: --json, help text
     std::ostream& err;                // messages
     bool err_is_terminal = false;     // print the one-line summary even without -v
+    // In-process callers (the Python module): progress as calls, (phase, share done 0…1), and a
+    // flag that stops the engine (it then throws toposimp::Cancelled).
+    std::function<void(const std::string& phase, double done)> progress{};
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 // Runs `toposimp ARGS...` (args excludes the program name) and returns the exit status.

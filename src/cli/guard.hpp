@@ -12,6 +12,12 @@
 
 namespace toposimp::cli {
 
+// A usage error found once the work has started (the command's options do not fit together or
+// with the input): exit status 2, as for bad input. In-process callers get it as it is.
+struct UsageError {
+    std::string message;
+};
+
 // A topology or validation failure (`--validate` found violations): exit status 1, no output.
 struct TopologyFailure {
     std::string message;
@@ -27,6 +33,8 @@ int guarded(spdlog::logger& log, Work&& work) {
         log.error("{}", error.what());
     } catch (const io::OutputError& error) {
         log.error("{}", error.what());
+    } catch (const UsageError& error) {
+        log.error("{}", error.message);
     } catch (const TopologyFailure& failure) {
         log.error("{}", failure.message);
         return kTopologyFailure;

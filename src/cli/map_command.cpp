@@ -234,8 +234,18 @@ void log_input(spdlog::logger& log, const std::string& input, const io::DatasetS
 }
 
 // The layers through OGR, and the control points file on a second thread meanwhile.
-MapInput read_layers(const MapOptions& options, spdlog::logger& log) {
+MapInput read_layers(const MapOptions& options, spdlog::logger& log, const MapMemory* memory) {
     MapInput input;
+    if (memory) {
+        input.dataset.emplace(io::OgrDataset::read(*memory->input, input.map));
+        input.written_points = input.map.control_points.size();
+        if (memory->points) {
+            const std::vector<Point> read = io::read_control_points(*memory->points);
+            input.map.control_points.insert(input.map.control_points.end(), read.begin(), read.end());
+        }
+        log_input(log, options.input, input.dataset->summary());
+        return input;
+    }
     std::future<std::vector<Point>> points;
     if (!options.points.empty()) {
         const unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads) : std::thread::hardware_concurrency();
@@ -487,7 +497,7 @@ struct Level {
     map::StopCriterion stop;
     std::string name;
 };
-std::vector<Level> levels_of(const MapOptions& options, std::string& problem) {
+std::vector<Level> levels_of(const MapOptions& options, bool in_memory, std::string& problem) {
     std::vector<Level> levels;
     std::stringstream list(options.levels);
     std::string token;
@@ -515,7 +525,7 @@ std::vector<Level> levels_of(const MapOptions& options, std::string& problem) {
         levels.push_back(level);
     }
     if (levels.empty()) problem = "--levels takes a list such as 20%,5%,1%";
-    if (options.output.find("{level}") == std::string::npos && !ranked_levels(options)) {
+    if (!in_memory && options.output.find("{level}") == std::string::npos && !ranked_levels(options)) {
         problem = "--levels writes one output per level: put {level} in -o (e.g. -o states_{level}.gpkg), or write one "
                   "TopoJSON whose positions carry their level as a third coordinate (-o states.topojson)";
     }
@@ -644,7 +654,7 @@ struct Publishing {
 // One output: round (a single run, if asked), write; returns its rounding.
 map::RoundingStats publish(const MapOptions& options, const Publishing& publishing, std::size_t k, MapInput& input,
                            map::SimplifyResult& result, std::optional<map::OutputGrid>& grid, exact::Arithmetic arithmetic,
-                           Timings& time, Context& context, Progress& progress, spdlog::logger& log) {
+                           Timings& time, Context& context, Progress& progress, spdlog::logger& log, MapMemory* memory) {
     map::RoundingStats rounding;
     if (publishing.levels_rounding) {
         grid = publishing.levels_rounding->grid;
@@ -658,7 +668,9 @@ map::RoundingStats publish(const MapOptions& options, const Publishing& publishi
     }
     progress.phase("writing " + options.output);
     const auto write_start = Clock::now();
-    if (publishing.ranked && k > 0) {
+    if (memory) {
+        memory->output.push_back(input.dataset->to_memory(input.map, result.kept));
+    } else if (publishing.ranked && k > 0) {
         // (Written with the first level.)
     } else if (options.giscup) {
         write_giscup(options, input, result, context.out);
@@ -674,17 +686,18 @@ map::RoundingStats publish(const MapOptions& options, const Publishing& publishi
 // parse (done) → read → simplify (once, or to each level) → per output: round → write → report.
 int run_map(const MapOptions& options, Context& context) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
+    return guarded(*log, [&] { return map_job(options, context, *log); });
+}
+
+int map_job(const MapOptions& options, Context& context, spdlog::logger& log, MapMemory* memory) {
     std::string problem;
     const std::optional<map::StopCriterion> stop = stop_criterion(options, problem);
     Publishing publishing;
     publishing.decimal_grid = grid_of(options, problem);
-    publishing.ranked = ranked_levels(options);
+    publishing.ranked = !memory && ranked_levels(options);
     std::vector<Level> levels;
-    if (!options.levels.empty()) levels = levels_of(options, problem);
-    if (!stop || !problem.empty()) {
-        log->error("{}", problem);
-        return kUsageError;
-    }
+    if (!options.levels.empty()) levels = levels_of(options, memory != nullptr, problem);
+    if (!stop || !problem.empty()) throw UsageError{problem};
     if (levels.empty()) levels.push_back({*stop, ""});
 
     io::set_config_options(options.config);
@@ -694,67 +707,66 @@ int run_map(const MapOptions& options, Context& context) {
     simplify_options.arithmetic = arithmetic_of(options.arithmetic);
     simplify_options.threads = options.threads;
     simplify_options.ranking = {options.weighting, options.spherical};
-    if (options.spherical && options.giscup) {
-        log->error("--spherical takes longitude, latitude layers; GIS Cup text has no CRS");
-        return kUsageError;
-    }
-    if (options.validate && options.giscup) {
-        log->error("--validate reads the output with GDAL; GIS Cup text is not a GDAL format");
-        return kUsageError;
-    }
+    simplify_options.cancel = context.cancel;
+    if (options.spherical && options.giscup) throw UsageError{"--spherical takes longitude, latitude layers; GIS Cup text has no CRS"};
+    if (options.validate && options.giscup) throw UsageError{"--validate reads the output with GDAL; GIS Cup text is not a GDAL format"};
     if (options.validate && options.input.rfind("/vsistdin", 0) == 0) {
-        log->error("--validate reads the input a second time, which standard input cannot give; save it to a file first");
-        return kUsageError;
+        throw UsageError{"--validate reads the input a second time, which standard input cannot give; save it to a file first"};
+    }
+    if (memory && (options.giscup || options.validate || options.quantize > 0)) {
+        throw UsageError{"layers in memory take neither GIS Cup text, --validate nor --quantize (a TopoJSON option)"};
     }
     if (simplify_options.arithmetic == exact::Arithmetic::floating) {
-        log->warn("--arithmetic float uses naive double predicates: the output may break topology");
+        log.warn("--arithmetic float uses naive double predicates: the output may break topology");
     }
 
-    return guarded(*log, [&] {
-        const auto start = Clock::now();
-        Timings time;
-        Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
-        simplify_options.progress = [&progress](double done) { progress.update(done); };
-        check_outputs(options, levels);
+    const auto start = Clock::now();
+    Timings time;
+    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet), context.progress);
+    simplify_options.progress = [&progress](double done) { progress.update(done); };
+    if (!memory) check_outputs(options, levels);
 
-        progress.phase("reading " + options.input);
-        MapInput input = options.giscup ? read_giscup(options) : read_layers(options, *log);
-        time.read = seconds_since(start);
-        check_spherical(options, input);
-        log->debug("{} chains, {} vertices, {} control points", input.map.chains.size(), input.map.vertices.size(),
-                   input.map.control_points.size());
+    progress.phase("reading " + options.input);
+    MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory);
+    time.read = seconds_since(start);
+    check_spherical(options, input);
+    log.debug("{} chains, {} vertices, {} control points", input.map.chains.size(), input.map.vertices.size(),
+              input.map.control_points.size());
 
-        // The engine builds chains, indexes and ranks inside simplify().
-        progress.phase("simplifying");
-        const auto simplify_start = Clock::now();
-        map::Levels simplified = simplify_all(input, simplify_options, options, levels, publishing.decimal_grid);
-        std::vector<map::SimplifyResult>& results = simplified.results;
-        time.simplify = seconds_since(simplify_start);
-        if (simplified.rounding) {
-            time.round = simplified.rounding->seconds;
-            time.simplify -= time.round;
-            apply_rounding(input, *simplified.rounding, simplified.rounding->grid, *log);
-            refuse_off_grid(options, simplified.rounding->stats);
-            publishing.levels_rounding = std::move(simplified.rounding);
+    // The engine builds chains, indexes and ranks inside simplify().
+    progress.phase("simplifying");
+    const auto simplify_start = Clock::now();
+    map::Levels simplified = simplify_all(input, simplify_options, options, levels, publishing.decimal_grid);
+    std::vector<map::SimplifyResult>& results = simplified.results;
+    time.simplify = seconds_since(simplify_start);
+    if (simplified.rounding) {
+        time.round = simplified.rounding->seconds;
+        time.simplify -= time.round;
+        apply_rounding(input, *simplified.rounding, simplified.rounding->grid, log);
+        refuse_off_grid(options, simplified.rounding->stats);
+        publishing.levels_rounding = std::move(simplified.rounding);
+    }
+    if (publishing.ranked) publishing.ranks = level_ranks(results, input.map.vertices.size());
+    std::vector<std::string> summaries;
+    for (std::size_t k = 0; k < levels.size(); ++k) {
+        MapOptions level_options = options;
+        level_options.output = memory ? options.output : output_of(options.output, levels[k].name);
+        std::optional<map::OutputGrid> grid;
+        const map::RoundingStats rounding = publish(level_options, publishing, k, input, results[k], grid, simplify_options.arithmetic,
+                                                    time, context, progress, log, memory);
+        time.total = seconds_since(start);
+        if (k + 1 == levels.size()) progress.done();
+        report(results[k].stats, levels[k].stop, time, level_options, context.err_is_terminal, log);
+        if (options.json || memory) {
+            summaries.push_back(json_summary(level_options, levels[k].stop, results[k].stats, time, input.features(), grid, rounding));
         }
-        if (publishing.ranked) publishing.ranks = level_ranks(results, input.map.vertices.size());
-        std::vector<std::string> summaries;
-        for (std::size_t k = 0; k < levels.size(); ++k) {
-            MapOptions level_options = options;
-            level_options.output = output_of(options.output, levels[k].name);
-            std::optional<map::OutputGrid> grid;
-            const map::RoundingStats rounding = publish(level_options, publishing, k, input, results[k], grid, simplify_options.arithmetic,
-                                                        time, context, progress, *log);
-            time.total = seconds_since(start);
-            if (k + 1 == levels.size()) progress.done();
-            report(results[k].stats, levels[k].stop, time, level_options, context.err_is_terminal, *log);
-            if (options.json) {
-                summaries.push_back(json_summary(level_options, levels[k].stop, results[k].stats, time, input.features(), grid, rounding));
-            }
-        }
-        if (options.json) print_summaries(options, summaries, context);
-        return kOk;
-    });
+    }
+    if (memory) {
+        memory->summaries = std::move(summaries);
+    } else if (options.json) {
+        print_summaries(options, summaries, context);
+    }
+    return kOk;
 }
 
 }  // namespace toposimp::cli

@@ -4,10 +4,15 @@
 #include "cli/cli.hpp"
 
 #include <CLI/App.hpp>
+#include <spdlog/logger.h>
 
 #include <string>
 #include <utility>
 #include <vector>
+
+namespace toposimp::io {
+struct MemoryLayers;
+}
 
 namespace toposimp::cli {
 
@@ -47,5 +52,18 @@ struct MapOptions {
 CLI::App* add_map_command(CLI::App& app, MapOptions& options);
 
 int run_map(const MapOptions& options, Context& context);
+
+// A map job whose layers come from and go to memory (the Python module): MapOptions::input and
+// ::points then only name them in messages, and nothing is written to MapOptions::output.
+struct MapMemory {
+    const io::MemoryLayers* input = nullptr;
+    const io::MemoryLayers* points = nullptr;  // or null: none (unless MapOptions::points names a file)
+    std::vector<io::MemoryLayers> output;      // per level (one without --levels), finest first
+    std::vector<std::string> summaries;        // per level, the --json summary
+};
+
+// What run_map runs inside its error guard, the errors thrown as they are (io::InputError,
+// io::OutputError, UsageError, TopologyFailure, toposimp::Cancelled); with `memory`, in memory.
+int map_job(const MapOptions& options, Context& context, spdlog::logger& log, MapMemory* memory = nullptr);
 
 }  // namespace toposimp::cli

@@ -127,6 +127,8 @@ struct MeshInput {
     std::size_t welded_vertices = 0;
 };
 
+void weld(const MeshCommandOptions& options, MeshInput& input, spdlog::logger& log);
+
 // A mesh file, its vertices welded if asked.
 MeshInput read_mesh_file(const MeshCommandOptions& options, spdlog::logger& log) {
     MeshInput input;
@@ -152,6 +154,13 @@ MeshInput read_mesh_file(const MeshCommandOptions& options, spdlog::logger& log)
                  report.welded);
     }
     input.welded_vertices = report.welded;
+    weld(options, input, log);
+    return input;
+}
+
+// --weld: vertices at one location merged, attribute columns that differ between them dropped.
+void weld(const MeshCommandOptions& options, MeshInput& input, spdlog::logger& log) {
+    mesh::Mesh& m = input.mesh;
     if (options.weld) {
         const mesh::Welded welded = mesh::weld_coincident(m);
         input.welded_vertices += welded.vertices;
@@ -164,7 +173,6 @@ MeshInput read_mesh_file(const MeshCommandOptions& options, spdlog::logger& log)
         mesh::remove_vertex_columns(m, welded.differs);
         std::erase_if(input.layout.vertex, [&, c = std::size_t{0}](const io::AttributeColumn&) mutable { return welded.differs[c++]; });
     }
-    return input;
 }
 
 // A DEM raster triangulated into a TIN: a terrain, its border locked unless freed.
@@ -396,68 +404,82 @@ void print_mesh_formats(std::ostream& out, bool json) {
 // parse (done) → read → simplify → write → measure → report.
 int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal) {
     auto log = make_logger(context.err, options.verbosity, options.quiet);
+    return guarded(*log, [&] { return mesh_job(options, context, gdal, *log); });
+}
+
+int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal, spdlog::logger& log, MeshMemory* memory) {
     std::string problem;
     std::optional<mesh::SimplifyOptions> engine = mesh_target(options, problem);
-    if (!engine) {
-        log->error("{}", problem);
-        return kUsageError;
-    }
-    if (mesh_needs_gdal(options) && (!gdal.read_dem || !gdal.write_tin_layer || !gdal.check_layer_output)) {
-        log->error("{} -> {}: a DEM or an OGR layer needs GDAL, which this caller did not provide", options.input, options.output);
-        return kUsageError;
+    if (!engine) throw UsageError{problem};
+    if (!memory && mesh_needs_gdal(options) && (!gdal.read_dem || !gdal.write_tin_layer || !gdal.check_layer_output)) {
+        throw UsageError{options.input + " -> " + options.output + ": a DEM or an OGR layer needs GDAL, which this caller did not provide"};
     }
     engine->lock_boundary = options.lock_boundary;
     engine->terrain = options.terrain;
     engine->threads = options.threads;
-    return guarded(*log, [&] {
-        const auto start = Clock::now();
-        Timings time;
-        Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet));
-        engine->progress = [&progress](double done) { progress.update(done); };
-        // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
-        const io::MeshFormatInfo* format = output_format(options);
-        io::OutputFile output(options.output, options.overwrite, &context.out);
-        if (!format) gdal.check_layer_output(options.output, options.format);
+    engine->cancel = context.cancel;
+    const auto start = Clock::now();
+    Timings time;
+    Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet), context.progress);
+    engine->progress = [&progress](double done) { progress.update(done); };
+    // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
+    const io::MeshFormatInfo* format = memory ? nullptr : output_format(options);
+    std::optional<io::OutputFile> output;
+    if (!memory) output.emplace(options.output, options.overwrite, &context.out);
+    if (!memory && !format) gdal.check_layer_output(options.output, options.format);
 
-        progress.phase("reading " + options.input);
-        MeshInput input = io::has_mesh_extension(options.input) ? read_mesh_file(options, *log) : read_dem(options, gdal, *engine, *log);
-        mesh::Mesh& m = input.mesh;
-        time.read = seconds_since(start);
-        if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");
-        if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
-            log->warn("{} faces repeat a corner (no area) and are dropped", repeated);
-        }
-        const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : mesh::Mesh{m.points, m.faces};
+    progress.phase("reading " + options.input);
+    MeshInput input;
+    if (memory) {
+        input.mesh = std::move(memory->mesh);
+        input.layout = std::move(memory->layout);
+        weld(options, input, log);
+    } else {
+        input = io::has_mesh_extension(options.input) ? read_mesh_file(options, log) : read_dem(options, gdal, *engine, log);
+    }
+    mesh::Mesh& m = input.mesh;
+    time.read = seconds_since(start);
+    if (m.faces.empty()) throw io::InputError(options.input + ": no faces to simplify");
+    if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
+        log.warn("{} faces repeat a corner (no area) and are dropped", repeated);
+    }
+    const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : mesh::Mesh{m.points, m.faces};
 
-        progress.phase("simplifying");
-        const auto simplify_start = Clock::now();
-        const mesh::SimplifyStats stats = mesh::simplify(m, *engine);
-        time.simplify = seconds_since(simplify_start);
-        check_result(stats, *engine, options, *log);
+    progress.phase("simplifying");
+    const auto simplify_start = Clock::now();
+    const mesh::SimplifyStats stats = mesh::simplify(m, *engine);
+    time.simplify = seconds_since(simplify_start);
+    check_result(stats, *engine, options, log);
 
+    std::vector<std::string> unwritten;
+    if (!memory) {
         progress.phase("writing " + options.output);
         const auto write_start = Clock::now();
-        const std::vector<std::string> unwritten = write_output(input, format, output.staging_path(), options, gdal, *log);
-        output.commit();
+        unwritten = write_output(input, format, output->staging_path(), options, gdal, log);
+        output->commit();
         time.write = seconds_since(write_start);
+    }
 
-        Measures measures;
-        if (!options.no_hausdorff) {
-            progress.phase("measuring the Hausdorff distance");
-            const auto measure_start = Clock::now();
-            measures = measure(original, m, stats, options.threads);
-            time.hausdorff = seconds_since(measure_start);
-        }
-        time.total = seconds_since(start);
-        progress.done();
+    Measures measures;
+    if (!options.no_hausdorff) {
+        progress.phase("measuring the Hausdorff distance");
+        const auto measure_start = Clock::now();
+        measures = measure(original, m, stats, options.threads);
+        time.hausdorff = seconds_since(measure_start);
+    }
+    time.total = seconds_since(start);
+    progress.done();
 
-        report(stats, *engine, measures, time, options, input, context.err_is_terminal, *log);
+    report(stats, *engine, measures, time, options, input, context.err_is_terminal, log);
+    if (memory) {
+        memory->summary = json_summary(stats, *engine, measures, time, options, input, unwritten);
+        memory->mesh = std::move(input.mesh);
+        memory->layout = std::move(input.layout);
+    } else if (options.json) {
         // The summary never mixes with a mesh written to stdout.
-        if (options.json) {
-            (output.to_stdout() ? context.err : context.out) << json_summary(stats, *engine, measures, time, options, input, unwritten);
-        }
-        return kOk;
-    });
+        (output->to_stdout() ? context.err : context.out) << json_summary(stats, *engine, measures, time, options, input, unwritten);
+    }
+    return kOk;
 }
 
 }  // namespace toposimp::cli

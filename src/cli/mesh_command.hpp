@@ -4,7 +4,10 @@
 #include "cli/cli.hpp"
 #include "io/ogr/dem.hpp"
 
+#include "io/mesh/mesh_files.hpp"
+
 #include <CLI/App.hpp>
+#include <spdlog/logger.h>
 
 #include <string>
 #include <vector>
@@ -57,6 +60,19 @@ bool mesh_needs_gdal(const MeshCommandOptions& options);
 bool parse_mesh_command(const std::vector<std::string>& args, MeshCommandOptions& options);
 
 int run_mesh(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal);
+
+// A mesh job on a mesh in memory (the Python module): MeshCommandOptions::input and ::output
+// only name it in messages; nothing is read or written.
+struct MeshMemory {
+    mesh::Mesh mesh;             // in: the mesh to simplify; out: the simplified mesh
+    io::AttributeLayout layout;  // what its attribute columns are
+    std::string summary;         // out: the --json summary
+};
+
+// What run_mesh runs inside its error guard, the errors thrown as they are (io::InputError,
+// io::OutputError, UsageError, toposimp::Cancelled); with `memory`, in memory.
+int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal& gdal, spdlog::logger& log,
+             MeshMemory* memory = nullptr);
 
 // `toposimp formats`: the mesh formats (io/mesh's table) with what each carries, as a table or
 // as JSON (the QGIS provider builds its file filters from it).

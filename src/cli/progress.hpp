@@ -3,10 +3,13 @@
 // - with --progress (for GUIs and wrappers such as the QGIS provider): plain lines
 //   `PROGRESS <percent> <phase>`, one when a phase starts (percent 0) and one each time the whole
 //   percent of the phase changes, whatever the stream is.
-// Nothing at all otherwise (pipes, logs) or with --quiet.
+// Nothing at all otherwise (pipes, logs) or with --quiet. An in-process caller (the Python module)
+// may take the same reports as calls instead: (phase, share done 0…1), at each phase's start and
+// each whole percent.
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <ostream>
 #include <string>
 
@@ -20,9 +23,12 @@ inline ProgressStyle progress_style(bool progress_lines, bool err_is_terminal, b
     return err_is_terminal && !quiet ? ProgressStyle::terminal : ProgressStyle::none;
 }
 
+using ProgressCallback = std::function<void(const std::string& phase, double done)>;
+
 class Progress {
 public:
-    Progress(std::ostream& err, ProgressStyle style) : err_(err), style_(style) {}
+    Progress(std::ostream& err, ProgressStyle style, ProgressCallback callback = {})
+        : err_(err), style_(style), callback_(std::move(callback)) {}
     ~Progress() { done(); }
     Progress(const Progress&) = delete;
     Progress& operator=(const Progress&) = delete;
@@ -30,7 +36,9 @@ public:
     void phase(const std::string& name) {
         phase_ = name;
         last_ = {};
+        called_ = -1;
         percent_ = -1;
+        call(0);
         if (style_ == ProgressStyle::lines) {
             show_line(0);
         } else {
@@ -40,6 +48,7 @@ public:
 
     // `share` of the current phase done (0…1). Safe to call often.
     void update(double share) {
+        call(share);
         if (style_ == ProgressStyle::lines) {
             show_line(static_cast<int>(share * 100));
             return;
@@ -58,6 +67,14 @@ public:
     }
 
 private:
+    void call(double share) {
+        if (!callback_) return;
+        const int percent = static_cast<int>(share * 100);
+        if (percent == called_) return;
+        called_ = percent;
+        callback_(phase_, share < 0 ? 0.0 : share > 1 ? 1.0 : share);
+    }
+
     void show(double share) {
         if (style_ != ProgressStyle::terminal) return;
         err_ << "\r\033[Ktoposimp: " << phase_;
@@ -75,6 +92,8 @@ private:
 
     std::ostream& err_;
     ProgressStyle style_;
+    ProgressCallback callback_;
+    int called_ = -1;  // the percent last passed to callback_
     bool shown_ = false;
     int percent_ = -1;
     std::string phase_;

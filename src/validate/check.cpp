@@ -11,10 +11,12 @@
 #include "validate/geos.hpp"
 #include "validate/layers.hpp"
 
+#include <cpl_vsi.h>
 #include <gmpxx.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cctype>
 #include <charconv>
 #include <cmath>
@@ -763,6 +765,25 @@ CheckReport check(const CheckOptions& options) {
         }
     }
     return Checker(options).run();
+}
+
+CheckReport check(const io::MemoryLayers& original, const io::MemoryLayers& simplified, const io::MemoryLayers* points,
+                  CheckOptions options) {
+    static std::atomic<unsigned> calls{0};
+    const std::string folder = "/vsimem/toposimp_check_" + std::to_string(calls++);
+    struct Remove {
+        const std::string& folder;
+        ~Remove() { VSIRmdirRecursive(folder.c_str()); }
+    } remove{folder};
+    options.original = folder + "/original.gpkg";
+    options.simplified = folder + "/simplified.gpkg";
+    io::write_geopackage(original, options.original);
+    io::write_geopackage(simplified, options.simplified);
+    if (points) {
+        options.points = folder + "/points.gpkg";
+        io::write_geopackage(*points, options.points);
+    }
+    return check(options);
 }
 
 }  // namespace toposimp::validate

@@ -16,6 +16,10 @@
 #include <string>
 #include <vector>
 
+namespace toposimp::io {
+struct MemoryLayers;
+}
+
 namespace toposimp::validate {
 
 struct CheckOptions {
@@ -84,5 +88,10 @@ struct CheckReport {
 
 // Throws io::InputError for unreadable or mismatched input.
 CheckReport check(const CheckOptions& options);
+
+// The same on layers in memory (the Python module; `points` may be null): `options`' original,
+// simplified and points are set to GeoPackages in GDAL's memory file system, there for the call.
+CheckReport check(const io::MemoryLayers& original, const io::MemoryLayers& simplified, const io::MemoryLayers* points,
+                  CheckOptions options);
 
 }  // namespace toposimp::validate

@@ -46,10 +46,10 @@ python=/usr/bin/python3
 [ -x "$python" ] || python=python3
 plugins="$prefix/share/qgis/python/plugins"
 for file in __init__.py metadata.txt plugin.py provider.py settings.py algorithms.py cli_args.py runner.py icon.svg; do
-    [ -f "$plugins/toposimp/$file" ] || fail "plugin file $file not installed"
+    [ -f "$plugins/toposimp_processing/$file" ] || fail "plugin file $file not installed"
 done
-grep -q '^hasProcessingProvider=yes' "$plugins/toposimp/metadata.txt" || fail "metadata without hasProcessingProvider"
-"$python" -c "import sys; sys.path.insert(0, sys.argv[1]); from toposimp import cli_args, runner; \
+grep -q '^hasProcessingProvider=yes' "$plugins/toposimp_processing/metadata.txt" || fail "metadata without hasProcessingProvider"
+"$python" -c "import sys; sys.path.insert(0, sys.argv[1]); from toposimp_processing import cli_args, runner; \
 assert runner.find_executable(sys.argv[2]) == sys.argv[2]" "$plugins" "$prefix/bin/toposimp" \
     || fail "the installed plugin's modules do not import"
 

@@ -18,7 +18,7 @@ done
 contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
 for path in ./usr/bin/toposimp ./usr/libexec/toposimp/toposimp-gdal ./usr/share/man/man1/toposimp.1 ./usr/share/man/man1/toposimp-map.1 \
             ./usr/share/man/man1/toposimp-mesh.1 ./usr/share/man/man1/toposimp-check.1 \
-            ./usr/share/qgis/python/plugins/toposimp/metadata.txt ./usr/share/qgis/python/plugins/toposimp/algorithms.py; do
+            ./usr/share/qgis/python/plugins/toposimp_processing/metadata.txt ./usr/share/qgis/python/plugins/toposimp_processing/algorithms.py; do
     echo "$contents" | grep -qx "$path" || fail "$path not in the package"
 done
 dpkg-deb -I "$deb" prerm >/dev/null || fail "no prerm script"

@@ -97,9 +97,9 @@ def main():
         os.makedirs(home)
         qgis = Qgis(executable, home, plugins, os.path.dirname(os.path.abspath(binary)))
 
-        enabled = qgis.call("plugins", "enable", "toposimp")
+        enabled = qgis.call("plugins", "enable", "toposimp_processing")
         if enabled.returncode != 0:
-            fail("plugins enable toposimp: " + enabled.stdout + enabled.stderr)
+            fail("plugins enable toposimp_processing: " + enabled.stdout + enabled.stderr)
         listing = qgis.call("list").stdout
         for algorithm in ("toposimp:map", "toposimp:check", "toposimp:mesh", "toposimp:dem"):
             if algorithm not in listing:

@@ -13,8 +13,8 @@ import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from toposimp import cli_args  # noqa: E402
-from toposimp.cli_args import ArgumentError  # noqa: E402
+from toposimp_processing import cli_args  # noqa: E402
+from toposimp_processing.cli_args import ArgumentError  # noqa: E402
 
 ROOT = os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..", ".."))
 TESTDATA = os.path.join(ROOT, "testdata")

@@ -12,7 +12,7 @@ import unittest
 
 sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
 
-from toposimp import runner  # noqa: E402
+from toposimp_processing import runner  # noqa: E402
 
 BINARY = os.environ.get("TOPOSIMP_BINARY")
 

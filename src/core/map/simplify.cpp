@@ -1,5 +1,6 @@
 #include "core/map/simplify.hpp"
 
+#include "core/cancel.hpp"
 #include "core/fill_later.hpp"
 #include "core/map/crossings.hpp"
 #include "core/map/location_key.hpp"
@@ -210,6 +211,7 @@ public:
         stats_.seconds_index = lap(start);
         pin_crossings();
         stats_.seconds_crossings = lap(start);
+        stop_if_cancelled(options_.cancel);
         simplify_vertices();
         stats_.seconds_sweep = lap(start);
         return finish();
@@ -505,7 +507,10 @@ private:
     }
 
     void sweep() {
-        for (unsigned level = 0; level < levels_; ++level) process_level(level);
+        for (unsigned level = 0; level < levels_; ++level) {
+            process_level(level);
+            stop_if_cancelled(options_.cancel);
+        }
     }
 
     void process_level(unsigned level) {
@@ -592,6 +597,7 @@ private:
             // Stale entries: the vertex went, waits, or was queued again with another area.
             if (state_[v] != State::queued || area_of(v) != top.key) continue;
             if ((++pops & 0xfff) == 0) {
+                if (cancel_requested(options_.cancel)) break;  // the level's end throws
                 progress_.fetch_add(worker.stats.removed - worker.reported, std::memory_order_relaxed);
                 worker.reported = worker.stats.removed;
                 report_progress();

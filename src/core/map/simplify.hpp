@@ -37,6 +37,7 @@
 #include "core/exact/predicates.hpp"
 #include "core/map/map_data.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <string>
@@ -82,6 +83,8 @@ struct SimplifyOptions {
     std::size_t parallel_threshold = 1 << 14;
     // Called now and then with the share of the work done (0…1); may be empty. Only reports.
     std::function<void(double done)> progress;
+    // Set by the caller to stop: the engine then throws Cancelled (core/cancel.hpp). May be null.
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 struct SimplifyStats {

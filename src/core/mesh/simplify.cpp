@@ -6,6 +6,8 @@
 // The steps live in the files simplifier.hpp lists.
 #include "core/mesh/simplify.hpp"
 
+#include "core/cancel.hpp"
+
 #include "core/mesh/height_field.hpp"
 #include "core/mesh/simplifier.hpp"
 #include "core/parallel/select.hpp"
@@ -480,6 +482,7 @@ SimplifyStats Simplifier::run() {
             const std::uint64_t removed = collapse_blocks(blocks, limit, stats);
             live_faces_ -= removed;
             ++stats.rounds;
+            stop_if_cancelled(options_.cancel);
             if (options_.progress) {
                 const double work = by_count_ ? static_cast<double>(stats.faces_in - std::min(target_, stats.faces_in)) : top + 1.0;
                 const double done = by_count_ ? static_cast<double>(stats.faces_in - live_faces_) : level + 1.0;

@@ -18,6 +18,7 @@
 #include "core/mesh/mesh.hpp"
 
 #include <array>
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
@@ -65,6 +66,9 @@ struct SimplifyOptions {
     // Called on the calling thread after every round with the share of the work done (0…1):
     // faces removed of those to remove for count targets, levels done for --max-error.
     std::function<void(double done)> progress;
+    // Set by the caller to stop: the engine then throws Cancelled (core/cancel.hpp) between two
+    // rounds, the mesh left half simplified (not a result to use). May be null.
+    const std::atomic<bool>* cancel = nullptr;
 };
 
 struct SimplifyStats {

@@ -98,6 +98,7 @@ struct OgrDataset::Data {
     }
 
     void read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file);
+    void finish(const std::string& path, map::MapData& map);
 
     // `arc_order`: rings start where their first arc does (as a TopoJSON reader rebuilds them).
     std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
@@ -416,6 +417,81 @@ OgrDataset::~OgrDataset() = default;
 
 const DatasetSummary& OgrDataset::summary() const { return data_->summary; }
 
+namespace {
+
+// A dataset in GDAL's memory driver holding `layers`' geometries, feature k with FID k.
+DatasetPtr memory_dataset(const MemoryLayers& layers) {
+    register_drivers();
+    GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("Memory");
+    if (driver == nullptr) throw InputError("GDAL has no Memory driver");
+    QuietGdal quiet;
+    DatasetPtr dataset{driver->Create("", 0, 0, 0, GDT_Unknown, nullptr)};
+    if (!dataset) throw InputError("cannot make a dataset in memory" + last_gdal_error());
+    for (const MemoryLayer& given : layers.layers) {
+        std::unique_ptr<OGRSpatialReference> srs;
+        if (!given.crs_wkt.empty()) {
+            srs = std::make_unique<OGRSpatialReference>();
+            srs->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+            if (srs->importFromWkt(given.crs_wkt.c_str()) != OGRERR_NONE) {
+                throw InputError("'" + layers.source + "', layer '" + given.name + "': its CRS is not one GDAL reads" + last_gdal_error());
+            }
+        }
+        OGRLayer* layer = dataset->CreateLayer(given.name.c_str(), srs.get(), wkbUnknown, nullptr);
+        if (layer == nullptr) throw InputError("cannot make layer '" + given.name + "' in memory" + last_gdal_error());
+        for (std::size_t k = 0; k < given.wkb.size(); ++k) {
+            OGRFeatureUniquePtr feature{OGRFeature::CreateFeature(layer->GetLayerDefn())};
+            feature->SetFID(static_cast<GIntBig>(k));
+            const std::string& wkb = given.wkb[k];
+            if (!wkb.empty()) {
+                OGRGeometry* geometry = nullptr;
+                std::size_t used = 0;
+                if (OGRGeometryFactory::createFromWkb(wkb.data(), nullptr, &geometry, wkb.size(), wkbVariantOldOgc, used) !=
+                        OGRERR_NONE || geometry == nullptr) {
+                    throw InputError("'" + layers.source + "', layer '" + given.name + "', feature " + std::to_string(k) +
+                                     ": not a WKB geometry GDAL reads" + last_gdal_error());
+                }
+                feature->SetGeometryDirectly(geometry);
+            }
+            if (layer->CreateFeature(feature.get()) != OGRERR_NONE) {
+                throw InputError("cannot keep feature " + std::to_string(k) + " of layer '" + given.name + "' in memory" + last_gdal_error());
+            }
+        }
+    }
+    return dataset;
+}
+
+}  // namespace
+
+// What every read ends with: a refusal if nothing is simplifiable, the coverage of the rings.
+void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
+    if (summary.sum(&LayerSummary::line_features) + summary.sum(&LayerSummary::polygon_features) == 0) {
+        std::string what;
+        for (const auto& layer : layers) {
+            what += (what.empty() ? "" : "; ") + std::string("layer '") + layer->name + "': " +
+                    OGRGeometryTypeToName(layer->geometry_type) + ", " + std::to_string(layer->features.size()) + " features";
+        }
+        throw InputError("'" + path + "' has no line or polygon geometry (" + what + ")");
+    }
+    // Polygon rings become arcs: one chain per border, shared by the polygons on both sides.
+    const std::size_t before = map.vertices.size();
+    coverage.build(map);
+    if (carries_zm) {
+        z.resize(map.vertices.size(), 0.0);
+        m.resize(map.vertices.size(), 0.0);
+        for (std::size_t v = before; v < map.vertices.size(); ++v) {
+            const std::uint32_t origin = coverage.source_of(static_cast<std::uint32_t>(v));
+            z[v] = ring_z[origin];
+            m[v] = ring_m[origin];
+        }
+    }
+    // Grown by doubling while reading: up to half of it spare, held through simplification.
+    map.vertices.shrink_to_fit();
+    map.chains.shrink_to_fit();
+    summary.arcs = coverage.arc_count();
+    summary.shared_arcs = coverage.shared_arc_count();
+    summary.degenerate_rings = coverage.degenerate_ring_count();
+}
+
 OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map,
                             bool prj_as_file) {
     DatasetPtr dataset = open_vector(path);
@@ -427,33 +503,38 @@ OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::stri
     } else {
         for (const std::string& name : layer_names_wanted) data->read_layer(path, pick_layer(*dataset, path, name), map, prj_as_file);
     }
-    if (data->summary.sum(&LayerSummary::line_features) + data->summary.sum(&LayerSummary::polygon_features) == 0) {
-        std::string what;
-        for (const auto& layer : data->layers) {
-            what += (what.empty() ? "" : "; ") + std::string("layer '") + layer->name + "': " +
-                    OGRGeometryTypeToName(layer->geometry_type) + ", " + std::to_string(layer->features.size()) + " features";
-        }
-        throw InputError("'" + path + "' has no line or polygon geometry (" + what + ")");
-    }
-    // Polygon rings become arcs: one chain per border, shared by the polygons on both sides.
-    const std::size_t before = map.vertices.size();
-    data->coverage.build(map);
-    if (data->carries_zm) {
-        data->z.resize(map.vertices.size(), 0.0);
-        data->m.resize(map.vertices.size(), 0.0);
-        for (std::size_t v = before; v < map.vertices.size(); ++v) {
-            const std::uint32_t origin = data->coverage.source_of(static_cast<std::uint32_t>(v));
-            data->z[v] = data->ring_z[origin];
-            data->m[v] = data->ring_m[origin];
-        }
-    }
-    // Grown by doubling while reading: up to half of it spare, held through simplification.
-    map.vertices.shrink_to_fit();
-    map.chains.shrink_to_fit();
-    data->summary.arcs = data->coverage.arc_count();
-    data->summary.shared_arcs = data->coverage.shared_arc_count();
-    data->summary.degenerate_rings = data->coverage.degenerate_ring_count();
+    data->finish(path, map);
     return OgrDataset(std::move(data));
+}
+
+OgrDataset OgrDataset::read(const MemoryLayers& layers, map::MapData& map) {
+    DatasetPtr dataset = memory_dataset(layers);
+    auto data = std::make_unique<Data>();
+    data->summary.driver = "Memory";
+    if (dataset->GetLayerCount() == 0) throw InputError("'" + layers.source + "' has no layer");
+    for (int i = 0; i < dataset->GetLayerCount(); ++i) data->read_layer(layers.source, *dataset->GetLayer(i), map, false);
+    data->finish(layers.source, map);
+    return OgrDataset(std::move(data));
+}
+
+MemoryLayers OgrDataset::to_memory(const map::MapData& map, const std::vector<std::uint8_t>& kept) const {
+    MemoryLayers out;
+    for (const auto& layer : data_->layers) {
+        MemoryLayer& written = out.layers.emplace_back();
+        written.name = layer->name;
+        written.wkb.resize(layer->shapes.size());
+        std::vector<unsigned char> buffer;
+        for (std::size_t k = 0; k < layer->shapes.size(); ++k) {
+            std::unique_ptr<OGRGeometry> geometry = data_->build_geometry(*layer, k, map, kept);
+            if (!geometry) continue;
+            // GEOS (and so shapely) reads no M: written 2D or 3D.
+            if (geometry->IsMeasured()) geometry->setMeasured(FALSE);
+            buffer.resize(geometry->WkbSize());
+            geometry->exportToWkb(wkbNDR, buffer.data(), wkbVariantOldOgc);
+            written.wkb[k].assign(reinterpret_cast<const char*>(buffer.data()), buffer.size());
+        }
+    }
+    return out;
 }
 
 std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
@@ -972,6 +1053,30 @@ std::vector<Point> read_control_points(const std::string& spec, unsigned threads
     if (count > 0) points.reserve(static_cast<std::size_t>(count));
     read_points_of(layer, path, points);
     return points;
+}
+
+std::vector<Point> read_control_points(const MemoryLayers& layers) {
+    DatasetPtr dataset = memory_dataset(layers);
+    std::vector<Point> points;
+    for (int i = 0; i < dataset->GetLayerCount(); ++i) read_points_of(*dataset->GetLayer(i), layers.source, points);
+    return points;
+}
+
+void write_geopackage(const MemoryLayers& layers, const std::string& path) {
+    DatasetPtr memory = memory_dataset(layers);
+    register_drivers();
+    GDALDriver* driver = GetGDALDriverManager()->GetDriverByName("GPKG");
+    if (driver == nullptr) throw OutputError("GDAL has no GPKG driver");
+    QuietGdal quiet;
+    DatasetPtr dataset{driver->Create(path.c_str(), 0, 0, 0, GDT_Unknown, nullptr)};
+    if (!dataset) throw OutputError("cannot write '" + path + "'" + last_gdal_error());
+    const char* options[] = {"SPATIAL_INDEX=NO", nullptr};
+    for (int i = 0; i < memory->GetLayerCount(); ++i) {
+        OGRLayer& source = *memory->GetLayer(i);
+        if (dataset->CopyLayer(&source, source.GetName(), const_cast<char**>(options)) == nullptr) {
+            throw OutputError("cannot write layer '" + std::string(source.GetName()) + "' to '" + path + "'" + last_gdal_error());
+        }
+    }
 }
 
 }  // namespace toposimp::io

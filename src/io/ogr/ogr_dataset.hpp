@@ -57,6 +57,18 @@ struct WriteOptions {
     std::function<void(const std::string& written)> before_commit;
 };
 
+// Layers handed over in memory (the Python module): each feature's geometry as WKB, in order.
+// Messages name them as files are named: "'<source>', layer '<name>', feature <position>".
+struct MemoryLayer {
+    std::string name;
+    std::string crs_wkt;           // empty: no CRS
+    std::vector<std::string> wkb;  // per feature (ISO or extended WKB); empty: a NULL geometry
+};
+struct MemoryLayers {
+    std::string source = "<memory>";
+    std::vector<MemoryLayer> layers;
+};
+
 class OgrDataset {
 public:
     // Reads the named layers of `path` (none named: every layer) into `map`. Throws InputError
@@ -65,6 +77,9 @@ public:
     // (see read_layer).
     static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
                            bool prj_as_file = false);
+
+    // The same from layers in memory (every one of them).
+    static OgrDataset read(const MemoryLayers& layers, map::MapData& map);
 
     OgrDataset(OgrDataset&&) noexcept;
     ~OgrDataset();
@@ -76,6 +91,10 @@ public:
     // Returns warnings worth telling the user (e.g. values a format cannot hold).
     std::vector<std::string> write(const WriteOptions& options, const map::MapData& map,
                                    const std::vector<std::uint8_t>& kept) const;
+
+    // The layers with only the kept vertices, as WKB (extended WKB for Z, as GEOS and shapely
+    // read it; M is dropped), in memory: what write() would write, without the attributes.
+    MemoryLayers to_memory(const map::MapData& map, const std::vector<std::uint8_t>& kept) const;
 
     // Moves the point features (written unchanged otherwise) to `points`: the map's control
     // points as read from this dataset, in the same order (rounding put them on a grid).
@@ -91,6 +110,13 @@ private:
 // Reads control points from "path" or "path:layer" (Point or MultiPoint features), a
 // GeoPackage on up to `threads` connections at once.
 std::vector<Point> read_control_points(const std::string& spec, unsigned threads = 1);
+
+// Control points from the Point or MultiPoint geometries of a layer in memory.
+std::vector<Point> read_control_points(const MemoryLayers& layers);
+
+// Writes layers in memory to a GeoPackage at `path` (e.g. under /vsimem/), for code that reads
+// datasets by name (toposimp check). OutputError if it cannot.
+void write_geopackage(const MemoryLayers& layers, const std::string& path);
 
 // "path:layer" split as read_control_points splits it (a path that exists as given is a path).
 struct PointsSpec {

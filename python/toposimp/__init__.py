@@ -1,0 +1,302 @@
+"""toposimp: exact, topology-preserving simplification of maps and meshes, in Python.
+
+The engine of the ``toposimp`` command line, in-process:
+
+- :func:`simplify` simplifies GeoDataFrames and GeoSeries as ``toposimp map`` does: polygons as
+  one coverage (a border shared by two polygons is simplified once, so no gaps or overlaps
+  appear), lines with their crossings kept, no vertex moved and no control point (``points``)
+  put on another side of any line. Every decision is made with exact predicates.
+- :func:`check` compares an original with a simplification made by any tool and lists what it
+  broke, as ``toposimp check`` does.
+- :func:`simplify_mesh`, :func:`read_mesh` and :func:`write_mesh` work on triangle meshes held in
+  numpy arrays, as ``toposimp mesh`` does.
+
+Geometries travel to the engine as WKB, so coordinates are bit-exact both ways, and the results
+are those of the command line on the same data, for any number of threads. The engine runs
+with the GIL released; Ctrl-C stops it (KeyboardInterrupt); ``progress=callable`` receives
+``(phase, share_done)``. Errors are :class:`InputError` (bad input: the message names the layer
+and feature, as the command line's do), :class:`UsageError` (options that do not fit together),
+:class:`OutputError` and :class:`TopologyError`.
+
+Example::
+
+    import geopandas, toposimp
+    states = geopandas.read_file("states.gpkg")
+    simple = toposimp.simplify(states, keep=0.05)
+    assert toposimp.check(states, simple).empty
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import threading
+import warnings
+from typing import Any, Callable, Optional, Sequence, Union
+
+from ._toposimp import InputError, OutputError, TopologyError, UsageError  # noqa: F401
+from . import _toposimp
+from .mesh import Mesh, read_mesh, simplify_mesh, write_mesh  # noqa: F401
+
+__all__ = ["simplify", "check", "summary", "simplify_mesh", "read_mesh", "write_mesh", "Mesh", "InputError",
+           "UsageError", "OutputError", "TopologyError", "ToposimpWarning"]
+
+log = logging.getLogger("toposimp")
+
+
+class ToposimpWarning(UserWarning):
+    """What the command line prints as a warning (a target not reached, locations left off a grid...)."""
+
+
+Progress = Callable[[str, float], Any]
+
+
+def _report(messages: str) -> None:
+    """The command line's messages: warnings as Python warnings, the rest to the toposimp logger."""
+    for line in messages.splitlines():
+        if line.startswith("toposimp: warning: "):
+            warnings.warn(line[len("toposimp: warning: "):], ToposimpWarning, stacklevel=3)
+        elif line.startswith("toposimp: error: "):
+            log.error("%s", line[len("toposimp: error: "):])
+        elif line.startswith("toposimp: "):
+            level, _, text = line[len("toposimp: "):].partition(": ")
+            log.log(logging.INFO if level == "info" else logging.DEBUG, "%s", text)
+
+
+def _interruptible() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
+def _share(value, name: str) -> str:
+    """keep=0.1 or keep="10%" as the command line's text (repr: the shortest text of the double)."""
+    if isinstance(value, str):
+        return value
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise UsageError(f"{name} takes a share such as 0.1 or '10%', not {value!r}")
+    return repr(float(value))
+
+
+def _number(value, name: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise UsageError(f"{name} takes a number, not {value!r}")
+    return float(value)
+
+
+# --- GeoDataFrames and GeoSeries <-> layers of WKB ------------------------------------------------
+
+def _geoms(data):
+    """The GeoSeries of a GeoDataFrame or GeoSeries."""
+    import geopandas
+    if isinstance(data, geopandas.GeoDataFrame):
+        return data.geometry
+    if isinstance(data, geopandas.GeoSeries):
+        return data
+    raise TypeError(f"expected a GeoDataFrame or GeoSeries, not {type(data).__name__}")
+
+
+def _untouched(geometry) -> bool:
+    """None and empty geometries are not sent: they come back as they were."""
+    return geometry is None or geometry.is_empty
+
+
+def _layer(name: str, data) -> tuple:
+    series = _geoms(data)
+    crs = series.crs.to_wkt() if series.crs is not None else None
+    wkb = [None if _untouched(g) else g.wkb for g in series.values]
+    return (name, crs, wkb)
+
+
+def _rebuild(data, wkb: Sequence[Optional[bytes]]):
+    """`data` with its geometries replaced by the WKB (None: the geometry it had)."""
+    import geopandas
+    import shapely.wkb
+    series = _geoms(data)
+    old = series.values
+    geometries = [old[k] if b is None else shapely.wkb.loads(b) for k, b in enumerate(wkb)]
+    new = geopandas.GeoSeries(geometries, index=series.index, crs=series.crs, name=series.name)
+    if isinstance(data, geopandas.GeoSeries):
+        return new
+    out = data.copy(deep=False)
+    out[data.geometry.name] = new
+    return out
+
+
+def _layers(data) -> tuple:
+    """(source name, [(name, data)], how to give the results back)."""
+    if isinstance(data, dict):
+        return "layers", [(str(name), value) for name, value in data.items()], "dict"
+    if isinstance(data, (list, tuple)):
+        return "layers", [(str(k), value) for k, value in enumerate(data)], "list"
+    return type(data).__name__, [(_default_name(data), data)], "one"
+
+
+def _default_name(data) -> str:
+    """A lone layer's name in messages: a GeoSeries' own name, else "0"."""
+    import geopandas
+    if isinstance(data, geopandas.GeoSeries) and isinstance(data.name, str) and data.name:
+        return data.name
+    return "0"
+
+
+def _points_layers(points) -> Optional[list]:
+    if points is None:
+        return None
+    items = points if isinstance(points, (list, tuple)) else [points]
+    return [_layer(str(k), item) for k, item in enumerate(items)]
+
+
+def _give_back(kind: str, names: list, results: list):
+    if kind == "one":
+        return results[0]
+    if kind == "dict":
+        return dict(zip(names, results))
+    return results
+
+
+def _levels_text(levels) -> str:
+    if isinstance(levels, str):
+        return levels
+    texts = []
+    for level in levels:
+        if isinstance(level, str):
+            texts.append(level)
+        elif isinstance(level, int) and not isinstance(level, bool) and level >= 2:
+            texts.append(str(level))
+        else:
+            texts.append(_share(level, "levels"))
+    return ",".join(texts)
+
+
+def simplify(data, keep: Union[float, str, None] = None, *, keep_points: Optional[int] = None,
+             remove_points: Optional[int] = None, max_area: Union[float, str, None] = None, max: bool = False,
+             levels: Union[str, Sequence[Union[float, int, str]], None] = None, points=None,
+             precision: Union[float, str, None] = None, decimals: Optional[int] = None, weighting: float = 0.0,
+             spherical: bool = False, arithmetic: str = "exact", threads: Optional[int] = None,
+             progress: Optional[Progress] = None, verbose: int = 0):
+    """Simplify line and polygon layers without changing their topology (``toposimp map``).
+
+    ``data`` is a GeoDataFrame or GeoSeries, or a list (or dict by name) of them: several layers
+    simplified together, so that a border two layers share stays shared and no line of one crosses
+    a line of another anew. The result has the same type (a list or dict for several layers),
+    index, columns, dtypes, CRS and geometry types; only the geometries change: every output
+    vertex is an input vertex (unless ``precision``/``decimals`` round them), each line keeps its
+    ends, polygons are simplified as one coverage (shared borders once: no gaps, no overlaps),
+    crossings in the input are kept as they are, and no control point changes side. Point, empty
+    and None geometries come back unchanged; points among the features are control points too.
+
+    One target (default ``keep=0.1``):
+
+    - ``keep``: the share of the vertices to keep, 0.1 or "10%";
+    - ``keep_points``: the number of vertices to keep; ``remove_points``: the number to remove;
+    - ``max_area``: remove vertices whose effective area is at most this (map units², or with
+      ``spherical`` m², or a text with a unit: "5km2", "20ha");
+    - ``max=True``: remove every vertex that can be removed;
+    - ``levels``: several nested targets at once, finest first (``["20%", "5%", "1%"]``, shares or
+      vertex counts): returns a list with one result per level, each a subset of the one before.
+
+    ``points``: control points (GeoSeries or GeoDataFrame of Point/MultiPoint, or a list of them)
+    kept on their side of every line. ``precision`` (a grid step, e.g. 0.0001) or ``decimals``
+    put every coordinate on a grid, keeping the topology (``--precision``/``--decimals``).
+    ``weighting`` (0…1, mapshaper's 0.7) ranks sharp angles first; ``spherical`` ranks by areas on
+    the sphere (longitude, latitude input). ``arithmetic``: "exact" (the default), "rational", or
+    "float" (unsafe, for experiments). ``threads``: None for all cores; the result is the same for
+    any number. ``progress``: a callable taking (phase, share done 0…1); raising from it stops
+    the run. ``verbose``: 1 or 2 log the command line's -v/-vv details to the "toposimp" logger.
+
+    The summary of ``toposimp map --json`` (vertices in and out, refusals, seconds...) is in the
+    result's ``.attrs["toposimp"]`` (see :func:`summary`). Raises :class:`InputError` for input
+    the engine cannot take (naming layer and feature: the position of the row, counted from 0),
+    :class:`UsageError` for options that do not fit.
+    """
+    criteria = {"keep": keep is not None, "keep_points": keep_points is not None,
+                "remove_points": remove_points is not None, "max_area": max_area is not None, "max": bool(max),
+                "levels": levels is not None}
+    given = [name for name, present in criteria.items() if present]
+    if len(given) > 1:
+        raise UsageError("give one target, not " + " and ".join(given))
+    if precision is not None and decimals is not None:
+        raise UsageError("give precision or decimals, not both")
+    options: dict = {"weighting": _number(weighting, "weighting"), "spherical": bool(spherical),
+                     "arithmetic": arithmetic, "threads": 0 if threads is None else int(threads),
+                     "verbosity": int(verbose)}
+    if keep is not None:
+        options["keep"] = _share(keep, "keep")
+    if keep_points is not None:
+        options["keep_points"] = _number(keep_points, "keep_points")
+        if options["keep_points"] < 0:
+            raise UsageError(f"keep_points takes a count of at least 0, not {keep_points!r}")
+    if remove_points is not None:
+        options["remove_points"] = _number(remove_points, "remove_points")
+        if options["remove_points"] < 0:
+            raise UsageError(f"remove_points takes a count of at least 0, not {remove_points!r}")
+    if max_area is not None:
+        options["max_area"] = max_area if isinstance(max_area, str) else repr(_number(max_area, "max_area"))
+    if max:
+        options["max"] = True
+    if levels is not None:
+        options["levels"] = _levels_text(levels)
+    if precision is not None:
+        options["precision"] = precision if isinstance(precision, str) else repr(_number(precision, "precision"))
+    if decimals is not None:
+        if isinstance(decimals, bool) or not isinstance(decimals, int) or not 0 <= decimals <= 300:
+            raise UsageError(f"decimals takes a whole number from 0 to 300, not {decimals!r}")
+        options["decimals"] = decimals
+    if arithmetic not in ("exact", "rational", "float"):
+        raise UsageError(f"arithmetic is 'exact', 'rational' or 'float', not {arithmetic!r}")
+    if options["threads"] < 0:
+        raise UsageError(f"threads takes a number of at least 1 (None: all cores), not {threads!r}")
+
+    source, named, kind = _layers(data)
+    if not named:
+        raise UsageError("no layers to simplify")
+    layers = [_layer(name, value) for name, value in named]
+    levels_out, summaries, messages = _toposimp.simplify_layers(source, layers, _points_layers(points), options,
+                                                                progress, _interruptible())
+    _report(messages)
+    results = []
+    for level, text in zip(levels_out, summaries):
+        info = json.loads(text)
+        info.pop("output", None)
+        simplified = [_rebuild(value, wkb) for (_, value), wkb in zip(named, level)]
+        for item in simplified:
+            item.attrs["toposimp"] = info
+        results.append(_give_back(kind, [name for name, _ in named], simplified))
+    return results if levels is not None else results[0]
+
+
+def summary(result) -> dict:
+    """The ``toposimp map --json`` summary of a result of :func:`simplify`."""
+    return result.attrs["toposimp"]
+
+
+def check(original, simplified, points=None, *, precision: Union[float, str, None] = None):
+    """What a simplification broke (``toposimp check``): a DataFrame of violations, empty when clean.
+
+    ``original`` and ``simplified``: GeoDataFrames or GeoSeries (or lists or dicts of them, as
+    :func:`simplify` takes), the features matched by order. ``points``: control points that must
+    keep their side. ``precision``: the simplified coordinates were rounded to this grid step.
+    Any tool's output can be checked (GEOS's simplify, mapshaper, ...).
+
+    Columns: kind (new_crossing, lost_touching, point_changed_side, not_subset, ...), layer,
+    feature (row position), other (the other feature of a contact), x, y (where), detail, and
+    decided_by ("exact": the exact predicates; "GEOS": polygon validity). The counts are in
+    ``.attrs["toposimp"]``.
+    """
+    import pandas
+    _, before, _ = _layers(original)
+    _, after, _ = _layers(simplified)
+    if len(before) != len(after):
+        raise UsageError(f"original has {len(before)} layers, simplified {len(after)}")
+    layers_before = [_layer(name, value) for name, value in before]
+    layers_after = [_layer(name, value) for name, value in after]
+    step = None if precision is None else precision if isinstance(precision, str) else repr(_number(precision, "precision"))
+    violations, features, control_points, invalid_before = _toposimp.check_layers(
+        layers_before, layers_after, _points_layers(points), step, _interruptible())
+    columns = ["kind", "layer", "feature", "other", "x", "y", "detail", "decided_by"]
+    frame = pandas.DataFrame(violations, columns=columns)
+    frame["x"] = frame["x"].astype("float64")
+    frame["y"] = frame["y"].astype("float64")
+    frame.attrs["toposimp"] = {"features": features, "control_points": control_points,
+                               "invalid_in_original": invalid_before,
+                               "counts": frame["kind"].value_counts().to_dict()}
+    return frame
