@@ -53,6 +53,27 @@ grep -q '^hasProcessingProvider=yes' "$plugins/toposimp_processing/metadata.txt"
 assert runner.find_executable(sys.argv[2]) == sys.argv[2]" "$plugins" "$prefix/bin/toposimp" \
     || fail "the installed plugin's modules do not import"
 
+# The Python package, where Debian's Python imports it under this prefix; with a folder of QGIS
+# plugins first on sys.path, as QGIS's console has it (QGIS's own modules too, when installed).
+site=$(echo "$prefix"/lib/python3*/dist-packages)
+[ -f "$site/toposimp/__init__.py" ] || fail "no $site/toposimp/__init__.py"
+ls "$site"/toposimp/_toposimp*.so >/dev/null || fail "no extension in $site/toposimp"
+PYTHONPATH="$site" "$python" - "$plugins" "$source_dir" <<'PY' || fail "the installed Python package does not work"
+import sys
+sys.path.insert(0, sys.argv[1])
+try:
+    import qgis.core  # noqa: F401
+except ImportError:
+    pass
+import geopandas
+import toposimp
+assert toposimp.__file__.startswith(sys.path[1]) or "dist-packages" in toposimp.__file__, toposimp.__file__
+states = geopandas.read_file(sys.argv[2] + "/testdata/ne_states_slice.gpkg")
+simple = toposimp.simplify(states, keep=0.3)
+assert toposimp.check(states, simple).empty
+assert toposimp.summary(simple)["vertices_out"] < toposimp.summary(simple)["vertices_in"]
+PY
+
 # The installed provider with the installed executable, in a real QGIS when there is one.
 status=0
 TOPOSIMP_BINARY="$prefix/bin/toposimp" TOPOSIMP_QGIS_PLUGINS="$plugins" \
@@ -62,4 +83,4 @@ if [ "$status" -eq 77 ]; then
 elif [ "$status" -ne 0 ]; then
     fail "the installed provider failed in qgis_process"
 fi
-echo "installed into $prefix and ran: executable, man pages, QGIS plugin"
+echo "installed into $prefix and ran: executable, man pages, QGIS plugin, Python package"

@@ -18,13 +18,20 @@ done
 contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
 for path in ./usr/bin/toposimp ./usr/libexec/toposimp/toposimp-gdal ./usr/share/man/man1/toposimp.1 ./usr/share/man/man1/toposimp-map.1 \
             ./usr/share/man/man1/toposimp-mesh.1 ./usr/share/man/man1/toposimp-check.1 \
-            ./usr/share/qgis/python/plugins/toposimp_processing/metadata.txt ./usr/share/qgis/python/plugins/toposimp_processing/algorithms.py; do
+            ./usr/share/qgis/python/plugins/toposimp_processing/metadata.txt ./usr/share/qgis/python/plugins/toposimp_processing/algorithms.py \
+            ./usr/lib/python3/dist-packages/toposimp/__init__.py ./usr/lib/python3/dist-packages/toposimp/mesh.py; do
     echo "$contents" | grep -qx "$path" || fail "$path not in the package"
 done
 dpkg-deb -I "$deb" prerm >/dev/null || fail "no prerm script"
 # The package's own executable runs against this system's libraries.
 dpkg-deb -x "$deb" "$tmp/root"
 "$tmp/root/usr/bin/toposimp" --version | grep -q '^toposimp ' || fail "the packaged executable does not run"
+echo "$contents" | grep -q '^./usr/lib/python3/dist-packages/toposimp/_toposimp.*\.so$' || fail "the Python extension is not in the package"
+dpkg-deb -f "$deb" Recommends | grep -q python3-geopandas || fail "Recommends lacks python3-geopandas"
+PYTHONPATH="$tmp/root/usr/lib/python3/dist-packages" /usr/bin/python3 -c "import toposimp, numpy; \
+m = toposimp.read_mesh('$(dirname "$0")/../../testdata/mesh/torus.off'); \
+assert len(toposimp.simplify_mesh(m.vertices, m.faces, keep=0.1, hausdorff=False).faces) == 480" \
+    || fail "the packaged Python package does not run"
 simulation=$(apt-get install -s "$deb" 2>&1) || { echo "$simulation"; fail "apt-get cannot install the package"; }
 echo "$simulation" | grep -q '^Inst toposimp' || { echo "$simulation"; fail "apt-get would not install toposimp"; }
 echo "package $(basename "$deb"): Depends: $depends"
