@@ -94,26 +94,56 @@ def _geoms(data):
     raise TypeError(f"expected a GeoDataFrame or GeoSeries, not {type(data).__name__}")
 
 
-def _untouched(geometry) -> bool:
-    """None and empty geometries are not sent: they come back as they were."""
-    return geometry is None or geometry.is_empty
+_shared_geos = None
+
+
+def _shares_geos() -> bool:
+    """Does shapely run on the GEOS library the extension links (Debian's shapely does)? Then the
+    extension reads shapely's geometries through it, instead of WKB made one geometry at a time."""
+    global _shared_geos
+    if _shared_geos is None:
+        try:
+            import ctypes
+            from shapely.geos import lgeos
+            address = ctypes.cast(lgeos._lgeos.GEOSversion, ctypes.c_void_p).value
+            _shared_geos = bool(_toposimp.same_geos(address))
+        except Exception:  # another shapely (2.x, or a wheel with its own GEOS): WKB
+            _shared_geos = False
+    return _shared_geos
+
+
+def _geometry_list(series) -> list:
+    values = series.values
+    data = getattr(values, "data", None)
+    return data.tolist() if data is not None else list(values)
 
 
 def _layer(name: str, data) -> tuple:
+    """(name, CRS, geometries): shapely's own when the extension shares its GEOS, else WKB (None
+    for None and empty geometries, which come back as they were)."""
     series = _geoms(data)
     crs = series.crs.to_wkt() if series.crs is not None else None
-    wkb = [None if _untouched(g) else g.wkb for g in series.values]
-    return (name, crs, wkb)
+    geometries = _geometry_list(series)
+    if not _shares_geos():
+        from shapely.geos import WKBWriter, lgeos
+        writer = WKBWriter(lgeos)
+        geometries = [None if g is None or g.is_empty else writer.write(g) for g in geometries]
+    return (name, crs, geometries)
 
 
 def _rebuild(data, wkb: Sequence[Optional[bytes]]):
     """`data` with its geometries replaced by the WKB (None: the geometry it had)."""
     import geopandas
-    import shapely.wkb
+    import numpy
+    from geopandas.array import GeometryArray
+    from shapely.geos import WKBReader, lgeos
+    reader = WKBReader(lgeos)
     series = _geoms(data)
-    old = series.values
-    geometries = [old[k] if b is None else shapely.wkb.loads(b) for k, b in enumerate(wkb)]
-    new = geopandas.GeoSeries(geometries, index=series.index, crs=series.crs, name=series.name)
+    old = _geometry_list(series)
+    geometries = numpy.empty(len(wkb), dtype=object)
+    for k, b in enumerate(wkb):  # (not a slice assignment: numpy would take multi-part geometries for sequences)
+        geometries[k] = old[k] if b is None else reader.read(b)
+    new = geopandas.GeoSeries(GeometryArray(geometries), index=series.index, crs=series.crs, name=series.name)
     if isinstance(data, geopandas.GeoSeries):
         return new
     out = data.copy(deep=False)
@@ -251,7 +281,7 @@ def simplify(data, keep: Union[float, str, None] = None, *, keep_points: Optiona
         raise UsageError("no layers to simplify")
     layers = [_layer(name, value) for name, value in named]
     levels_out, summaries, messages = _toposimp.simplify_layers(source, layers, _points_layers(points), options,
-                                                                progress, _interruptible())
+                                                                progress, _interruptible(), _shares_geos())
     _report(messages)
     results = []
     for level, text in zip(levels_out, summaries):
@@ -291,7 +321,7 @@ def check(original, simplified, points=None, *, precision: Union[float, str, Non
     layers_after = [_layer(name, value) for name, value in after]
     step = None if precision is None else precision if isinstance(precision, str) else repr(_number(precision, "precision"))
     violations, features, control_points, invalid_before = _toposimp.check_layers(
-        layers_before, layers_after, _points_layers(points), step, _interruptible())
+        layers_before, layers_after, _points_layers(points), step, _interruptible(), _shares_geos())
     columns = ["kind", "layer", "feature", "other", "x", "y", "detail", "decided_by"]
     frame = pandas.DataFrame(violations, columns=columns)
     frame["x"] = frame["x"].astype("float64")

@@ -243,6 +243,9 @@ MapInput read_layers(const MapOptions& options, spdlog::logger& log, const MapMe
             const std::vector<Point> read = io::read_control_points(*memory->points);
             input.map.control_points.insert(input.map.control_points.end(), read.begin(), read.end());
         }
+        if (const std::vector<Point>* given = memory->point_coordinates) {
+            input.map.control_points.insert(input.map.control_points.end(), given->begin(), given->end());
+        }
         log_input(log, options.input, input.dataset->summary());
         return input;
     }

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "cli/cli.hpp"
+#include "core/geometry.hpp"
 
 #include <CLI/App.hpp>
 #include <spdlog/logger.h>
@@ -58,6 +59,7 @@ int run_map(const MapOptions& options, Context& context);
 struct MapMemory {
     const io::MemoryLayers* input = nullptr;
     const io::MemoryLayers* points = nullptr;  // or null: none (unless MapOptions::points names a file)
+    const std::vector<Point>* point_coordinates = nullptr;  // control points given as coordinates, or null
     std::vector<io::MemoryLayers> output;      // per level (one without --levels), finest first
     std::vector<std::string> summaries;        // per level, the --json summary
 };

@@ -239,3 +239,21 @@ def test_wkb_round_trip_is_bit_exact():
     line = shapely.geometry.LineString([(x, (x * 7.3) % 1.0 + 1e-13) for x in xs])
     out = toposimp.simplify(geopandas.GeoSeries([line]), keep=1.0)
     assert out.values[0].wkb == line.wkb
+
+
+def test_wkb_path_gives_what_the_geos_path_gives(states, borders, places, monkeypatch):
+    # Debian's shapely shares the extension's GEOS, so geometries go through it; any other shapely
+    # sends WKB. Both must give the same result, errors included.
+    assert toposimp._shares_geos()
+    through_geos = [toposimp.simplify(states, keep=0.3), toposimp.simplify(borders, keep=0.1, points=places)]
+    monkeypatch.setattr(toposimp, "_shared_geos", False)
+    through_wkb = [toposimp.simplify(states, keep=0.3), toposimp.simplify(borders, keep=0.1, points=places)]
+    for a, b in zip(through_geos, through_wkb):
+        assert wkb_list(a.geometry) == wkb_list(b.geometry)
+    assert toposimp.check(borders, through_wkb[1], points=places).empty
+    lines = geopandas.GeoSeries([shapely.geometry.LineString([(0, 0), (1, 1)])])
+    with pytest.raises(toposimp.InputError, match="feature 0: control points must be Point or MultiPoint"):
+        toposimp.simplify(lines, points=lines)
+    monkeypatch.setattr(toposimp, "_shared_geos", True)
+    with pytest.raises(toposimp.InputError, match="feature 0: control points must be Point or MultiPoint"):
+        toposimp.simplify(lines, points=lines)

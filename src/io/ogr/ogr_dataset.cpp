@@ -85,6 +85,7 @@ struct OgrDataset::Data {
     std::vector<std::unique_ptr<Layer>> layers;
     map::Coverage coverage;              // rings of every layer: borders shared across layers too
     bool carries_zm = false;             // some layer has Z or M
+    bool points_moved = false;           // move_points() put the point features elsewhere
     std::vector<double> z, m;            // per map vertex, when carries_zm
     std::vector<double> ring_z, ring_m;  // per coverage ring point, until the coverage is built
 
@@ -525,8 +526,10 @@ MemoryLayers OgrDataset::to_memory(const map::MapData& map, const std::vector<st
         written.wkb.resize(layer->shapes.size());
         std::vector<unsigned char> buffer;
         for (std::size_t k = 0; k < layer->shapes.size(); ++k) {
+            const Data::Layer::Kind kind = layer->shapes[k].kind;
+            if (kind == Data::Layer::Kind::null || (kind == Data::Layer::Kind::untouched && !data_->points_moved)) continue;
             std::unique_ptr<OGRGeometry> geometry = data_->build_geometry(*layer, k, map, kept);
-            if (!geometry) continue;
+            if (!geometry || geometry->IsEmpty()) continue;
             // GEOS (and so shapely) reads no M: written 2D or 3D.
             if (geometry->IsMeasured()) geometry->setMeasured(FALSE);
             buffer.resize(geometry->WkbSize());
@@ -754,6 +757,7 @@ TopoGeometry OgrDataset::Data::topo_geometry(const Layer& layer, std::size_t ind
 }
 
 void OgrDataset::move_points(std::span<const Point> points) {
+    data_->points_moved = true;
     for (auto& layer : data_->layers) {
         for (std::size_t g = 0; g < layer->untouched.size(); ++g) {
             std::uint32_t next = layer->untouched_points[g];

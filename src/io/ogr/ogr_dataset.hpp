@@ -93,7 +93,9 @@ public:
                                    const std::vector<std::uint8_t>& kept) const;
 
     // The layers with only the kept vertices, as WKB (extended WKB for Z, as GEOS and shapely
-    // read it; M is dropped), in memory: what write() would write, without the attributes.
+    // read it; M is dropped), in memory: what write() would write, without the attributes —
+    // except that geometries the caller has already are left empty: NULL and empty ones, and
+    // point features unless move_points() moved them.
     MemoryLayers to_memory(const map::MapData& map, const std::vector<std::uint8_t>& kept) const;
 
     // Moves the point features (written unchanged otherwise) to `points`: the map's control
