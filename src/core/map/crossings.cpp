@@ -5,6 +5,8 @@
 #include "core/map/location_key.hpp"
 #include "core/map/segment_cells.hpp"
 
+#include "core/cancel.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -52,8 +54,10 @@ std::uint32_t ends_hash(const MapData& map, std::uint32_t v) {
 // `worker` (one Worker per thread, made by make_worker(), handed to finish(worker) at the end,
 // one thread at a time). Two segments that meet are both in the cell where they meet; a
 // visitor that wants each pair once checks first_shared_cell.
+// Once `cancel` is set, the rows left are passed over (the caller then stops).
 template <class MakeWorker, class Visit, class Finish>
-void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worker, Visit visit, Finish finish) {
+void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worker, Visit visit, Finish finish,
+                   const std::atomic<bool>* cancel = nullptr) {
     const auto vertex_count = static_cast<std::uint32_t>(map.vertices.size());
     std::size_t segment_count = 0;
     for (const Chain& chain : map.chains) segment_count += chain.last - chain.first;
@@ -118,7 +122,7 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
 #pragma omp for schedule(dynamic, 8) nowait
         for (std::uint32_t y = 0; y < side; ++y) {
             const std::size_t begin = row_start[std::size_t{y} * share], end = row_start[std::size_t{y + 1} * share];
-            if (end - begin < 2) continue;
+            if (end - begin < 2 || cancel_requested(cancel)) continue;
             std::fill(cell_start.begin(), cell_start.end(), 0);
             for (std::size_t k = begin; k < end; ++k) {
                 const Box part = part_of(in_rows[k], y);
@@ -245,7 +249,7 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
 // copies. Each cell settles its segments on its own (a pair is tested in every cell both parts
 // reach), so the predicates counted, like the result, do not depend on the threads.
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
-                                                 exact::PredicateStats& stats, int threads) {
+                                                 exact::PredicateStats& stats, int threads, const std::atomic<bool>* cancel) {
     std::vector<std::uint8_t> improper(map.vertices.size(), 0);
     struct Worker {
         std::vector<std::uint32_t> found;  // segments found improper (with repeats across cells)
@@ -324,7 +328,8 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
         [&](Worker& worker) {
             for (const std::uint32_t segment : worker.found) improper[segment] = 1;
             stats += worker.counted;
-        });
+        },
+        cancel);
     return improper;
 }
 

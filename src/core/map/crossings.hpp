@@ -13,6 +13,7 @@
 #include "core/exact/predicates.hpp"
 #include "core/map/map_data.hpp"
 
+#include <atomic>
 #include <cstdint>
 #include <span>
 #include <vector>
@@ -45,8 +46,10 @@ std::vector<SegmentContact> find_segment_contacts(const MapData& map, exact::Ari
                                                   std::span<const std::uint32_t> line_of = {});
 
 // Per vertex v: 1 if the segment from v to the next vertex of its chain meets another segment of
-// the map improperly (any contact above).
+// the map improperly (any contact above). Once `cancel` is set (core/cancel.hpp) the search
+// stops early and its result is incomplete: the caller must then stop.
 std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arithmetic arithmetic,
-                                                 exact::PredicateStats& stats, int threads = 0);
+                                                 exact::PredicateStats& stats, int threads = 0,
+                                                 const std::atomic<bool>* cancel = nullptr);
 
 }  // namespace toposimp::map

@@ -209,9 +209,9 @@ public:
         find_shared_locations();
         build_chains();
         stats_.seconds_index = lap(start);
+        stop_if_cancelled(options_.cancel);
         pin_crossings();
         stats_.seconds_crossings = lap(start);
-        stop_if_cancelled(options_.cancel);
         simplify_vertices();
         stats_.seconds_sweep = lap(start);
         return finish();
