@@ -105,6 +105,7 @@ def test_round_trip_keeps_index_columns_dtypes_crs_and_untouched_geometries(bord
     pandas.testing.assert_frame_equal(out.drop(columns="geometry"), data.drop(columns="geometry"))
     # The input is left as it was.
     assert wkb_list(data.geometry) == wkb_list(before.geometry)
+    assert "toposimp" not in data.attrs and "toposimp" in out.attrs
     assert out.geometry.values[0].wkb != data.geometry.values[0].wkb or len(data.geometry.values[0].coords) <= 2
 
 
