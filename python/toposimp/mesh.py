@@ -53,7 +53,7 @@ def _share(value) -> str:
 def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep_faces: Optional[int] = None,
                   max_error: Optional[float] = None, terrain: bool = False, lock_boundary: bool = False,
                   weld: bool = False, vertex_attributes: Optional[Dict[str, numpy.ndarray]] = None,
-                  face_attributes: Optional[Dict[str, numpy.ndarray]] = None, hausdorff: bool = True,
+                  face_attributes: Optional[Dict[str, numpy.ndarray]] = None, measure: Optional[str] = "quick",
                   threads: Optional[int] = None, progress: Optional[Callable[[str, float], object]] = None,
                   verbose: int = 0) -> Mesh:
     """Simplify a triangle mesh without self-intersections, flipped faces or non-manifold edges
@@ -66,7 +66,10 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
     ``lock_boundary`` keeps border vertices where they are; ``weld`` merges vertices at the same
     location first (triangle soups). ``vertex_attributes``/``face_attributes``: arrays of one
     value per vertex (face) by column name; a merged vertex gets the blend of its two ends'.
-    ``hausdorff``: measure the distance to the input (in the report; False saves the time).
+    ``measure``: how far the output lies from the input, in the report: "quick" (8 192 points of
+    each surface spread by area, measured exactly: a lower bound of the Hausdorff distance, for a
+    small part of the run), "full" (every vertex and ~4 points per face: slow on big meshes) or
+    None.
     ``threads``: None for all cores (the result is the same for any number). ``progress``: a
     callable taking (phase, share done).
 
@@ -78,8 +81,10 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
              if value is not None]
     if len(given) > 1:
         raise _toposimp.UsageError("give one target, not " + " and ".join(given))
+    if measure not in ("quick", "full", None):
+        raise _toposimp.UsageError(f"measure is 'quick', 'full' or None, not {measure!r}")
     options = {"terrain": bool(terrain), "lock_boundary": bool(lock_boundary), "weld": bool(weld),
-               "hausdorff": bool(hausdorff), "threads": 0 if threads is None else int(threads), "verbosity": int(verbose)}
+               "measure": measure or "none", "threads": 0 if threads is None else int(threads), "verbosity": int(verbose)}
     if keep is not None:
         options["keep"] = _share(keep)
     if keep_faces is not None:

@@ -72,7 +72,12 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
     mesh->add_flag("--ascii", options.ascii,
                    "Write " + text_and_binary + " as text (default: binary; PLY little endian with double coordinates, STL only if "
                    "every coordinate is a float32, else text with every digit)");
-    mesh->add_flag("--no-hausdorff", options.no_hausdorff, "Skip measuring the Hausdorff distance (saves time on big meshes)");
+    auto* measure = mesh->add_option("--measure", options.measure,
+                                     "How far the output lies from the input: quick (default: 8 192 points of each surface, spread "
+                                     "by area, measured exactly; a lower bound of the Hausdorff distance, for a small part of the "
+                                     "run), full (every vertex and ~4 points per face, up to 400 000: slow on big meshes) or none")
+                         ->check(CLI::IsMember({"quick", "full", "none"}));
+    mesh->add_flag("--no-hausdorff", options.no_hausdorff, "The same as --measure none")->excludes(measure);
     mesh->add_option("-j,--threads", options.threads,
                      "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
         ->check(number_at_least(0));
@@ -233,18 +238,33 @@ std::vector<std::string> write_output(const MeshInput& input, const io::MeshForm
 }
 
 // How far the output lies from the input: the sampled Hausdorff distance, and for terrains the
-// vertical error.
+// vertical error; quick (a fixed number of points spread over each surface) or full.
 struct Measures {
+    std::string mode;  // quick, full
     std::optional<mesh::HausdorffDistance> distance;
     std::optional<mesh::VerticalError> vertical;
 };
 
-Measures measure(const mesh::Mesh& original, const mesh::Mesh& simplified, const mesh::SimplifyStats& stats, int threads) {
+constexpr std::size_t kQuickSamples = 8192;
+
+bool measuring(const MeshCommandOptions& options) { return !options.no_hausdorff && options.measure != "none"; }
+
+Measures measure(const MeshCommandOptions& options, const mesh::Mesh& original, const mesh::Mesh& simplified,
+                 const mesh::SimplifyStats& stats) {
     Measures measures;
-    // Four samples per input face, at least 50 000 and at most 400 000 per direction.
-    const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
-    measures.distance = mesh::hausdorff(original, simplified, samples, threads);
-    if (stats.terrain) measures.vertical = mesh::vertical_error(original, simplified, samples, threads);
+    measures.mode = options.measure;
+    if (options.measure == "full") {
+        // Every vertex and four points per input face, at least 50 000 and at most 400 000 per direction.
+        const std::size_t samples = std::clamp<std::size_t>(4 * original.faces.size(), 50000, 400000);
+        measures.distance = mesh::hausdorff(original, simplified, samples, options.threads);
+        if (stats.terrain) measures.vertical = mesh::vertical_error(original, simplified, samples, options.threads);
+    } else if (stats.terrain) {
+        const mesh::TerrainMeasure both = mesh::spread_terrain_measure(original, simplified, kQuickSamples, options.threads);
+        measures.distance = both.distance;
+        measures.vertical = both.vertical;
+    } else {
+        measures.distance = mesh::spread_hausdorff(original, simplified, kQuickSamples, options.threads);
+    }
     return measures;
 }
 
@@ -276,8 +296,9 @@ void report(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engin
                                       stats.faces_in, stats.faces_out, stats.vertices_in, stats.vertices_out, stats.collapses,
                                       stats.refused(), describe(engine.stop, stats), time.total);
     if (const auto& distance = measures.distance) {
-        summary += fmt::format("; Hausdorff {:.6g} ({:.4g}% of the diagonal)", distance->max(),
-                               distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0);
+        summary += fmt::format("; Hausdorff {}{:.6g} ({:.4g}% of the diagonal{})", measures.mode == "quick" ? ">= " : "", distance->max(),
+                               distance->diagonal > 0 ? 100 * distance->max() / distance->diagonal : 0.0,
+                               measures.mode == "quick" ? "; quick: --measure full for more points" : "");
     }
     if (measures.vertical) summary += fmt::format("; vertical error {:.6g}", measures.vertical->max());
     if (err_is_terminal || options.verbosity > 0) log.info("{}", summary);
@@ -336,7 +357,7 @@ std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyO
     }
     if (const auto& distance = measures.distance) {
         const double diagonal = distance->diagonal > 0 ? distance->diagonal : 1.0;
-        json.object("hausdorff").field("max", distance->max()).field("max_fraction_of_diagonal", distance->max() / diagonal);
+        json.object("hausdorff").field("mode", measures.mode).field("max", distance->max()).field("max_fraction_of_diagonal", distance->max() / diagonal);
         sides(json, distance->forward, distance->backward);
         json.field("diagonal", distance->diagonal).end();
     }
@@ -443,7 +464,7 @@ int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal
     if (const std::size_t repeated = mesh::count_repeated_corner_faces(m); repeated > 0) {
         log.warn("{} faces repeat a corner (no area) and are dropped", repeated);
     }
-    const mesh::Mesh original = options.no_hausdorff ? mesh::Mesh{} : mesh::Mesh{m.points, m.faces};
+    const mesh::Mesh original = measuring(options) ? mesh::Mesh{m.points, m.faces} : mesh::Mesh{};
 
     progress.phase("simplifying");
     const auto simplify_start = Clock::now();
@@ -461,10 +482,10 @@ int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal
     }
 
     Measures measures;
-    if (!options.no_hausdorff) {
+    if (measuring(options)) {
         progress.phase("measuring the Hausdorff distance");
         const auto measure_start = Clock::now();
-        measures = measure(original, m, stats, options.threads);
+        measures = measure(options, original, m, stats);
         time.hausdorff = seconds_since(measure_start);
     }
     time.total = seconds_since(start);

@@ -29,7 +29,8 @@ struct MeshCommandOptions {
     bool triangulate = false;
     bool weld = false;  // --weld: merge vertices at the same location first
     bool ascii = false;
-    bool no_hausdorff = false;
+    bool no_hausdorff = false;  // --no-hausdorff: --measure none
+    std::string measure = "quick";  // --measure quick|full|none: how the distance to the input is measured
     int threads = 0;
     bool json = false;
     bool overwrite = false;

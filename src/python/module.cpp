@@ -474,9 +474,7 @@ py::tuple simplify_mesh_arrays(const py::object& points, const py::object& faces
     set_if(options, "weld", command.weld);
     set_if(options, "threads", command.threads);
     set_if(options, "verbosity", command.verbosity);
-    bool hausdorff = true;
-    set_if(options, "hausdorff", hausdorff);
-    command.no_hausdorff = !hausdorff;
+    set_if(options, "measure", command.measure);
     if (command.keep.empty() && command.keep_faces < 0 && command.max_error < 0) command.keep = "10%";
     cli::MeshMemory memory;
     memory.mesh = mesh_of(points, faces, vertex_columns, face_columns, memory.layout);

@@ -65,9 +65,9 @@ TEST(MeshCli, TerrainsReportTheirVerticalError) {
     const auto at = r.out.find("\"vertical_error\":{\"max\":");
     ASSERT_NE(at, std::string::npos) << r.out;
     const double vertical = std::stod(r.out.substr(at + std::string("\"vertical_error\":{\"max\":").size()));
-    const auto hausdorff_at = r.out.find("\"hausdorff\":{\"max\":");
+    const auto hausdorff_at = r.out.find("\"hausdorff\":{\"mode\":\"quick\",\"max\":");
     ASSERT_NE(hausdorff_at, std::string::npos) << r.out;
-    const double distance = std::stod(r.out.substr(hausdorff_at + std::string("\"hausdorff\":{\"max\":").size()));
+    const double distance = std::stod(r.out.substr(hausdorff_at + std::string("\"hausdorff\":{\"mode\":\"quick\",\"max\":").size()));
     EXPECT_GT(vertical, 0.0);
     EXPECT_GE(vertical, distance);  // straight up or down is one way to the other surface
     EXPECT_NE(r.out.find("\"samples_outside\":0"), std::string::npos) << "locked border: the same plan";
@@ -480,6 +480,33 @@ TEST(MeshCli, DemBandOutOfRangeIsAnError) {
     EXPECT_EQ(r.code, 2);
     EXPECT_NE(r.err.find("no band 2"), std::string::npos) << r.err;
     EXPECT_FALSE(std::filesystem::exists(dir / "out.obj"));
+}
+
+// The distance to the input: quick by default (8 192 points of each surface), every vertex and
+// more with --measure full (the quick one a lower bound of it), none with --measure none.
+TEST(MeshCli, Issue33MeasureIsQuickByDefaultFullOnRequest) {
+    const auto dir = fresh_dir("mesh");
+    const std::string out = (dir / "t.ply").string();
+    auto largest = [](const std::string& json, const std::string& mode) {
+        const std::string key = "\"hausdorff\":{\"mode\":\"" + mode + "\",\"max\":";
+        const auto at = json.find(key);
+        return at == std::string::npos ? -1.0 : std::stod(json.substr(at + key.size()));
+    };
+    const CliResult quick = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "--json"});
+    ASSERT_EQ(quick.code, 0) << quick.err;
+    EXPECT_NE(quick.out.find("\"samples\":8192"), std::string::npos) << quick.out;
+    const CliResult full = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "--json", "--measure", "full", "--overwrite"});
+    ASSERT_EQ(full.code, 0) << full.err;
+    const double q = largest(quick.out, "quick"), f = largest(full.out, "full");
+    ASSERT_GT(q, 0.0) << quick.out;
+    ASSERT_GT(f, 0.0) << full.out;
+    EXPECT_LE(q, f);
+    EXPECT_GT(q, 0.5 * f);
+    const CliResult none = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--json", "--measure", "none", "--overwrite"});
+    ASSERT_EQ(none.code, 0) << none.err;
+    EXPECT_EQ(none.out.find("\"hausdorff\":{"), std::string::npos) << none.out;
+    EXPECT_EQ(run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--measure", "some", "--overwrite"}).code, 2);
+    EXPECT_EQ(run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--measure", "full", "--no-hausdorff", "--overwrite"}).code, 2);
 }
 
 }  // namespace

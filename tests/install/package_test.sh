@@ -30,7 +30,7 @@ echo "$contents" | grep -q '^./usr/lib/python3/dist-packages/toposimp/_toposimp.
 dpkg-deb -f "$deb" Recommends | grep -q python3-geopandas || fail "Recommends lacks python3-geopandas"
 PYTHONPATH="$tmp/root/usr/lib/python3/dist-packages" /usr/bin/python3 -c "import toposimp, numpy; \
 m = toposimp.read_mesh('$(dirname "$0")/../../testdata/mesh/torus.off'); \
-assert len(toposimp.simplify_mesh(m.vertices, m.faces, keep=0.1, hausdorff=False).faces) == 480" \
+assert len(toposimp.simplify_mesh(m.vertices, m.faces, keep=0.1, measure=None).faces) == 480" \
     || fail "the packaged Python package does not run"
 simulation=$(apt-get install -s "$deb" 2>&1) || { echo "$simulation"; fail "apt-get cannot install the package"; }
 echo "$simulation" | grep -q '^Inst toposimp' || { echo "$simulation"; fail "apt-get would not install toposimp"; }

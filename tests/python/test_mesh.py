@@ -34,7 +34,7 @@ def test_read_write_round_trip_is_exact(tmp_path):
                                           ({"max_error": 0.05}, ["--max-error", "0.05"])])
 def test_simplify_matches_the_command_line(run_cli, tmp_path, options, args):
     mesh = toposimp.read_mesh(DATA / "mesh" / "torus.off")
-    ours = toposimp.simplify_mesh(mesh.vertices, mesh.faces, hausdorff=False, **options)
+    ours = toposimp.simplify_mesh(mesh.vertices, mesh.faces, measure=None, **options)
     run_cli("mesh", DATA / "mesh" / "torus.off", "-o", tmp_path / "t.ply", "--no-hausdorff", *args)
     theirs = toposimp.read_mesh(tmp_path / "t.ply")
     assert numpy.array_equal(ours.vertices, theirs.vertices)

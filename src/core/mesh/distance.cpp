@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <limits>
 #include <optional>
+#include <span>
+#include <tuple>
 #include <vector>
 
 namespace toposimp::mesh {
@@ -76,31 +78,52 @@ bool triangle_meets_box(V a, V b, V c, V centre, V half) {
 // cells each, and listing them there made every query near the fan test most of its faces (a
 // 5 000-corner polygon: 1.8 s of measurement, issue 29). The search below stays exact: a face not
 // listed in the cells searched has no point in them.
+// With `near` (and `radius`), only the cells within `radius` cells of one of those points are
+// filled: nearest() is then exact for those points while its search stays within `radius`
+// shells, and says when it would have to go further (limited()).
 class FaceGrid {
 public:
-    explicit FaceGrid(const Mesh& m) : mesh_(m) {
+    explicit FaceGrid(const Mesh& m, std::span<const V> near = {}, std::int64_t radius = 0) : mesh_(m) {
         if (m.faces.empty()) return;
-        lo_ = hi_ = v(m.points[m.faces[0][0]]);
-        double edges = 0;
-        for (const Face& f : m.faces) {
-            for (int k = 0; k < 3; ++k) {
-                const V p = v(m.points[f[k]]);
-                lo_ = {std::min(lo_.x, p.x), std::min(lo_.y, p.y), std::min(lo_.z, p.z)};
-                hi_ = {std::max(hi_.x, p.x), std::max(hi_.y, p.y), std::max(hi_.z, p.z)};
-                const V e = p - v(m.points[f[(k + 1) % 3]]);
+        // The box of the points, and the mean edge and area of up to 65 536 faces spread over the
+        // mesh (the cell size needs no more; the distances do not depend on it), in fixed chunks
+        // on all threads, the chunks' sums added in order: the same numbers for any thread count.
+        const std::size_t faces = m.faces.size(), chunks = (faces + kChunk - 1) / kChunk;
+        const std::size_t points = m.points.size(), point_chunks = (points + kChunk - 1) / kChunk;
+        std::vector<std::pair<V, V>> boxes(point_chunks);
+#pragma omp parallel for schedule(static)
+        for (std::int64_t k = 0; k < static_cast<std::int64_t>(point_chunks); ++k) {
+            const std::size_t first = static_cast<std::size_t>(k) * kChunk, last = std::min(points, first + kChunk);
+            V lo = v(m.points[first]), hi = lo;
+            for (std::size_t i = first; i < last; ++i) {
+                const V p = v(m.points[i]);
+                lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+                hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+            }
+            boxes[static_cast<std::size_t>(k)] = {lo, hi};
+        }
+        lo_ = boxes[0].first, hi_ = boxes[0].second;
+        for (const auto& [lo, hi] : boxes) {
+            lo_ = {std::min(lo_.x, lo.x), std::min(lo_.y, lo.y), std::min(lo_.z, lo.z)};
+            hi_ = {std::max(hi_.x, hi.x), std::max(hi_.y, hi.y), std::max(hi_.z, hi.z)};
+        }
+        const std::size_t stride = std::max<std::size_t>(1, faces / 65536);
+        double edges = 0, area = 0;
+        std::size_t measured = 0;
+        for (std::size_t i = 0; i < faces; i += stride, ++measured) {
+            const Face& f = m.faces[i];
+            for (int c = 0; c < 3; ++c) {
+                const V e = v(m.points[f[c]]) - v(m.points[f[(c + 1) % 3]]);
                 edges += std::sqrt(dot(e, e));
             }
+            const V n = cross(v(m.points[f[1]]) - v(m.points[f[0]]), v(m.points[f[2]]) - v(m.points[f[0]]));
+            area += 0.5 * std::sqrt(dot(n, n));
         }
         // Cells two thirds of the mean edge, or twice the side of a face's mean area if that is
         // smaller: long thin faces (a fan) have long edges and little area, and cells as long
         // as their edges would each list most of them.
-        double area = 0;
-        for (const Face& f : m.faces) {
-            const V n = cross(v(m.points[f[1]]) - v(m.points[f[0]]), v(m.points[f[2]]) - v(m.points[f[0]]));
-            area += 0.5 * std::sqrt(dot(n, n));
-        }
-        size_ = 2.0 * edges / (3.0 * static_cast<double>(m.faces.size()));
-        const double by_area = 2.0 * std::sqrt(area / static_cast<double>(m.faces.size()));
+        size_ = 2.0 * edges / (3.0 * static_cast<double>(measured));
+        const double by_area = 2.0 * std::sqrt(area / static_cast<double>(measured));
         if (by_area > 0 && by_area < size_) size_ = by_area;
         const double largest = std::max({hi_.x - lo_.x, hi_.y - lo_.y, hi_.z - lo_.z});
         if (!(size_ > 0)) size_ = largest > 0 ? largest : 1.0;
@@ -110,48 +133,112 @@ public:
             if (static_cast<double>(n_[0]) * static_cast<double>(n_[1]) * static_cast<double>(n_[2]) <= 16777216.0) break;
             size_ *= 1.5;
         }
-        std::vector<std::pair<std::int64_t, std::uint32_t>> entries;
-        for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
-            std::int64_t lo[3], hi[3];
-            for (int k = 0; k < 3; ++k) {
-                double a = coordinate(m.points[m.faces[f][0]], k), b = a;
-                for (int c = 1; c < 3; ++c) {
-                    a = std::min(a, coordinate(m.points[m.faces[f][c]], k));
-                    b = std::max(b, coordinate(m.points[m.faces[f][c]], k));
-                }
-                lo[k] = cell(a, k);
-                hi[k] = cell(b, k);
-            }
-            const bool one_cell = lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2];
-            const V a = v(m.points[m.faces[f][0]]), b = v(m.points[m.faces[f][1]]), c = v(m.points[m.faces[f][2]]);
-            // Half a cell, and a millionth more (with the cells' clamping at the grid's edges,
-            // a cell of the edge row may hold points beyond it: those rows take the whole box).
-            const double half = 0.5 * size_ * (1.0 + 1e-6);
-            for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
-                for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
-                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
-                        const bool edge = x == n_[0] - 1 || y == n_[1] - 1 || z == n_[2] - 1 || x == 0 || y == 0 || z == 0;
-                        const V centre{lo_.x + (static_cast<double>(x) + 0.5) * size_, lo_.y + (static_cast<double>(y) + 0.5) * size_,
-                                       lo_.z + (static_cast<double>(z) + 0.5) * size_};
-                        if (one_cell || edge || triangle_meets_box(a, b, c, centre, {half, half, half})) {
-                            entries.emplace_back(key(x, y, z), f);
+        // With `near`: the cells wanted, and the same at 8 × 8 × 8 coarser (small enough to stay in
+        // cache), to pass over the faces far from every point with one look each.
+        std::vector<std::uint8_t> wanted, coarse;
+        const std::int64_t coarse_n[3] = {(n_[0] + 7) / 8, (n_[1] + 7) / 8, (n_[2] + 7) / 8};
+        auto coarse_key = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
+            return static_cast<std::size_t>(((x / 8) * coarse_n[1] + y / 8) * coarse_n[2] + z / 8);
+        };
+        if (!near.empty()) {
+            limit_ = radius;
+            coarse.assign(static_cast<std::size_t>(coarse_n[0] * coarse_n[1] * coarse_n[2]), 0);
+            wanted.assign(static_cast<std::size_t>(n_[0] * n_[1] * n_[2]), 0);
+            for (const V& p : near) {
+                const std::int64_t c[3] = {cell(p.x, 0), cell(p.y, 1), cell(p.z, 2)};
+                for (std::int64_t x = std::max<std::int64_t>(0, c[0] - radius); x <= std::min(n_[0] - 1, c[0] + radius); ++x) {
+                    for (std::int64_t y = std::max<std::int64_t>(0, c[1] - radius); y <= std::min(n_[1] - 1, c[1] + radius); ++y) {
+                        for (std::int64_t z = std::max<std::int64_t>(0, c[2] - radius); z <= std::min(n_[2] - 1, c[2] + radius); ++z) {
+                            wanted[static_cast<std::size_t>(key(x, y, z))] = 1;
+                            coarse[coarse_key(x, y, z)] = 1;
                         }
                     }
                 }
             }
         }
-        std::sort(entries.begin(), entries.end());
-        keys_.resize(entries.size());
-        faces_.resize(entries.size());
-        for (std::size_t i = 0; i < entries.size(); ++i) keys_[i] = entries[i].first, faces_[i] = entries[i].second;
+        std::vector<std::vector<std::pair<std::int64_t, std::uint32_t>>> listed(chunks);
+#pragma omp parallel for schedule(dynamic, 1)
+        for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) {
+            auto& entries = listed[static_cast<std::size_t>(chunk)];
+            const auto first = static_cast<std::uint32_t>(static_cast<std::size_t>(chunk) * kChunk);
+            const auto last = static_cast<std::uint32_t>(std::min(faces, static_cast<std::size_t>(first) + kChunk));
+            for (std::uint32_t f = first; f < last; ++f) {
+                std::int64_t lo[3], hi[3];
+                for (int k = 0; k < 3; ++k) {
+                    double a = coordinate(m.points[m.faces[f][0]], k), b = a;
+                    for (int c = 1; c < 3; ++c) {
+                        a = std::min(a, coordinate(m.points[m.faces[f][c]], k));
+                        b = std::max(b, coordinate(m.points[m.faces[f][c]], k));
+                    }
+                    lo[k] = cell(a, k);
+                    hi[k] = cell(b, k);
+                }
+                if (!coarse.empty()) {
+                    bool near_one = false;
+                    for (std::int64_t x = lo[0] / 8; x <= hi[0] / 8 && !near_one; ++x) {
+                        for (std::int64_t y = lo[1] / 8; y <= hi[1] / 8 && !near_one; ++y) {
+                            for (std::int64_t z = lo[2] / 8; z <= hi[2] / 8 && !near_one; ++z) near_one = coarse[coarse_key(8 * x, 8 * y, 8 * z)];
+                        }
+                    }
+                    if (!near_one) continue;
+                }
+                const bool one_cell = lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2];
+                const V a = v(m.points[m.faces[f][0]]), b = v(m.points[m.faces[f][1]]), c = v(m.points[m.faces[f][2]]);
+                // Half a cell, and a millionth more (with the cells' clamping at the grid's edges,
+                // a cell of the edge row may hold points beyond it: those rows take the whole box).
+                const double half = 0.5 * size_ * (1.0 + 1e-6);
+                for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
+                    for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
+                        for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
+                            const bool edge = x == n_[0] - 1 || y == n_[1] - 1 || z == n_[2] - 1 || x == 0 || y == 0 || z == 0;
+                            const V centre{lo_.x + (static_cast<double>(x) + 0.5) * size_, lo_.y + (static_cast<double>(y) + 0.5) * size_,
+                                           lo_.z + (static_cast<double>(z) + 0.5) * size_};
+                            if (!wanted.empty() && !wanted[static_cast<std::size_t>(key(x, y, z))]) continue;
+                            if (one_cell || edge || triangle_meets_box(a, b, c, centre, {half, half, half})) {
+                                entries.emplace_back(key(x, y, z), f);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // By cell, and by face within a cell (the chunks are in face order): a counting sort.
+        std::size_t total = 0;
+        for (const auto& part : listed) total += part.size();
+        const auto cells = static_cast<std::size_t>(n_[0] * n_[1] * n_[2]);
+        keys_.resize(total);
+        faces_.resize(total);
+        // (A count per cell: at most 4 MB more than the entries, or 16 bytes a cell per entry.)
+        if ((cells <= 4 * total || cells <= (std::size_t{1} << 20)) && total < std::numeric_limits<std::uint32_t>::max()) {
+            std::vector<std::uint32_t> start(cells + 1, 0);
+            for (const auto& part : listed) {
+                for (const auto& [cell_key, face] : part) ++start[static_cast<std::size_t>(cell_key) + 1];
+            }
+            for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+            for (const auto& part : listed) {
+                for (const auto& [cell_key, face] : part) {
+                    const std::uint32_t at = start[static_cast<std::size_t>(cell_key)]++;
+                    keys_[at] = cell_key, faces_[at] = face;
+                }
+            }
+        } else {
+            std::vector<std::pair<std::int64_t, std::uint32_t>> entries;
+            entries.reserve(total);
+            for (const auto& part : listed) entries.insert(entries.end(), part.begin(), part.end());
+            std::sort(entries.begin(), entries.end());
+            for (std::size_t i = 0; i < entries.size(); ++i) keys_[i] = entries[i].first, faces_[i] = entries[i].second;
+        }
     }
 
+    // The distance from p to the nearest face; with `near` (see above), NaN if the search would
+    // leave the cells filled.
     double nearest(V p) const {
         double best = std::numeric_limits<double>::infinity();
         if (mesh_.faces.empty()) return best;
         const std::int64_t c[3] = {cell(p.x, 0), cell(p.y, 1), cell(p.z, 2)};
         const std::int64_t most = std::max({n_[0], n_[1], n_[2]});
         for (std::int64_t r = 0; r <= most; ++r) {
+            if (limit_ >= 0 && r > limit_) return std::numeric_limits<double>::quiet_NaN();
             for (std::int64_t x = c[0] - r; x <= c[0] + r; ++x) {
                 for (std::int64_t y = c[1] - r; y <= c[1] + r; ++y) {
                     for (std::int64_t z = c[2] - r; z <= c[2] + r; ++z) {
@@ -190,7 +277,10 @@ private:
     }
     std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) const { return (x * n_[1] + y) * n_[2] + z; }
 
+    static constexpr std::size_t kChunk = 1 << 15;
+
     const Mesh& mesh_;
+    std::int64_t limit_ = -1;  // with `near`: the shells filled around those points
     V lo_{0, 0, 0}, hi_{0, 0, 0};
     double size_ = 1.0;
     std::int64_t n_[3] = {1, 1, 1};
@@ -256,6 +346,71 @@ OneWayDistance over_samples(const std::vector<V>& samples, int threads, Measure 
         result.samples += measured[c];
     }
     result.mean = result.samples == 0 ? 0.0 : sum / static_cast<double>(result.samples);
+    return result;
+}
+
+// `count` points of a mesh spread over it by area, stratified: the k-th lies where the running sum
+// of the faces' areas reaches (k + ½)/count of the whole, placed inside its face by the R2
+// low-discrepancy sequence (Roberts 2018), so the points are deterministic and even.
+std::vector<V> spread_samples(const Mesh& m, std::size_t count) {
+    std::vector<V> out;
+    if (m.faces.empty() || count == 0) return out;
+    std::vector<double> running(m.faces.size());
+    double total = 0;
+    for (std::size_t f = 0; f < m.faces.size(); ++f) {
+        const Face& face = m.faces[f];
+        const V n = cross(v(m.points[face[1]]) - v(m.points[face[0]]), v(m.points[face[2]]) - v(m.points[face[0]]));
+        total += std::sqrt(dot(n, n));
+        running[f] = total;
+    }
+    if (!(total > 0)) {
+        for (std::size_t k = 0; k < count; ++k) out.push_back(v(m.points[m.faces[k * m.faces.size() / count][0]]));
+        return out;
+    }
+    out.reserve(count);
+    constexpr double kA = 0.7548776662466927, kB = 0.5698402909980532;  // 1/g, 1/g² (g: the plastic number)
+    std::size_t f = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+        const double at = (static_cast<double>(k) + 0.5) / static_cast<double>(count) * total;
+        while (f + 1 < running.size() && running[f] < at) ++f;
+        double s = std::fmod(0.5 + kA * static_cast<double>(k + 1), 1.0), t = std::fmod(0.5 + kB * static_cast<double>(k + 1), 1.0);
+        if (s + t > 1) s = 1 - s, t = 1 - t;
+        const Face& face = m.faces[f];
+        const V a = v(m.points[face[0]]), b = v(m.points[face[1]]), c = v(m.points[face[2]]);
+        out.push_back(a + s * (b - a) + t * (c - a));
+    }
+    return out;
+}
+
+// From each sample to the nearest face of `to`, indexing only the faces near the samples: the
+// cells within one shell of each, then, for samples whose search must go further, wider shells
+// around those alone until every one is measured (a measure bounded by the samples, not by the
+// size of `to`).
+// `each`, if given, receives every sample's distance, in order.
+OneWayDistance one_way_near(const std::vector<V>& samples, const Mesh& to, int threads, std::vector<double>* each = nullptr) {
+    std::vector<double> distance(samples.size(), std::numeric_limits<double>::quiet_NaN());
+    std::vector<std::size_t> open(samples.size());
+    for (std::size_t i = 0; i < samples.size(); ++i) open[i] = i;
+    for (std::int64_t radius = 1; !open.empty(); radius *= 4) {
+        std::vector<V> near;
+        for (const std::size_t i : open) near.push_back(samples[i]);
+        const FaceGrid grid(to, near, radius);
+        const auto count = static_cast<std::int64_t>(open.size());
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
+        for (std::int64_t k = 0; k < count; ++k) {
+            distance[open[static_cast<std::size_t>(k)]] = grid.nearest(near[static_cast<std::size_t>(k)]);
+        }
+        std::erase_if(open, [&](std::size_t i) { return !std::isnan(distance[i]); });
+    }
+    OneWayDistance result;
+    double sum = 0;
+    for (const double d : distance) {
+        sum += d;
+        result.max = std::max(result.max, d);
+    }
+    result.samples = samples.size();
+    result.mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
+    if (each) *each = std::move(distance);
     return result;
 }
 
@@ -349,6 +504,137 @@ VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samp
     e.forward = one_way_vertical(a, b, face_samples, e.outside, threads);
     e.backward = one_way_vertical(b, a, face_samples, e.outside, threads);
     return e;
+}
+
+namespace {
+
+// Every coordinate zero or of a magnitude whose squares, and their products with each other
+// (distance2's), stay normal doubles: within 2^±120.
+bool in_safe_range(const Mesh& m) {
+    auto safe = [](double c) { return c == 0 || (std::fabs(c) < 0x1p120 && std::fabs(c) > 0x1p-120); };
+    for (const Point3& p : m.points) {
+        if (!safe(p.x) || !safe(p.y) || !safe(p.z)) return false;
+    }
+    return true;
+}
+
+double diagonal_of(const Mesh& m) {
+    if (m.points.empty()) return 0.0;
+    V lo = v(m.points[0]), hi = lo;
+    for (const Point3& p : m.points) {
+        lo = {std::min(lo.x, p.x), std::min(lo.y, p.y), std::min(lo.z, p.z)};
+        hi = {std::max(hi.x, p.x), std::max(hi.y, p.y), std::max(hi.z, p.z)};
+    }
+    return std::sqrt(dot(hi - lo, hi - lo));
+}
+
+}  // namespace
+
+HausdorffDistance spread_hausdorff(const Mesh& a, const Mesh& b, std::size_t count, int threads) {
+    if (threads <= 0) threads = omp_get_max_threads();
+    // Framed (a copy of both meshes) only where squared lengths could overflow or underflow.
+    std::optional<Framed> in;
+    if (!in_safe_range(a) || !in_safe_range(b)) in = framed(a, b);
+    const Mesh& first = in ? in->a : a;
+    const Mesh& second = in ? in->b : b;
+    const double unscale = in ? in->unscale : 1.0;
+    HausdorffDistance d;
+    d.forward = unscaled(one_way_near(spread_samples(first, count), second, threads), unscale);
+    d.backward = unscaled(one_way_near(spread_samples(second, count), first, threads), unscale);
+    d.diagonal = diagonal_of(first) * unscale;
+    return d;
+}
+
+VerticalError spread_vertical_error(const Mesh& a, const Mesh& b, std::size_t count, int threads) {
+    if (threads <= 0) threads = omp_get_max_threads();
+    VerticalError e;
+    for (const auto& [from, to, side] : {std::tuple{&a, &b, &e.forward}, std::tuple{&b, &a, &e.backward}}) {
+        const std::vector<V> samples = spread_samples(*from, count);
+        std::vector<Point> near;
+        near.reserve(samples.size());
+        for (const V& p : samples) near.push_back({p.x, p.y});
+        const PlanIndex index(*to, near);
+        *side = over_samples(samples, threads, [&](V p, double& d) {
+            double z = 0;
+            if (!height_at(*to, index, p.x, p.y, z)) return false;
+            d = std::fabs(p.z - z);
+            return true;
+        });
+        e.outside += samples.size() - side->samples;
+    }
+    return e;
+}
+
+std::vector<Point3> spread_points(const Mesh& m, std::size_t count) {
+    std::vector<Point3> out;
+    for (const V& p : spread_samples(m, count)) out.push_back({p.x, p.y, p.z});
+    return out;
+}
+
+TerrainMeasure spread_terrain_measure(const Mesh& a, const Mesh& b, std::size_t count, int threads) {
+    if (threads <= 0) threads = omp_get_max_threads();
+    if (!in_safe_range(a) || !in_safe_range(b)) {
+        return {spread_hausdorff(a, b, count, threads), spread_vertical_error(a, b, count, threads)};
+    }
+    TerrainMeasure out;
+    out.distance.diagonal = diagonal_of(a);
+    for (const auto& [from, to, forward] : {std::tuple{&a, &b, true}, std::tuple{&b, &a, false}}) {
+        const std::vector<V> samples = spread_samples(*from, count);
+        std::vector<Point> near;
+        near.reserve(samples.size());
+        for (const V& p : samples) near.push_back({p.x, p.y});
+        const PlanIndex index(*to, near, 1);
+        const auto n = static_cast<std::int64_t>(samples.size());
+        std::vector<double> vertical(samples.size(), std::numeric_limits<double>::quiet_NaN());
+        std::vector<double> distance(samples.size(), std::numeric_limits<double>::quiet_NaN());
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
+        for (std::int64_t k = 0; k < n; ++k) {
+            const V p = samples[static_cast<std::size_t>(k)];
+            double z = 0;
+            if (!height_at(*to, index, p.x, p.y, z)) continue;
+            const double dz = std::fabs(p.z - z);
+            vertical[static_cast<std::size_t>(k)] = dz;
+            // The nearest point of `to` is no farther than the one straight above or below, so
+            // its face's box meets the square of that half-side around (x, y) (a little wider:
+            // z above was interpolated in doubles).
+            double best = std::numeric_limits<double>::infinity();
+            const bool searched = index.visit_square(p.x, p.y, dz * (1 + 1e-6) + 1e-300, [&](std::uint32_t face) {
+                const Face& f = to->faces[face];
+                best = std::min(best, distance2(p, v(to->points[f[0]]), v(to->points[f[1]]), v(to->points[f[2]])));
+            });
+            if (searched) distance[static_cast<std::size_t>(k)] = std::sqrt(best);
+        }
+        // Samples with no face straight above or below, or whose square reaches beyond the cells
+        // filled: measured in space.
+        std::vector<V> rest;
+        std::vector<std::size_t> rest_at;
+        for (std::size_t i = 0; i < samples.size(); ++i) {
+            if (std::isnan(distance[i])) rest.push_back(samples[i]), rest_at.push_back(i);
+        }
+        if (!rest.empty()) {
+            std::vector<double> measured;
+            one_way_near(rest, *to, threads, &measured);
+            for (std::size_t i = 0; i < rest.size(); ++i) distance[rest_at[i]] = measured[i];
+        }
+        OneWayDistance& side = forward ? out.distance.forward : out.distance.backward;
+        OneWayDistance& up = forward ? out.vertical.forward : out.vertical.backward;
+        double sum = 0, sum_up = 0;
+        for (std::size_t i = 0; i < samples.size(); ++i) {
+            sum += distance[i];
+            side.max = std::max(side.max, distance[i]);
+            if (std::isnan(vertical[i])) {
+                ++out.vertical.outside;
+                continue;
+            }
+            sum_up += vertical[i];
+            up.max = std::max(up.max, vertical[i]);
+            ++up.samples;
+        }
+        side.samples = samples.size();
+        side.mean = samples.empty() ? 0.0 : sum / static_cast<double>(samples.size());
+        up.mean = up.samples == 0 ? 0.0 : sum_up / static_cast<double>(up.samples);
+    }
+    return out;
 }
 
 HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples, int threads) {

@@ -5,6 +5,7 @@
 #include "core/mesh/mesh.hpp"
 
 #include <cstddef>
+#include <vector>
 
 namespace toposimp::mesh {
 
@@ -25,6 +26,17 @@ struct HausdorffDistance {
 // `threads`: 0 for OpenMP's default; the result is the same for any.
 HausdorffDistance hausdorff(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000, int threads = 0);
 
+// The quick measure (toposimp mesh's default): `count` points of each mesh, spread over it by area
+// (stratified, deterministic), each measured to the nearest face of the other exactly as
+// hausdorff() measures; only the faces near the points are indexed, so the cost grows with
+// `count`, not with the meshes (beyond one pass over their faces). The largest distance found is
+// a lower bound of the Hausdorff distance; were the points independent uniform samples, the
+// share of a surface farther than it from the other would exceed 0.1 % with probability
+// 0.999^count (4.1e-4 for 8 192 points).
+HausdorffDistance spread_hausdorff(const Mesh& a, const Mesh& b, std::size_t count, int threads = 0);
+// The points spread_hausdorff measures from `m` (for tests).
+std::vector<Point3> spread_points(const Mesh& m, std::size_t count);
+
 // Vertical error between two terrains (faces triangulating the x–y plane): from each sample of
 // one (the same samples as hausdorff's), |Δz| to the other's surface straight above or below it
 // (the face holding its x–y position, by exact orientation tests; z interpolated in doubles).
@@ -36,5 +48,18 @@ struct VerticalError {
     double max() const { return forward.max > backward.max ? forward.max : backward.max; }
 };
 VerticalError vertical_error(const Mesh& a, const Mesh& b, std::size_t face_samples = 200000, int threads = 0);
+// The same from `count` points of each, spread as spread_hausdorff spreads them.
+VerticalError spread_vertical_error(const Mesh& a, const Mesh& b, std::size_t count, int threads = 0);
+
+// Both quick measures of two terrains at once, as spread_hausdorff and spread_vertical_error
+// give them, for less: the nearest point of the other surface is no farther than the one
+// straight above or below, so each point's distance in space is searched among the faces
+// whose boxes in the map plane meet a square that small around it (the same index serves both);
+// only the points with no face above or below them are searched in space.
+struct TerrainMeasure {
+    HausdorffDistance distance;
+    VerticalError vertical;
+};
+TerrainMeasure spread_terrain_measure(const Mesh& a, const Mesh& b, std::size_t count, int threads = 0);
 
 }  // namespace toposimp::mesh

@@ -54,36 +54,93 @@ bool overlap_in_plan(const Mesh& mesh, const Face& f, const Face& g, int turn, e
 
 }  // namespace
 
-PlanIndex::PlanIndex(const Mesh& mesh) {
+PlanIndex::PlanIndex(const Mesh& mesh) : PlanIndex(mesh, std::span<const Point>{}, 0) {}
+
+PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach) {
     first_.assign(2, 0);
     if (mesh.faces.empty()) return;
-    const Point3& start = mesh.points[mesh.faces[0][0]];
-    double lo_x = start.x, hi_x = start.x, lo_y = start.y, hi_y = start.y;
-    for (const Face& f : mesh.faces) {
-        for (std::uint32_t w : f) {
-            lo_x = std::min(lo_x, mesh.points[w].x), hi_x = std::max(hi_x, mesh.points[w].x);
-            lo_y = std::min(lo_y, mesh.points[w].y), hi_y = std::max(hi_y, mesh.points[w].y);
+    // The faces in fixed chunks on all threads (boxes: minima and maxima, the same in any order).
+    constexpr std::size_t kChunk = 1 << 15;
+    const std::size_t faces = mesh.faces.size(), chunks = (faces + kChunk - 1) / kChunk;
+    auto chunk_range = [&](std::int64_t k) {
+        const std::size_t first = static_cast<std::size_t>(k) * kChunk;
+        return std::pair{first, std::min(faces, first + kChunk)};
+    };
+    std::vector<PlanBox> boxes(chunks);
+#pragma omp parallel for schedule(static)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
+        const auto [first, last] = chunk_range(k);
+        PlanBox all = plan_box(mesh, mesh.faces[first]);
+        for (std::size_t f = first; f < last; ++f) {
+            const PlanBox box = plan_box(mesh, mesh.faces[f]);
+            all = {std::min(all.x0, box.x0), std::max(all.x1, box.x1), std::min(all.y0, box.y0), std::max(all.y1, box.y1)};
         }
+        boxes[static_cast<std::size_t>(k)] = all;
     }
+    PlanBox all = boxes[0];
+    for (const PlanBox& box : boxes) {
+        all = {std::min(all.x0, box.x0), std::max(all.x1, box.x1), std::min(all.y0, box.y0), std::max(all.y1, box.y1)};
+    }
+    const double lo_x = all.x0, hi_x = all.x1, lo_y = all.y0, hi_y = all.y1;
     lo_x_ = lo_x, lo_y_ = lo_y;
     const double cells = std::max(1.0, static_cast<double>(mesh.faces.size()) / 2.0);
     const double width = hi_x - lo_x, height = hi_y - lo_y;
     size_ = width > 0 && height > 0 ? std::sqrt(width * height / cells) : std::max({width, height, 1.0});
     n_x_ = std::min<std::int64_t>(static_cast<std::int64_t>(width / size_) + 1, 1 << 14);
     n_y_ = std::min<std::int64_t>(static_cast<std::int64_t>(height / size_) + 1, 1 << 14);
-    // Two passes over the faces' cell ranges: count per cell, then fill (a counting sort).
-    auto for_cells = [&](const Face& f, auto each) {
-        const PlanBox box = plan_box(mesh, f);
-        for (std::int64_t x = cell(box.x0, lo_x_, n_x_); x <= cell(box.x1, lo_x_, n_x_); ++x) {
-            for (std::int64_t y = cell(box.y0, lo_y_, n_y_); y <= cell(box.y1, lo_y_, n_y_); ++y) each(static_cast<std::size_t>(x * n_y_ + y));
-        }
-    };
     first_.assign(static_cast<std::size_t>(n_x_ * n_y_) + 1, 0);
-    for (const Face& f : mesh.faces) for_cells(f, [&](std::size_t c) { ++first_[c + 1]; });
+    if (near.empty()) {
+        // Every face: two passes over their cell ranges, count per cell then fill (a counting
+        // sort), with no more memory than the index.
+        auto for_cells = [&](const Face& f, auto each) {
+            const PlanBox box = plan_box(mesh, f);
+            for (std::int64_t x = cell(box.x0, lo_x_, n_x_); x <= cell(box.x1, lo_x_, n_x_); ++x) {
+                for (std::int64_t y = cell(box.y0, lo_y_, n_y_); y <= cell(box.y1, lo_y_, n_y_); ++y) each(static_cast<std::size_t>(x * n_y_ + y));
+            }
+        };
+        for (const Face& f : mesh.faces) for_cells(f, [&](std::size_t c) { ++first_[c + 1]; });
+        for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
+        faces_.resize(first_.back());
+        std::vector<std::size_t> next(first_.begin(), first_.end() - 1);
+        for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) for_cells(mesh.faces[f], [&](std::size_t c) { faces_[next[c]++] = f; });
+        return;
+    }
+    reach_ = reach;
+    std::vector<std::uint8_t> wanted(static_cast<std::size_t>(n_x_ * n_y_), 0);
+    for (const Point p : near) {
+        const std::int64_t cx = cell(p.x, lo_x_, n_x_), cy = cell(p.y, lo_y_, n_y_);
+        for (std::int64_t x = std::max<std::int64_t>(0, cx - reach); x <= std::min(n_x_ - 1, cx + reach); ++x) {
+            for (std::int64_t y = std::max<std::int64_t>(0, cy - reach); y <= std::min(n_y_ - 1, cy + reach); ++y) {
+                wanted[static_cast<std::size_t>(x * n_y_ + y)] = 1;
+            }
+        }
+    }
+    // The wanted cells only (few faces listed): each chunk's (cell, face) pairs in face order on
+    // all threads, then a counting sort by cell.
+    std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> listed(chunks);
+#pragma omp parallel for schedule(dynamic, 1)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
+        const auto [first, last] = chunk_range(k);
+        auto& pairs = listed[static_cast<std::size_t>(k)];
+        for (std::size_t f = first; f < last; ++f) {
+            const PlanBox box = plan_box(mesh, mesh.faces[f]);
+            for (std::int64_t x = cell(box.x0, lo_x_, n_x_); x <= cell(box.x1, lo_x_, n_x_); ++x) {
+                for (std::int64_t y = cell(box.y0, lo_y_, n_y_); y <= cell(box.y1, lo_y_, n_y_); ++y) {
+                    const auto c = static_cast<std::size_t>(x * n_y_ + y);
+                    if (wanted[c]) pairs.emplace_back(static_cast<std::uint32_t>(c), static_cast<std::uint32_t>(f));
+                }
+            }
+        }
+    }
+    for (const auto& pairs : listed) {
+        for (const auto& [c, f] : pairs) ++first_[c + 1];
+    }
     for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
     faces_.resize(first_.back());
     std::vector<std::size_t> next(first_.begin(), first_.end() - 1);
-    for (std::uint32_t f = 0; f < mesh.faces.size(); ++f) for_cells(mesh.faces[f], [&](std::size_t c) { faces_[next[c]++] = f; });
+    for (const auto& pairs : listed) {
+        for (const auto& [c, f] : pairs) faces_[next[c]++] = f;
+    }
 }
 
 std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn, int threads) const {

@@ -19,12 +19,35 @@ namespace toposimp::mesh {
 class PlanIndex {
 public:
     explicit PlanIndex(const Mesh& mesh);
+    // Only the cells within `reach` cells of one holding a point of `near` are filled (at()
+    // elsewhere says nothing): for queries at those points alone, without listing every face of
+    // a big mesh.
+    PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach = 0);
 
     // The faces whose boxes meet the cell holding (x, y) (clamped to the grid): every face over
     // that point among them.
     std::span<const std::uint32_t> at(double x, double y) const {
         const std::size_t c = static_cast<std::size_t>(cell(x, lo_x_, n_x_) * n_y_ + cell(y, lo_y_, n_y_));
         return {faces_.data() + first_[c], faces_.data() + first_[c + 1]};
+    }
+
+    // Calls visit(face) for the faces listed in the cells that meet the square of half-side `r`
+    // around (x, y) (a face more than once if it is listed in several): every face whose box
+    // meets the square among them. With `near`, false (and no call) if the square reaches
+    // beyond the `reach` cells filled around (x, y)'s cell.
+    template <class Visit>
+    bool visit_square(double x, double y, double r, Visit visit) const {
+        const std::int64_t cx = cell(x, lo_x_, n_x_), cy = cell(y, lo_y_, n_y_);
+        const std::int64_t x0 = cell(x - r, lo_x_, n_x_), x1 = cell(x + r, lo_x_, n_x_);
+        const std::int64_t y0 = cell(y - r, lo_y_, n_y_), y1 = cell(y + r, lo_y_, n_y_);
+        if (reach_ >= 0 && (cx - x0 > reach_ || x1 - cx > reach_ || cy - y0 > reach_ || y1 - cy > reach_)) return false;
+        for (std::int64_t i = x0; i <= x1; ++i) {
+            for (std::int64_t j = y0; j <= y1; ++j) {
+                const auto c = static_cast<std::size_t>(i * n_y_ + j);
+                for (std::size_t k = first_[c]; k < first_[c + 1]; ++k) visit(faces_[k]);
+            }
+        }
+        return true;
     }
 
     // Two faces whose interiors overlap in the map plane, the first such pair (f < g, ordered),
@@ -43,6 +66,7 @@ private:
     }
 
     double lo_x_ = 0, lo_y_ = 0, size_ = 1;
+    std::int64_t reach_ = -1;  // with `near`: the cells filled around each point's
     std::int64_t n_x_ = 1, n_y_ = 1;
     std::vector<std::size_t> first_;  // per cell (x-major), where its faces start; one more at the end
     std::vector<std::uint32_t> faces_;

@@ -11,6 +11,7 @@
 #include <cmath>
 #include <limits>
 #include <random>
+#include <tuple>
 #include <vector>
 
 namespace toposimp::mesh {
@@ -160,6 +161,83 @@ TEST(Hausdorff, ScaledByAPowerOfTwoMeasuresTheSame) {
         EXPECT_EQ(d.backward.max, std::ldexp(unit.backward.max, k)) << k;
         EXPECT_EQ(d.forward.mean, std::ldexp(unit.forward.mean, k)) << k;
         EXPECT_EQ(d.diagonal, std::ldexp(unit.diagonal, k)) << k;
+    }
+}
+
+}  // namespace
+}  // namespace toposimp::mesh
+
+namespace toposimp::mesh {
+namespace {
+
+// The quick measure: its points, measured against every face, give its numbers.
+void expect_spread_same(const Mesh& a, const Mesh& b, std::size_t count) {
+    const HausdorffDistance d = spread_hausdorff(a, b, count);
+    for (const auto& [from, to, side] : {std::tuple{&a, &b, d.forward}, std::tuple{&b, &a, d.backward}}) {
+        const std::vector<Point3> points = spread_points(*from, count);
+        ASSERT_EQ(points.size(), count);
+        double most = 0, sum = 0;
+        for (const Point3& p : points) {
+            double nearest = std::numeric_limits<double>::infinity();
+            for (const Face& g : to->faces) nearest = std::min(nearest, to_triangle({p.x, p.y, p.z}, at(*to, g[0]), at(*to, g[1]), at(*to, g[2])));
+            most = std::max(most, nearest);
+            sum += nearest;
+        }
+        EXPECT_EQ(side.samples, count);
+        expect_close(side.max, most);
+        expect_close(side.mean, sum / static_cast<double>(count));
+    }
+}
+
+TEST(QuickMeasure, IndexingOnlyNearTheSpreadPointsFindsTheNearestFaces) {
+    const Mesh fine = toposimp::testing::noisy_sphere(3, 0.0, 1);
+    const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
+    expect_spread_same(fine, coarse, 2000);
+    // Far apart: every search leaves the first shells, and the cells around are filled wider.
+    expect_spread_same(fine, toposimp::testing::noisy_sphere(2, 0.05, 3, {6.0, 1.0, -2.0}), 500);
+    std::mt19937 random(5);
+    expect_spread_same(scattered(random, 150, 10.0), scattered(random, 120, 3.0), 1500);
+    expect_spread_same(fan(400, 1.0, 0.0, 1), fan(150, 1.05, 0.02, 2), 1000);
+}
+
+TEST(QuickMeasure, PointsAreSpreadByAreaAndTheSameForAnyThreads) {
+    const Mesh fine = toposimp::testing::noisy_sphere(3, 0.02, 4);
+    const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 5);
+    const HausdorffDistance one = spread_hausdorff(fine, coarse, 4096, 1), two = spread_hausdorff(fine, coarse, 4096, 2);
+    EXPECT_EQ(one.forward.max, two.forward.max);
+    EXPECT_EQ(one.forward.mean, two.forward.mean);
+    EXPECT_EQ(one.backward.max, two.backward.max);
+    // A lower bound of the full measure's largest distance (which includes every vertex).
+    const HausdorffDistance full = hausdorff(fine, coarse, 200000);
+    EXPECT_LE(one.max(), full.max() * (1 + 1e-12));
+    EXPECT_GT(one.max(), 0.5 * full.max());
+    // Two faces of areas 1 and 3 get a quarter and three quarters of the points.
+    Mesh two_faces;
+    two_faces.points = {{0, 0, 0}, {1, 0, 0}, {0, 2, 0}, {10, 0, 0}, {13, 0, 0}, {10, 2, 0}};
+    two_faces.faces = {{0, 1, 2}, {3, 4, 5}};
+    std::size_t on_first = 0;
+    for (const Point3& p : spread_points(two_faces, 1000)) on_first += p.x < 5;
+    EXPECT_EQ(on_first, 250u);
+}
+
+// For terrains both quick measures come from one plan index: the same numbers as each alone,
+// also where the border moved (points with no face above or below are measured in space).
+TEST(QuickMeasure, TerrainMeasureEqualsTheTwoMeasuresAlone) {
+    const Mesh ground = toposimp::testing::noisy_heightfield(40, 0.3, 6);
+    Mesh moved = toposimp::testing::noisy_heightfield(25, 0.3, 7);
+    for (Point3& p : moved.points) p = {p.x * 40.0 / 25.0 + 0.7, p.y * 40.0 / 25.0 - 0.4, p.z + 0.05};
+    for (const auto& [a, b] : {std::pair<const Mesh*, const Mesh*>{&ground, &moved}, std::pair<const Mesh*, const Mesh*>{&moved, &ground}}) {
+        const TerrainMeasure both = spread_terrain_measure(*a, *b, 3000);
+        const HausdorffDistance distance = spread_hausdorff(*a, *b, 3000);
+        const VerticalError vertical = spread_vertical_error(*a, *b, 3000);
+        EXPECT_EQ(both.distance.forward.max, distance.forward.max);
+        EXPECT_EQ(both.distance.backward.max, distance.backward.max);
+        expect_close(both.distance.forward.mean, distance.forward.mean);
+        EXPECT_EQ(both.vertical.forward.max, vertical.forward.max);
+        EXPECT_EQ(both.vertical.backward.max, vertical.backward.max);
+        EXPECT_EQ(both.vertical.outside, vertical.outside);
+        EXPECT_GT(both.vertical.outside, 0u);
+        EXPECT_LE(both.distance.max(), both.vertical.max() * (1 + 1e-9));
     }
 }
 
