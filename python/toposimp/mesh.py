@@ -51,7 +51,7 @@ def _share(value) -> str:
 
 
 def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep_faces: Optional[int] = None,
-                  max_error: Optional[float] = None, terrain: bool = False, lock_boundary: bool = False,
+                  max_error: Optional[float] = None, terrain: Optional[bool] = None, lock_boundary: bool = False,
                   weld: bool = False, vertex_attributes: Optional[Dict[str, numpy.ndarray]] = None,
                   face_attributes: Optional[Dict[str, numpy.ndarray]] = None, measure: Optional[str] = "quick",
                   threads: Optional[int] = None, progress: Optional[Callable[[str, float], object]] = None,
@@ -61,8 +61,11 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
 
     ``vertices``: n × 3 numbers; ``faces``: m × 3 corner indices. One target (default
     ``keep=0.1``): ``keep`` the share of the faces (0.1 or "10%"), ``keep_faces`` a face count, or
-    ``max_error`` the largest error (for a ``terrain``, a TIN with z as height: the vertical
-    distance to the input, guaranteed everywhere; otherwise the quadric error).
+    ``max_error`` the largest error (for a terrain, a TIN with z as height: the vertical
+    distance to the input, guaranteed everywhere, the border kept; otherwise the quadric error).
+    ``terrain``: None (the default) simplifies a mesh found to be a height field (exactly: every
+    face turned the same way in the x-y plane, none overlapping there) as a terrain, any other in
+    space; True asks for a terrain (a warning if it is not one), False never.
     ``lock_boundary`` keeps border vertices where they are; ``weld`` merges vertices at the same
     location first (triangle soups). ``vertex_attributes``/``face_attributes``: arrays of one
     value per vertex (face) by column name; a merged vertex gets the blend of its two ends'.
@@ -83,7 +86,7 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
         raise _toposimp.UsageError("give one target, not " + " and ".join(given))
     if measure not in ("quick", "full", None):
         raise _toposimp.UsageError(f"measure is 'quick', 'full' or None, not {measure!r}")
-    options = {"terrain": bool(terrain), "lock_boundary": bool(lock_boundary), "weld": bool(weld),
+    options = {"terrain": terrain is True, "no_terrain": terrain is False, "lock_boundary": bool(lock_boundary), "weld": bool(weld),
                "measure": measure or "none", "threads": 0 if threads is None else int(threads), "verbosity": int(verbose)}
     if keep is not None:
         options["keep"] = _share(keep)

@@ -63,8 +63,13 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
                    "Keep every border vertex (on an edge with one face) where it is, so neighbouring tiles still match");
     mesh->add_flag("--free-boundary", options.free_boundary,
                    "For a DEM: let border vertices move (the default keeps them, as --lock-boundary)");
-    mesh->add_flag("--terrain", options.terrain,
-                   "The mesh is a TIN over the x-y plane (z = height): never fold a face over in the map plane");
+    auto* terrain = mesh->add_flag("--terrain", options.terrain,
+                                   "The mesh is a TIN over the x-y plane (z = height): never fold a face over in the map plane "
+                                   "(the default for any mesh found to be one; a warning if it is not)");
+    mesh->add_flag("--no-terrain", options.no_terrain,
+                   "Simplify in space even a mesh that is a height field (the default simplifies those as terrains: "
+                   "--max-error then bounds the vertical error and keeps the border)")
+        ->excludes(terrain);
     mesh->add_flag("--triangulate", options.triangulate, "Split polygons with more than 3 corners into fans (else an error)");
     mesh->add_flag("--weld", options.weld,
                    "First merge vertices at exactly the same location (an unwelded mesh, as converted from STL); vertex "
@@ -194,6 +199,23 @@ MeshInput read_dem(const MeshCommandOptions& options, const MeshGdal& gdal, mesh
     return input;
 }
 
+// Why the mesh was simplified as a terrain or in space: (mode for --json, words for people).
+std::pair<std::string, std::string> terrain_mode(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engine,
+                                                 const MeshCommandOptions& options, bool dem) {
+    if (!engine.terrain) return {"off", "in space: --no-terrain"};
+    if (stats.terrain) {
+        if (dem) return {"dem", "as a terrain: a DEM's TIN"};
+        if (options.terrain) return {"asked", "as a terrain: --terrain, and every face turns the same way in the x-y plane, none overlapping"};
+        return {"detected", "as a terrain: found to be a height field (every face turns the same way in the x-y plane, none "
+                            "overlapping; --no-terrain for the checks in space)"};
+    }
+    const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
+                                                     std::to_string((*stats.plan_overlap)[1]) +
+                                                     " (counted from 0) overlap in the x-y plane"
+                                               : "the faces are not all turned the same way in the x-y plane";
+    return {"not_a_height_field", "in space: " + why};
+}
+
 // What the engine's stats say the user must hear: a non-manifold input is an error; a terrain
 // that is not one is simplified in space, with a warning.
 void check_result(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engine, const MeshCommandOptions& options,
@@ -206,14 +228,14 @@ void check_result(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions&
                              (options.weld ? " once vertices at the same location are welded" : "") +
                              ": non-manifold meshes are not supported");
     }
-    if (engine.terrain && !stats.terrain) {
-        const std::string why = stats.plan_overlap ? "faces " + std::to_string((*stats.plan_overlap)[0]) + " and " +
-                                                         std::to_string((*stats.plan_overlap)[1]) +
-                                                         " (counted from 0) overlap in the x-y plane"
-                                                   : "the faces are not all turned the same way in the x-y plane";
-        log.warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, why,
+    const auto [mode, words] = terrain_mode(stats, engine, options, false);
+    if (mode == "not_a_height_field" && options.terrain) {
+        log.warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, words.substr(10),
                  engine.stop.target == mesh::Target::max_error ? " (--max-error bounds the quadric error)" : "");
-    } else if (stats.vertical_bound && !engine.lock_boundary) {
+    } else {
+        log.debug("{}: simplified {}", options.input, words);
+    }
+    if (stats.vertical_bound && !engine.lock_boundary) {
         log.info("border vertices kept where they are: the vertical bound is measured over the input's extent");
     }
 }
@@ -335,6 +357,8 @@ std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyO
         .field("vertical", stats.refused_vertical)
         .end();
     json.field("max_quadric_error", stats.max_error).field("terrain", stats.terrain);
+    const auto [mode, words] = terrain_mode(stats, engine, options, input.dem.has_value());
+    json.field("terrain_mode", mode).field("terrain_why", words);
     json.field("lock_boundary", engine.lock_boundary || stats.vertical_bound);
     if (stats.vertical_bound) json.field("guaranteed_vertical_error", engine.stop.value);
     // Attribute columns kept, dropped on reading (with the reason), left out on writing.
@@ -436,7 +460,8 @@ int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal
         throw UsageError{options.input + " -> " + options.output + ": a DEM or an OGR layer needs GDAL, which this caller did not provide"};
     }
     engine->lock_boundary = options.lock_boundary;
-    engine->terrain = options.terrain;
+    // A height field is found by the engine's own exact test, which --terrain asks for anyway.
+    engine->terrain = !options.no_terrain;
     engine->threads = options.threads;
     engine->cancel = context.cancel;
     const auto start = Clock::now();

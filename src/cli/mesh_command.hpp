@@ -25,7 +25,10 @@ struct MeshCommandOptions {
     bool free_boundary = false;
     int band = 1;
     std::string layer_name = "tin";
-    bool terrain = false;
+    bool terrain = false;     // --terrain: a TIN over the x-y plane (a warning if it is not one)
+    bool no_terrain = false;  // --no-terrain: simplify in space even a height field
+    // Neither: a height field (every face turned the same way in the x-y plane, none degenerate
+    // or overlapping there, decided exactly) is simplified as a terrain, anything else in space.
     bool triangulate = false;
     bool weld = false;  // --weld: merge vertices at the same location first
     bool ascii = false;

@@ -471,6 +471,7 @@ py::tuple simplify_mesh_arrays(const py::object& points, const py::object& faces
     set_if(options, "max_error", command.max_error);
     set_if(options, "lock_boundary", command.lock_boundary);
     set_if(options, "terrain", command.terrain);
+    set_if(options, "no_terrain", command.no_terrain);
     set_if(options, "weld", command.weld);
     set_if(options, "threads", command.threads);
     set_if(options, "verbosity", command.verbosity);

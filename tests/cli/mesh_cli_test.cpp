@@ -509,5 +509,54 @@ TEST(MeshCli, Issue33MeasureIsQuickByDefaultFullOnRequest) {
     EXPECT_EQ(run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--measure", "full", "--no-hausdorff", "--overwrite"}).code, 2);
 }
 
+// Issue 33: a height field is found and simplified as a terrain without --terrain, exactly as
+// with it; a mesh that is not one (a closed model, a deck over the ground, one fold) in space,
+// without a warning; --no-terrain keeps the checks in space.
+TEST(MeshCli, Issue33HeightFieldsAreFoundAutomatically) {
+    const auto dir = fresh_dir("mesh");
+    auto mode_of = [](const std::string& json) {
+        const std::string key = "\"terrain_mode\":\"";
+        const auto at = json.find(key);
+        return at == std::string::npos ? std::string() : json.substr(at + key.size(), json.find('"', at + key.size()) - at - key.size());
+    };
+    auto file = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::string found = (dir / "found.ply").string(), asked = (dir / "asked.ply").string(), space = (dir / "space.ply").string();
+    const CliResult auto_run = run_cli({"mesh", testdata("mesh/hills.obj"), "-o", found, "--max-error", "0.3", "--json"});
+    ASSERT_EQ(auto_run.code, 0) << auto_run.err;
+    EXPECT_EQ(mode_of(auto_run.out), "detected") << auto_run.out;
+    EXPECT_NE(auto_run.out.find("\"guaranteed_vertical_error\":0.3"), std::string::npos) << auto_run.out;
+    EXPECT_EQ(auto_run.err.find("warning"), std::string::npos) << auto_run.err;
+    const CliResult asked_run = run_cli({"mesh", testdata("mesh/hills.obj"), "-o", asked, "--max-error", "0.3", "--terrain", "--json"});
+    ASSERT_EQ(asked_run.code, 0) << asked_run.err;
+    EXPECT_EQ(mode_of(asked_run.out), "asked");
+    EXPECT_EQ(file(found), file(asked));
+    const CliResult off = run_cli({"mesh", testdata("mesh/hills.obj"), "-o", space, "--max-error", "0.3", "--no-terrain", "--json"});
+    ASSERT_EQ(off.code, 0) << off.err;
+    EXPECT_EQ(mode_of(off.out), "off");
+    EXPECT_NE(file(found), file(space));
+
+    for (const char* model : {"mesh/torus.off", "mesh/bridge-deck.obj"}) {
+        const CliResult r = run_cli({"mesh", testdata(model), "-o", (dir / "m.ply").string(), "--overwrite", "--json"});
+        ASSERT_EQ(r.code, 0) << r.err;
+        EXPECT_EQ(mode_of(r.out), "not_a_height_field") << model;
+        EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+    }
+    // One fold: an interior vertex of the hills pushed past its neighbour in x.
+    mesh::Mesh hills = read_back(testdata("mesh/hills.obj"));
+    const std::uint32_t v = 65 * 30 + 30;
+    ASSERT_EQ(hills.points[v].x, 30.0);
+    hills.points[v].x = 31.5;
+    const std::string folded = (dir / "folded.ply").string();
+    io::write_mesh(hills, {}, folded, io::MeshFormat::ply, false);
+    const CliResult r = run_cli({"mesh", folded, "-o", (dir / "f.ply").string(), "--json"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(mode_of(r.out), "not_a_height_field") << r.out;
+    const CliResult warned = run_cli({"mesh", folded, "-o", (dir / "g.ply").string(), "--terrain"});
+    EXPECT_NE(warned.err.find("not a terrain TIN"), std::string::npos) << warned.err;
+}
+
 }  // namespace
 }  // namespace toposimp::testing
