@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <string>
 
 namespace toposimp::mesh {
@@ -55,12 +56,64 @@ TEST(MeshProperties, CheckerFindsCoplanarAndCrossingContacts) {
     pierced.points.push_back({3, 3, 3});
     pierced.faces.push_back({4, 5, 6});
     EXPECT_EQ(find_defects(pierced).intersecting_pairs, 1u);
+    // Two faces meeting in one corner only: a pinch (two fans around that vertex).
+    Mesh bowtie{{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {-1, 0, 0}, {0, -1, 0}}, {{0, 1, 2}, {0, 3, 4}}};
+    EXPECT_EQ(find_defects(bowtie).non_manifold_vertices, 1u);
+    EXPECT_EQ(find_defects(flat).non_manifold_vertices, 0u);
     Mesh lying = flat;
     lying.points.push_back({0.6, 0.1, 0});
     lying.points.push_back({0.9, 0.1, 0});
     lying.points.push_back({0.9, 0.4, 0});
     lying.faces.push_back({4, 5, 6});
     EXPECT_EQ(find_defects(lying).intersecting_pairs, 1u);
+}
+
+// A bumpy n × n grid with square holes of h × h cells every h + gap cells: border loops `gap`
+// cells apart (1: a strip one face wide between two holes).
+Mesh holed_sheet(int n, int h, int gap, double bump, std::uint64_t seed) {
+    std::mt19937_64 random(seed);
+    std::uniform_real_distribution<double> noise(-bump, bump);
+    Mesh m;
+    for (int j = 0; j <= n; ++j) {
+        for (int i = 0; i <= n; ++i) m.points.push_back({i + 0.1 * noise(random), j + 0.1 * noise(random), std::sin(0.3 * i) * std::cos(0.2 * j) + noise(random)});
+    }
+    auto hole = [&](int i, int j) { return i % (h + gap) >= gap && j % (h + gap) >= gap && i < n - gap && j < n - gap; };
+    for (int j = 0; j < n; ++j) {
+        for (int i = 0; i < n; ++i) {
+            if (hole(i, j)) continue;
+            const auto a = static_cast<std::uint32_t>(j * (n + 1) + i);
+            const auto w = static_cast<std::uint32_t>(n + 1);
+            m.faces.push_back({a, a + 1, a + w + 1});
+            m.faces.push_back({a, a + w + 1, a + w});
+        }
+    }
+    drop_unused(m);
+    return m;
+}
+
+// Issue 33: border loops close together must never be pinched into one vertex, nor the strips
+// between them crossed, whatever the target (in space and as a terrain, border free or locked).
+TEST(MeshProperties, Issue33BorderLoopsCloseTogetherAreNeverPinched) {
+    for (const int gap : {1, 2}) {
+        for (const std::uint64_t seed : {1u, 2u}) {
+            const Mesh input = holed_sheet(30, 2, gap, 0.3, seed);
+            {
+                const auto defects = find_defects(input);
+                ASSERT_EQ(defects.total(), 0u) << defects.first;
+            }
+            for (const bool terrain : {false, true}) {
+                for (const bool lock : {false, true}) {
+                    for (const double keep : {0.1, 0.0}) {
+                        Mesh m = input;
+                        simplified(m, Target::keep_fraction, keep, 2, terrain, lock);
+                        const auto defects = find_defects(m);
+                        EXPECT_EQ(defects.total(), 0u) << "gap " << gap << " seed " << seed << " terrain " << terrain << " lock "
+                                                       << lock << " keep " << keep << ": " << defects.first;
+                    }
+                }
+            }
+        }
+    }
 }
 
 TEST(MeshProperties, GeneratedInputsAreClean) {

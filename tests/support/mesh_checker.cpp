@@ -193,6 +193,40 @@ MeshDefects find_defects(const mesh::Mesh& mesh) {
             note("inconsistently oriented edge " + std::to_string(edge.first) + "-" + std::to_string(edge.second));
         }
     }
+    // Vertices: the faces around each must form one fan, every two joined through a chain of
+    // faces that share an edge at the vertex; two fans meeting in one vertex (two border loops
+    // pinched together, two surfaces touching at a point) are not a manifold there.
+    {
+        std::vector<std::vector<std::uint32_t>> around(mesh.points.size());
+        for (std::size_t f = 0; f < m; ++f) {
+            for (std::uint32_t v : mesh.faces[f]) around[v].push_back(static_cast<std::uint32_t>(f));
+        }
+        for (std::uint32_t v = 0; v < around.size(); ++v) {
+            const std::vector<std::uint32_t>& faces = around[v];
+            if (faces.size() < 2) continue;
+            std::vector<std::size_t> root(faces.size());
+            for (std::size_t i = 0; i < root.size(); ++i) root[i] = i;
+            auto find = [&](std::size_t i) {
+                while (root[i] != i) i = root[i] = root[root[i]];
+                return i;
+            };
+            // Faces at v sharing another corner w share the edge vw.
+            std::map<std::uint32_t, std::size_t> first_with;
+            for (std::size_t i = 0; i < faces.size(); ++i) {
+                for (std::uint32_t w : mesh.faces[faces[i]]) {
+                    if (w == v) continue;
+                    const auto [at, added] = first_with.emplace(w, i);
+                    if (!added) root[find(i)] = find(at->second);
+                }
+            }
+            std::size_t fans = 0;
+            for (std::size_t i = 0; i < faces.size(); ++i) fans += find(i) == i;
+            if (fans > 1) {
+                ++defects.non_manifold_vertices;
+                note("non-manifold vertex " + std::to_string(v) + " (" + std::to_string(fans) + " fans)");
+            }
+        }
+    }
     // Every pair of faces with overlapping boxes.
     std::vector<std::size_t> order(m);
     for (std::size_t f = 0; f < m; ++f) order[f] = f;

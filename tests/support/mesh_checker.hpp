@@ -17,10 +17,12 @@ struct MeshDefects {
     std::size_t inconsistent_edges = 0;   // two faces using an edge in the same direction
     std::size_t degenerate_faces = 0;     // collinear corners or a repeated corner
     std::size_t duplicate_faces = 0;      // two faces on the same three vertices
+    std::size_t non_manifold_vertices = 0;  // faces around a vertex in more than one fan (a pinch)
     std::string first;                    // a description of the first defect found
 
     std::size_t total() const {
-        return intersecting_pairs + non_manifold_edges + inconsistent_edges + degenerate_faces + duplicate_faces;
+        return intersecting_pairs + non_manifold_edges + inconsistent_edges + degenerate_faces + duplicate_faces +
+               non_manifold_vertices;
     }
 };
 
