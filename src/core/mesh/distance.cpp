@@ -548,7 +548,11 @@ HausdorffDistance spread_hausdorff(const Mesh& a, const Mesh& b, std::size_t cou
 VerticalError spread_vertical_error(const Mesh& a, const Mesh& b, std::size_t count, int threads) {
     if (threads <= 0) threads = omp_get_max_threads();
     VerticalError e;
-    for (const auto& [from, to, side] : {std::tuple{&a, &b, &e.forward}, std::tuple{&b, &a, &e.backward}}) {
+    for (const auto& [from_mesh, to_mesh, one_side] : {std::tuple{&a, &b, &e.forward}, std::tuple{&b, &a, &e.backward}}) {
+        // (Plain locals: clang 14 does not capture structured bindings in lambdas.)
+        const Mesh* from = from_mesh;
+        const Mesh* to = to_mesh;
+        OneWayDistance* side = one_side;
         const std::vector<V> samples = spread_samples(*from, count);
         std::vector<Point> near;
         near.reserve(samples.size());
@@ -578,7 +582,10 @@ TerrainMeasure spread_terrain_measure(const Mesh& a, const Mesh& b, std::size_t 
     }
     TerrainMeasure out;
     out.distance.diagonal = diagonal_of(a);
-    for (const auto& [from, to, forward] : {std::tuple{&a, &b, true}, std::tuple{&b, &a, false}}) {
+    for (const auto& [from_mesh, to_mesh, forward] : {std::tuple{&a, &b, true}, std::tuple{&b, &a, false}}) {
+        // (Plain locals: clang 14 does not capture structured bindings in lambdas.)
+        const Mesh* from = from_mesh;
+        const Mesh* to = to_mesh;
         const std::vector<V> samples = spread_samples(*from, count);
         std::vector<Point> near;
         near.reserve(samples.size());
