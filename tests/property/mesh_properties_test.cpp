@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <random>
 #include <string>
 
@@ -112,6 +113,65 @@ TEST(MeshProperties, Issue33BorderLoopsCloseTogetherAreNeverPinched) {
                     }
                 }
             }
+        }
+    }
+}
+
+// The connected pieces of a mesh (faces joined through shared vertices), each a mesh of its own.
+std::vector<Mesh> pieces(const Mesh& m) {
+    std::vector<std::uint32_t> root(m.points.size());
+    for (std::uint32_t v = 0; v < root.size(); ++v) root[v] = v;
+    auto find = [&](std::uint32_t v) {
+        while (root[v] != v) v = root[v] = root[root[v]];
+        return v;
+    };
+    for (const Face& f : m.faces) {
+        root[find(f[1])] = find(f[0]);
+        root[find(f[2])] = find(f[0]);
+    }
+    std::map<std::uint32_t, Mesh> by_root;
+    for (const Face& f : m.faces) by_root[find(f[0])].faces.push_back(f);
+    std::vector<Mesh> out;
+    for (auto& [r, piece] : by_root) {
+        piece.points = m.points;
+        drop_unused(piece);
+        out.push_back(std::move(piece));
+    }
+    return out;
+}
+
+// Issue 33: parts that already cross each other (two interpenetrating spheres, a sphere through
+// a sheet) simplify as far as clean ones: a contact a collapse inherits from the faces it
+// replaces is not a new one. Each part stays free of contacts with itself, manifold, whole; the
+// parts still cross (they did); the target is reached.
+TEST(MeshProperties, Issue33InterpenetratingPartsSimplifyAsFarAsCleanOnes) {
+    for (const std::uint64_t seed : {1u, 2u}) {
+        const Mesh first = toposimp::testing::noisy_sphere(4, 0.02, seed);
+        const Mesh second = toposimp::testing::noisy_sphere(4, 0.02, seed + 10, {0.9, 0.3, 0.1});
+        Mesh both = first;
+        for (const Point3& p : second.points) both.points.push_back(p);
+        const auto offset = static_cast<std::uint32_t>(first.points.size());
+        for (const Face& f : second.faces) both.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+        ASSERT_GT(find_defects(both).intersecting_pairs, 0u);
+        for (const double keep : {0.1, 0.02}) {
+            Mesh m = both;
+            const SimplifyStats stats = simplified(m, Target::keep_fraction, keep, 2);
+            EXPECT_TRUE(stats.target_reached) << "seed " << seed << " keep " << keep << ": " << stats.faces_out << " faces";
+            const std::vector<Mesh> parts = pieces(m);
+            ASSERT_EQ(parts.size(), 2u);
+            for (const Mesh& part : parts) {
+                const auto defects = find_defects(part);
+                EXPECT_EQ(defects.total(), 0u) << "seed " << seed << " keep " << keep << ": " << defects.first;
+                EXPECT_EQ(static_cast<long>(part.points.size()) - static_cast<long>(part.faces.size()) / 2, 2) << "a sphere stays one";
+            }
+            const auto whole = find_defects(m);
+            EXPECT_GT(whole.intersecting_pairs, 0u) << "the parts crossed and still do";
+            EXPECT_EQ(whole.non_manifold_edges + whole.non_manifold_vertices + whole.degenerate_faces + whole.duplicate_faces, 0u)
+                << whole.first;
+            // The same for any number of threads.
+            Mesh one = both;
+            simplified(one, Target::keep_fraction, keep, 1);
+            EXPECT_TRUE(same(one, m)) << "seed " << seed << " keep " << keep;
         }
     }
 }

@@ -193,7 +193,9 @@ void Simplifier::apply(const Collapse& c, BlockResult& result, std::vector<std::
     flags_[b] = static_cast<std::uint8_t>(flags_[b] | kDead);
     stamp_[a] = (stamp_[a] + 1) & kStampMask;
     stamp_[b] = (stamp_[b] + 1) & kStampMask;
-    for (std::uint32_t f : c.star) clean_[f] = kClean;
+    // Faces made by a collapse were checked against every face near them: clean, unless they
+    // inherit a contact of the input's.
+    for (std::uint32_t f : c.star) clean_[f] = c.inherits ? kConflicting : kClean;
     if (!terrain_) twin_[a] = c.twin_after;
     if (use_index_) {
         for (std::uint32_t f : c.shared) index_.mark_changed(f);

@@ -1,7 +1,11 @@
 // The no-new-contact check of a collapse: no face it changes may touch or cross another face,
-// except at the corners and the edge the two share. Decided with exact predicates: first, in
-// flat regions, by a proof that needs no other face (flat_and_clean); otherwise by searching the
-// face index for the faces near the new ones and testing each pair.
+// except at the corners and the edge the two share — or where the input already crossed itself:
+// a new face may meet a face g that one of the faces the collapse replaces met too (the contact
+// is inherited, not new: the crossing of two interpenetrating parts moves along the faces that
+// already crossed, and no part touches one it did not touch). A clean input never has such a
+// face, so its result does not change. Decided with exact predicates: first, in flat regions, by
+// a proof that needs no other face (flat_and_clean); otherwise by searching the face index for
+// the faces near the new ones and testing each pair.
 #include "core/mesh/simplifier.hpp"
 
 namespace toposimp::mesh::detail {
@@ -45,6 +49,7 @@ bool Simplifier::no_new_contact(Collapse& c, Overlay& overlay, SimplifyStats& st
     const bool flatten = terrain_ && moves_border;
     const bool interior = ((flags_[c.a] | flags_[c.b]) & kBoundary) == 0 && c.shared.size() == 2;
     c.twin_after = false;
+    c.inherits = false;
     if (!terrain_ && interior && options_.flat_shortcut && flat_and_clean(c, overlay, predicates)) {
         ++stats.flat_unsearched;
         return true;
@@ -165,7 +170,9 @@ bool Simplifier::search_contacts(Collapse& c, bool flatten, Overlay& overlay, ex
         }
         for (std::size_t k = 0; k < meets; ++k) {
             const std::size_t n = meeting[k];
-            if (conflict(face_[near.faces[n]], near.triangles[n])) return true;
+            if (!conflict(face_[near.faces[n]], near.triangles[n])) continue;
+            if (flatten || !met_by_replaced(c, near.triangles[n], near.boxes[n], predicates)) return true;
+            c.inherits = true;
         }
         for (std::size_t j = i + 1; j < c.fresh.size() && !simple_fan; ++j) {
             const exact::Triangle3 other = flat(c.fresh[j]);
@@ -315,6 +322,20 @@ bool Simplifier::fan_is_simple(std::uint32_t a, std::uint32_t b, const std::vect
         edge = &*std::lower_bound(link.begin(), link.end(), edge->y, [](const LinkEdge& e, std::uint32_t v) { return e.x < v; });
     }
     return exact::simple_fan(p, ring, predicates);
+}
+
+// Did one of the faces the collapse replaces (a's and b's, as they are) meet `other` beyond
+// their shared corners? (A degenerate one inherits nothing.)
+bool Simplifier::met_by_replaced(const Collapse& c, const exact::Triangle3& other, const Box3& other_box,
+                                 exact::PredicateStats& predicates) const {
+    for (const std::vector<std::uint32_t>* faces : {&c.fa, &c.fb}) {
+        for (const std::uint32_t r : *faces) {
+            const exact::Triangle3 old = triangle(face_[r]);
+            if (!other_box.overlaps(triangle_box(old[0], old[1], old[2]))) continue;
+            if (!exact::degenerate(old, predicates) && exact::faces_conflict(old, other, predicates)) return true;
+        }
+    }
+    return false;
 }
 
 bool Simplifier::meets_another(std::uint32_t f, const Overlay& overlay, exact::PredicateStats& predicates) const {

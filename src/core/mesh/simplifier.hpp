@@ -116,6 +116,7 @@ struct Collapse {
     std::vector<std::uint32_t> replaced;  // (vertical bound) the star and the shared faces
     Box3 reach{};                         // the box of the fresh faces
     bool twin_after = false;              // (3D) another vertex lies at the placement
+    bool inherits = false;                // a new face meets a face an old one met (see no_new_contact)
 };
 
 class Simplifier {
@@ -283,6 +284,8 @@ private:
     // Whether the collapse of the interior edge ab, whose changed faces `star` become `fresh` with
     // a and b at p, provably makes no contact, without looking at other faces (see the definition).
     bool flat_and_clean(const Collapse& c, Overlay& overlay, exact::PredicateStats& predicates);
+    bool met_by_replaced(const Collapse& c, const exact::Triangle3& other, const Box3& other_box,
+                         exact::PredicateStats& predicates) const;
     // The link Γ of the collapse of ab: for each face of `star` (each has a or b, not both), its
     // edge x → y opposite that corner, sorted by x. True if Γ is one cycle.
     bool link_cycle(std::uint32_t a, std::uint32_t b, const std::vector<std::uint32_t>& star, std::vector<LinkEdge>& link) const;
