@@ -76,7 +76,7 @@ PY
 
 # The installed provider with the installed executable, in a real QGIS when there is one.
 status=0
-TOPOSIMP_BINARY="$prefix/bin/toposimp" TOPOSIMP_QGIS_PLUGINS="$plugins" \
+TOPOSIMP_BINARY="$prefix/bin/toposimp" TOPOSIMP_QGIS_PLUGINS="$plugins" TOPOSIMP_PYTHONPATH="$site" \
     "$python" "$source_dir/scripts/qgis/tests/qgis_process_test.py" || status=$?
 if [ "$status" -eq 77 ]; then
     echo "note: qgis_process not installed; the installed provider was not run in QGIS"

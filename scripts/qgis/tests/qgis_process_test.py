@@ -204,7 +204,21 @@ def main():
                                        OUTPUT=os.path.join(tmp, "nowhere.obj"))
         if code == 0 or "toposimp was not found on PATH" not in text:
             fail("no executable anywhere did not give the 'not found' error: exit {}\n{}".format(code, text))
-    print("qgis_process: map, check, mesh, dem, the executable setting and errors all behaved")
+        # The Python package inside QGIS's own Python (what its console runs), with the plugin's
+        # folder among QGIS's plugin paths: a Processing script that imports toposimp and
+        # simplifies the sample with it. TOPOSIMP_PYTHONPATH: where the package under test is.
+        package = os.environ.get("TOPOSIMP_PYTHONPATH")
+        if package:
+            scripts = os.path.join(home, ".local", "share", "QGIS", "QGIS3", "profiles", "default", "processing", "scripts")
+            os.makedirs(scripts, exist_ok=True)
+            shutil.copy(os.path.join(HERE, "scripts", "toposimp_import.py"), scripts)
+            qgis.env.update(PYTHONPATH=package, TOPOSIMP_TESTDATA=TESTDATA)
+            code, results, text = qgis.run("script:toposimp_import")
+            if code != 0 or results.get("VERTICES_OUT") != 100 or not str(results.get("MODULE", "")).startswith(package):
+                fail("import toposimp in QGIS's Python: exit {}\n{}".format(code, text))
+    print("qgis_process: map, check, mesh, dem, the executable setting and errors, and import toposimp in QGIS's "
+          "Python all behaved" if package else "qgis_process: map, check, mesh, dem, the executable setting and errors "
+          "all behaved (TOPOSIMP_PYTHONPATH unset: the Python package was not tried)")
     return 0
 
 
