@@ -208,8 +208,8 @@ public:
         const auto cells = static_cast<std::size_t>(n_[0] * n_[1] * n_[2]);
         keys_.resize(total);
         faces_.resize(total);
-        // (A count per cell: at most 4 MB more than the entries, or 16 bytes a cell per entry.)
-        if ((cells <= 4 * total || cells <= (std::size_t{1} << 20)) && total < std::numeric_limits<std::uint32_t>::max()) {
+        // (A count per cell: at most 16 MB more than the entries, or 16 bytes a cell per entry.)
+        if ((cells <= 4 * total || cells <= (std::size_t{1} << 22)) && total < std::numeric_limits<std::uint32_t>::max()) {
             std::vector<std::uint32_t> start(cells + 1, 0);
             for (const auto& part : listed) {
                 for (const auto& [cell_key, face] : part) ++start[static_cast<std::size_t>(cell_key) + 1];
