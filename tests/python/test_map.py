@@ -289,13 +289,15 @@ def test_the_engine_runs_without_the_gil():
         worker.join()
     engine = toposimp.summary(out)["seconds"]["simplify"]
     # Held through the engine, the GIL would let the other thread count only in the call's Python
-    # parts (measured: 3 % of the engine's time's worth); let go, it counts through the engine too.
-    assert during > 0.3 * rate * engine, (during, rate, engine, seconds)
+    # parts (measured: 2-4 % of the engine's time's worth); let go, it counts through the engine
+    # too (measured: 50-100 %, less when other tests share the cores).
+    assert during > 0.1 * rate * engine, (during, rate, engine, seconds)
 
 
 def test_ctrl_c_stops_a_long_run_at_once(tmp_path):
-    # A separate Python runs a long simplification (2 M vertices); SIGINT half a second in must end
-    # it within a second with KeyboardInterrupt, not when the engine is done.
+    # A separate Python runs a long simplification (2 M vertices: 4 s of engine in a debug build
+    # here); SIGINT half a second in must end it soon with KeyboardInterrupt (measured: 0.4 s in a
+    # debug build), not when the engine is done (3.5 s later).
     import subprocess
     import sys
     import time
@@ -316,4 +318,4 @@ def test_ctrl_c_stops_a_long_run_at_once(tmp_path):
     _, err = process.communicate(timeout=60)
     waited = time.perf_counter() - sent
     assert "KeyboardInterrupt" in err
-    assert waited < 1.0, waited
+    assert waited < 2.0, waited
