@@ -10,7 +10,13 @@ cd "$(dirname "$0")/.."
 budget=${1:-3600}
 shift || true
 cmake --preset fuzz >/dev/null
-cmake --build --preset fuzz -j "$(nproc)" --target fuzzers >/dev/null
+# (Quiet unless the build fails: then its errors, and no fuzzing — a run in the background would
+# otherwise end without a word.)
+if ! build_log=$(cmake --build --preset fuzz -j "$(nproc)" --target fuzzers 2>&1); then
+  echo "$build_log" | grep -E "error|FAILED" -A3 >&2
+  echo "fuzz_long: the fuzz preset does not build (clang); nothing fuzzed" >&2
+  exit 1
+fi
 fuzz=build/fuzz/tests/fuzz
 long=build/fuzz/long
 mkdir -p "$long"
