@@ -66,6 +66,7 @@ public:
         struct sigaction action {};
         action.sa_handler = on_interrupt;
         sigemptyset(&action.sa_mask);
+        action.sa_flags = SA_RESTART;  // reads and writes under way carry on; the engine looks at the flag
         installed_ = sigaction(SIGINT, &action, &previous_) == 0;
     }
     ~InterruptScope() {
