@@ -1,10 +1,9 @@
 // toposimp._toposimp: the engine for Python. The package (python/toposimp/__init__.py) turns
 // GeoDataFrames and numpy arrays into what these functions take, and back: geometries travel as
-// WKB (exact doubles both ways), meshes as arrays. The work is the command line's own (the same
+// WKB or shapely's own GEOS geometries (exact doubles both ways), meshes as arrays. The work is the command line's own (the same
 // options, the same messages, the same result), run with the GIL released, stopped by Ctrl-C
 // (while the engine runs, SIGINT sets a flag the engine reads) and reporting progress through a
 // callable.
-#include "cli/check_command.hpp"
 #include "cli/cli.hpp"
 #include "cli/guard.hpp"
 #include "cli/logging.hpp"
@@ -12,11 +11,10 @@
 #include "cli/mesh_command.hpp"
 #include "core/cancel.hpp"
 #include "io/common/errors.hpp"
-#include "io/ogr/ogr_dataset.hpp"
-#include "validate/check.hpp"
-
 #include "io/common/output_file.hpp"
 #include "io/mesh/mesh_files.hpp"
+#include "io/ogr/ogr_dataset.hpp"
+#include "validate/check.hpp"
 
 #include <geos_c.h>
 #include <pybind11/functional.h>
