@@ -112,6 +112,26 @@ def _shares_geos() -> bool:
     return _shared_geos
 
 
+def _wkb_writer():
+    """One geometry to WKB: shapely 1.8's writer made once (its `wkb` makes one per call), else
+    shapely's own function."""
+    try:
+        from shapely.geos import WKBWriter, lgeos
+        return WKBWriter(lgeos).write
+    except ImportError:
+        import shapely.wkb
+        return shapely.wkb.dumps
+
+
+def _wkb_reader():
+    try:
+        from shapely.geos import WKBReader, lgeos
+        return WKBReader(lgeos).read
+    except ImportError:
+        import shapely.wkb
+        return shapely.wkb.loads
+
+
 def _geometry_list(series) -> list:
     values = series.values
     data = getattr(values, "data", None)
@@ -125,9 +145,8 @@ def _layer(name: str, data) -> tuple:
     crs = series.crs.to_wkt() if series.crs is not None else None
     geometries = _geometry_list(series)
     if not _shares_geos():
-        from shapely.geos import WKBWriter, lgeos
-        writer = WKBWriter(lgeos)
-        geometries = [None if g is None or g.is_empty else writer.write(g) for g in geometries]
+        write = _wkb_writer()
+        geometries = [None if g is None or g.is_empty else write(g) for g in geometries]
     return (name, crs, geometries)
 
 
@@ -136,13 +155,12 @@ def _rebuild(data, wkb: Sequence[Optional[bytes]]):
     import geopandas
     import numpy
     from geopandas.array import GeometryArray
-    from shapely.geos import WKBReader, lgeos
-    reader = WKBReader(lgeos)
+    read = _wkb_reader()
     series = _geoms(data)
     old = _geometry_list(series)
     geometries = numpy.empty(len(wkb), dtype=object)
     for k, b in enumerate(wkb):  # (not a slice assignment: numpy would take multi-part geometries for sequences)
-        geometries[k] = old[k] if b is None else reader.read(b)
+        geometries[k] = old[k] if b is None else read(b)
     new = geopandas.GeoSeries(GeometryArray(geometries), index=series.index, crs=series.crs, name=series.name)
     if isinstance(data, geopandas.GeoSeries):
         return new
