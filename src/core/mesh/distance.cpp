@@ -80,7 +80,8 @@ bool triangle_meets_box(V a, V b, V c, V centre, V half) {
 // listed in the cells searched has no point in them.
 // With `near` (and `radius`), only the cells within `radius` cells of one of those points are
 // filled: nearest() is then exact for those points while its search stays within `radius`
-// shells, and says when it would have to go further (limited()).
+// shells, and returns NaN when it would have to go further. (When those cells would be most of
+// the grid, every cell is filled.)
 class FaceGrid {
 public:
     explicit FaceGrid(const Mesh& m, std::span<const V> near = {}, std::int64_t radius = 0) : mesh_(m) {
@@ -140,7 +141,9 @@ public:
         auto coarse_key = [&](std::int64_t x, std::int64_t y, std::int64_t z) {
             return static_cast<std::size_t>(((x / 8) * coarse_n[1] + y / 8) * coarse_n[2] + z / 8);
         };
-        if (!near.empty()) {
+        const double side = 2.0 * static_cast<double>(radius) + 1.0;
+        const double cells_wanted = static_cast<double>(near.size()) * side * side * side;
+        if (!near.empty() && cells_wanted < static_cast<double>(n_[0]) * static_cast<double>(n_[1]) * static_cast<double>(n_[2])) {
             limit_ = radius;
             coarse.assign(static_cast<std::size_t>(coarse_n[0] * coarse_n[1] * coarse_n[2]), 0);
             wanted.assign(static_cast<std::size_t>(n_[0] * n_[1] * n_[2]), 0);
