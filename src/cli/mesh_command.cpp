@@ -201,7 +201,7 @@ MeshInput read_dem(const MeshCommandOptions& options, const MeshGdal& gdal, mesh
 
 // Why the mesh was simplified as a terrain or in space: (mode for --json, words for people).
 std::pair<std::string, std::string> terrain_mode(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engine,
-                                                 const MeshCommandOptions& options, bool dem) {
+                                                 const MeshCommandOptions& options, bool dem) {  // dem: a DEM's TIN, not checked
     if (!engine.terrain) return {"off", "in space: --no-terrain"};
     if (stats.terrain) {
         if (dem) return {"dem", "as a terrain: a DEM's TIN"};
@@ -228,7 +228,7 @@ void check_result(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions&
                              (options.weld ? " once vertices at the same location are welded" : "") +
                              ": non-manifold meshes are not supported");
     }
-    const auto [mode, words] = terrain_mode(stats, engine, options, false);
+    const auto [mode, words] = terrain_mode(stats, engine, options, engine.height_field);
     if (mode == "not_a_height_field" && options.terrain) {
         log.warn("{}: {}, so this is not a terrain TIN: simplified as a surface in space{}", options.input, words.substr(10),
                  engine.stop.target == mesh::Target::max_error ? " (--max-error bounds the quadric error)" : "");
@@ -357,7 +357,7 @@ std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyO
         .field("vertical", stats.refused_vertical)
         .end();
     json.field("max_quadric_error", stats.max_error).field("terrain", stats.terrain);
-    const auto [mode, words] = terrain_mode(stats, engine, options, input.dem.has_value());
+    const auto [mode, words] = terrain_mode(stats, engine, options, engine.height_field);
     json.field("terrain_mode", mode).field("terrain_why", words);
     json.field("lock_boundary", engine.lock_boundary || stats.vertical_bound);
     if (stats.vertical_bound) json.field("guaranteed_vertical_error", engine.stop.value);

@@ -378,6 +378,7 @@ TEST(MeshCli, DemBecomesASimplifiedTinLayerInTheDemsCrs) {
     const CliResult r = run_cli({"mesh", dem, "-o", out, "--keep", "20%", "--json"});
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("\"terrain\":true"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"terrain_mode\":\"dem\""), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\"lock_boundary\":true"), std::string::npos);
     int hole = 0;
     for (int j = 0; j < 24; ++j) {
