@@ -84,15 +84,17 @@ bool triangle_meets_box(V a, V b, V c, V centre, V half) {
 // the grid, every cell is filled.)
 class FaceGrid {
 public:
-    explicit FaceGrid(const Mesh& m, std::span<const V> near = {}, std::int64_t radius = 0) : mesh_(m) {
+    // Built on `threads` threads (0: OpenMP's default) when big; the grid is the same for any.
+    explicit FaceGrid(const Mesh& m, std::span<const V> near = {}, std::int64_t radius = 0, int threads = 0) : mesh_(m) {
         if (m.faces.empty()) return;
         // The box of the points, and the mean edge and area of up to 65 536 faces spread over the
         // mesh (the cell size needs no more; the distances do not depend on it), in fixed chunks
         // on all threads, the chunks' sums added in order: the same numbers for any thread count.
         const std::size_t faces = m.faces.size(), chunks = (faces + kChunk - 1) / kChunk;
         const std::size_t points = m.points.size(), point_chunks = (points + kChunk - 1) / kChunk;
+        const int team = threads > 0 ? threads : omp_get_max_threads();
         std::vector<std::pair<V, V>> boxes(point_chunks);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(team) if (point_chunks > 1)
         for (std::int64_t k = 0; k < static_cast<std::int64_t>(point_chunks); ++k) {
             const std::size_t first = static_cast<std::size_t>(k) * kChunk, last = std::min(points, first + kChunk);
             V lo = v(m.points[first]), hi = lo;
@@ -160,7 +162,7 @@ public:
             }
         }
         std::vector<std::vector<std::pair<std::int64_t, std::uint32_t>>> listed(chunks);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (chunks > 1)
         for (std::int64_t chunk = 0; chunk < static_cast<std::int64_t>(chunks); ++chunk) {
             auto& entries = listed[static_cast<std::size_t>(chunk)];
             const auto first = static_cast<std::uint32_t>(static_cast<std::size_t>(chunk) * kChunk);
@@ -397,9 +399,9 @@ OneWayDistance one_way_near(const std::vector<V>& samples, const Mesh& to, int t
     for (std::int64_t radius = 1; !open.empty(); radius *= 4) {
         std::vector<V> near;
         for (const std::size_t i : open) near.push_back(samples[i]);
-        const FaceGrid grid(to, near, radius);
+        const FaceGrid grid(to, near, radius, threads);
         const auto count = static_cast<std::int64_t>(open.size());
-#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads) if (count > 1024)
         for (std::int64_t k = 0; k < count; ++k) {
             distance[open[static_cast<std::size_t>(k)]] = grid.nearest(near[static_cast<std::size_t>(k)]);
         }
@@ -418,7 +420,7 @@ OneWayDistance one_way_near(const std::vector<V>& samples, const Mesh& to, int t
 }
 
 OneWayDistance one_way(const Mesh& from, const Mesh& to, std::size_t face_samples, int threads) {
-    const FaceGrid grid(to);
+    const FaceGrid grid(to, {}, 0, threads);
     return over_samples(samples_of(from, face_samples), threads, [&grid](V p, double& d) {
         d = grid.nearest(p);
         return true;
@@ -560,7 +562,7 @@ VerticalError spread_vertical_error(const Mesh& a, const Mesh& b, std::size_t co
         std::vector<Point> near;
         near.reserve(samples.size());
         for (const V& p : samples) near.push_back({p.x, p.y});
-        const PlanIndex index(*to, near);
+        const PlanIndex index(*to, near, 0, threads);
         *side = over_samples(samples, threads, [&](V p, double& d) {
             double z = 0;
             if (!height_at(*to, index, p.x, p.y, z)) return false;
@@ -593,11 +595,11 @@ TerrainMeasure spread_terrain_measure(const Mesh& a, const Mesh& b, std::size_t 
         std::vector<Point> near;
         near.reserve(samples.size());
         for (const V& p : samples) near.push_back({p.x, p.y});
-        const PlanIndex index(*to, near, 1);
+        const PlanIndex index(*to, near, 1, threads);
         const auto n = static_cast<std::int64_t>(samples.size());
         std::vector<double> vertical(samples.size(), std::numeric_limits<double>::quiet_NaN());
         std::vector<double> distance(samples.size(), std::numeric_limits<double>::quiet_NaN());
-#pragma omp parallel for schedule(dynamic, 256) num_threads(threads)
+#pragma omp parallel for schedule(dynamic, 256) num_threads(threads) if (n > 1024)
         for (std::int64_t k = 0; k < n; ++k) {
             const V p = samples[static_cast<std::size_t>(k)];
             double z = 0;

@@ -56,7 +56,7 @@ bool overlap_in_plan(const Mesh& mesh, const Face& f, const Face& g, int turn, e
 
 PlanIndex::PlanIndex(const Mesh& mesh) : PlanIndex(mesh, std::span<const Point>{}, 0) {}
 
-PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach) {
+PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach, int threads) {
     first_.assign(2, 0);
     if (mesh.faces.empty()) return;
     // The faces in fixed chunks on all threads (boxes: minima and maxima, the same in any order).
@@ -66,8 +66,11 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
         const std::size_t first = static_cast<std::size_t>(k) * kChunk;
         return std::pair{first, std::min(faces, first + kChunk)};
     };
+    // (Every face, for the engine: on the calling thread, as before near points existed.)
+    const bool parallel = !near.empty() && chunks > 1;
+    const int team = threads > 0 ? threads : omp_get_max_threads();
     std::vector<PlanBox> boxes(chunks);
-#pragma omp parallel for schedule(static)
+#pragma omp parallel for schedule(static) num_threads(team) if (parallel)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
         const auto [first, last] = chunk_range(k);
         PlanBox all = plan_box(mesh, mesh.faces[first]);
@@ -118,7 +121,7 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
     // The wanted cells only (few faces listed): each chunk's (cell, face) pairs in face order on
     // all threads, then a counting sort by cell.
     std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> listed(chunks);
-#pragma omp parallel for schedule(dynamic, 1)
+#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (parallel)
     for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
         const auto [first, last] = chunk_range(k);
         auto& pairs = listed[static_cast<std::size_t>(k)];

@@ -22,7 +22,8 @@ public:
     // Only the cells within `reach` cells of one holding a point of `near` are filled (at()
     // elsewhere says nothing): for queries at those points alone, without listing every face of
     // a big mesh.
-    PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach = 0);
+    // Built on `threads` threads (0: OpenMP's default) when big; the index is the same for any.
+    PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach = 0, int threads = 0);
 
     // The faces whose boxes meet the cell holding (x, y) (clamped to the grid): every face over
     // that point among them.
