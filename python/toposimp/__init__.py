@@ -326,8 +326,9 @@ def check(original, simplified, points=None, *, precision: Union[float, str, Non
     Any tool's output can be checked (GEOS's simplify, mapshaper, ...).
 
     Columns: kind (new_crossing, lost_touching, point_changed_side, not_subset, ...), layer,
-    feature (row position), other (the other feature of a contact), x, y (where), detail, and
-    decided_by ("exact": the exact predicates; "GEOS": polygon validity). The counts are in
+    feature (row position, counted from 0), other (the other feature of a contact, if any), x, y
+    (where), detail, decided_by ("exact": the exact predicates; "GEOS": polygon validity), and
+    index and other_index (those rows' labels in the original's index). The counts are in
     ``.attrs["toposimp"]``.
     """
     import pandas
@@ -344,6 +345,14 @@ def check(original, simplified, points=None, *, precision: Union[float, str, Non
     frame = pandas.DataFrame(violations, columns=columns)
     frame["x"] = frame["x"].astype("float64")
     frame["y"] = frame["y"].astype("float64")
+    # The rows' index labels in the original (feature and other are positions, counted from 0).
+    by_name = {name: _geoms(value).index for name, value in before}
+
+    def label(layer, position):
+        index = by_name.get(layer)
+        return index[int(position)] if index is not None and str(position).isdigit() and int(position) < len(index) else None
+    frame["index"] = [label(layer, f) for layer, f in zip(frame["layer"], frame["feature"])]
+    frame["other_index"] = [label(layer, o) for layer, o in zip(frame["layer"], frame["other"])]
     frame.attrs["toposimp"] = {"features": features, "control_points": control_points,
                                "invalid_in_original": invalid_before,
                                "counts": frame["kind"].value_counts().to_dict()}

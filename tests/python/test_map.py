@@ -145,7 +145,10 @@ def test_per_feature_simplify_breaks_what_toposimp_keeps(states):
     assert toposimp.check(states, ours).empty
     broken = toposimp.check(states, naive)
     assert len(broken) > 0
-    assert set(broken.columns) == {"kind", "layer", "feature", "other", "x", "y", "detail", "decided_by"}
+    assert set(broken.columns) == {"kind", "layer", "feature", "other", "x", "y", "detail", "decided_by", "index", "other_index"}
+    crossing = broken[broken["kind"] == "new_crossing"].iloc[0]
+    assert crossing["index"] == states.index[int(crossing["feature"])]
+    assert crossing["other_index"] == states.index[int(crossing["other"])]
     assert "border_no_longer_shared" in set(broken["kind"])
     assert target > 0
 
@@ -156,6 +159,9 @@ def test_check_sees_a_point_on_the_wrong_side(borders, places):
     chord = geopandas.GeoSeries([shapely.geometry.LineString([(0, 0), (2, 0)])])
     report = toposimp.check(line, chord, points=point)
     assert list(report["kind"]) == ["point_changed_side"]
+    assert list(report["index"]) == [0]
+    labelled = toposimp.check(line.set_axis(["bent"]), chord.set_axis(["bent"]), points=point)
+    assert list(labelled["index"]) == ["bent"]
     assert report.attrs["toposimp"]["control_points"] == 1
     # toposimp keeps the vertex: removing it would put the point on the other side.
     kept = toposimp.simplify(line, max=True, points=point)
