@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # The second README command: installs the dependencies, builds (dev preset: debug, -Werror) and
-# runs every test through ctest (labels: unit, cli, property, golden, corpus, qgis, install).
+# runs every test through ctest (labels: unit, cli, property, golden, corpus, python, qgis, install).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
