@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import json
-from typing import Callable, Dict, List, NamedTuple, Optional, Union
+from types import MappingProxyType
+from typing import Callable, Dict, List, Mapping, NamedTuple, Optional, Union
 
 import numpy
 
@@ -21,9 +22,10 @@ class Mesh(NamedTuple):
     """
     vertices: numpy.ndarray
     faces: numpy.ndarray
-    vertex_attributes: Dict[str, numpy.ndarray] = {}
-    face_attributes: Dict[str, numpy.ndarray] = {}
-    report: dict = {}
+    # (Defaults read-only: one shared empty mapping, which no Mesh can change for the others.)
+    vertex_attributes: Mapping[str, numpy.ndarray] = MappingProxyType({})
+    face_attributes: Mapping[str, numpy.ndarray] = MappingProxyType({})
+    report: Mapping = MappingProxyType({})
 
 
 _TYPES = {"int8", "uint8", "int16", "uint16", "int32", "uint32", "float32", "float64"}
