@@ -99,6 +99,9 @@ struct OgrDataset::Data {
     }
 
     void read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file);
+    void read_memory_layer(const std::string& source, const MemoryLayer& given, map::MapData& map);
+    void add_geometry(Layer& layer, Layer::Shape& shape, LayerSummary& summary_of_layer, const OGRGeometry& geometry,
+                      const std::string& label, map::MapData& map);
     void finish(const std::string& path, map::MapData& map);
 
     // `arc_order`: rings start where their first arc does (as a TopoJSON reader rebuilds them).
@@ -253,6 +256,66 @@ void add_record_lines(OgrDataset::Data& data, OgrDataset::Data::Layer& layer, co
 
 }  // namespace
 
+// A feature's geometry into the map: lines as chains, polygon rings into the coverage, points as
+// control points (kept as they are for writing back); `shape` says which, for writing.
+void OgrDataset::Data::add_geometry(Layer& layer, Layer::Shape& shape, LayerSummary& summary_of_layer, const OGRGeometry& geometry,
+                                    const std::string& label, map::MapData& map) {
+    shape.type = geometry.getGeometryType();
+    if (geometry.Is3D() || geometry.IsMeasured()) {
+        // A layer declared 2D may hold 3D features: keep their Z/M too.
+        summary_of_layer.has_z = summary_of_layer.has_z || geometry.Is3D();
+        summary_of_layer.has_m = summary_of_layer.has_m || geometry.IsMeasured();
+        start_carrying_zm(map);
+    }
+    switch (wkbFlatten(shape.type)) {
+        case wkbLineString:
+            shape.kind = Layer::Kind::lines;
+            layer.items.push_back(add_line(*this, layer, *geometry.toLineString(), map, label));
+            break;
+        case wkbMultiLineString:
+            shape.kind = Layer::Kind::lines;
+            for (const OGRLineString* part : *geometry.toMultiLineString()) {
+                layer.items.push_back(add_line(*this, layer, *part, map, label));
+            }
+            break;
+        case wkbPolygon:
+            shape.kind = Layer::Kind::polygons;
+            add_polygon(*this, layer, *geometry.toPolygon(), label);
+            break;
+        case wkbMultiPolygon:
+            shape.kind = Layer::Kind::polygons;
+            for (const OGRPolygon* polygon : *geometry.toMultiPolygon()) add_polygon(*this, layer, *polygon, label);
+            break;
+        case wkbPoint:
+        case wkbMultiPoint: {
+            // Points among lines: written back untouched, kept on their side as control points.
+            shape.kind = Layer::Kind::untouched;
+            shape.first = static_cast<std::uint32_t>(layer.untouched.size());
+            shape.count = 1;
+            layer.untouched_points.push_back(static_cast<std::uint32_t>(map.control_points.size()));
+            auto add = [&](const OGRPoint& point) {
+                if (point.IsEmpty()) return;
+                const Point p{point.getX(), point.getY()};
+                if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(label + ": point has a non-finite coordinate");
+                map.control_points.push_back(p);
+            };
+            if (wkbFlatten(shape.type) == wkbPoint) {
+                add(*geometry.toPoint());
+            } else {
+                for (const OGRPoint* point : *geometry.toMultiPoint()) add(*point);
+            }
+            layer.untouched.emplace_back(geometry.clone());
+            ++summary_of_layer.untouched_points;
+            break;
+        }
+        default:
+            throw InputError(label + ": geometry is " + OGRGeometryTypeToName(shape.type) +
+                             "; toposimp map simplifies (Multi)LineString and (Multi)Polygon features" +
+                             (OGR_GT_IsNonLinear(shape.type) ? " (linearize curves first: ogr2ogr -nlt CONVERT_TO_LINEAR)" : ""));
+    }
+    if (shape.kind != Layer::Kind::untouched) shape.count = static_cast<std::uint32_t>(layer.items.size()) - shape.first;
+}
+
 void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file) {
     auto layer = std::make_unique<Layer>();
     LayerSummary summary_of_layer;
@@ -337,63 +400,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
             }
         }
-        OGRGeometry* geometry = feature->GetGeometryRef();
-        if (geometry != nullptr) {
+        if (const OGRGeometry* geometry = feature->GetGeometryRef()) {
             empty = geometry->IsEmpty();
-            shape.type = geometry->getGeometryType();
-            if (geometry->Is3D() || geometry->IsMeasured()) {
-                // A layer declared 2D may hold 3D features: keep their Z/M too.
-                summary_of_layer.has_z = summary_of_layer.has_z || geometry->Is3D();
-                summary_of_layer.has_m = summary_of_layer.has_m || geometry->IsMeasured();
-                start_carrying_zm(map);
-            }
-            switch (wkbFlatten(shape.type)) {
-                case wkbLineString:
-                    shape.kind = Layer::Kind::lines;
-                    layer->items.push_back(add_line(*this, *layer, *geometry->toLineString(), map, label));
-                    break;
-                case wkbMultiLineString:
-                    shape.kind = Layer::Kind::lines;
-                    for (const OGRLineString* part : *geometry->toMultiLineString()) {
-                        layer->items.push_back(add_line(*this, *layer, *part, map, label));
-                    }
-                    break;
-                case wkbPolygon:
-                    shape.kind = Layer::Kind::polygons;
-                    add_polygon(*this, *layer, *geometry->toPolygon(), label);
-                    break;
-                case wkbMultiPolygon:
-                    shape.kind = Layer::Kind::polygons;
-                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) add_polygon(*this, *layer, *polygon, label);
-                    break;
-                case wkbPoint:
-                case wkbMultiPoint: {
-                    // Points among lines: written back untouched, kept on their side as control points.
-                    shape.kind = Layer::Kind::untouched;
-                    shape.first = static_cast<std::uint32_t>(layer->untouched.size());
-                    shape.count = 1;
-                    layer->untouched_points.push_back(static_cast<std::uint32_t>(map.control_points.size()));
-                    auto add = [&](const OGRPoint& point) {
-                        if (point.IsEmpty()) return;
-                        const Point p{point.getX(), point.getY()};
-                        if (!std::isfinite(p.x) || !std::isfinite(p.y)) throw InputError(label + ": point has a non-finite coordinate");
-                        map.control_points.push_back(p);
-                    };
-                    if (wkbFlatten(shape.type) == wkbPoint) {
-                        add(*geometry->toPoint());
-                    } else {
-                        for (const OGRPoint* point : *geometry->toMultiPoint()) add(*point);
-                    }
-                    layer->untouched.emplace_back(geometry->clone());
-                    ++summary_of_layer.untouched_points;
-                    break;
-                }
-                default:
-                    throw InputError(label + ": geometry is " + OGRGeometryTypeToName(shape.type) +
-                                     "; toposimp map simplifies (Multi)LineString and (Multi)Polygon features" +
-                                     (OGR_GT_IsNonLinear(shape.type) ? " (linearize curves first: ogr2ogr -nlt CONVERT_TO_LINEAR)" : ""));
-            }
-            if (shape.kind != Layer::Kind::untouched) shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
+            add_geometry(*layer, shape, summary_of_layer, *geometry, label, map);
         }
         if (empty) {
             ++summary_of_layer.empty_geometries;
@@ -408,6 +417,53 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     }
     if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
     summary_of_layer.features = layer->features.size();
+    summary.layers.push_back(summary_of_layer);
+    layers.push_back(std::move(layer));
+}
+
+// A layer in memory, straight from its WKB into the map (no OGR dataset, no feature objects: the
+// attributes stay with the caller).
+void OgrDataset::Data::read_memory_layer(const std::string& source, const MemoryLayer& given, map::MapData& map) {
+    auto layer = std::make_unique<Layer>();
+    LayerSummary summary_of_layer;
+    summary_of_layer.layer = layer->name = given.name;
+    if (!given.crs_wkt.empty()) {
+        QuietGdal quiet;
+        layer->srs = std::make_unique<OGRSpatialReference>();
+        layer->srs->SetAxisMappingStrategy(OAMS_TRADITIONAL_GIS_ORDER);
+        if (layer->srs->importFromWkt(given.crs_wkt.c_str()) != OGRERR_NONE) {
+            throw InputError("'" + source + "', layer '" + given.name + "': its CRS is not one GDAL reads" + last_gdal_error());
+        }
+        summary_of_layer.geographic = layer->srs->IsGeographic();
+    }
+    layer->shapes.reserve(given.wkb.size());
+    for (std::size_t k = 0; k < given.wkb.size(); ++k) {
+        Layer::Shape shape;
+        shape.first = static_cast<std::uint32_t>(layer->items.size());
+        bool empty = true;
+        if (const std::string& wkb = given.wkb[k]; !wkb.empty()) {
+            const std::string label = "'" + source + "', layer '" + given.name + "', feature " + std::to_string(k);
+            OGRGeometry* read = nullptr;
+            std::size_t used = 0;
+            QuietGdal quiet;
+            if (OGRGeometryFactory::createFromWkb(wkb.data(), nullptr, &read, wkb.size(), wkbVariantOldOgc, used) != OGRERR_NONE ||
+                read == nullptr) {
+                throw InputError(label + ": not a WKB geometry GDAL reads" + last_gdal_error());
+            }
+            const std::unique_ptr<OGRGeometry> geometry(read);
+            empty = geometry->IsEmpty();
+            add_geometry(*layer, shape, summary_of_layer, *geometry, label, map);
+        }
+        if (empty) {
+            ++summary_of_layer.empty_geometries;
+        } else if (shape.kind == Layer::Kind::polygons) {
+            ++summary_of_layer.polygon_features;
+        } else if (shape.kind == Layer::Kind::lines) {
+            ++summary_of_layer.line_features;
+        }
+        layer->shapes.push_back(shape);
+    }
+    summary_of_layer.features = layer->shapes.size();
     summary.layers.push_back(summary_of_layer);
     layers.push_back(std::move(layer));
 }
@@ -469,7 +525,7 @@ void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
         std::string what;
         for (const auto& layer : layers) {
             what += (what.empty() ? "" : "; ") + std::string("layer '") + layer->name + "': " +
-                    OGRGeometryTypeToName(layer->geometry_type) + ", " + std::to_string(layer->features.size()) + " features";
+                    OGRGeometryTypeToName(layer->geometry_type) + ", " + std::to_string(layer->shapes.size()) + " features";
         }
         throw InputError("'" + path + "' has no line or polygon geometry (" + what + ")");
     }
@@ -509,11 +565,10 @@ OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::stri
 }
 
 OgrDataset OgrDataset::read(const MemoryLayers& layers, map::MapData& map) {
-    DatasetPtr dataset = memory_dataset(layers);
     auto data = std::make_unique<Data>();
     data->summary.driver = "Memory";
-    if (dataset->GetLayerCount() == 0) throw InputError("'" + layers.source + "' has no layer");
-    for (int i = 0; i < dataset->GetLayerCount(); ++i) data->read_layer(layers.source, *dataset->GetLayer(i), map, false);
+    if (layers.layers.empty()) throw InputError("'" + layers.source + "' has no layer");
+    for (const MemoryLayer& layer : layers.layers) data->read_memory_layer(layers.source, layer, map);
     data->finish(layers.source, map);
     return OgrDataset(std::move(data));
 }
