@@ -256,6 +256,21 @@ void add_record_lines(OgrDataset::Data& data, OgrDataset::Data::Layer& layer, co
 
 }  // namespace
 
+namespace {
+
+// A feature in its layer's counts: empty (or NULL), polygons, lines.
+void count_feature(LayerSummary& summary_of_layer, const OgrDataset::Data::Layer::Shape& shape, bool empty) {
+    if (empty) {
+        ++summary_of_layer.empty_geometries;
+    } else if (shape.kind == OgrDataset::Data::Layer::Kind::polygons) {
+        ++summary_of_layer.polygon_features;
+    } else if (shape.kind == OgrDataset::Data::Layer::Kind::lines) {
+        ++summary_of_layer.line_features;
+    }
+}
+
+}  // namespace
+
 // A feature's geometry into the map: lines as chains, polygon rings into the coverage, points as
 // control points (kept as they are for writing back); `shape` says which, for writing.
 void OgrDataset::Data::add_geometry(Layer& layer, Layer::Shape& shape, LayerSummary& summary_of_layer, const OGRGeometry& geometry,
@@ -404,13 +419,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             empty = geometry->IsEmpty();
             add_geometry(*layer, shape, summary_of_layer, *geometry, label, map);
         }
-        if (empty) {
-            ++summary_of_layer.empty_geometries;
-        } else if (shape.kind == Layer::Kind::polygons) {
-            ++summary_of_layer.polygon_features;
-        } else if (shape.kind == Layer::Kind::lines) {
-            ++summary_of_layer.line_features;
-        }
+        count_feature(summary_of_layer, shape, empty);
         feature->SetGeometryDirectly(nullptr);
         layer->shapes.push_back(shape);
         layer->features.push_back(std::move(feature));
@@ -454,13 +463,7 @@ void OgrDataset::Data::read_memory_layer(const std::string& source, const Memory
             empty = geometry->IsEmpty();
             add_geometry(*layer, shape, summary_of_layer, *geometry, label, map);
         }
-        if (empty) {
-            ++summary_of_layer.empty_geometries;
-        } else if (shape.kind == Layer::Kind::polygons) {
-            ++summary_of_layer.polygon_features;
-        } else if (shape.kind == Layer::Kind::lines) {
-            ++summary_of_layer.line_features;
-        }
+        count_feature(summary_of_layer, shape, empty);
         layer->shapes.push_back(shape);
     }
     summary_of_layer.features = layer->shapes.size();
