@@ -31,7 +31,7 @@ inline std::optional<double> parse_share(const std::string& keep, const std::str
     }
     if (percent) value /= 100.0;
     if (value > 1.0) {
-        problem = "--keep " + keep + " is more than all " + things + " (did you mean " + keep + "%?)";
+        problem = "--keep " + keep + " is more than all " + things + (percent ? "" : " (did you mean " + keep + "%?)");
         return std::nullopt;
     }
     return value;

@@ -299,7 +299,6 @@ py::tuple simplify_layers(const std::string& source, const py::list& layers, con
     set_if(options, "arithmetic", map.arithmetic);
     set_if(options, "threads", map.threads);
     set_if(options, "verbosity", map.verbosity);
-    if (map.keep.empty() && map.keep_points < 0 && map.remove_points < 0 && map.max_area.empty() && !map.max) map.keep = "10%";
 
     const io::MemoryLayers input = memory_layers(source, layers, shapely_geos);
     std::optional<io::MemoryLayers> control_points;
@@ -475,7 +474,6 @@ py::tuple simplify_mesh_arrays(const py::object& points, const py::object& faces
     set_if(options, "threads", command.threads);
     set_if(options, "verbosity", command.verbosity);
     set_if(options, "measure", command.measure);
-    if (command.keep.empty() && command.keep_faces < 0 && command.max_error < 0) command.keep = "10%";
     cli::MeshMemory memory;
     memory.mesh = mesh_of(points, faces, vertex_columns, face_columns, memory.layout);
     Run run(progress, interruptible);

@@ -330,6 +330,8 @@ bool Simplifier::met_by_replaced(const Collapse& c, const exact::Triangle3& othe
                                  exact::PredicateStats& predicates) const {
     for (const std::vector<std::uint32_t>* faces : {&c.fa, &c.fb}) {
         for (const std::uint32_t r : *faces) {
+            // (The faces of ab are both a's and b's: tested with a's.)
+            if (faces == &c.fb && std::find(c.shared.begin(), c.shared.end(), r) != c.shared.end()) continue;
             const exact::Triangle3 old = triangle(face_[r]);
             if (!other_box.overlaps(triangle_box(old[0], old[1], old[2]))) continue;
             if (!exact::degenerate(old, predicates) && exact::faces_conflict(old, other, predicates)) return true;
