@@ -169,25 +169,105 @@ private:
     std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> waiters_of_;
 };
 
+// A block's queue: a binary min-heap over (area, id) holding each vertex once, with every
+// vertex's place in it kept in `slot` (kNone when not queued), so that a vertex whose area
+// changes moves in place. (A heap that took a new entry instead and skipped the stale ones as
+// they came up popped each vertex two and a half times on GSHHG — issue 34.) Entries are
+// unique and the order total, so the order of the pops is the same as with any other heap.
+class BlockQueue {
+public:
+    bool empty() const { return heap_.empty(); }
+    const Ranked& top() const { return heap_.front(); }
+
+    // Starts the queue with `vertices`, a vertex listed more than once taken once.
+    template <class Area>
+    void fill(std::span<const std::uint32_t> vertices, Area&& area, std::uint32_t* slot) {
+        heap_.clear();
+        for (const std::uint32_t v : vertices) {
+            if (slot[v] != kNone) continue;
+            slot[v] = static_cast<std::uint32_t>(heap_.size());
+            heap_.push_back({area(v), v});
+        }
+        for (std::size_t i = heap_.size() / 2; i-- > 0;) sift_down(i, slot);
+    }
+
+    // Queues v with `key`, or moves it there if it is queued.
+    void set(Ranked entry, std::uint32_t* slot) {
+        std::size_t at = slot[entry.id];
+        if (at == kNone) {
+            at = heap_.size();
+            heap_.push_back(entry);
+            sift_up(at, slot);
+            return;
+        }
+        const bool up = entry < heap_[at];
+        heap_[at] = entry;
+        if (up) {
+            sift_up(at, slot);
+        } else {
+            sift_down(at, slot);
+        }
+    }
+
+    Ranked pop(std::uint32_t* slot) {
+        const Ranked top = heap_.front();
+        slot[top.id] = kNone;
+        const Ranked last = heap_.back();
+        heap_.pop_back();
+        if (!heap_.empty()) {
+            heap_.front() = last;
+            sift_down(0, slot);
+        }
+        return top;
+    }
+
+    // Empties the queue, its vertices no longer queued.
+    void clear(std::uint32_t* slot) {
+        for (const Ranked& entry : heap_) slot[entry.id] = kNone;
+        heap_.clear();
+    }
+
+private:
+    void sift_up(std::size_t at, std::uint32_t* slot) {
+        const Ranked entry = heap_[at];
+        while (at > 0) {
+            const std::size_t parent = (at - 1) / 2;
+            if (!(entry < heap_[parent])) break;
+            heap_[at] = heap_[parent];
+            slot[heap_[at].id] = static_cast<std::uint32_t>(at);
+            at = parent;
+        }
+        heap_[at] = entry;
+        slot[entry.id] = static_cast<std::uint32_t>(at);
+    }
+
+    void sift_down(std::size_t at, std::uint32_t* slot) {
+        const Ranked entry = heap_[at];
+        const std::size_t size = heap_.size();
+        for (;;) {
+            std::size_t child = 2 * at + 1;
+            if (child >= size) break;
+            if (child + 1 < size && heap_[child + 1] < heap_[child]) ++child;
+            if (!(heap_[child] < entry)) break;
+            heap_[at] = heap_[child];
+            slot[heap_[at].id] = static_cast<std::uint32_t>(at);
+            at = child;
+        }
+        heap_[at] = entry;
+        slot[entry.id] = static_cast<std::uint32_t>(at);
+    }
+
+    std::vector<Ranked> heap_;
+};
+
 // What one thread accumulates while it works through blocks.
 struct Worker {
-    std::vector<Ranked> queue;                       // the block's queue: a binary min-heap
+    BlockQueue queue;                                // the block's queue
     std::vector<std::vector<std::uint32_t>> later;   // per level: vertices to queue there
     std::vector<std::uint32_t> released;             // waiters outside the block whose blocker went
     std::uint32_t block = 0;                         // the block being processed
     SimplifyStats stats;
     std::uint64_t reported = 0;  // removals already added to the progress count
-
-    void push(Ranked entry) {
-        queue.push_back(entry);
-        std::push_heap(queue.begin(), queue.end(), [](Ranked a, Ranked b) { return b < a; });
-    }
-    Ranked pop() {
-        std::pop_heap(queue.begin(), queue.end(), [](Ranked a, Ranked b) { return b < a; });
-        const Ranked top = queue.back();
-        queue.pop_back();
-        return top;
-    }
 };
 
 class Simplifier {
@@ -507,6 +587,7 @@ private:
     }
 
     void sweep() {
+        if (slot_.empty()) slot_.assign(vertex_count_, kNone);  // (after the first round's selection, not beside it)
         for (unsigned level = 0; level < levels_; ++level) {
             process_level(level);
             stop_if_cancelled(options_.cancel);
@@ -519,15 +600,12 @@ private:
         std::vector<std::uint32_t>& candidates = later_[level];
         const std::uint32_t blocks = blocks_at(level);
         std::vector<std::uint32_t>& start = start_;
-        std::vector<std::uint32_t>& block_of = block_of_;
         start.assign(std::size_t{blocks} + 1, 0);
-        block_of.resize(candidates.size());
         std::size_t kept = 0;
         for (const std::uint32_t v : candidates) {
             if (state_[v] != State::queued || level_of(v) > level) continue;  // else on a later list
             candidates[kept] = v;
-            block_of[kept] = block_at(v, level);
-            ++start[block_of[kept] + 1];
+            ++start[block_at(v, level) + 1];
             ++kept;
         }
         for (std::uint32_t b = 0; b < blocks; ++b) start[b + 1] += start[b];
@@ -535,9 +613,9 @@ private:
         grouped.resize(kept);
         {
             std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-            for (std::size_t i = 0; i < kept; ++i) grouped[fill[block_of[i]]++] = candidates[i];
+            for (std::size_t i = 0; i < kept; ++i) grouped[fill[block_at(candidates[i], level)]++] = candidates[i];
         }
-        candidates.clear();
+        std::vector<std::uint32_t>().swap(candidates);  // (its memory back before the blocks run)
         std::vector<std::uint32_t> busy;  // blocks with candidates
         for (std::uint32_t b = 0; b < blocks; ++b) {
             if (start[b + 1] > start[b]) busy.push_back(b);
@@ -587,15 +665,11 @@ private:
 
     // One block: remove its queued vertices smallest area first, up to the round's threshold.
     void process_block(unsigned level, std::span<const std::uint32_t> candidates, Worker& worker) {
-        worker.queue.clear();
-        for (const std::uint32_t v : candidates) worker.queue.push_back({area_of(v), v});
-        std::make_heap(worker.queue.begin(), worker.queue.end(), [](Ranked a, Ranked b) { return b < a; });
+        std::uint32_t* const slot = slot_.data();
+        worker.queue.fill(candidates, [&](std::uint32_t v) { return area_of(v); }, slot);
         std::uint64_t pops = 0;
-        while (!worker.queue.empty() && !(bound_ < worker.queue.front())) {
-            const Ranked top = worker.pop();
-            const std::uint32_t v = top.id;
-            // Stale entries: the vertex went, waits, or was queued again with another area.
-            if (state_[v] != State::queued || area_of(v) != top.key) continue;
+        while (!worker.queue.empty() && !(bound_ < worker.queue.top())) {
+            const std::uint32_t v = worker.queue.pop(slot).id;
             if ((++pops & 0xfff) == 0) {
                 if (cancel_requested(options_.cancel)) break;  // the level's end throws
                 progress_.fetch_add(worker.stats.removed - worker.reported, std::memory_order_relaxed);
@@ -624,7 +698,7 @@ private:
                 case Verdict::later: worker.later[level + 1].push_back(v); break;
             }
         }
-        worker.queue.clear();
+        worker.queue.clear(slot);
     }
 
     Verdict judge(std::uint32_t v, unsigned level, std::uint32_t& blocker, SimplifyStats& stats) {
@@ -738,7 +812,7 @@ private:
         if (use_marks_ && !marked_[u]) return;  // not this round's
         const unsigned at = level_of(u);
         if (at <= level) {
-            worker.push({area_of(u), u});
+            worker.queue.set({area_of(u), u}, slot_.data());
         } else {
             worker.later[at].push_back(u);
         }
@@ -830,8 +904,9 @@ private:
     std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
     Waits waits_;
     std::vector<std::uint8_t> has_waiters_;  // per vertex: some vertex may wait on it (written by its block only)
+    std::vector<std::uint32_t> slot_;        // per vertex: its place in its block's queue, or kNone
     std::vector<std::vector<std::uint32_t>> later_;  // per level: vertices to queue there
-    std::vector<std::uint32_t> start_, block_of_, grouped_;  // scratch, reused between levels
+    std::vector<std::uint32_t> start_, grouped_;  // scratch, reused between levels
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
