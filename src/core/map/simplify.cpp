@@ -492,6 +492,7 @@ private:
             ++stats_.rounds;
             schedule_queued();
             sweep();
+            keep_undecided();
         }
         stats_.target_reached = stats_.removed >= goal;
     }
@@ -505,20 +506,18 @@ private:
     // the mesh engine's round threshold). Then every queued vertex with a smaller area is marked,
     // and of those with area K, the first ones in id order up to the budget.
     bool mark_smallest(std::uint64_t budget) {
-        const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
+        const std::size_t count = undecided_count();
+        const int threads = count >= parallel_min_ ? threads_ : 1;
         const auto share = static_cast<std::size_t>(threads);
-        auto range = [&](int t) {
-            return std::pair{static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * t / share),
-                             static_cast<std::uint32_t>(std::uint64_t{vertex_count_} * (t + 1) / share)};
-        };
+        auto range = [&](int t) { return std::pair{count * static_cast<std::size_t>(t) / share, count * static_cast<std::size_t>(t + 1) / share}; };
         std::vector<std::size_t> offset(share + 1, 0);
 #pragma omp parallel num_threads(threads)
         {
             const int t = omp_get_thread_num();
             const auto [begin, end] = range(t);
-            std::size_t count = 0;
-            for (std::uint32_t v = begin; v < end; ++v) count += state_[v] == State::queued;
-            offset[static_cast<std::size_t>(t) + 1] = count;
+            std::size_t queued = 0;
+            for (std::size_t i = begin; i < end; ++i) queued += state_[undecided(i)] == State::queued;
+            offset[static_cast<std::size_t>(t) + 1] = queued;
         }
         for (std::size_t t = 0; t < share; ++t) offset[t + 1] += offset[t];
         const std::size_t queued = offset.back();
@@ -529,7 +528,8 @@ private:
             const int t = omp_get_thread_num();
             const auto [begin, end] = range(t);
             std::size_t k = offset[static_cast<std::size_t>(t)];
-            for (std::uint32_t v = begin; v < end; ++v) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t v = undecided(i);
                 marked_[v] = 0;
                 if (state_[v] == State::queued) keys[k++] = std::bit_cast<std::uint64_t>(area_of(v));
             }
@@ -553,7 +553,8 @@ private:
             const auto [first, last] = range(t);
             std::uint64_t seen = at_key[static_cast<std::size_t>(t)];
             std::size_t k = begin;
-            for (std::uint32_t v = first; v < last; ++v) {
+            for (std::size_t i = first; i < last; ++i) {
+                const std::uint32_t v = undecided(i);
                 if (state_[v] != State::queued) continue;
                 const std::uint64_t own = keys[k++];
                 if (own < key) {
@@ -571,11 +572,13 @@ private:
     void schedule_queued() {
         std::vector<std::vector<std::vector<std::uint32_t>>> parts(static_cast<std::size_t>(threads_),
                                                                    std::vector<std::vector<std::uint32_t>>(levels_));
-#pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
+        const std::size_t count = undecided_count();
+#pragma omp parallel num_threads(threads_) if (count >= parallel_min_)
         {
             auto& part = parts[static_cast<std::size_t>(omp_get_thread_num())];
 #pragma omp for schedule(static)
-            for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            for (std::size_t i = 0; i < count; ++i) {
+                const std::uint32_t v = undecided(i);
                 if (state_[v] == State::queued && (!use_marks_ || marked_[v])) part[level_of(v)].push_back(v);
             }
         }
@@ -583,6 +586,27 @@ private:
             for (unsigned level = 0; level < levels_; ++level) {
                 later_[level].insert(later_[level].end(), part[level].begin(), part[level].end());
             }
+        }
+    }
+
+    // The vertices a round looks at, in id order: every vertex until a round has run, then
+    // only those neither fixed nor removed (after the first round of GSHHG at 10 %, a third),
+    // so that the rounds that follow do not scan the whole map again and again.
+    std::size_t undecided_count() const { return undecided_listed_ ? undecided_.size() : vertex_count_; }
+    std::uint32_t undecided(std::size_t i) const { return undecided_listed_ ? undecided_[i] : static_cast<std::uint32_t>(i); }
+
+    void keep_undecided() {
+        const auto open = [&](std::uint32_t v) { return state_[v] != State::fixed && state_[v] != State::removed; };
+        if (!undecided_listed_) {
+            std::size_t count = 0;
+            for (std::uint32_t v = 0; v < vertex_count_; ++v) count += open(v);
+            undecided_.reserve(count);
+            for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+                if (open(v)) undecided_.push_back(v);
+            }
+            undecided_listed_ = true;
+        } else {
+            std::erase_if(undecided_, [&](std::uint32_t v) { return !open(v); });
         }
     }
 
@@ -905,6 +929,8 @@ private:
     Waits waits_;
     std::vector<std::uint8_t> has_waiters_;  // per vertex: some vertex may wait on it (written by its block only)
     std::vector<std::uint32_t> slot_;        // per vertex: its place in its block's queue, or kNone
+    std::vector<std::uint32_t> undecided_;   // see undecided()
+    bool undecided_listed_ = false;
     std::vector<std::vector<std::uint32_t>> later_;  // per level: vertices to queue there
     std::vector<std::uint32_t> start_, grouped_;  // scratch, reused between levels
     bool use_marks_ = false;
