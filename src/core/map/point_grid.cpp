@@ -6,7 +6,8 @@
 
 namespace toposimp::map {
 
-PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second, double points_per_cell, int threads_wanted) {
+PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second, double points_per_cell, int threads_wanted,
+                     unsigned row_split) {
     const std::size_t f = first.size(), n = f + second.size();
     auto point = [&](std::size_t i) { return i < f ? first[i] : second[i - f]; };
     if (n == 0) {
@@ -45,6 +46,19 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
     // A width that overflows to infinity gives scale 0: one column, still correct.
     scale_x_ = width > 0 ? columns_ / width : 0.0;
     scale_y_ = height > 0 ? rows_ / height : 0.0;
+    base_columns_ = columns_;
+    base_rows_ = rows_;
+    base_scale_x_ = scale_x_;
+    base_scale_y_ = scale_y_;
+    // Thin rows: 2^k of them per base row, at exactly 2^k times the base scale (so a row's
+    // base row is its index shifted; a power of two scales a double exactly).
+    if (row_split > 0 && scale_y_ > 0) {
+        row_split_ = row_split;
+        rows_ = base_rows_ << row_split;
+        scale_y_ = std::ldexp(base_scale_y_, static_cast<int>(row_split));
+        columns_ = std::max(1u, base_columns_ >> row_split);
+        scale_x_ = width > 0 ? columns_ / width : 0.0;
+    }
 
     // Two counting sorts, both parallel: points into rows (each thread its own contiguous range
     // of ids, so a row keeps id order), then each row on its own into cells, each cell sorted by

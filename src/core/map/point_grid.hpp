@@ -27,8 +27,13 @@ public:
     // Indexes `first` as ids [0, f) and `second` as ids [f, f + s). About `points_per_cell`
     // points share a cell on average. Built on `threads` threads (0: OpenMP's default) when
     // big; the grid is the same for any number.
+    //
+    // The cells are first laid out square-ish (the *base* cells); `row_split` k then cuts each
+    // base row into 2^k rows and joins columns 2^k at a time, keeping the number of cells: thin
+    // rows read fewer points outside a small query box when points crowd along lines (shores,
+    // borders). Base row r is rows r·2^k to r·2^k + 2^k − 1 exactly (row(y) >> k == base_row(y)).
     explicit PointGrid(std::span<const Point> first, std::span<const Point> second = {}, double points_per_cell = 2.0,
-                       int threads = 0);
+                       int threads = 0, unsigned row_split = 0);
 
     // Calls visit(id, point) for each point not taken out whose x lies in the box's x range,
     // within the rows of cells the box overlaps (a superset of the points inside it), until
@@ -57,10 +62,52 @@ public:
         return false;
     }
 
+    // The point accept(id, point) takes that comes first in the order (base row, x, id), or
+    // kRemoved: the point any_in_cells would stop at on a grid without row_split, whatever the
+    // split. Each row is sorted by (x, id), so its first accepted point is its least; rows of
+    // one base row are all read once one of them has a point.
+    template <class Accept>
+    std::uint32_t first_in_cells(const Box& box, Accept&& accept) const {
+        std::uint32_t best = kRemoved, best_row = 0;
+        Point best_point{};
+        const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
+        const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
+        for (std::uint32_t y = y0; y <= y1; ++y) {
+            if (best != kRemoved && (y >> row_split_) != (best_row >> row_split_)) break;
+            const std::size_t row_start = std::size_t{y} * columns_;
+            const Point* first = points_.data() + cell_start_[row_start + x0];
+            const Point* last = points_.data() + cell_start_[row_start + x1 + 1];
+            const Point* p = first;
+            if (last - first > 16) {
+                p = std::partition_point(first, last, [&](const Point& q) { return q.x < box.min_x; });
+            } else {
+                while (p != last && p->x < box.min_x) ++p;
+            }
+            for (; p != last && p->x <= box.max_x; ++p) {
+                if (best != kRemoved && best_point.x < p->x) break;  // (nothing later in this row comes first)
+                const std::uint32_t id = load(ids_[static_cast<std::size_t>(p - points_.data())]);
+                if (id == kRemoved || !accept(id, *p)) continue;
+                if (best == kRemoved || p->x < best_point.x || (p->x == best_point.x && id < best)) {
+                    best = id;
+                    best_point = *p;
+                    best_row = y;
+                }
+                break;
+            }
+        }
+        return best;
+    }
+
     // Takes point `id` of the first span out: queries skip it from now on. Points that other
     // threads may be taking out at the same time can lie in the cells a query scans (outside
     // its box), hence the relaxed atomic accesses to ids.
     void remove(std::uint32_t id) { std::atomic_ref<std::uint32_t>(ids_[slot_[id]]).store(kRemoved, std::memory_order_relaxed); }
+
+    // The base cells (see the constructor).
+    std::uint32_t base_columns() const { return base_columns_; }
+    std::uint32_t base_rows() const { return base_rows_; }
+    std::uint32_t base_column(double x) const { return cell_of(x, origin_x_, base_scale_x_, base_columns_); }
+    std::uint32_t base_row(double y) const { return cell_of(y, origin_y_, base_scale_y_, base_rows_); }
 
     std::uint32_t columns() const { return columns_; }
     std::uint32_t rows() const { return rows_; }
@@ -91,6 +138,9 @@ private:
 
     double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
     std::uint32_t columns_ = 1, rows_ = 1;
+    double base_scale_x_ = 0, base_scale_y_ = 0;
+    std::uint32_t base_columns_ = 1, base_rows_ = 1;
+    unsigned row_split_ = 0;
     FillLater<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
     FillLater<Point> points_;              // in cell order
     FillLater<std::uint32_t> ids_;         // parallel to points_; kRemoved once taken out

@@ -48,6 +48,9 @@ constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr unsigned kMinShift = 3;
 constexpr std::uint32_t kMaxBlocksPerSide = 256;
 
+// The point grid's rows are split in 4 (PointGrid): on GSHHG's shorelines, 7 % off the sweep.
+constexpr unsigned kRowSplit = 2;
+
 // whole_level_ of an open chain.
 constexpr std::uint8_t kOpen = 0xff;
 
@@ -302,7 +305,7 @@ private:
 
     // One grid over vertices (ids [0, n), removable) and control points (ids [n, n+m)).
     void index_points() {
-        grid_.emplace(map_.vertices, control_points_, 2.0, threads_);
+        grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit);
         stats_.control_points = control_points_.size();
         control_points_ = {};
         owned_points_ = std::vector<Point>();  // freed: the grid has them
@@ -311,16 +314,16 @@ private:
     // The point grid's cells grouped into blocks (parallel/blocks.hpp, axis 0 the columns, axis
     // 1 the rows): 2^shift × 2^shift cells at level 0, levels up to one block.
     void set_up_levels() {
-        const std::uint32_t side = std::max(grid_->columns(), grid_->rows());
-        blocks_.cells = {grid_->columns(), grid_->rows()};
+        const std::uint32_t side = std::max(grid_->base_columns(), grid_->base_rows());
+        blocks_.cells = {grid_->base_columns(), grid_->base_rows()};
         blocks_.shift = kMinShift;
         while (((side - 1) >> blocks_.shift) >= kMaxBlocksPerSide) ++blocks_.shift;
         levels_ = static_cast<unsigned>(blocks_.top_level()) + 1;
         stats_.levels = levels_;
     }
 
-    std::uint32_t block_column(Point p) const { return blocks_.block(grid_->column(p.x), 0); }
-    std::uint32_t block_row(Point p) const { return blocks_.block(grid_->row(p.y), 0); }
+    std::uint32_t block_column(Point p) const { return blocks_.block(grid_->base_column(p.x), 0); }
+    std::uint32_t block_row(Point p) const { return blocks_.block(grid_->base_row(p.y), 0); }
 
     // The finest level at which two vertices fall in one block.
     unsigned shared_level(std::uint32_t u, std::uint32_t w) const {
@@ -596,18 +599,33 @@ private:
     std::uint32_t undecided(std::size_t i) const { return undecided_listed_ ? undecided_[i] : static_cast<std::uint32_t>(i); }
 
     void keep_undecided() {
-        const auto open = [&](std::uint32_t v) { return state_[v] != State::fixed && state_[v] != State::removed; };
-        if (!undecided_listed_) {
-            std::size_t count = 0;
-            for (std::uint32_t v = 0; v < vertex_count_; ++v) count += open(v);
-            undecided_.reserve(count);
-            for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-                if (open(v)) undecided_.push_back(v);
-            }
-            undecided_listed_ = true;
-        } else {
-            std::erase_if(undecided_, [&](std::uint32_t v) { return !open(v); });
+        const std::size_t count = undecided_count();
+        const int threads = count >= parallel_min_ ? threads_ : 1;
+        const auto share = static_cast<std::size_t>(threads);
+        auto range = [&](int t) { return std::pair{count * static_cast<std::size_t>(t) / share, count * static_cast<std::size_t>(t + 1) / share}; };
+        auto open = [&](std::uint32_t v) { return state_[v] != State::fixed && state_[v] != State::removed; };
+        std::vector<std::size_t> offset(share + 1, 0);
+#pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            const auto [begin, end] = range(t);
+            std::size_t kept = 0;
+            for (std::size_t i = begin; i < end; ++i) kept += open(undecided(i));
+            offset[static_cast<std::size_t>(t) + 1] = kept;
         }
+        for (std::size_t t = 0; t < share; ++t) offset[t + 1] += offset[t];
+        std::vector<std::uint32_t> kept(offset.back());
+#pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            const auto [begin, end] = range(t);
+            std::size_t k = offset[static_cast<std::size_t>(t)];
+            for (std::size_t i = begin; i < end; ++i) {
+                if (open(undecided(i))) kept[k++] = undecided(i);
+            }
+        }
+        undecided_.swap(kept);
+        undecided_listed_ = true;
     }
 
     void sweep() {
@@ -620,26 +638,11 @@ private:
 
     void process_level(unsigned level) {
         decide_split_rings(level);
-        // The candidates of this level, grouped by block (counting sort).
-        std::vector<std::uint32_t>& candidates = later_[level];
-        const std::uint32_t blocks = blocks_at(level);
+        const std::size_t kept = group_by_block(level);
         std::vector<std::uint32_t>& start = start_;
-        start.assign(std::size_t{blocks} + 1, 0);
-        std::size_t kept = 0;
-        for (const std::uint32_t v : candidates) {
-            if (state_[v] != State::queued || level_of(v) > level) continue;  // else on a later list
-            candidates[kept] = v;
-            ++start[block_at(v, level) + 1];
-            ++kept;
-        }
-        for (std::uint32_t b = 0; b < blocks; ++b) start[b + 1] += start[b];
         std::vector<std::uint32_t>& grouped = grouped_;
-        grouped.resize(kept);
-        {
-            std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
-            for (std::size_t i = 0; i < kept; ++i) grouped[fill[block_at(candidates[i], level)]++] = candidates[i];
-        }
-        std::vector<std::uint32_t>().swap(candidates);  // (its memory back before the blocks run)
+        const std::uint32_t blocks = blocks_at(level);
+        std::vector<std::uint32_t>().swap(later_[level]);  // (its memory back before the blocks run)
         std::vector<std::uint32_t> busy;  // blocks with candidates
         for (std::uint32_t b = 0; b < blocks; ++b) {
             if (start[b + 1] > start[b]) busy.push_back(b);
@@ -664,6 +667,58 @@ private:
         }
         progress_.store(0, std::memory_order_relaxed);
         report_progress();
+    }
+
+    // The candidates of this level still queued at it (else they are on a later list), grouped
+    // by block into grouped_, block b's from start_[b]: a counting sort, each thread counting and
+    // then placing a contiguous share of the list. Returns how many there are.
+    std::size_t group_by_block(unsigned level) {
+        std::vector<std::uint32_t>& candidates = later_[level];
+        const std::uint32_t blocks = blocks_at(level);
+        const std::size_t count = candidates.size();
+        const int threads = count >= parallel_min_ ? threads_ : 1;
+        const auto share = static_cast<std::size_t>(threads);
+        auto range = [&](int t) { return std::pair{count * static_cast<std::size_t>(t) / share, count * static_cast<std::size_t>(t + 1) / share}; };
+        std::vector<std::size_t> place(std::size_t{blocks} * share);  // [block][thread]: where the thread's entries go
+#pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            const auto [begin, end] = range(t);
+            std::vector<std::size_t> mine(blocks, 0);
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t v = candidates[i];
+                if (state_[v] != State::queued || level_of(v) > level) {
+                    candidates[i] = kNone;
+                } else {
+                    ++mine[block_at(v, level)];
+                }
+            }
+            for (std::uint32_t b = 0; b < blocks; ++b) place[std::size_t{b} * share + static_cast<std::size_t>(t)] = mine[b];
+        }
+        start_.resize(std::size_t{blocks} + 1);
+        std::size_t total = 0;
+        for (std::uint32_t b = 0; b < blocks; ++b) {
+            start_[b] = static_cast<std::uint32_t>(total);
+            for (std::size_t t = 0; t < share; ++t) {
+                const std::size_t here = place[std::size_t{b} * share + t];
+                place[std::size_t{b} * share + t] = total;
+                total += here;
+            }
+        }
+        start_[blocks] = static_cast<std::uint32_t>(total);
+        grouped_.resize(total);
+#pragma omp parallel num_threads(threads)
+        {
+            const int t = omp_get_thread_num();
+            const auto [begin, end] = range(t);
+            std::vector<std::size_t> fill(blocks);
+            for (std::uint32_t b = 0; b < blocks; ++b) fill[b] = place[std::size_t{b} * share + static_cast<std::size_t>(t)];
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t v = candidates[i];
+                if (v != kNone) grouped_[fill[block_at(v, level)]++] = v;
+            }
+        }
+        return total;
     }
 
     // For each ring not within one block at this level: can its fixed vertices alone keep it
@@ -732,14 +787,14 @@ private:
 
         const Box box = triangle_box(a, b, c);
         std::optional<exact::ClosedTriangle> triangle;  // prepared at the first candidate point
-        const bool hit = grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
+        // The blocker a vertex waits on is the first point in the triangle in the grid's base
+        // order, as the split rows do not change it.
+        blocker = grid_->first_in_cells(box, [&](std::uint32_t id, Point q) {
             if (id == v || !box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
-            if (!triangle->contains(q)) return false;
-            blocker = id;
-            return true;
+            return triangle->contains(q);
         });
-        if (hit) return Verdict::blocked_by_point;
+        if (blocker != PointGrid::kRemoved) return Verdict::blocked_by_point;
 
         if (coincides_with_other_segment(p, v, n)) return Verdict::blocked_by_coincidence;
         return Verdict::remove;

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 #include <tuple>
 
@@ -178,6 +179,28 @@ TEST(SegmentContacts, Issue29BackAndForthLineIsSettledInLinearPasses) {
     // Each cell settles its segments in a pass or two, the rest passed over: the tests grow with
     // the segments times the cells they span (141 here), not with their square (8·10^8 pairs).
     EXPECT_LT(stats.filter_decided + stats.expansion_decided + stats.gmp_fallbacks, 40000u * 141u * 4u);
+}
+
+// Consecutive segments of a chain running strictly one way through their shared vertex, in x or
+// in y, meet there alone and are settled without a predicate (issue 34); one folding back by a
+// single ulp, or lying back along itself, still is improper.
+TEST(SegmentContacts, Issue34ConsecutiveSegmentsFoldingBackByAnUlpAreImproper) {
+    const double up = std::nextafter(1.0, 2.0), down = std::nextafter(1.0, 0.0);
+    struct Case {
+        Point p, q, u;
+        bool improper;
+    };
+    for (const auto& [p, q, u, improper] : {Case{{0, 0}, {1, 0}, {up, 0}, false}, Case{{0, 0}, {1, 0}, {down, 0}, true},
+                                             Case{{0, 0}, {1, 1}, {0.5, 2}, false}, Case{{0, 5}, {0, 1}, {0, down}, false},
+                                             Case{{0, 5}, {0, 1}, {0, up}, true}, Case{{3, 3}, {1, 1}, {2, 2}, true},
+                                             Case{{1e300, -1e-300}, {-1e300, 1e-300}, {1e300, 0}, false}}) {
+        MapData map;
+        map.add_chain(std::vector<Point>{p, q, u});
+        exact::PredicateStats stats;
+        const std::vector<std::uint8_t> found = find_improper_segments(map, exact::Arithmetic::exact, stats, 1);
+        EXPECT_EQ(found[0] == 1, improper) << p.x << "," << p.y << " " << q.x << "," << q.y << " " << u.x << "," << u.y;
+        EXPECT_EQ(found[0], found[1]);
+    }
 }
 
 }  // namespace

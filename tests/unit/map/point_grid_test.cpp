@@ -93,5 +93,54 @@ TEST(PointGrid, SameCellsForAnyThreadCountEachSortedByXThenId) {
     }
 }
 
+// Split rows (issue 34): no point inside a box is missed, a row's base row is its index shifted,
+// and first_in_cells picks the point any_in_cells stops at on the unsplit grid — points crowded
+// on lines, on equal x, at extreme and at one-ulp-apart coordinates, some taken out.
+TEST(PointGrid, Issue34SplitRowsFindTheSameFirstPointAsTheBaseGrid) {
+    std::mt19937_64 rng(34);
+    std::uniform_real_distribution<double> unit(0, 1);
+    for (const auto& [offset, scale] : {std::pair{0.0, 1.0}, std::pair{1e9, 1e-6}, std::pair{-1e300, 1e299}}) {
+        std::vector<Point> points;
+        for (int k = 0; k < 3000; ++k) {  // a "shoreline" and a scatter, many sharing x
+            const double t = unit(rng);
+            points.push_back({offset + scale * t * 100, offset + scale * (50 + 20 * std::sin(t * 40))});
+            points.push_back({offset + scale * std::floor(unit(rng) * 60), offset + scale * unit(rng) * 100});
+        }
+        points.push_back({std::nextafter(points[0].x, INFINITY), points[0].y});
+        const PointGrid base(points, {}, 2.0, 1, 0);
+        for (const unsigned split : {1u, 2u, 3u}) {
+            PointGrid grid(points, {}, 2.0, 1, split);
+            PointGrid plain(points, {}, 2.0, 1, 0);
+            for (std::uint32_t id = 0; id < points.size(); id += 7) {
+                grid.remove(id);
+                plain.remove(id);
+            }
+            for (const Point& p : points) ASSERT_EQ(grid.row(p.y) >> split, base.row(p.y));
+            for (const Point& p : points) ASSERT_EQ(grid.base_column(p.x), base.column(p.x));
+            for (int k = 0; k < 300; ++k) {
+                const Point& corner = points[static_cast<std::size_t>(unit(rng) * static_cast<double>(points.size()))];
+                const Box box{corner.x, corner.y, corner.x + scale * unit(rng) * 20, corner.y + scale * unit(rng) * 20};
+                auto accept = [&](std::uint32_t id, Point q) { return box_contains(box, q) && id % 3 != 0; };
+                std::uint32_t expected = PointGrid::kRemoved;
+                plain.any_in_cells(box, [&](std::uint32_t id, Point q) {
+                    if (!accept(id, q)) return false;
+                    expected = id;
+                    return true;
+                });
+                EXPECT_EQ(grid.first_in_cells(box, accept), expected) << "split " << split << ", box " << k;
+                std::set<std::uint32_t> inside;
+                for (const std::uint32_t id : in_cells(grid, box)) {
+                    if (box_contains(box, points[id])) inside.insert(id);
+                }
+                std::set<std::uint32_t> wanted;
+                for (const std::uint32_t id : in_cells(plain, box)) {
+                    if (box_contains(box, points[id])) wanted.insert(id);
+                }
+                EXPECT_EQ(inside, wanted);
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::map
