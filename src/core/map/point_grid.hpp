@@ -16,6 +16,7 @@
 #include <atomic>
 #include <cstdint>
 #include <span>
+#include <utility>
 #include <vector>
 
 namespace toposimp::map {
@@ -44,17 +45,8 @@ public:
         const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
         const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
         for (std::uint32_t y = y0; y <= y1; ++y) {
-            const std::size_t row_start = std::size_t{y} * columns_;
-            const Point* first = points_.data() + cell_start_[row_start + x0];
-            const Point* last = points_.data() + cell_start_[row_start + x1 + 1];
-            // Few points per cell on average: a short linear skip beats a binary search.
-            const Point* p = first;
-            if (last - first > 16) {
-                p = std::partition_point(first, last, [&](const Point& q) { return q.x < box.min_x; });
-            } else {
-                while (p != last && p->x < box.min_x) ++p;
-            }
-            for (; p != last && p->x <= box.max_x; ++p) {
+            const auto [from, last] = row_part(y, x0, x1, box.min_x);
+            for (const Point* p = from; p != last && p->x <= box.max_x; ++p) {
                 const std::uint32_t id = load(ids_[static_cast<std::size_t>(p - points_.data())]);
                 if (id != kRemoved && visit(id, *p)) return true;
             }
@@ -74,16 +66,8 @@ public:
         const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
         for (std::uint32_t y = y0; y <= y1; ++y) {
             if (best != kRemoved && (y >> row_split_) != (best_row >> row_split_)) break;
-            const std::size_t row_start = std::size_t{y} * columns_;
-            const Point* first = points_.data() + cell_start_[row_start + x0];
-            const Point* last = points_.data() + cell_start_[row_start + x1 + 1];
-            const Point* p = first;
-            if (last - first > 16) {
-                p = std::partition_point(first, last, [&](const Point& q) { return q.x < box.min_x; });
-            } else {
-                while (p != last && p->x < box.min_x) ++p;
-            }
-            for (; p != last && p->x <= box.max_x; ++p) {
+            const auto [from, last] = row_part(y, x0, x1, box.min_x);
+            for (const Point* p = from; p != last && p->x <= box.max_x; ++p) {
                 if (best != kRemoved && best_point.x < p->x) break;  // (nothing later in this row comes first)
                 const std::uint32_t id = load(ids_[static_cast<std::size_t>(p - points_.data())]);
                 if (id == kRemoved || !accept(id, *p)) continue;
@@ -125,6 +109,17 @@ public:
     }
 
 private:
+    // Row y's points in columns x0 to x1, from the first with x ≥ min_x on.
+    std::pair<const Point*, const Point*> row_part(std::uint32_t y, std::uint32_t x0, std::uint32_t x1, double min_x) const {
+        const std::size_t row_start = std::size_t{y} * columns_;
+        const Point* p = points_.data() + cell_start_[row_start + x0];
+        const Point* last = points_.data() + cell_start_[row_start + x1 + 1];
+        // Few points per cell on average: a short linear skip beats a binary search.
+        if (last - p > 16) return {std::partition_point(p, last, [&](const Point& q) { return q.x < min_x; }), last};
+        while (p != last && p->x < min_x) ++p;
+        return {p, last};
+    }
+
     static std::uint32_t load(const std::uint32_t& id) {
         return std::atomic_ref<const std::uint32_t>(id).load(std::memory_order_relaxed);
     }
