@@ -52,4 +52,8 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                                                  exact::PredicateStats& stats, int threads = 0,
                                                  const std::atomic<bool>* cancel = nullptr);
 
+// How many times the search splits its grid's rows for this map (0 to 3; see row_split in
+// crossings.cpp): for tests, which must reach every shape of the grid.
+unsigned search_row_split(const MapData& map);
+
 }  // namespace toposimp::map

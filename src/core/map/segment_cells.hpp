@@ -68,14 +68,17 @@ struct Grid {
     }
 };
 
-// A grid of about side × side cells over `extent`.
-inline Grid make_grid(const Box& extent, std::uint32_t side) {
+// A grid of columns × rows cells over `extent`.
+inline Grid make_grid(const Box& extent, std::uint32_t columns, std::uint32_t rows) {
     const double width = extent.max_x - extent.min_x, height = extent.max_y - extent.min_y;
-    Grid grid{{extent.min_x, width > 0 ? side / width : 0.0, side}, {extent.min_y, height > 0 ? side / height : 0.0, side},
-              width / side, height / side};
+    Grid grid{{extent.min_x, width > 0 ? columns / width : 0.0, columns}, {extent.min_y, height > 0 ? rows / height : 0.0, rows},
+              width / columns, height / rows};
     const double magnitude = std::max({std::abs(extent.min_x), std::abs(extent.max_x), std::abs(extent.min_y), std::abs(extent.max_y)});
     grid.clip = std::min(grid.cell_width, grid.cell_height) >= std::ldexp(magnitude, -36);
     return grid;
 }
+
+// A grid of about side × side cells over `extent`.
+inline Grid make_grid(const Box& extent, std::uint32_t side) { return make_grid(extent, side, side); }
 
 }  // namespace toposimp::map

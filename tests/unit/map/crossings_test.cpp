@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <set>
 #include <tuple>
 
 namespace toposimp::map {
@@ -201,6 +202,45 @@ TEST(SegmentContacts, Issue34ConsecutiveSegmentsFoldingBackByAnUlpAreImproper) {
         EXPECT_EQ(found[0] == 1, improper) << p.x << "," << p.y << " " << q.x << "," << q.y << " " << u.x << "," << u.y;
         EXPECT_EQ(found[0], found[1]);
     }
+}
+
+// Vertices crowded along lines (GSHHG's shores) make the search split its rows (issue 34): dense
+// walks on a fine lattice in a few spots of a wide map — overlaps, touches, crossings — found
+// exactly as a test of every pair finds them, with every split the search can choose.
+MapData crowded_map(std::uint64_t seed, int blobs, int steps, double extent) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> where(0, extent);
+    std::uniform_int_distribution<int> step(-1, 1), pick(0, 9);
+    MapData map;
+    map.add_chain(std::vector<Point>{{0, 0}, {extent, extent}});  // across everything
+    for (int b = 0; b < blobs; ++b) {
+        std::vector<Point> points;
+        Point at{std::round(where(rng)), std::round(where(rng))};
+        for (int k = 0; k < steps; ++k) {
+            points.push_back(at);
+            at = {at.x + 0.25 * step(rng), at.y + 0.25 * step(rng)};
+            if (pick(rng) == 0) at = {at.x + 0.1, at.y - 0.07};  // off the lattice
+        }
+        map.add_chain(points);
+    }
+    return map;
+}
+
+TEST(SegmentContacts, Issue34CrowdedMapsSplitRowsAndMatchEveryPairTest) {
+    std::set<unsigned> splits;
+    for (const auto& [seed, blobs, steps, extent] : {std::tuple{5, 600, 8, 300.0}, std::tuple{7, 100, 60, 300.0}, std::tuple{8, 60, 150, 300.0}, std::tuple{2, 8, 2500, 1000.0},
+                                                      std::tuple{3, 6, 4000, 3000.0}, std::tuple{4, 3, 8000, 1e5}}) {
+        const MapData map = crowded_map(static_cast<std::uint64_t>(seed), blobs, steps, extent);
+        splits.insert(search_row_split(map));
+        expect_same_contacts(map);
+        std::vector<std::uint8_t> expected(map.vertices.size(), 0);
+        for (const SegmentContact& c : every_pair(map)) expected[c.s] = expected[c.t] = 1;
+        for (const int threads : {1, 2}) {
+            exact::PredicateStats stats;
+            EXPECT_EQ(find_improper_segments(map, exact::Arithmetic::exact, stats, threads), expected) << seed << " " << threads;
+        }
+    }
+    EXPECT_EQ(splits, (std::set<unsigned>{0, 1, 2, 3}));
 }
 
 }  // namespace
