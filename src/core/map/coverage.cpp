@@ -82,12 +82,14 @@ void Coverage::build(MapData& map) {
     };
 
     // 2. Nodes: locations whose occurrences do not all have the same pair of neighbours.
-    std::vector<std::uint32_t> order(clean.size());
-    for (std::uint32_t i = 0; i < order.size(); ++i) order[i] = i;
+    // (The keys sorted with their positions, not positions by their keys: the sort then reads
+    // memory in order — a third of the build on Natural Earth's states went to that sort.)
     auto key_of = [&](std::uint32_t i) { return LocationKey(points_[clean[i]]); };
-    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-        const LocationKey ka = key_of(a), kb = key_of(b);
-        return ka < kb || (ka == kb && a < b);
+    std::vector<std::pair<LocationKey, std::uint32_t>> order;
+    order.reserve(clean.size());
+    for (std::uint32_t i = 0; i < clean.size(); ++i) order.emplace_back(key_of(i), i);
+    std::sort(order.begin(), order.end(), [](const auto& a, const auto& b) {
+        return a.first < b.first || (a.first == b.first && a.second < b.second);
     });
     std::vector<std::uint8_t> node(clean.size(), 0);
     auto neighbours = [&](std::uint32_t i) {
@@ -97,10 +99,10 @@ void Coverage::build(MapData& map) {
     };
     for (std::size_t g = 0; g < order.size();) {
         std::size_t h = g + 1;
-        while (h < order.size() && key_of(order[h]) == key_of(order[g])) ++h;
+        while (h < order.size() && order[h].first == order[g].first) ++h;
         bool differ = false;
-        for (std::size_t k = g + 1; k < h && !differ; ++k) differ = neighbours(order[k]) != neighbours(order[g]);
-        for (std::size_t k = g; k < h && differ; ++k) node[order[k]] = 1;
+        for (std::size_t k = g + 1; k < h && !differ; ++k) differ = neighbours(order[k].second) != neighbours(order[g].second);
+        for (std::size_t k = g; k < h && differ; ++k) node[order[k].second] = 1;
         g = h;
     }
 
