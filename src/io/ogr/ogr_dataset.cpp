@@ -691,6 +691,32 @@ void collect_parts(const OGRGeometry* geometry, std::vector<const OGRSimpleCurve
     }
 }
 
+// Does a Shapefile record hold exactly the kept vertices of a plain (2D) line feature, part by
+// part and in order? The common case of the check after writing, decided without an OGR geometry
+// on either side (on GSHHG at 50 %, 0.22 s of a 0.75 s write went to building them). False for
+// anything else, which same_coordinates then decides (and explains).
+bool record_holds_lines(const OgrDataset::Data::Layer& layer, std::size_t index, const map::MapData& map,
+                        const std::vector<std::uint8_t>& kept, const ShapeRecord& record) {
+    const OgrDataset::Data::Layer::Shape& shape = layer.shapes[index];
+    if (shape.kind != OgrDataset::Data::Layer::Kind::lines || OGR_GT_HasZ(shape.type) || OGR_GT_HasM(shape.type) ||
+        !record.z.empty() || record.part_starts.size() != shape.count) {
+        return false;
+    }
+    for (std::uint32_t k = 0; k < shape.count; ++k) {
+        const std::uint32_t chain = layer.items[shape.first + k];
+        if (chain == kEmptyPart) return false;
+        std::size_t at = record.part_starts[k];
+        const std::size_t end = k + 1 < shape.count ? record.part_starts[k + 1] : record.xy.size();
+        for (std::uint32_t v = map.chains[chain].first; v <= map.chains[chain].last; ++v) {
+            if (!kept[v]) continue;
+            if (at == end || !(record.xy[at].x == map.vertices[v].x) || !(record.xy[at].y == map.vertices[v].y)) return false;
+            ++at;
+        }
+        if (at != end) return false;
+    }
+    return true;
+}
+
 // Do two geometries hold the same coordinates, bit for bit? A LineString equals a one-part
 // MultiLineString, and a ring may come back reversed (Shapefile writes rings in its own
 // orientation); nothing else may differ.
@@ -993,6 +1019,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             check_count(layer, shapes->size());
             for (std::size_t i = 0; i < shapes->size(); ++i) {
                 const ShapeRecord& shape = (*shapes)[i];
+                if (record_holds_lines(layer, i, map, kept, shape)) continue;
                 check_geometry(layer, i, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get());
             }
         } else {
