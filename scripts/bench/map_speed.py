@@ -81,7 +81,8 @@ def main():
                 engine = {k: statistics.median(r["engine_seconds"][k] for r in new) for k in ("index", "crossings", "sweep")}
                 rows.append(dict(job=job, threads=threads, old=statistics.median(walls["old"]), new=statistics.median(walls["new"]),
                                  same=outputs["old"] == outputs["new"], phases=phases, engine=engine,
-                                 memory=max(r["peak_memory_mib"] for r in new), kept=new[0]["vertices_out"],
+                                 memory=max(r["peak_memory_mib"] for r in new), old_memory=max(r["peak_memory_mib"] for r in report["old"]),
+                                 kept=new[0]["vertices_out"],
                                  vertices=new[0]["vertices_in"], rounds=new[0]["parallel"]["rounds"]))
             # mapshaper at the share toposimp kept, in the same run.
             source = JOBS[job][0]
@@ -96,7 +97,7 @@ def main():
             for row in rows[-2:]:
                 row["mapshaper"] = statistics.median(ms_walls)
     print("| job | threads | old wall s | new wall s | new/old | identical | read | index | crossings | sweep | write | rounds |"
-          " simplify 1 → 2 threads | peak MiB | mapshaper s | mapshaper/new |")
+          " simplify 1 → 2 threads | peak MiB old → new | mapshaper s | mapshaper/new |")
     print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     for r in rows:
         p, e = r["phases"], r["engine"]
@@ -104,9 +105,9 @@ def main():
         if r["threads"] == 2:
             one = next(x for x in rows if x["job"] == r["job"] and x["threads"] == 1)
             speedup = "%.2f×" % (one["phases"]["simplify"] / p["simplify"])
-        print("| %s | %d | %.2f | %.2f | %.2f | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %d | %s | %.0f | %.2f | %.1f× |" % (
+        print("| %s | %d | %.2f | %.2f | %.2f | %s | %.2f | %.2f | %.2f | %.2f | %.2f | %d | %s | %.0f → %.0f | %.2f | %.1f× |" % (
             r["job"], r["threads"], r["old"], r["new"], r["new"] / r["old"], "yes" if r["same"] else "NO", p["read"],
-            e["index"], e["crossings"], e["sweep"], p["write"], r["rounds"], speedup, r["memory"], r["mapshaper"],
+            e["index"], e["crossings"], e["sweep"], p["write"], r["rounds"], speedup, r["old_memory"], r["memory"], r["mapshaper"],
             r["mapshaper"] / r["new"]))
 
 
