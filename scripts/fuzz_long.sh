@@ -6,7 +6,7 @@
 # build/fuzz/tests/fuzz/artifacts/<target>/ as with scripts/fuzz.sh.
 #
 # To time something else on a quiet machine: `touch build/fuzz/long/pause` holds the next slices
-# back, and `pkill -TERM -f build/fuzz/tests/fuzz/fuzz_` ends the running ones (a slice ended so
+# back, and `pkill -TERM -f '^build/fuzz/tests/fuzz/fuzz_'` ends the running ones (a slice ended so
 # is counted, not taken for a finding); `rm build/fuzz/long/pause` goes on. Never SIGSTOP a
 # fuzzer: libFuzzer takes the pause for a timeout of the input it was running.
 # Usage: scripts/fuzz_long.sh [CPU SECONDS per target, default 3600] [target ...]
