@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -76,8 +77,14 @@ std::uint32_t little_u32(const unsigned char* bytes) {
 }
 
 double little_f64(const unsigned char* bytes) {
+    // One load where the machine is little-endian (the byte-by-byte assembly took 0.06 s of
+    // GSHHG's read; issue 34).
     std::uint64_t bits = 0;
-    for (int i = 0; i < 8; ++i) bits |= std::uint64_t{bytes[i]} << (8 * i);
+    if constexpr (std::endian::native == std::endian::little) {
+        std::memcpy(&bits, bytes, sizeof bits);
+    } else {
+        for (int i = 0; i < 8; ++i) bits |= std::uint64_t{bytes[i]} << (8 * i);
+    }
     double value = 0;
     std::memcpy(&value, &bits, sizeof value);
     return value;
