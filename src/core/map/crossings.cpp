@@ -61,6 +61,7 @@ std::uint32_t ends_hash(const MapData& map, std::uint32_t v) {
 // cell with mean μ = λ/8 and holds μ / (1 − e^−μ) a cell it fills, which is solved for μ.
 unsigned row_split(const MapData& map, const Grid& square, int threads) {
     constexpr std::uint32_t kStride = 8;
+    if (!(square.row.scale > 0)) return 0;  // one row for all (a flat map): splitting it gains nothing
     const std::size_t cells = std::size_t{square.column.count} * square.row.count, words = (cells + 63) / 64;
     const auto chains = static_cast<std::int64_t>(map.chains.size());
     std::vector<std::uint64_t> filled(words, 0);
