@@ -4,6 +4,7 @@
 #include "core/fill_later.hpp"
 #include "core/map/location_key.hpp"
 #include "core/map/segment_cells.hpp"
+#include "core/parallel/shares.hpp"
 
 #include "core/cancel.hpp"
 
@@ -160,8 +161,7 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
     // thread's entries of that row begin.
     std::vector<std::size_t> row_start(std::size_t{rows} * share + 1, 0);
 #pragma omp parallel num_threads(threads)
-    {
-        const int t = omp_get_thread_num();
+    parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = vertices_of(t);
         std::vector<std::size_t> count(rows, 0);
         for_each_segment(map, begin, end, [&](std::uint32_t v) {
@@ -169,12 +169,11 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
             for (std::uint32_t y = row(box.min_y), last = row(box.max_y); y <= last; ++y) ++count[y];
         });
         for (std::uint32_t y = 0; y < rows; ++y) row_start[std::size_t{y} * share + static_cast<std::size_t>(t) + 1] = count[y];
-    }
+    });
     for (std::size_t k = 1; k < row_start.size(); ++k) row_start[k] += row_start[k - 1];
     FillLater<std::uint32_t> in_rows(row_start.back());
 #pragma omp parallel num_threads(threads)
-    {
-        const int t = omp_get_thread_num();
+    parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = vertices_of(t);
         std::vector<std::size_t> fill(rows);
         for (std::uint32_t y = 0; y < rows; ++y) fill[y] = row_start[std::size_t{y} * share + static_cast<std::size_t>(t)];
@@ -182,7 +181,7 @@ void for_each_cell(const MapData& map, int threads_wanted, MakeWorker make_worke
             const Box box = box_of(v);
             for (std::uint32_t y = row(box.min_y), last = row(box.max_y); y <= last; ++y) in_rows[fill[y]++] = v;
         });
-    }
+    });
 
 #pragma omp parallel num_threads(threads)
     {

@@ -1,5 +1,7 @@
 #include "core/map/point_grid.hpp"
 
+#include "core/parallel/shares.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <omp.h>
@@ -69,29 +71,27 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
     std::vector<std::size_t> row_start(share * rows_ + 1, 0);  // [row][thread]: where each thread's part of a row starts
     auto chunk = [&](int t) { return std::pair{n * static_cast<std::size_t>(t) / share, n * static_cast<std::size_t>(t + 1) / share}; };
 #pragma omp parallel num_threads(threads) if (parallel)
-    {
-        const int t = omp_get_thread_num();
+    parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = chunk(t);
         std::vector<std::size_t> count(rows_, 0);
         for (std::size_t i = begin; i < end; ++i) ++count[row(point(i).y)];
-        for (std::uint32_t y = 0; y < rows_; ++y) row_start[std::size_t{y} * share + t + 1] = count[y];
-    }
+        for (std::uint32_t y = 0; y < rows_; ++y) row_start[std::size_t{y} * share + static_cast<std::size_t>(t) + 1] = count[y];
+    });
     for (std::size_t k = 1; k < row_start.size(); ++k) row_start[k] += row_start[k - 1];
     points_.resize(n);
     ids_.resize(n);
 #pragma omp parallel num_threads(threads) if (parallel)
-    {
-        const int t = omp_get_thread_num();
+    parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = chunk(t);
         std::vector<std::size_t> fill(rows_);
-        for (std::uint32_t y = 0; y < rows_; ++y) fill[y] = row_start[std::size_t{y} * share + t];
+        for (std::uint32_t y = 0; y < rows_; ++y) fill[y] = row_start[std::size_t{y} * share + static_cast<std::size_t>(t)];
         for (std::size_t i = begin; i < end; ++i) {
             const Point p = point(i);
             const std::size_t slot = fill[row(p.y)]++;
             points_[slot] = p;
             ids_[slot] = static_cast<std::uint32_t>(i);
         }
-    }
+    });
     cell_start_.resize(std::size_t{columns_} * rows_ + 1);
     cell_start_.back() = static_cast<std::uint32_t>(n);
 #pragma omp parallel num_threads(threads) if (parallel)

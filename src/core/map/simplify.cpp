@@ -7,6 +7,7 @@
 #include "core/map/point_grid.hpp"
 #include "core/parallel/blocks.hpp"
 #include "core/parallel/select.hpp"
+#include "core/parallel/shares.hpp"
 
 #include <omp.h>
 
@@ -513,25 +514,23 @@ private:
         const auto share = static_cast<std::size_t>(threads);
         std::vector<std::size_t> offset(share + 1, 0);
 #pragma omp parallel num_threads(threads)
-        {
-            const int t = omp_get_thread_num();
+        parallel::for_my_shares(threads, [&](int t) {
             std::size_t queued = 0;
             for_each_undecided(t, threads, [&](std::uint32_t v) { queued += state_[v] == State::queued; });
             offset[static_cast<std::size_t>(t) + 1] = queued;
-        }
+        });
         for (std::size_t t = 0; t < share; ++t) offset[t + 1] += offset[t];
         const std::size_t queued = offset.back();
         if (queued == 0) return false;
         FillLater<std::uint64_t> keys(queued);
 #pragma omp parallel num_threads(threads)
-        {
-            const int t = omp_get_thread_num();
+        parallel::for_my_shares(threads, [&](int t) {
             std::size_t k = offset[static_cast<std::size_t>(t)];
             for_each_undecided(t, threads, [&](std::uint32_t v) {
                 marked_[v] = 0;
                 if (state_[v] == State::queued) keys[k++] = std::bit_cast<std::uint64_t>(area_of(v));
             });
-        }
+        });
         // The budget-th smallest key (the largest when the budget takes them all), and of those
         // equal to it the first `rank` in id order: each thread's run of keys is a list.
         std::vector<std::span<const std::uint64_t>> runs(share);
@@ -545,8 +544,7 @@ private:
         std::vector<std::uint64_t> at_key(share + 1, 0);  // keys at the key in the runs before
         for (std::size_t t = 0; t < share; ++t) at_key[t + 1] = at_key[t] + kth.equal[t];
 #pragma omp parallel num_threads(threads)
-        {
-            const int t = omp_get_thread_num();
+        parallel::for_my_shares(threads, [&](int t) {
             std::uint64_t seen = at_key[static_cast<std::size_t>(t)];
             std::size_t k = offset[static_cast<std::size_t>(t)];
             for_each_undecided(t, threads, [&](std::uint32_t v) {
@@ -559,7 +557,7 @@ private:
                     if (++seen == rank) bound_ = {std::bit_cast<double>(key), v};
                 }
             });
-        }
+        });
         return true;
     }
 
@@ -569,13 +567,12 @@ private:
                                                                    std::vector<std::vector<std::uint32_t>>(levels_));
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
 #pragma omp parallel num_threads(threads)
-        {
-            const int t = omp_get_thread_num();
+        parallel::for_my_shares(threads, [&](int t) {
             auto& part = parts[static_cast<std::size_t>(t)];
             for_each_undecided(t, threads, [&](std::uint32_t v) {
                 if (state_[v] == State::queued && (!use_marks_ || marked_[v])) part[level_of(v)].push_back(v);
             });
-        }
+        });
         for (const auto& part : parts) {
             for (unsigned level = 0; level < levels_; ++level) {
                 later_[level].insert(later_[level].end(), part[level].begin(), part[level].end());
@@ -682,8 +679,7 @@ private:
         auto range = [&](int t) { return std::pair{count * static_cast<std::size_t>(t) / share, count * static_cast<std::size_t>(t + 1) / share}; };
         std::vector<std::size_t> place(std::size_t{blocks} * share);  // [block][thread]: where the thread's entries go
 #pragma omp parallel num_threads(threads)
-        {
-            const int t = omp_get_thread_num();
+        parallel::for_my_shares(threads, [&](int t) {
             const auto [begin, end] = range(t);
             std::vector<std::size_t> mine(blocks, 0);
             for (std::size_t i = begin; i < end; ++i) {
@@ -695,7 +691,7 @@ private:
                 }
             }
             for (std::uint32_t b = 0; b < blocks; ++b) place[std::size_t{b} * share + static_cast<std::size_t>(t)] = mine[b];
-        }
+        });
         start_.resize(std::size_t{blocks} + 1);
         std::size_t total = 0;
         for (std::uint32_t b = 0; b < blocks; ++b) {
@@ -709,8 +705,7 @@ private:
         start_[blocks] = static_cast<std::uint32_t>(total);
         grouped_.resize(total);
 #pragma omp parallel num_threads(threads)
-        {
-            const int t = omp_get_thread_num();
+        parallel::for_my_shares(threads, [&](int t) {
             const auto [begin, end] = range(t);
             std::vector<std::size_t> fill(blocks);
             for (std::uint32_t b = 0; b < blocks; ++b) fill[b] = place[std::size_t{b} * share + static_cast<std::size_t>(t)];
@@ -718,7 +713,7 @@ private:
                 const std::uint32_t v = candidates[i];
                 if (v != kNone) grouped_[fill[block_at(v, level)]++] = v;
             }
-        }
+        });
         return total;
     }
 
