@@ -276,5 +276,31 @@ TEST(ShapefileShapes, AnythingElseIsLeftToOgr) {
     EXPECT_FALSE(read_shapefile_shapes(bad_part.path()).has_value());
 }
 
+// A map read for a Shapefile output decodes a line file's records itself while OGR reads the
+// attributes; a file the decoder declines (here a deleted record) is read again through OGR,
+// geometries and all: the same chains either way.
+TEST(ShapefileShapes, MapReadFallsBackToOgrWhereTheDecoderDeclines) {
+    const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "MULTILINESTRING ((2 2,3 3),(4 4,5 5,6 6))", "LINESTRING (7 7,8 8)"};
+    for (const bool with_deleted : {false, true}) {
+        const ShapeFile file(with_deleted ? "withdeleted" : "plain", wkbLineString, lines,
+                             with_deleted ? std::vector<GIntBig>{1} : std::vector<GIntBig>{});
+        EXPECT_EQ(read_shapefile_shapes(file.path()).has_value(), !with_deleted);
+        map::MapData map;
+        const OgrDataset dataset = OgrDataset::read(file.path(), {}, map, true);
+        std::vector<std::vector<Point>> chains;
+        for (const map::Chain& chain : map.chains) chains.emplace_back(map.vertices.begin() + chain.first, map.vertices.begin() + chain.last + 1);
+        std::vector<std::vector<Point>> expected = {{{0, 0}, {1, 1}}, {{2, 2}, {3, 3}}, {{4, 4}, {5, 5}, {6, 6}}, {{7, 7}, {8, 8}}};
+        if (with_deleted) expected.erase(expected.begin() + 1, expected.begin() + 3);
+        ASSERT_EQ(chains.size(), expected.size()) << with_deleted;
+        for (std::size_t c = 0; c < chains.size(); ++c) {
+            ASSERT_EQ(chains[c].size(), expected[c].size());
+            for (std::size_t i = 0; i < chains[c].size(); ++i) {
+                EXPECT_EQ(chains[c][i].x, expected[c][i].x);
+                EXPECT_EQ(chains[c][i].y, expected[c][i].y);
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::io
