@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <span>
 
 namespace toposimp::io {
 namespace {
@@ -39,6 +40,19 @@ public:
             count -= n;
         }
         return true;
+    }
+
+    // The next `count` bytes: in the buffer where they all lie in it, else copied to `scratch`;
+    // nullptr past the end.
+    const unsigned char* view(std::size_t count, std::vector<unsigned char>& scratch) {
+        if (filled_ - at_ >= count) {
+            const unsigned char* bytes = buffer_.data() + at_;
+            at_ += count;
+            offset_ += count;
+            return bytes;
+        }
+        scratch.resize(count);
+        return take(scratch.data(), count) ? scratch.data() : nullptr;
     }
 
     bool skip(std::uint64_t count) {
@@ -113,8 +127,8 @@ bool is_poly_type(std::uint32_t type) { return type == 3 || type == 5 || type ==
 
 // Calls visit(fid, deleted, content) for every record of the .shp at `path` whose file shape
 // type passes `accepts`, `content` being the record after its 8-byte header (at least the
-// 4-byte shape type, which is 0 or the file's unless the record is deleted). False when a
-// sibling file is missing, the files disagree, or visit returns false.
+// 4-byte shape type, which is 0 or the file's unless the record is deleted), valid during the
+// call. False when a sibling file is missing, the files disagree, or visit returns false.
 template <class Accepts, class Visit>
 bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
     const std::filesystem::path shp_path(path);
@@ -145,7 +159,7 @@ bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
         return false;
     }
 
-    std::vector<unsigned char> content;
+    std::vector<unsigned char> scratch;  // a record the read buffer does not hold whole
     for (std::uint64_t fid = 0; fid < records; ++fid) {
         unsigned char index[8], record_header[8], deletion = 0;
         if (!shx.take(index, 8) || !dbf.take(&deletion, 1) || !dbf.skip(dbf_record_length - 1)) return false;
@@ -157,12 +171,12 @@ bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
         // A length is held against the file before anything is allocated for it (issue 29: a
         // 10 KB file claiming a 2 GB record).
         if (length < 4 || length > shp_size - std::min<std::uint64_t>(shp_size, shp.offset())) return false;
-        content.resize(static_cast<std::size_t>(length));
-        if (!shp.take(content.data(), content.size())) return false;
+        const unsigned char* bytes = shp.view(static_cast<std::size_t>(length), scratch);
+        if (bytes == nullptr) return false;
         if (deletion != '*' && deletion != ' ') return false;
-        const std::uint32_t type = little_u32(content.data());
+        const std::uint32_t type = little_u32(bytes);
         if (deletion == ' ' && type != 0 && type != *file_type) return false;
-        if (!visit(fid, deletion == '*', content)) return false;
+        if (!visit(fid, deletion == '*', std::span<const unsigned char>(bytes, static_cast<std::size_t>(length)))) return false;
     }
     return true;
 }
@@ -173,7 +187,7 @@ std::optional<std::vector<Point>> read_shapefile_points(const std::string& path)
     std::vector<Point> points;
     const bool read = for_each_record(
         path, [](std::uint32_t type) { return is_point_type(type) || is_multipoint_type(type); },
-        [&](std::uint64_t fid, bool deleted, const std::vector<unsigned char>& content) {
+        [&](std::uint64_t fid, bool deleted, std::span<const unsigned char> content) {
             const std::uint32_t type = little_u32(content.data());
             if (deleted || type == 0) return true;
             const std::size_t length = content.size(), before = points.size();
@@ -200,39 +214,55 @@ std::optional<std::vector<Point>> read_shapefile_points(const std::string& path)
     return points;
 }
 
-std::optional<std::vector<ShapeRecord>> read_shapefile_shapes(const std::string& path) {
-    std::vector<ShapeRecord> shapes;
-    const bool read = for_each_record(path, is_poly_type, [&](std::uint64_t, bool deleted, const std::vector<unsigned char>& content) {
+ShapeRecord ShapeTable::operator[](std::size_t r) const {
+    const std::size_t first = record_first[r], end = record_first[r + 1];
+    return {{xy.data() + first, end - first},
+            z.empty() ? std::span<const double>() : std::span<const double>(z.data() + first, end - first),
+            {part_starts.data() + record_parts[r], record_parts[r + 1] - record_parts[r]}};
+}
+
+std::optional<ShapeTable> read_shapefile_shapes(const std::string& path) {
+    ShapeTable table;
+    // Room for as many vertices as the file can hold (16 bytes each): the arrays grow once.
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(path, error);
+    if (error) return std::nullopt;
+    table.xy.reserve(static_cast<std::size_t>(size / 16));
+    table.record_first.push_back(0);
+    table.record_parts.push_back(0);
+    std::optional<bool> has_z;  // (every record's type is the file's or null)
+    const bool read = for_each_record(path, is_poly_type, [&](std::uint64_t, bool deleted, std::span<const unsigned char> content) {
         if (deleted) return false;  // (not in a file just written)
-        ShapeRecord& shape = shapes.emplace_back();
         const std::uint32_t type = little_u32(content.data());
-        if (type == 0) return true;
-        // Box (32 bytes), part and point counts, the parts' first points, the points; for Z
-        // types then the z range and the z values (M values after them are not read).
-        const std::uint64_t length = content.size();
-        if (length < 44) return false;
-        const std::uint64_t parts = little_u32(&content[36]), count = little_u32(&content[40]);
-        const std::uint64_t points_at = 44 + 4 * parts, z_at = points_at + 16 * count + 16;
-        const bool has_z = type == 13 || type == 15;
-        if (length < points_at + 16 * count || (has_z && length < z_at + 8 * count)) return false;
-        for (std::uint64_t k = 0; k < parts; ++k) {
-            const std::uint64_t start = little_u32(&content[44 + 4 * k]);
-            if (start >= count || (k == 0 ? start != 0 : start <= shape.part_starts.back())) return false;
-            shape.part_starts.push_back(static_cast<std::size_t>(start));
+        if (type != 0) {
+            // Box (32 bytes), part and point counts, the parts' first points, the points; for Z
+            // types then the z range and the z values (M values after them are not read).
+            const std::uint64_t length = content.size();
+            if (length < 44) return false;
+            const std::uint64_t parts = little_u32(&content[36]), count = little_u32(&content[40]);
+            const std::uint64_t points_at = 44 + 4 * parts, z_at = points_at + 16 * count + 16;
+            if (!has_z) has_z = type == 13 || type == 15;
+            if (length < points_at + 16 * count || (*has_z && length < z_at + 8 * count)) return false;
+            if (parts == 0 && count != 0) return false;
+            for (std::uint64_t k = 0; k < parts; ++k) {
+                const std::uint32_t start = little_u32(&content[44 + 4 * k]);
+                if (start >= count || (k == 0 ? start != 0 : start <= table.part_starts.back())) return false;
+                table.part_starts.push_back(start);
+            }
+            for (std::size_t i = 0; i < count; ++i) {
+                table.xy.push_back({little_f64(&content[points_at + 16 * i]), little_f64(&content[points_at + 16 * i + 8])});
+            }
+            if (*has_z) {
+                table.z.resize(table.xy.size() - count);  // (records before all null)
+                for (std::size_t i = 0; i < count; ++i) table.z.push_back(little_f64(&content[z_at + 8 * i]));
+            }
         }
-        if (parts == 0 && count != 0) return false;
-        shape.xy.reserve(static_cast<std::size_t>(count));
-        for (std::uint64_t i = 0; i < count; ++i) {
-            shape.xy.push_back({little_f64(&content[points_at + 16 * i]), little_f64(&content[points_at + 16 * i + 8])});
-        }
-        if (has_z) {
-            shape.z.reserve(static_cast<std::size_t>(count));
-            for (std::uint64_t i = 0; i < count; ++i) shape.z.push_back(little_f64(&content[z_at + 8 * i]));
-        }
+        table.record_first.push_back(table.xy.size());
+        table.record_parts.push_back(table.part_starts.size());
         return true;
     });
     if (!read) return std::nullopt;
-    return shapes;
+    return table;
 }
 
 }  // namespace toposimp::io

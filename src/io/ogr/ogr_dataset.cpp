@@ -228,33 +228,6 @@ std::unique_ptr<OGRGeometry> shape_geometry(const ShapeRecord& record) {
     return lines;
 }
 
-// A Shapefile record's lines (as shape_geometry gives them) straight from the record into the
-// map, not through an OGR geometry: on GSHHG, 155 MB of coordinates copied twice less.
-void add_record_lines(OgrDataset::Data& data, OgrDataset::Data::Layer& layer, const ShapeRecord& record, map::MapData& map,
-                      const std::string& label) {
-    for (std::size_t k = 0; k < record.part_starts.size(); ++k) {
-        const std::size_t first = record.part_starts[k];
-        const std::size_t end = k + 1 < record.part_starts.size() ? record.part_starts[k + 1] : record.xy.size();
-        const std::span<const Point> points(record.xy.data() + first, end - first);
-        if (map.vertices.size() + points.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
-            throw InputError(label + ": more than 2 billion vertices in one map");
-        }
-        for (std::size_t i = 0; i < points.size(); ++i) {
-            if (!std::isfinite(points[i].x) || !std::isfinite(points[i].y)) {
-                throw InputError(label + ": vertex " + std::to_string(i) + " has a non-finite coordinate (" + std::to_string(points[i].x) +
-                                 ", " + std::to_string(points[i].y) + ")");
-            }
-        }
-        layer.items.push_back(map.add_chain(points));
-        if (data.carries_zm) {
-            for (std::size_t j = first; j < end; ++j) {
-                data.z.push_back(record.z.empty() ? 0.0 : record.z[j]);
-                data.m.push_back(0.0);
-            }
-        }
-    }
-}
-
 }  // namespace
 
 namespace {
@@ -349,7 +322,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // a LineString, more a MultiLineString, as OGR reads them), on a thread of their own while
     // OGR reads the attributes only (on GSHHG, 0.16 s each), and the .prj file goes to the output
     // as it is. A .shp this reader does not take is read again through OGR, geometries and all.
-    std::future<std::optional<std::vector<ShapeRecord>>> decoding;
+    std::future<std::optional<ShapeTable>> decoding;
     if (prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString && is_local_shp(path) &&
         source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) == OGRERR_NONE) {
         decoding = std::async(std::launch::async, [path] { return read_shapefile_shapes(path); });
@@ -361,32 +334,43 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto read_error = [&] {
         return InputError("error reading '" + path + "', layer '" + layer->name + "'" + last_gdal_error());
     };
+    // A Shapefile record's lines (as shape_geometry gives them) as chains of the map, whose
+    // vertices the records' are from first_vertex on: no OGR geometry, no copy.
+    std::size_t first_vertex = 0;
+    auto add_record_lines = [&](const ShapeTable& records, std::size_t r, Layer::Shape& shape, auto&& label) {
+        const std::size_t first = first_vertex + records.record_first[r], end = first_vertex + records.record_first[r + 1];
+        const std::span<const std::uint32_t> parts(records.part_starts.data() + records.record_parts[r],
+                                                   records.record_parts[r + 1] - records.record_parts[r]);
+        if (parts.empty()) return;
+        for (std::size_t k = 0; k < parts.size(); ++k) {
+            const std::size_t part_first = first + parts[k], part_end = k + 1 < parts.size() ? first + parts[k + 1] : end;
+            for (std::size_t v = part_first; v < part_end; ++v) {
+                const Point p = map.vertices[v];
+                if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+                    throw InputError(label() + ": vertex " + std::to_string(v - part_first) + " has a non-finite coordinate (" +
+                                     std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
+                }
+            }
+            map.chains.push_back({static_cast<std::uint32_t>(part_first), static_cast<std::uint32_t>(part_end - 1)});
+            layer->items.push_back(static_cast<std::uint32_t>(map.chains.size() - 1));
+        }
+        const bool has_z = !records.z.empty();
+        shape.type = parts.size() == 1 ? (has_z ? wkbLineString25D : wkbLineString) : (has_z ? wkbMultiLineString25D : wkbMultiLineString);
+        shape.kind = Layer::Kind::lines;
+        shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
+    };
     // Each feature in turn, with its record's shape if `records`, else with OGR's geometry. A
     // feature GDAL could not read is an error at once (a later read may clear GDAL's last error).
-    auto add_feature = [&](OGRFeatureUniquePtr feature, const std::vector<ShapeRecord>* records) {
-        const std::string label = feature_label(path, source, feature->GetFID());
+    auto add_feature = [&](OGRFeatureUniquePtr feature, const ShapeTable* records) {
         Layer::Shape shape;
         shape.first = static_cast<std::uint32_t>(layer->items.size());
         bool empty = true;
         if (records) {
-            const auto fid = static_cast<std::size_t>(feature->GetFID());
-            if (fid >= records->size()) throw InputError(label + ": no such record in the .shp");
-            const ShapeRecord& record = (*records)[fid];
-            empty = record.part_starts.empty();
-            if (!empty) {
-                shape.type = record.part_starts.size() == 1 ? (record.z.empty() ? wkbLineString : wkbLineString25D)
-                                                            : (record.z.empty() ? wkbMultiLineString : wkbMultiLineString25D);
-                shape.kind = Layer::Kind::lines;
-                if (!record.z.empty()) {
-                    summary_of_layer.has_z = true;
-                    start_carrying_zm(map);
-                }
-                add_record_lines(*this, *layer, record, map, label);
-                shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
-            }
+            add_record_lines(*records, static_cast<std::size_t>(feature->GetFID()), shape, [&] { return feature_label(path, source, feature->GetFID()); });
+            empty = shape.kind != Layer::Kind::lines;
         } else if (const OGRGeometry* geometry = feature->GetGeometryRef()) {
             empty = geometry->IsEmpty();
-            add_geometry(*layer, shape, summary_of_layer, *geometry, label, map);
+            add_geometry(*layer, shape, summary_of_layer, *geometry, feature_label(path, source, feature->GetFID()), map);
         }
         count_feature(summary_of_layer, shape, empty);
         feature->SetGeometryDirectly(nullptr);
@@ -394,7 +378,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         layer->features.push_back(std::move(feature));
     };
     source.ResetReading();
-    std::optional<std::vector<ShapeRecord>> records;
+    std::optional<ShapeTable> records;
     if (decoding.valid()) {
         std::vector<OGRFeatureUniquePtr> features;
         for (;;) {
@@ -404,16 +388,34 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             features.push_back(std::move(feature));
         }
         records = decoding.get();
-        if (records && records->size() == features.size()) {
-            // Room for every record's points at once: the map's arrays grow once, not by doubling
-            // (each doubling a copy of all the coordinates read so far).
-            std::size_t points = 0, parts = 0;
-            for (const ShapeRecord& record : *records) {
-                points += record.xy.size();
-                parts += record.part_starts.size();
+        // (The records' vertices go to the map in record order: the features must come in it.)
+        bool in_order = records && records->size() == features.size();
+        for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
+        if (in_order) {
+            // The records' vertices become the map's (moved, when this is its first layer).
+            first_vertex = map.vertices.size();
+            if (records->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2 - first_vertex) {
+                throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
             }
-            map.vertices.reserve(map.vertices.size() + points);
-            map.chains.reserve(map.chains.size() + parts);
+            if (!records->z.empty()) {
+                summary_of_layer.has_z = true;
+                start_carrying_zm(map);
+            }
+            if (carries_zm) {
+                if (records->z.empty()) {
+                    z.resize(z.size() + records->xy.size(), 0.0);
+                } else {
+                    z.insert(z.end(), records->z.begin(), records->z.end());
+                }
+                m.resize(m.size() + records->xy.size(), 0.0);
+            }
+            if (first_vertex == 0) {
+                map.vertices = std::move(records->xy);
+            } else {
+                map.vertices.insert(map.vertices.end(), records->xy.begin(), records->xy.end());
+                std::vector<Point>().swap(records->xy);
+            }
+            map.chains.reserve(map.chains.size() + records->part_starts.size());
             for (const char* extension : {".prj", ".PRJ"}) {
                 std::error_code error;
                 if (std::filesystem::exists(std::filesystem::path(path).replace_extension(extension), error)) {
@@ -1031,13 +1033,13 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                                   output_name(layer) + "' after writing, not " + std::to_string(layer.features.size()));
             }
         };
-        std::optional<std::vector<ShapeRecord>> shapes;
+        std::optional<ShapeTable> shapes;
         if (driver_name == "ESRI Shapefile" && layer_count == 1) shapes = read_shapefile_shapes(output.staging_path());
         if (shapes) {
             const Data::Layer& layer = *data.layers.front();
             check_count(layer, shapes->size());
             for (std::size_t i = 0; i < shapes->size(); ++i) {
-                const ShapeRecord& shape = (*shapes)[i];
+                const ShapeRecord shape = (*shapes)[i];
                 if (record_holds_lines(layer, i, map, kept, shape)) continue;
                 check_geometry(layer, i, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get());
             }
