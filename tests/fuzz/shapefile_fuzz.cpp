@@ -39,5 +39,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } catch (const io::InputError&) {
     }
     io::read_shapefile_shapes(stem + ".shp");
+    io::for_each_shape(stem + ".shp", [](std::uint64_t, const io::ShapeRecord&) { return true; });
     return 0;
 }

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <span>
 
 namespace toposimp::io {
@@ -221,48 +222,82 @@ ShapeRecord ShapeTable::operator[](std::size_t r) const {
             {part_starts.data() + record_parts[r], record_parts[r + 1] - record_parts[r]}};
 }
 
+namespace {
+
+// Appends a PolyLine or Polygon record's content (after its shape type, which is `type`) to the
+// arrays: its part starts, vertices and, for Z types, z values. False if the record is not
+// whole. `has_z` is set by the first record that is not null (the file's type is every one's).
+bool append_shape(std::span<const unsigned char> content, std::uint32_t type, std::optional<bool>& has_z, std::vector<Point>& xy,
+                  std::vector<double>& z, std::vector<std::uint32_t>& part_starts) {
+    // Box (32 bytes), part and point counts, the parts' first points, the points; for Z types
+    // then the z range and the z values (M values after them are not read).
+    const std::uint64_t length = content.size();
+    if (length < 44) return false;
+    const std::uint64_t parts = little_u32(&content[36]), count = little_u32(&content[40]);
+    const std::uint64_t points_at = 44 + 4 * parts, z_at = points_at + 16 * count + 16;
+    if (!has_z) has_z = type == 13 || type == 15;
+    if (length < points_at + 16 * count || (*has_z && length < z_at + 8 * count)) return false;
+    if (parts == 0 && count != 0) return false;
+    for (std::uint64_t k = 0; k < parts; ++k) {
+        const std::uint32_t start = little_u32(&content[44 + 4 * k]);
+        if (start >= count || (k == 0 ? start != 0 : start <= part_starts.back())) return false;
+        part_starts.push_back(start);
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+        xy.push_back({little_f64(&content[points_at + 16 * i]), little_f64(&content[points_at + 16 * i + 8])});
+    }
+    if (*has_z) {
+        z.resize(xy.size() - count);  // (records before all null)
+        for (std::size_t i = 0; i < count; ++i) z.push_back(little_f64(&content[z_at + 8 * i]));
+    }
+    return true;
+}
+
+}  // namespace
+
 std::optional<ShapeTable> read_shapefile_shapes(const std::string& path) {
     ShapeTable table;
-    // Room for as many vertices as the file can hold (16 bytes each): the arrays grow once.
+    // Room for as many records, parts and vertices as the files can hold (8 bytes of .shx a
+    // record; 4 and 16 bytes of .shp a part and a vertex), address space only until written: the
+    // arrays never grow, so never copy.
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(path, error);
+    const std::uintmax_t shx_size = std::filesystem::file_size(sibling(path, ".shx", ".SHX"), error);
     if (error) return std::nullopt;
     table.xy.reserve(static_cast<std::size_t>(size / 16));
+    table.part_starts.reserve(static_cast<std::size_t>(size / 4));
+    table.record_first.reserve(static_cast<std::size_t>(shx_size / 8 + 1));
+    table.record_parts.reserve(static_cast<std::size_t>(shx_size / 8 + 1));
     table.record_first.push_back(0);
     table.record_parts.push_back(0);
-    std::optional<bool> has_z;  // (every record's type is the file's or null)
+    std::optional<bool> has_z;
     const bool read = for_each_record(path, is_poly_type, [&](std::uint64_t, bool deleted, std::span<const unsigned char> content) {
         if (deleted) return false;  // (not in a file just written)
         const std::uint32_t type = little_u32(content.data());
-        if (type != 0) {
-            // Box (32 bytes), part and point counts, the parts' first points, the points; for Z
-            // types then the z range and the z values (M values after them are not read).
-            const std::uint64_t length = content.size();
-            if (length < 44) return false;
-            const std::uint64_t parts = little_u32(&content[36]), count = little_u32(&content[40]);
-            const std::uint64_t points_at = 44 + 4 * parts, z_at = points_at + 16 * count + 16;
-            if (!has_z) has_z = type == 13 || type == 15;
-            if (length < points_at + 16 * count || (*has_z && length < z_at + 8 * count)) return false;
-            if (parts == 0 && count != 0) return false;
-            for (std::uint64_t k = 0; k < parts; ++k) {
-                const std::uint32_t start = little_u32(&content[44 + 4 * k]);
-                if (start >= count || (k == 0 ? start != 0 : start <= table.part_starts.back())) return false;
-                table.part_starts.push_back(start);
-            }
-            for (std::size_t i = 0; i < count; ++i) {
-                table.xy.push_back({little_f64(&content[points_at + 16 * i]), little_f64(&content[points_at + 16 * i + 8])});
-            }
-            if (*has_z) {
-                table.z.resize(table.xy.size() - count);  // (records before all null)
-                for (std::size_t i = 0; i < count; ++i) table.z.push_back(little_f64(&content[z_at + 8 * i]));
-            }
-        }
+        if (type != 0 && table.z.empty() && (type == 13 || type == 15)) table.z.reserve(static_cast<std::size_t>(size / 24));
+        if (type != 0 && !append_shape(content, type, has_z, table.xy, table.z, table.part_starts)) return false;
         table.record_first.push_back(table.xy.size());
         table.record_parts.push_back(table.part_starts.size());
         return true;
     });
     if (!read) return std::nullopt;
     return table;
+}
+
+bool for_each_shape(const std::string& path, const std::function<bool(std::uint64_t, const ShapeRecord&)>& visit) {
+    std::vector<Point> xy;
+    std::vector<double> z;
+    std::vector<std::uint32_t> part_starts;
+    std::optional<bool> has_z;
+    return for_each_record(path, is_poly_type, [&](std::uint64_t fid, bool deleted, std::span<const unsigned char> content) {
+        if (deleted) return false;
+        const std::uint32_t type = little_u32(content.data());
+        xy.clear();
+        z.clear();
+        part_starts.clear();
+        if (type != 0 && !append_shape(content, type, has_z, xy, z, part_starts)) return false;
+        return visit(fid, ShapeRecord{xy, z, part_starts});
+    });
 }
 
 }  // namespace toposimp::io

@@ -12,6 +12,7 @@
 #include "core/geometry.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <string>
@@ -53,5 +54,10 @@ struct ShapeTable {
 // is not what this reader decodes (as for read_shapefile_points). Coordinates as stored,
 // non-finite ones included.
 std::optional<ShapeTable> read_shapefile_shapes(const std::string& path);
+
+// The same records one at a time, none kept: calls visit(fid, record) for each in order (the
+// record valid during the call) until visit returns false. False where read_shapefile_shapes
+// gives std::nullopt (after the records before the one it stops at) or visit returned false.
+bool for_each_shape(const std::string& path, const std::function<bool(std::uint64_t, const ShapeRecord&)>& visit);
 
 }  // namespace toposimp::io

@@ -23,7 +23,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <future>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -319,14 +318,14 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // layer's CRS, and the first one makes the driver parse the .prj with PROJ (and search
     // proj.db for its EPSG code) — most of a small file's run, for a CRS that is only written
     // back. Then the shapes are decoded from the .shp here (shapefile.hpp; a one-part record is
-    // a LineString, more a MultiLineString, as OGR reads them), on a thread of their own while
-    // OGR reads the attributes only (on GSHHG, 0.16 s each), and the .prj file goes to the output
-    // as it is. A .shp this reader does not take is read again through OGR, geometries and all.
-    std::future<std::optional<ShapeTable>> decoding;
-    if (prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString && is_local_shp(path) &&
-        source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) == OGRERR_NONE) {
-        decoding = std::async(std::launch::async, [path] { return read_shapefile_shapes(path); });
-    }
+    // a LineString, more a MultiLineString, as OGR reads them) after OGR has read the attributes
+    // only, and the .prj file goes to the output as it is. A .shp this reader does not take is
+    // read again through OGR, geometries and all. (Decoding on a thread of its own beside OGR saved
+    // 0.03 s on GSHHG but raised the peak of a run with 10 M control points by 30 MB: the thread's
+    // malloc arena stays.)
+    const bool decode = prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
+                        is_local_shp(path) &&
+                        source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) == OGRERR_NONE;
     layer->definition = source.GetLayerDefn();
     layer->definition->Reference();
 
@@ -379,7 +378,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     };
     source.ResetReading();
     std::optional<ShapeTable> records;
-    if (decoding.valid()) {
+    if (decode) {
         std::vector<OGRFeatureUniquePtr> features;
         for (;;) {
             OGRFeatureUniquePtr feature{source.GetNextFeature()};
@@ -387,7 +386,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             if (!feature) break;
             features.push_back(std::move(feature));
         }
-        records = decoding.get();
+        records = read_shapefile_shapes(path);
         // (The records' vertices go to the map in record order: the features must come in it.)
         bool in_order = records && records->size() == features.size();
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
@@ -411,6 +410,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             }
             if (first_vertex == 0) {
                 map.vertices = std::move(records->xy);
+                if (getenv("TS_SHRINK")) map.vertices.shrink_to_fit();
             } else {
                 map.vertices.insert(map.vertices.end(), records->xy.begin(), records->xy.end());
                 std::vector<Point>().swap(records->xy);
@@ -1033,17 +1033,22 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                                   output_name(layer) + "' after writing, not " + std::to_string(layer.features.size()));
             }
         };
-        std::optional<ShapeTable> shapes;
-        if (driver_name == "ESRI Shapefile" && layer_count == 1) shapes = read_shapefile_shapes(output.staging_path());
-        if (shapes) {
+        // (Record by record, none kept: the check adds no memory at the run's end, where the peak
+        // can be.)
+        bool decoded = false;
+        if (driver_name == "ESRI Shapefile" && layer_count == 1) {
             const Data::Layer& layer = *data.layers.front();
-            check_count(layer, shapes->size());
-            for (std::size_t i = 0; i < shapes->size(); ++i) {
-                const ShapeRecord shape = (*shapes)[i];
-                if (record_holds_lines(layer, i, map, kept, shape)) continue;
-                check_geometry(layer, i, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get());
-            }
-        } else {
+            std::size_t count = 0;
+            decoded = for_each_shape(output.staging_path(), [&](std::uint64_t fid, const ShapeRecord& shape) {
+                ++count;
+                if (fid < layer.features.size() && !record_holds_lines(layer, fid, map, kept, shape)) {
+                    check_geometry(layer, fid, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get());
+                }
+                return true;
+            });
+            if (decoded) check_count(layer, count);
+        }
+        if (!decoded) {
             DatasetPtr written = open_vector(output.staging_path(), driver_name.c_str());
             QuietGdal quiet;
             for (const auto& layer_pointer : data.layers) {
