@@ -628,6 +628,7 @@ private:
     void sweep() {
         if (slot_.empty()) slot_.assign(vertex_count_, kNone);  // (after the first round's selection, not beside it)
         for (unsigned level = 0; level < levels_; ++level) {
+            if (later_[level].empty()) continue;  // (nothing to do there: late rounds leave most levels empty)
             process_level(level);
             stop_if_cancelled(options_.cancel);
         }
