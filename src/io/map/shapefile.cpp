@@ -258,14 +258,14 @@ bool append_shape(std::span<const unsigned char> content, std::uint32_t type, st
 std::optional<ShapeTable> read_shapefile_shapes(const std::string& path) {
     ShapeTable table;
     // Room for as many records, parts and vertices as the files can hold (8 bytes of .shx a
-    // record; 4 and 16 bytes of .shp a part and a vertex), address space only until written: the
-    // arrays never grow, so never copy.
+    // record; 16 bytes of .shp a vertex, and 20 a part: its start and at least one vertex),
+    // address space only until written: the arrays never grow, so never copy.
     std::error_code error;
     const std::uintmax_t size = std::filesystem::file_size(path, error);
     const std::uintmax_t shx_size = std::filesystem::file_size(sibling(path, ".shx", ".SHX"), error);
     if (error) return std::nullopt;
     table.xy.reserve(static_cast<std::size_t>(size / 16));
-    table.part_starts.reserve(static_cast<std::size_t>(size / 4));
+    table.part_starts.reserve(static_cast<std::size_t>(size / 20));
     table.record_first.reserve(static_cast<std::size_t>(shx_size / 8 + 1));
     table.record_parts.reserve(static_cast<std::size_t>(shx_size / 8 + 1));
     table.record_first.push_back(0);
