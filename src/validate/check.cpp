@@ -68,6 +68,11 @@ namespace {
 
 using io::InputError;
 
+// Rings of at least this many vertices are indexed (exact::RingLocator) to locate control points
+// in them; a removed stretch's detour once this many points were located in it.
+constexpr std::size_t kIndexedRing = 64;
+constexpr std::size_t kIndexedAfter = 16;
+
 // Does a simplified vertex stand for an original one: the same location, or, for output rounded
 // onto a grid, a grid point of the 5×5 around the original's nearest one (where toposimp map
 // --precision may put it)? Decided on the grid's integer indices: exact.
@@ -588,6 +593,14 @@ private:
     // Control points and polygons: each point in the same polygon (inside, on its boundary or
     // outside) before and after.
     void check_points_in_polygons(const std::vector<Point>& points) {
+        // Long rings are indexed the first time a point is located in them (the same answers).
+        std::unordered_map<const std::vector<Point>*, exact::RingLocator> locators;
+        auto locate_in = [&](const std::vector<Point>& ring, Point p) {
+            if (ring.size() < kIndexedRing) return exact::locate_in_ring(ring, p, stats_);
+            auto found = locators.find(&ring);
+            if (found == locators.end()) found = locators.emplace(&ring, exact::RingLocator(ring)).first;
+            return found->second.locate(p, stats_);
+        };
         auto locate = [&](const Feature& feature, Point p) {
             // 2 inside, 1 on the boundary, 0 outside (polygon = exterior minus holes; any polygon).
             int best = 0;
@@ -595,7 +608,7 @@ private:
             for (const std::uint32_t rings : feature.rings_per_polygon) {
                 int here = 0;
                 for (std::uint32_t r = 0; r < rings; ++r, ++ring) {
-                    const auto at = exact::locate_in_ring(feature.parts[ring], p, stats_);
+                    const auto at = locate_in(feature.parts[ring], p);
                     if (r == 0) here = at == exact::RingLocation::inside ? 2 : at == exact::RingLocation::boundary ? 1 : 0;
                     else if (here == 2 && at == exact::RingLocation::boundary) here = 1;
                     else if (here == 2 && at == exact::RingLocation::inside) here = 0;
@@ -679,13 +692,20 @@ private:
                     detour.push_back(a);
                     Box box{INFINITY, INFINITY, -INFINITY, -INFINITY};
                     for (const Point q : detour) box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
+                    // A long detour that many points fall in is indexed (the same answers).
+                    std::optional<exact::RingLocator> locator;
+                    std::size_t located = 0;
+                    auto locate = [&](Point q) {
+                        if (!locator && detour.size() >= kIndexedRing && ++located > kIndexedAfter) locator.emplace(detour);
+                        return locator ? locator->locate(q, stats_) : exact::locate_in_ring(detour, q, stats_);
+                    };
                     grid.any_in_cells(box, [&](std::uint32_t, Point q) {
                         // A point at an end that stayed is on the line before and after.
                         if (!box_contains(box, q) || (same_location(q, a) && same_location(a, a_out)) ||
                             (same_location(q, b) && same_location(b, b_out))) {
                             return false;
                         }
-                        if (exact::locate_in_ring(detour, q, stats_) != exact::RingLocation::outside) {
+                        if (locate(q) != exact::RingLocation::outside) {
                             violation(ViolationKind::point_changed_side, layer_of(m), before.key, q,
                                       std::string(moved ? "swept by the rounded segment standing for vertices "
                                                         : "swept by the segment replacing vertices ") +

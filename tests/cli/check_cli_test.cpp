@@ -212,6 +212,40 @@ TEST(CheckCli, ControlPointChangedPolygonAndSide) {
     EXPECT_EQ(side.count, 1) << side.json;
 }
 
+// Long detours and rings with many control points in them are located through an index
+// (exact::RingLocator; before it, a coastline a peer had cut down to a quadrilateral took hours
+// to check against 10 M points): the same counts. A 200-tooth zigzag line simplified to its
+// ends sweeps the point under the middle of each of its 400 segments and none above them; a
+// square whose top is such a zigzag, cut back to the square, loses the point under each.
+TEST(CheckCli, ControlPointsInLongDetoursAndRings) {
+    constexpr int kTeeth = 200;
+    std::string zigzag = "LINESTRING (", top;
+    std::vector<FeatureSpec> line_points, ring_points;
+    for (int k = 0; k <= 2 * kTeeth; ++k) zigzag += (k ? ", " : "") + std::to_string(k) + " " + std::to_string(k % 2);
+    zigzag += ")";
+    for (int k = 2 * kTeeth; k >= 0; --k) top += ", " + std::to_string(k) + " " + std::to_string(2 + k % 2);
+    for (int k = 0; k < 2 * kTeeth; ++k) {
+        const std::string x = std::to_string(k) + ".5";
+        line_points.push_back({"POINT (" + x + " 0.25)", "swept"});   // under the zigzag's segment
+        line_points.push_back({"POINT (" + x + " 0.75)", "above"});   // above it: outside the detour
+        ring_points.push_back({"POINT (" + x + " 2.25)", "lost"});    // under the top: inside, then outside
+        ring_points.push_back({"POINT (" + x + " 1)", "inside"});     // inside both
+    }
+    const std::string n = std::to_string(2 * kTeeth);
+    const Case lines = make_case("long-detour", wkbLineString, {zigzag}, {"LINESTRING (0 0, " + n + " 0)"});
+    const std::string line_file = (lines.dir / "points.gpkg").string();
+    write_layer(line_file, "GPKG", wkbPoint, line_points, "places");
+    const Checked side = run_check(lines, "point_changed_side", {"--points", line_file});
+    EXPECT_EQ(side.count, 2 * kTeeth) << side.json.substr(0, 2000);
+
+    const Case polygons = make_case("long-ring", wkbPolygon, {"POLYGON ((0 0, " + n + " 0" + top + ", 0 0))"},
+                                    {"POLYGON ((0 0, " + n + " 0, " + n + " 2, 0 2, 0 0))"});
+    const std::string ring_file = (polygons.dir / "points.gpkg").string();
+    write_layer(ring_file, "GPKG", wkbPoint, ring_points, "places");
+    const Checked moved = run_check(polygons, "point_changed_polygon", {"--points", ring_file});
+    EXPECT_EQ(moved.count, 2 * kTeeth) << moved.json.substr(0, 2000);
+}
+
 TEST(CheckCli, GeoJsonErrorsAndTable) {
     const Case c = make_case("outputs", wkbLineString, {kZigzag, "LINESTRING (0 3, 1 3, 2 0.5, 3 3, 4 3)"},
                              {"LINESTRING (0 0, 1 1, 3 1, 4 0)", "LINESTRING (0 3, 1 3, 2 0.5, 3 3, 4 3)"});
