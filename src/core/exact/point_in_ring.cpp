@@ -1,7 +1,6 @@
 #include "core/exact/point_in_ring.hpp"
 
 #include <algorithm>
-#include <cmath>
 
 namespace toposimp::exact {
 namespace {

@@ -18,9 +18,10 @@ RingLocation locate_in_ring(std::span<const Point> ring, Point p, PredicateStats
 
 // Many points against one ring of many edges: the same answers as locate_in_ring, each from the
 // edges whose y range holds the point's y (the only edges that answer depends on), found in rows
-// of y. Each locate_in_ring reads every edge; `toposimp check` located millions of points in rings
-// of ten thousand edges and more (a coastline a peer had simplified to a quadrilateral: hours).
-// The ring must outlive the locator.
+// of y. Each locate_in_ring reads every edge: `toposimp check` located millions of points in the
+// detours of coastlines a peer had cut down to a few vertices, each of ten thousand edges and
+// more (GSHHG with 10 M points: stopped after 227 s; 19.6 s with the index). The ring must
+// outlive the locator.
 class RingLocator {
 public:
     explicit RingLocator(std::span<const Point> ring);
