@@ -224,7 +224,9 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
         const auto from = static_cast<std::int64_t>(static_cast<std::uint64_t>(first) + share * t);
         const std::optional<std::int64_t> to =
             t + 1 == threads ? std::nullopt : std::optional(static_cast<std::int64_t>(static_cast<std::uint64_t>(first) + share * (t + 1)));
-        const std::size_t expected = reservation(t + 1 == threads ? gaps - share * t + 1 : share);
+        // (The first part reserves room for all: the others are then appended to it, not all
+        // copied into a new array — 160 MB for 10 M points, 0.1 s.)
+        const std::size_t expected = reservation(t == 0 ? gaps + 1 : t + 1 == threads ? gaps - share * t + 1 : share);
         parts.push_back(std::async(std::launch::async, [&table, from, to, expected] {
             return read_rows(table, true, from, to, expected);
         }));
@@ -236,11 +238,11 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
         if (!part) return std::nullopt;
         total += part->size();
     }
-    std::vector<Point> points;
-    points.reserve(total);
-    for (auto& part : read) {
-        points.insert(points.end(), part->begin(), part->end());
-        part.reset();  // the copy and the parts never all live at once
+    std::vector<Point> points = std::move(*read.front());
+    points.reserve(total);  // (room already there, unless the reservation was bounded by the file's size)
+    for (std::size_t t = 1; t < read.size(); ++t) {
+        points.insert(points.end(), read[t]->begin(), read[t]->end());
+        read[t].reset();  // the copy and the parts never all live at once
     }
     return points;
 }
