@@ -410,7 +410,6 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             }
             if (first_vertex == 0) {
                 map.vertices = std::move(records->xy);
-                if (getenv("TS_SHRINK")) map.vertices.shrink_to_fit();
             } else {
                 map.vertices.insert(map.vertices.end(), records->xy.begin(), records->xy.end());
                 std::vector<Point>().swap(records->xy);
