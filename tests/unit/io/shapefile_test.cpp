@@ -282,9 +282,9 @@ TEST(ShapefileShapes, AnythingElseIsLeftToOgr) {
     EXPECT_FALSE(read_shapefile_shapes(bad_part.path()).has_value());
 }
 
-// A map read for a Shapefile output decodes a line file's records itself while OGR reads the
-// attributes; a file the decoder declines (here a deleted record) is read again through OGR,
-// geometries and all: the same chains either way.
+// A map read for a Shapefile output decodes a line file's records itself (OGR reads the
+// attributes only); a file the decoder declines (here a deleted record) is read again through
+// OGR, geometries and all: the same chains either way.
 TEST(ShapefileShapes, MapReadFallsBackToOgrWhereTheDecoderDeclines) {
     const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "MULTILINESTRING ((2 2,3 3),(4 4,5 5,6 6))", "LINESTRING (7 7,8 8)"};
     for (const bool with_deleted : {false, true}) {
