@@ -393,7 +393,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         if (in_order) {
             // The records' vertices become the map's (moved, when this is its first layer).
             first_vertex = map.vertices.size();
-            if (records->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2 - first_vertex) {
+            if (first_vertex + records->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
                 throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
             }
             if (!records->z.empty()) {
