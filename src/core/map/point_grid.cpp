@@ -8,6 +8,47 @@
 
 namespace toposimp::map {
 
+PointGrid::Geometry PointGrid::Geometry::plan(double min_x, double min_y, double max_x, double max_y, std::size_t n,
+                                              double points_per_cell, unsigned row_split) {
+    Geometry g;
+    const double width = max_x - min_x;
+    const double height = max_y - min_y;
+    // Square-ish cells, total count ≈ n / points_per_cell, each side capped to keep indices small.
+    const double cells = std::max(1.0, static_cast<double>(n) / points_per_cell);
+    double columns = 1, rows = 1;
+    if (width > 0 && height > 0 && std::isfinite(width / height)) {
+        const double aspect = width / height;
+        columns = std::sqrt(cells * aspect);
+        rows = std::sqrt(cells / aspect);
+    } else if (width > 0) {
+        columns = cells;
+    } else if (height > 0) {
+        rows = cells;
+    }
+    constexpr double kMaxSide = 1 << 15;
+    g.columns = static_cast<std::uint32_t>(std::clamp(std::floor(columns), 1.0, kMaxSide));
+    g.rows = static_cast<std::uint32_t>(std::clamp(std::floor(rows), 1.0, kMaxSide));
+    g.origin_x = min_x;
+    g.origin_y = min_y;
+    // A width that overflows to infinity gives scale 0: one column, still correct.
+    g.scale_x = width > 0 ? g.columns / width : 0.0;
+    g.scale_y = height > 0 ? g.rows / height : 0.0;
+    g.base_columns = g.columns;
+    g.base_rows = g.rows;
+    g.base_scale_x = g.scale_x;
+    g.base_scale_y = g.scale_y;
+    // Thin rows: 2^k of them per base row, at exactly 2^k times the base scale (so a row's
+    // base row is its index shifted; a power of two scales a double exactly).
+    if (row_split > 0 && g.scale_y > 0) {
+        g.row_split = row_split;
+        g.rows = g.base_rows << row_split;
+        g.scale_y = std::ldexp(g.base_scale_y, static_cast<int>(row_split));
+        g.columns = std::max(1u, g.base_columns >> row_split);
+        g.scale_x = width > 0 ? g.columns / width : 0.0;
+    }
+    return g;
+}
+
 PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second, double points_per_cell, int threads_wanted,
                      unsigned row_split) {
     const std::size_t f = first.size(), n = f + second.size();
@@ -26,41 +67,36 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
         max_x = std::max(max_x, p.x);
         max_y = std::max(max_y, p.y);
     }
-    const double width = max_x - min_x;
-    const double height = max_y - min_y;
-    // Square-ish cells, total count ≈ n / points_per_cell, each side capped to keep indices small.
-    const double cells = std::max(1.0, static_cast<double>(n) / points_per_cell);
-    double columns = 1, rows = 1;
-    if (width > 0 && height > 0 && std::isfinite(width / height)) {
-        const double aspect = width / height;
-        columns = std::sqrt(cells * aspect);
-        rows = std::sqrt(cells / aspect);
-    } else if (width > 0) {
-        columns = cells;
-    } else if (height > 0) {
-        rows = cells;
+    geometry_ = Geometry::plan(min_x, min_y, max_x, max_y, n, points_per_cell, row_split);
+    columns_ = geometry_.columns;
+    rows_ = geometry_.rows;
+    row_split_ = geometry_.row_split;
+    build<false>(first, second, threads_wanted);
+}
+
+PointGrid::PointGrid(const Geometry& geometry, const Window& window, std::span<const Point> first, std::span<const Point> second,
+                     int threads_wanted)
+    : geometry_(geometry),
+      first_column_(window.first_column),
+      first_row_(window.first_row),
+      columns_(window.last_column - window.first_column + 1),
+      rows_(window.last_row - window.first_row + 1),
+      row_split_(geometry.row_split) {
+    if (first.size() + second.size() == 0) {
+        columns_ = rows_ = 1;
+        cell_start_.assign(2, 0);
+        return;
     }
-    constexpr double kMaxSide = 1 << 15;
-    columns_ = static_cast<std::uint32_t>(std::clamp(std::floor(columns), 1.0, kMaxSide));
-    rows_ = static_cast<std::uint32_t>(std::clamp(std::floor(rows), 1.0, kMaxSide));
-    origin_x_ = min_x;
-    origin_y_ = min_y;
-    // A width that overflows to infinity gives scale 0: one column, still correct.
-    scale_x_ = width > 0 ? columns_ / width : 0.0;
-    scale_y_ = height > 0 ? rows_ / height : 0.0;
-    base_columns_ = columns_;
-    base_rows_ = rows_;
-    base_scale_x_ = scale_x_;
-    base_scale_y_ = scale_y_;
-    // Thin rows: 2^k of them per base row, at exactly 2^k times the base scale (so a row's
-    // base row is its index shifted; a power of two scales a double exactly).
-    if (row_split > 0 && scale_y_ > 0) {
-        row_split_ = row_split;
-        rows_ = base_rows_ << row_split;
-        scale_y_ = std::ldexp(base_scale_y_, static_cast<int>(row_split));
-        columns_ = std::max(1u, base_columns_ >> row_split);
-        scale_x_ = width > 0 ? columns_ / width : 0.0;
-    }
+    build<true>(first, second, threads_wanted);
+}
+
+template <bool Windowed>
+void PointGrid::build(std::span<const Point> first, std::span<const Point> second, int threads_wanted) {
+    const std::size_t f = first.size(), n = f + second.size();
+    auto point = [&](std::size_t i) { return i < f ? first[i] : second[i - f]; };
+    // Where a point is stored: its cell, or the window's nearest one.
+    auto cell_column = [&](double x) { return Windowed ? in_window(geometry_.column(x), first_column_, columns_) : geometry_.column(x); };
+    auto cell_row = [&](double y) { return Windowed ? in_window(geometry_.row(y), first_row_, rows_) : geometry_.row(y); };
 
     // Two counting sorts, both parallel: points into rows (each thread its own contiguous range
     // of ids, so a row keeps id order), then each row on its own into cells, each cell sorted by
@@ -74,7 +110,7 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
     parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = chunk(t);
         std::vector<std::size_t> count(rows_, 0);
-        for (std::size_t i = begin; i < end; ++i) ++count[row(point(i).y)];
+        for (std::size_t i = begin; i < end; ++i) ++count[cell_row(point(i).y)];
         for (std::uint32_t y = 0; y < rows_; ++y) row_start[std::size_t{y} * share + static_cast<std::size_t>(t) + 1] = count[y];
     });
     for (std::size_t k = 1; k < row_start.size(); ++k) row_start[k] += row_start[k - 1];
@@ -87,7 +123,7 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
         for (std::uint32_t y = 0; y < rows_; ++y) fill[y] = row_start[std::size_t{y} * share + static_cast<std::size_t>(t)];
         for (std::size_t i = begin; i < end; ++i) {
             const Point p = point(i);
-            const std::size_t slot = fill[row(p.y)]++;
+            const std::size_t slot = fill[cell_row(p.y)]++;
             points_[slot] = p;
             ids_[slot] = static_cast<std::uint32_t>(i);
         }
@@ -103,19 +139,19 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
             const std::size_t begin = row_start[std::size_t{y} * share], end = row_start[std::size_t{y + 1} * share];
             entries.clear();
             std::fill(start.begin(), start.end(), 0);
-            for (std::size_t k = begin; k < end; ++k) ++start[column(points_[k].x) + 1];
+            for (std::size_t k = begin; k < end; ++k) ++start[cell_column(points_[k].x) + 1];
             for (std::uint32_t x = 0; x < columns_; ++x) {
                 start[x + 1] += start[x];
                 cell_start_[std::size_t{y} * columns_ + x] = static_cast<std::uint32_t>(begin + start[x]);
             }
             entries.resize(end - begin);
-            for (std::size_t k = begin; k < end; ++k) entries[start[column(points_[k].x)]++] = {points_[k], ids_[k]};
+            for (std::size_t k = begin; k < end; ++k) entries[start[cell_column(points_[k].x)]++] = {points_[k], ids_[k]};
             // Cells now follow each other in column order, ids in order within each: sort each
             // cell by x, ties by id, and write the row back.
             for (std::size_t a = 0; a < entries.size();) {
                 std::size_t b = a + 1;
-                const std::uint32_t x = column(entries[a].first.x);
-                while (b < entries.size() && column(entries[b].first.x) == x) ++b;
+                const std::uint32_t x = cell_column(entries[a].first.x);
+                while (b < entries.size() && cell_column(entries[b].first.x) == x) ++b;
                 if (b - a > 1) {
                     std::sort(entries.begin() + static_cast<std::ptrdiff_t>(a), entries.begin() + static_cast<std::ptrdiff_t>(b),
                               [](const auto& u, const auto& v) {

@@ -25,6 +25,31 @@ class PointGrid {
 public:
     static constexpr std::uint32_t kRemoved = 0xffffffffu;
 
+    // Where the cells are: what a grid over part of the points must share with the grid over all
+    // of them to put every point in the same cell (core/map/tiles.hpp).
+    struct Geometry {
+        double origin_x = 0, origin_y = 0, scale_x = 0, scale_y = 0;
+        std::uint32_t columns = 1, rows = 1;
+        double base_scale_x = 0, base_scale_y = 0;
+        std::uint32_t base_columns = 1, base_rows = 1;
+        unsigned row_split = 0;
+
+        // The cells of a grid over `points` points spanning [min_x, max_x] × [min_y, max_y]
+        // (see the constructor below).
+        static Geometry plan(double min_x, double min_y, double max_x, double max_y, std::size_t points,
+                             double points_per_cell, unsigned row_split);
+
+        std::uint32_t column(double x) const { return cell_of(x, origin_x, scale_x, columns); }
+        std::uint32_t row(double y) const { return cell_of(y, origin_y, scale_y, rows); }
+        std::uint32_t base_column(double x) const { return cell_of(x, origin_x, base_scale_x, base_columns); }
+        std::uint32_t base_row(double y) const { return cell_of(y, origin_y, base_scale_y, base_rows); }
+    };
+
+    // A rectangle of a Geometry's cells, inclusive.
+    struct Window {
+        std::uint32_t first_column, first_row, last_column, last_row;
+    };
+
     // Indexes `first` as ids [0, f) and `second` as ids [f, f + s). About `points_per_cell`
     // points share a cell on average. Built on `threads` threads (0: OpenMP's default) when
     // big; the grid is the same for any number.
@@ -35,6 +60,16 @@ public:
     // borders). Base row r is rows r·2^k to r·2^k + 2^k − 1 exactly (row(y) >> k == base_row(y)).
     explicit PointGrid(std::span<const Point> first, std::span<const Point> second = {}, double points_per_cell = 2.0,
                        int threads = 0, unsigned row_split = 0);
+
+    // A grid with the cells of `geometry` in `window` only (a tile of a bigger grid): every point
+    // inside the window lands in the cell the bigger grid puts it in, with the same order within
+    // its cell as long as ids keep the bigger grid's order; a point outside is kept in the
+    // window's nearest cell, where a query for a box inside the window reads it but never finds
+    // it in the box.
+    PointGrid(const Geometry& geometry, const Window& window, std::span<const Point> first,
+              std::span<const Point> second = {}, int threads = 0);
+
+    const Geometry& geometry() const { return geometry_; }
 
     // Calls visit(id, point) for each point not taken out whose x lies in the box's x range,
     // within the rows of cells the box overlaps (a superset of the points inside it), until
@@ -65,7 +100,7 @@ public:
         const std::uint32_t x0 = column(box.min_x), x1 = column(box.max_x);
         const std::uint32_t y0 = row(box.min_y), y1 = row(box.max_y);
         for (std::uint32_t y = y0; y <= y1; ++y) {
-            if (best != kRemoved && (y >> row_split_) != (best_row >> row_split_)) break;
+            if (best != kRemoved && ((y + first_row_) >> row_split_) != ((best_row + first_row_) >> row_split_)) break;
             const auto [from, last] = row_part(y, x0, x1, box.min_x);
             for (const Point* p = from; p != last && p->x <= box.max_x; ++p) {
                 if (best != kRemoved && best_point.x < p->x) break;  // (nothing later in this row comes first)
@@ -88,15 +123,17 @@ public:
     void remove(std::uint32_t id) { std::atomic_ref<std::uint32_t>(ids_[slot_[id]]).store(kRemoved, std::memory_order_relaxed); }
 
     // The base cells (see the constructor).
-    std::uint32_t base_columns() const { return base_columns_; }
-    std::uint32_t base_rows() const { return base_rows_; }
-    std::uint32_t base_column(double x) const { return cell_of(x, origin_x_, base_scale_x_, base_columns_); }
-    std::uint32_t base_row(double y) const { return cell_of(y, origin_y_, base_scale_y_, base_rows_); }
+    std::uint32_t base_columns() const { return geometry_.base_columns; }
+    std::uint32_t base_rows() const { return geometry_.base_rows; }
+    std::uint32_t base_column(double x) const { return geometry_.base_column(x); }
+    std::uint32_t base_row(double y) const { return geometry_.base_row(y); }
 
+    // The cells held (all of the geometry's, or a window's), numbered from the window's corner.
+    // column() and row() are for coordinates inside the window (every query's box must be).
     std::uint32_t columns() const { return columns_; }
     std::uint32_t rows() const { return rows_; }
-    std::uint32_t column(double x) const { return cell_of(x, origin_x_, scale_x_, columns_); }
-    std::uint32_t row(double y) const { return cell_of(y, origin_y_, scale_y_, rows_); }
+    std::uint32_t column(double x) const { return geometry_.column(x) - first_column_; }
+    std::uint32_t row(double y) const { return geometry_.row(y) - first_row_; }
 
     // The ids and points of cell (column x, row y), sorted by x (ties by id); kRemoved for taken-out points.
     std::span<const std::uint32_t> cell_ids(std::uint32_t x, std::uint32_t y) const {
@@ -124,6 +161,14 @@ private:
         return std::atomic_ref<const std::uint32_t>(id).load(std::memory_order_relaxed);
     }
 
+    static std::uint32_t in_window(std::uint32_t cell, std::uint32_t first, std::uint32_t count) {
+        const std::uint32_t offset = cell < first ? 0 : cell - first;
+        return offset < count ? offset : count - 1;
+    }
+
+    template <bool Windowed>
+    void build(std::span<const Point> first, std::span<const Point> second, int threads_wanted);
+
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;
         if (!(t >= 0.0)) t = 0.0;  // also catches NaN from 0·∞ in a zero-width grid
@@ -131,10 +176,9 @@ private:
         return static_cast<std::uint32_t>(t);
     }
 
-    double origin_x_ = 0, origin_y_ = 0, scale_x_ = 0, scale_y_ = 0;
-    std::uint32_t columns_ = 1, rows_ = 1;
-    double base_scale_x_ = 0, base_scale_y_ = 0;
-    std::uint32_t base_columns_ = 1, base_rows_ = 1;
+    Geometry geometry_;
+    std::uint32_t first_column_ = 0, first_row_ = 0;  // the window's corner in the geometry's cells
+    std::uint32_t columns_ = 1, rows_ = 1;            // the window's size
     unsigned row_split_ = 0;
     FillLater<std::uint32_t> cell_start_;  // cells are row-major, so a row's cells are contiguous
     FillLater<Point> points_;              // in cell order

@@ -1,4 +1,5 @@
 #include "core/map/simplify.hpp"
+#include "core/map/tiles.hpp"
 
 #include "core/cancel.hpp"
 #include "core/fill_later.hpp"
@@ -20,6 +21,7 @@
 #include <mutex>
 #include <optional>
 #include <span>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace toposimp::map {
@@ -154,6 +156,12 @@ public:
         return blocker_of_.count(waiter) != 0;
     }
 
+    // Every (waiter, blocker), in no order.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> all() {
+        const std::lock_guard lock(mutex_);
+        return {blocker_of_.begin(), blocker_of_.end()};
+    }
+
     // The vertices waiting on `blocker`, in id order; their waits end.
     std::vector<std::uint32_t> take(std::uint32_t blocker) {
         const std::lock_guard lock(mutex_);
@@ -274,6 +282,34 @@ struct Worker {
     std::uint64_t reported = 0;  // removals already added to the progress count
 };
 
+// The blocks' shift for a grid of these base cells (parallel/blocks.hpp).
+unsigned block_shift(std::uint32_t base_columns, std::uint32_t base_rows) {
+    const std::uint32_t side = std::max(base_columns, base_rows);
+    unsigned shift = kMinShift;
+    while (((side - 1) >> shift) >= kMaxBlocksPerSide) ++shift;
+    return shift;
+}
+
+// Per vertex, in place of `improper` (per segment by first vertex): 1 for an interior vertex at
+// an end of an improper segment or on a frozen chain — never removed.
+void pin_from_improper(const MapData& map, std::vector<std::uint8_t>& improper, int threads, bool parallel) {
+    const auto chains = static_cast<std::uint32_t>(map.chains.size());
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads) if (parallel)
+    for (std::uint32_t c = 0; c < chains; ++c) {
+        const Chain& chain = map.chains[c];
+        const bool frozen = map.is_frozen(c);
+        // Backwards, so improper[v − 1] is still the segment's own flag when v reads it.
+        for (std::uint32_t v = chain.last; v > chain.first; --v) {
+            improper[v] = v < chain.last && (frozen || improper[v] || improper[v - 1]);
+        }
+        improper[chain.first] = 0;
+    }
+}
+
+}  // namespace
+
+namespace detail {
+
 class Simplifier {
 public:
     // `owned_points`: the control points, if they are handed over (else the map's are used).
@@ -286,27 +322,138 @@ public:
           threads_(options.threads > 0 ? options.threads : omp_get_max_threads()),
           parallel_min_(options.parallel_threshold) {}
 
+    // A tile of a run in parts (tiles.hpp): `tile` and `plan` outlive the simplifier.
+    Simplifier(const TileInput& tile, const GridPlan& plan, const SimplifyOptions& options)
+        : map_(tile.map),
+          control_points_(tile.map.control_points),
+          options_(options),
+          vertex_count_(static_cast<std::uint32_t>(tile.map.vertices.size())),
+          threads_(options.threads > 0 ? options.threads : omp_get_max_threads()),
+          parallel_min_(options.parallel_threshold),
+          tile_(&tile),
+          plan_(&plan) {}
+
     SimplifyResult run() {
         auto start = Clock::now();
-        index_points();
-        set_up_levels();
-        find_shared_locations();
-        build_chains();
+        set_up();
         stats_.seconds_index = lap(start);
         stop_if_cancelled(options_.cancel);
-        pin_crossings();
+        std::vector<std::uint8_t> pinned = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_);
+        pin_from_improper(map_, pinned, threads_, vertex_count_ >= parallel_min_);
+        pin(pinned);
         stats_.seconds_crossings = lap(start);
         simplify_vertices();
         stats_.seconds_sweep = lap(start);
         return finish();
     }
 
+    // ---- runs in parts (tiles.hpp) ---------------------------------------------------------
+
+    // A tile: set up, pinned as the whole map says, its candidates listed by level.
+    void start_tile() {
+        set_up();
+        pin(tile_->pinned);
+        start_single_sweep();
+        schedule_queued();
+        slot_.assign(vertex_count_, kNone);
+        initial_distinct_ = distinct_;
+    }
+
+    std::vector<RingLocations> open_rings(unsigned level) const {
+        std::vector<RingLocations> open;
+        for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
+            if (!split_over_tiles(c) || tile_->settled[c] || whole_level_[c] <= level) continue;
+            RingLocations ring{tile_->chain_id[c], {}};
+            for_each_fixed_location(c, level, 4, [&](Point q) { ring.locations.push_back(q); });
+            open.push_back(std::move(ring));
+        }
+        return open;
+    }
+
+    void run_tile_level(unsigned level, std::span<const std::uint32_t> clear) {
+        if (later_[level].empty()) return;
+        outside_clear_ = clear;
+        process_level(level);
+        outside_clear_ = {};
+        stop_if_cancelled(options_.cancel);
+    }
+
+    TileOutcome finish_tile() {
+        TileOutcome out;
+        const auto id = [&](std::uint32_t v) { return tile_->vertex_id[v]; };
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            switch (state_[v]) {
+                case State::removed: out.removed.push_back(id(v)); break;
+                case State::refused: out.refused.push_back(id(v)); break;
+                default: break;
+            }
+        }
+        for (const auto& [waiter, blocker] : waits_.all()) out.waits.emplace_back(id(waiter), id(blocker));
+        std::sort(out.waits.begin(), out.waits.end());
+        for (unsigned level = tile_->level; level < levels_; ++level) {
+            std::vector<std::uint32_t> list;
+            for (const std::uint32_t v : later_[level]) list.push_back(id(v));
+            out.later.push_back(std::move(list));
+        }
+        for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
+            const std::uint32_t lost = initial_distinct_[c] - distinct_[c];  // (modulo 2^32: pieces start at 0)
+            if (whole_level_[c] != kOpen && lost != 0) out.locations_lost.emplace_back(tile_->chain_id[c], lost);
+        }
+        out.stats = stats_;
+        return out;
+    }
+
+    // The whole map from the tiles' outcomes: the levels from `tile_level` up.
+    SimplifyResult run_from_tiles(unsigned tile_level, std::span<const TileOutcome> tiles, std::span<const std::uint8_t> pinned) {
+        auto start = Clock::now();
+        set_up();
+        stats_.seconds_index = lap(start);
+        pin(pinned);
+        start_single_sweep();
+        slot_.assign(vertex_count_, kNone);
+        for (const TileOutcome& tile : tiles) {
+            for (const std::uint32_t v : tile.removed) {
+                state_[v] = State::removed;
+                grid_->remove(v);
+                next_[prev_[v]] = next_[v];
+                prev_[next_[v]] = prev_[v];
+            }
+            for (const std::uint32_t v : tile.refused) state_[v] = State::refused;
+            for (const auto& [waiter, blocker] : tile.waits) wait_on(waiter, blocker);
+            for (const auto& [chain, lost] : tile.locations_lost) distinct_[chain] -= lost;
+            for (std::size_t k = 0; k < tile.later.size() && tile_level + k < levels_; ++k) {
+                later_[tile_level + k].insert(later_[tile_level + k].end(), tile.later[k].begin(), tile.later[k].end());
+            }
+            add(stats_, tile.stats);
+        }
+        for (unsigned level = tile_level; level < levels_; ++level) {
+            if (later_[level].empty()) continue;
+            process_level(level);
+            stop_if_cancelled(options_.cancel);
+        }
+        stats_.seconds_sweep = lap(start);
+        return finish();
+    }
+
+
 private:
     // ---- set-up --------------------------------------------------------------------------
 
-    // One grid over vertices (ids [0, n), removable) and control points (ids [n, n+m)).
+    void set_up() {
+        index_points();
+        set_up_levels();
+        find_shared_locations();
+        build_chains();
+    }
+
+    // One grid over vertices (ids [0, n), removable) and control points (ids [n, n+m)); a tile's
+    // over the whole map's cells that hold its points.
     void index_points() {
-        grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit);
+        if (tile_) {
+            index_tile_points();
+        } else {
+            grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit);
+        }
         stats_.control_points = control_points_.size();
         control_points_ = {};
         owned_points_ = std::vector<Point>();  // freed: the grid has them
@@ -315,12 +462,30 @@ private:
     // The point grid's cells grouped into blocks (parallel/blocks.hpp, axis 0 the columns, axis
     // 1 the rows): 2^shift × 2^shift cells at level 0, levels up to one block.
     void set_up_levels() {
-        const std::uint32_t side = std::max(grid_->base_columns(), grid_->base_rows());
         blocks_.cells = {grid_->base_columns(), grid_->base_rows()};
-        blocks_.shift = kMinShift;
-        while (((side - 1) >> blocks_.shift) >= kMaxBlocksPerSide) ++blocks_.shift;
+        blocks_.shift = static_cast<int>(block_shift(grid_->base_columns(), grid_->base_rows()));
         levels_ = static_cast<unsigned>(blocks_.top_level()) + 1;
         stats_.levels = levels_;
+    }
+
+    // The window of the plan's cells that the tile's own points (vertices inside it and control
+    // points) fall in; cut ends beyond the border are held in its edge cells (PointGrid).
+    void index_tile_points() {
+        const PointGrid::Geometry& g = plan_->grid;
+        PointGrid::Window window{kNone, kNone, 0, 0};
+        auto take = [&](Point p) {
+            const std::uint32_t x = g.column(p.x), y = g.row(p.y);
+            window = {std::min(window.first_column, x), std::min(window.first_row, y), std::max(window.last_column, x),
+                      std::max(window.last_row, y)};
+        };
+        for (const Point p : map_.vertices) {
+            if (plan_->block_column(p, tile_->level) == tile_->column && plan_->block_row(p, tile_->level) == tile_->row) take(p);
+        }
+        for (const Point p : control_points_) take(p);
+        if (window.first_column == kNone) window = {0, 0, 0, 0};
+        grid_.emplace(g, window, map_.vertices, control_points_, threads_);
+        stats_.control_points = control_points_.size();
+        control_points_ = {};
     }
 
     std::uint32_t block_column(Point p) const { return blocks_.block(grid_->base_column(p.x), 0); }
@@ -373,7 +538,10 @@ private:
                 min_row = std::min(min_row, row);
                 max_row = std::max(max_row, row);
             }
-            if (is_closed(c)) {
+            if (tile_ && tile_->whole_level[c] != kOpen) {
+                whole_level_[c] = tile_->whole_level[c];  // the whole map's chain's
+                if (!split_over_tiles(c)) distinct_[c] = count_distinct_locations(chain);
+            } else if (!tile_ && is_closed(c)) {
                 distinct_[c] = count_distinct_locations(chain);
                 whole_level_[c] = static_cast<std::uint8_t>(
                     std::max(Blocks::shared_level(min_column, max_column), Blocks::shared_level(min_row, max_row)));
@@ -452,15 +620,14 @@ private:
 
     // Vertices at either end of a segment that crosses or touches another one improperly in the
     // input are never removed (see crossings.hpp for why that is enough); nor are frozen chains'.
-    void pin_crossings() {
-        const std::vector<std::uint8_t> improper = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_);
+    // `pinned`: per vertex, from pin_from_improper (or the whole map's, for a tile).
+    void pin(std::span<const std::uint8_t> pinned) {
         state_.assign(vertex_count_, State::fixed);
         std::uint64_t pinned_count = 0;
 #pragma omp parallel for schedule(static) num_threads(threads_) reduction(+ : pinned_count) if (vertex_count_ >= parallel_min_)
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
             if (prev_[v] == kNone || next_[v] == kNone) continue;
-            const bool pinned = improper[v] || improper[prev_[v]] || map_.is_frozen(chain_of_[v]);
-            if (pinned) {
+            if (pinned[v]) {
                 ++pinned_count;
             } else {
                 state_[v] = State::queued;
@@ -482,9 +649,7 @@ private:
         marked_.assign(vertex_count_, 0);
         later_.assign(levels_ + 1, {});
         if (target == Target::max || target == Target::max_area) {
-            use_marks_ = false;
-            bound_ = {target == Target::max ? std::numeric_limits<double>::infinity() : options_.stop.value, kNone};
-            work_ = static_cast<double>(vertex_count_);
+            start_single_sweep();
             schedule_queued();
             sweep();
             return;
@@ -499,6 +664,16 @@ private:
             keep_undecided();
         }
         stats_.target_reached = stats_.removed >= goal;
+    }
+
+    // --max and --max-area: one sweep up to a fixed bound.
+    void start_single_sweep() {
+        marked_.assign(vertex_count_, 0);
+        later_.assign(levels_ + 1, {});
+        use_marks_ = false;
+        const Target target = options_.stop.target;
+        bound_ = {target == Target::max ? std::numeric_limits<double>::infinity() : options_.stop.value, kNone};
+        work_ = static_cast<double>(vertex_count_);
     }
 
     // Marks the `budget` queued vertices smallest in (area, id) order (all if fewer) and sets
@@ -725,18 +900,40 @@ private:
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= parallel_min_)
         for (std::uint32_t c = 0; c < chains; ++c) {
             if (whole_level_[c] == kOpen || whole_level_[c] <= level) continue;
-            Point found[4];
-            int count = 0;
-            for (std::uint32_t u = map_.chains[c].first; u != kNone && count < 4; u = next_[u]) {
-                const bool fixed = state_[u] == State::fixed || level_of(u) > level;
-                if (!fixed) continue;
-                const Point q = map_.vertices[u];
-                bool seen = false;
-                for (int k = 0; k < count; ++k) seen = seen || same_location(found[k], q);
-                if (!seen) found[count++] = q;
+            if (split_over_tiles(c)) {
+                // A piece: its cut ends settle it, or the tiles' fixed locations together do.
+                ring_clear_[c] = tile_->settled[c] ||
+                                 std::binary_search(outside_clear_.begin(), outside_clear_.end(), tile_->chain_id[c]);
+                continue;
             }
+            int count = 0;
+            for_each_fixed_location(c, level, 4, [&](Point) { ++count; });
             ring_clear_[c] = count >= 4;
         }
+    }
+
+    // Calls visit(q) for the first `most` distinct locations of chain c's fixed vertices at
+    // `level` (pinned, ends, or of a coarser level), in chain order.
+    template <class Visit>
+    void for_each_fixed_location(std::uint32_t c, unsigned level, int most, Visit&& visit) const {
+        Point found[4];
+        int count = 0;
+        for (std::uint32_t u = map_.chains[c].first; u != kNone && count < most; u = next_[u]) {
+            const bool fixed = state_[u] == State::fixed || level_of(u) > level;
+            if (!fixed) continue;
+            const Point q = map_.vertices[u];
+            bool seen = false;
+            for (int k = 0; k < count; ++k) seen = seen || same_location(found[k], q);
+            if (!seen) {
+                found[count++] = q;
+                visit(q);
+            }
+        }
+    }
+
+    // A tile's piece of a ring that other tiles hold pieces of.
+    bool split_over_tiles(std::uint32_t c) const {
+        return tile_ && tile_->whole_level[c] != kOpen && tile_->whole_level[c] > tile_->level;
     }
 
     // One block: remove its queued vertices smallest area first, up to the round's threshold.
@@ -984,6 +1181,10 @@ private:
     std::vector<std::uint64_t> undecided_;   // see for_each_undecided(); empty until a round has run
     std::vector<std::vector<std::uint32_t>> later_;  // per level: vertices to queue there
     std::vector<std::uint32_t> start_, grouped_;  // scratch of process_level
+    const TileInput* tile_ = nullptr;  // a tile of a run in parts, with the whole map's plan
+    const GridPlan* plan_ = nullptr;
+    std::span<const std::uint32_t> outside_clear_;  // this level: split rings clear over all tiles
+    std::vector<std::uint32_t> initial_distinct_;  // a tile's distinct_ at the start
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
@@ -991,16 +1192,79 @@ private:
     SimplifyStats stats_;
 };
 
-}  // namespace
+}  // namespace detail
 
 SimplifyResult simplify(const MapData& map, const SimplifyOptions& options) {
-    return Simplifier(map, options).run();
+    return detail::Simplifier(map, options).run();
 }
 
 SimplifyResult simplify_releasing_points(MapData& map, const SimplifyOptions& options) {
     std::vector<Point> points = std::move(map.control_points);
     map.control_points.clear();
-    return Simplifier(map, options, std::move(points)).run();
+    return detail::Simplifier(map, options, std::move(points)).run();
+}
+
+// ---- runs in parts (tiles.hpp) ------------------------------------------------------------------
+
+GridPlan plan_grid(const MapData& map) {
+    GridPlan plan;
+    const std::size_t n = map.vertices.size() + map.control_points.size();
+    if (n == 0) return plan;
+    double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
+    for (const auto* points : {&map.vertices, &map.control_points}) {
+        for (const Point p : *points) {
+            min_x = std::min(min_x, p.x);
+            min_y = std::min(min_y, p.y);
+            max_x = std::max(max_x, p.x);
+            max_y = std::max(max_y, p.y);
+        }
+    }
+    plan.grid = PointGrid::Geometry::plan(min_x, min_y, max_x, max_y, n, 2.0, kRowSplit);
+    plan.shift = block_shift(plan.grid.base_columns, plan.grid.base_rows);
+    parallel::BlockLevels<2> blocks;
+    blocks.cells = {plan.grid.base_columns, plan.grid.base_rows};
+    blocks.shift = static_cast<int>(plan.shift);
+    plan.levels = static_cast<unsigned>(blocks.top_level()) + 1;
+    return plan;
+}
+
+std::vector<std::uint8_t> pinned_vertices(const MapData& map, const SimplifyOptions& options, SimplifyStats& stats) {
+    const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+    std::vector<std::uint8_t> pinned = find_improper_segments(map, options.arithmetic, stats.predicates, threads, options.cancel);
+    stop_if_cancelled(options.cancel);
+    pin_from_improper(map, pinned, threads, map.vertices.size() >= options.parallel_threshold);
+    return pinned;
+}
+
+struct TileRun::Parts {
+    TileInput input;
+    GridPlan plan;
+    SimplifyOptions options;
+    std::optional<detail::Simplifier> engine;
+};
+
+TileRun::TileRun(TileInput input, const GridPlan& plan, const SimplifyOptions& options)
+    : parts_(new Parts{std::move(input), plan, options, std::nullopt}) {
+    if (options.stop.target != Target::max && options.stop.target != Target::max_area) {
+        throw std::invalid_argument("a run in tiles takes --max or --max-area only (count targets are not run in parts yet)");
+    }
+    parts_->engine.emplace(parts_->input, parts_->plan, parts_->options);
+    parts_->engine->start_tile();
+}
+
+TileRun::~TileRun() = default;
+TileRun::TileRun(TileRun&&) noexcept = default;
+TileRun& TileRun::operator=(TileRun&&) noexcept = default;
+
+std::vector<RingLocations> TileRun::open_rings(unsigned level) { return parts_->engine->open_rings(level); }
+
+void TileRun::run_level(unsigned level, std::span<const std::uint32_t> clear) { parts_->engine->run_tile_level(level, clear); }
+
+TileOutcome TileRun::finish() { return parts_->engine->finish_tile(); }
+
+SimplifyResult simplify_from_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level,
+                                   std::span<const TileOutcome> tiles, std::span<const std::uint8_t> pinned) {
+    return detail::Simplifier(map, options).run_from_tiles(tile_level, tiles, pinned);
 }
 
 }  // namespace toposimp::map

@@ -1,0 +1,194 @@
+// The engine in parts (core/map/tiles.hpp): tiles simplified on their own below the tile level,
+// then the levels above over the whole map, give simplify()'s result exactly.
+#include "core/map/tiles.hpp"
+
+#include "support/random_maps.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+
+namespace toposimp::map {
+namespace {
+
+void expect_same(const SimplifyResult& parts, const SimplifyResult& whole, const std::string& what) {
+    EXPECT_EQ(parts.kept, whole.kept) << what;
+    EXPECT_EQ(parts.stats.removed, whole.stats.removed) << what;
+    EXPECT_EQ(parts.stats.blocked_by_point, whole.stats.blocked_by_point) << what;
+    EXPECT_EQ(parts.stats.blocked_by_ring, whole.stats.blocked_by_ring) << what;
+    EXPECT_EQ(parts.stats.blocked_by_coincidence, whole.stats.blocked_by_coincidence) << what;
+    EXPECT_EQ(parts.stats.pinned_by_crossing, whole.stats.pinned_by_crossing) << what;
+    EXPECT_EQ(parts.stats.control_points, whole.stats.control_points) << what;
+    EXPECT_EQ(parts.stats.levels, whole.stats.levels) << what;
+}
+
+// Big enough random maps for 4–5 levels of blocks: every tile level from 0 (no level in tiles)
+// to the top (one tile, nothing above).
+TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
+    for (const std::uint64_t seed : {1, 2, 3, 4}) {
+        std::mt19937_64 rng(seed);
+        testing::RandomMapOptions shape;
+        shape.chains = 150;
+        shape.max_steps = 60;
+        shape.rings = 60;
+        shape.control_points = 1500;
+        shape.roads = seed % 2 == 0 ? 6 : 0;
+        shape.origin_x = seed == 3 ? 1e6 : 0;
+        const MapData map = testing::random_planar_map(rng, shape);
+        const GridPlan plan = plan_grid(map);
+        ASSERT_GE(plan.levels, 3u) << "the map should have several levels of blocks";
+        for (const Target target : {Target::max, Target::max_area}) {
+            SimplifyOptions options;
+            options.stop = {target, 2.0};
+            options.parallel_threshold = 0;
+            options.threads = 2;
+            const SimplifyResult whole = simplify(map, options);
+            ASSERT_GT(whole.stats.removed, 0u);
+            for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
+                const std::string what = "seed " + std::to_string(seed) + ", target " + std::to_string(static_cast<int>(target)) +
+                                         ", tile level " + std::to_string(tile_level);
+                expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
+            }
+        }
+    }
+}
+
+// A ring whose only segments across the tile border are one segment out and the same one back
+// (A, B, A): its cut ends hold 2 locations, so its pieces cannot settle the ring rule alone; the
+// tiles tell each other their fixed locations level by level (here the fold-back rule would keep
+// the ring's shape even if they did not: this test shows what they say, and that the result is
+// still the single process's).
+TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
+    MapData background;
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> coordinate(0, 100);
+    for (int k = 0; k < 20000; ++k) background.control_points.push_back({coordinate(rng), coordinate(rng)});
+    background.control_points.push_back({0, 0});
+    background.control_points.push_back({100, 100});
+    // The plan does not depend on where the ring's 9 vertices are, only on their number.
+    MapData sized = background;
+    sized.add_chain(std::vector<Point>(9, Point{50, 50}));
+    const GridPlan plan = plan_grid(sized);
+    ASSERT_GE(plan.levels, 4u);
+    // The border between the two halves of the top block: a tile border at every level below it.
+    const std::uint32_t border_column = 1u << (plan.shift + plan.levels - 2);
+    double left = 0, right = 100;  // base_column(left) < border_column ≤ base_column(right)
+    for (int step = 0; step < 200; ++step) {
+        const double middle = 0.5 * (left + right);
+        (plan.grid.base_column(middle) < border_column ? left : right) = middle;
+    }
+    const double cell = 100.0 / plan.grid.base_columns;
+    const double a = left - 0.25 * cell, b = right + 0.25 * cell;  // A in the left half, B in the right
+    ASSERT_LT(plan.grid.base_column(a), border_column);
+    ASSERT_GE(plan.grid.base_column(b), border_column);
+    MapData map;
+    const std::vector<Point> ring = {{a, 50},           {b, 50.5},           {a, 50},
+                                     {a - cell, 51},    {a - 2 * cell, 50.5}, {a - 2.5 * cell, 49.5},
+                                     {a - 1.5 * cell, 49}, {a - 0.5 * cell, 49.5}, {a, 50}};
+    map.add_chain(ring);
+    for (const Point p : background.control_points) {
+        if (std::fabs(p.x - a) > 4 * cell || std::fabs(p.y - 50) > 3 * cell) map.control_points.push_back(p);
+    }
+    while (map.vertices.size() + map.control_points.size() < sized.vertices.size() + sized.control_points.size()) {
+        map.control_points.push_back({0, 100});
+    }
+    ASSERT_EQ(plan_grid(map).shift, plan.shift);
+    ASSERT_EQ(plan_grid(map).grid.base_columns, plan.grid.base_columns);
+
+    SimplifyOptions options;
+    options.stop = {Target::max, 0};
+    const SimplifyResult whole = simplify(map, options);
+    std::vector<Point> kept;
+    for (std::uint32_t v = 0; v < ring.size(); ++v) {
+        if (whole.kept[v] && std::none_of(kept.begin(), kept.end(), [&](Point q) { return same_location(q, ring[v]); })) {
+            kept.push_back(ring[v]);
+        }
+    }
+    EXPECT_GE(kept.size(), 3u) << "the ring rule keeps 3 locations or more";
+    EXPECT_LE(kept.size(), 4u) << "the bulk of the ring should simplify";
+
+    // The tiles at level 1: the ring's pieces are not settled, and at level 0 their fixed
+    // locations are A and B only (A's vertices and B are fixed: chain ends and cut ends; the
+    // q's are of level 0), so the ring is not clear there.
+    const std::vector<std::uint8_t> pinned(map.vertices.size(), 0);
+    std::vector<Point> fixed;
+    int pieces = 0;
+    for (TileInput& tile : split_into_tiles(map, plan, 1, pinned)) {
+        for (std::size_t c = 0; c < tile.chain_id.size(); ++c) {
+            if (tile.chain_id[c] != 0) continue;
+            ++pieces;
+            EXPECT_EQ(tile.settled[c], 0) << "two cut-end locations cannot settle the ring";
+        }
+        TileRun run(std::move(tile), plan, options);
+        for (const RingLocations& open : run.open_rings(0)) {
+            ASSERT_EQ(open.chain, 0u);
+            for (const Point q : open.locations) {
+                if (std::none_of(fixed.begin(), fixed.end(), [&](Point f) { return same_location(f, q); })) fixed.push_back(q);
+            }
+        }
+    }
+    EXPECT_EQ(pieces, 3) << "A–B on the left, B's piece on the right, B–A–q…–A on the left";
+    ASSERT_EQ(fixed.size(), 2u);
+    EXPECT_TRUE(same_location(fixed[0], ring[0]) || same_location(fixed[1], ring[0]));
+    EXPECT_TRUE(same_location(fixed[0], ring[1]) || same_location(fixed[1], ring[1]));
+    for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
+        expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+    }
+}
+
+// The tiles of a level partition the map's vertices and control points, and each piece ends
+// with its cut ends: the vertices beyond the tile's border.
+TEST(MapTiles, TilesPartitionTheMap) {
+    std::mt19937_64 rng(7);
+    testing::RandomMapOptions shape;
+    shape.chains = 100;
+    shape.max_steps = 50;
+    shape.control_points = 500;
+    const MapData map = testing::random_planar_map(rng, shape);
+    const GridPlan plan = plan_grid(map);
+    const std::vector<std::uint8_t> pinned(map.vertices.size(), 0);
+    for (unsigned tile_level = 0; tile_level < plan.levels; ++tile_level) {
+        const std::vector<TileInput> tiles = split_into_tiles(map, plan, tile_level, pinned);
+        std::vector<int> inside(map.vertices.size(), 0);
+        std::size_t points = 0;
+        for (const TileInput& tile : tiles) {
+            points += tile.map.control_points.size();
+            for (const Point p : tile.map.control_points) {
+                EXPECT_EQ(plan.block_column(p, tile_level), tile.column);
+                EXPECT_EQ(plan.block_row(p, tile_level), tile.row);
+            }
+            for (std::uint32_t c = 0; c < tile.map.chains.size(); ++c) {
+                const Chain piece = tile.map.chains[c];
+                for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
+                    const std::uint32_t id = tile.vertex_id[v];
+                    EXPECT_TRUE(same_location(tile.map.vertices[v], map.vertices[id]));
+                    if (v > piece.first) {
+                        EXPECT_EQ(id, tile.vertex_id[v - 1] + 1) << "a piece runs along its chain";
+                    }
+                    const bool in = plan.block_column(map.vertices[id], tile_level) == tile.column &&
+                                    plan.block_row(map.vertices[id], tile_level) == tile.row;
+                    EXPECT_TRUE(in || v == piece.first || v == piece.last) << "only a piece's ends lie outside its tile";
+                    EXPECT_TRUE(in || piece.last > piece.first) << "a cut end comes with the vertex inside";
+                    inside[id] += in;
+                }
+            }
+        }
+        // Every control point in a tile with vertices (in the others, nothing is to be done).
+        std::size_t expected = 0;
+        for (const Point p : map.control_points) {
+            expected += std::any_of(tiles.begin(), tiles.end(), [&](const TileInput& tile) {
+                return plan.block_column(p, tile_level) == tile.column && plan.block_row(p, tile_level) == tile.row;
+            });
+        }
+        EXPECT_EQ(points, expected);
+        EXPECT_GT(points, map.control_points.size() / 2);
+        EXPECT_EQ(std::count(inside.begin(), inside.end(), 1), static_cast<std::ptrdiff_t>(map.vertices.size()))
+            << "every vertex inside exactly one tile";
+    }
+}
+
+}  // namespace
+}  // namespace toposimp::map
