@@ -7,6 +7,12 @@
 #include <string>
 #include <vector>
 
+namespace toposimp::map {
+struct MapData;
+struct SimplifyOptions;
+struct SimplifyResult;
+}  // namespace toposimp::map
+
 namespace toposimp::cli {
 
 // Exit statuses (DESIGN.md): 0 ok, 1 topology or validation failure, 2 usage or input error.
@@ -20,6 +26,9 @@ struct Context {
     // flag that stops the engine (it then throws toposimp::Cancelled).
     std::function<void(const std::string& phase, double done)> progress{};
     const std::atomic<bool>* cancel = nullptr;
+    // In-process callers that run the map engine elsewhere (python3 -m toposimp.dask): called in
+    // place of map::simplify, and must give what it gives. Empty: the engine runs here.
+    std::function<map::SimplifyResult(const map::MapData&, const map::SimplifyOptions&)> map_engine{};
 };
 
 // Runs `toposimp ARGS...` (args excludes the program name) and returns the exit status.

@@ -573,8 +573,14 @@ void check_spherical(const MapOptions& options, const MapInput& input) {
 // One result per level (one level: the run's own target). Levels on a grid are rounded as they
 // are simplified (levels.hpp); a single run is rounded when it is published.
 map::Levels simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
-                         const std::vector<Level>& levels, const std::optional<map::GridStep>& decimal_grid) {
+                         const std::vector<Level>& levels, const std::optional<map::GridStep>& decimal_grid, const Context& context) {
     const bool rounds = decimal_grid || options.quantize > 0;
+    if (context.map_engine) {
+        if (!options.levels.empty()) throw UsageError{"--levels is not run in parts yet: run it with toposimp map"};
+        map::Levels one;
+        one.results.push_back(context.map_engine(input.map, simplify_options));
+        return one;
+    }
     if (options.levels.empty()) {
         // Rounding needs the control points again; without it the engine may free them early.
         map::Levels one;
@@ -739,7 +745,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     // The engine builds chains, indexes and ranks inside simplify().
     progress.phase("simplifying");
     const auto simplify_start = Clock::now();
-    map::Levels simplified = simplify_all(input, simplify_options, options, levels, publishing.decimal_grid);
+    map::Levels simplified = simplify_all(input, simplify_options, options, levels, publishing.decimal_grid, context);
     std::vector<map::SimplifyResult>& results = simplified.results;
     time.simplify = seconds_since(simplify_start);
     if (simplified.rounding) {

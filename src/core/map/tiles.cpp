@@ -98,15 +98,43 @@ std::vector<TileInput> split_into_tiles(const MapData& map, const GridPlan& plan
     return out;
 }
 
-SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level) {
-    const GridPlan plan = plan_grid(map);
-    tile_level = std::min(tile_level, plan.levels);
-    SimplifyStats pinning;
-    const std::vector<std::uint8_t> pinned = pinned_vertices(map, options, pinning);
+std::vector<std::vector<TileInput>> group_tiles(std::vector<TileInput> tiles) {
+    // Union-find over the tiles, joined by the chains of their unsettled split pieces.
+    std::vector<std::size_t> parent(tiles.size());
+    for (std::size_t k = 0; k < tiles.size(); ++k) parent[k] = k;
+    auto root = [&](std::size_t k) {
+        while (parent[k] != k) k = parent[k] = parent[parent[k]];
+        return k;
+    };
+    std::map<std::uint32_t, std::size_t> holder;  // unsettled chain → a tile holding a piece
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const TileInput& tile = tiles[k];
+        for (std::size_t c = 0; c < tile.chain_id.size(); ++c) {
+            const bool open = tile.whole_level[c] != kOpenChain && tile.whole_level[c] > tile.level && !tile.settled[c];
+            if (!open) continue;
+            const auto [at, fresh] = holder.emplace(tile.chain_id[c], k);
+            if (!fresh) parent[root(k)] = root(at->second);
+        }
+    }
+    std::vector<std::vector<TileInput>> groups;
+    std::map<std::size_t, std::size_t> group_of;  // root → group
+    for (std::size_t k = 0; k < tiles.size(); ++k) {
+        const auto [at, fresh] = group_of.emplace(root(k), groups.size());
+        if (fresh) groups.emplace_back();
+        groups[at->second].push_back(std::move(tiles[k]));
+    }
+    return groups;
+}
+
+std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options) {
+    if (group.empty()) return {};
+    const unsigned tile_level = group.front().level;
     std::vector<TileRun> runs;
-    for (TileInput& input : split_into_tiles(map, plan, tile_level, pinned)) runs.emplace_back(std::move(input), plan, options);
+    runs.reserve(group.size());
+    for (TileInput& input : group) runs.emplace_back(std::move(input), plan, options);
     for (unsigned level = 0; level < tile_level; ++level) {
-        // The split rings' fixed locations over all tiles: clear when ≥ 4 distinct ones.
+        // The open rings' fixed locations over the group's tiles (which hold all their pieces):
+        // clear when ≥ 4 distinct ones.
         std::map<std::uint32_t, std::vector<Point>> locations;
         for (TileRun& run : runs) {
             for (RingLocations& ring : run.open_rings(level)) {
@@ -125,7 +153,18 @@ SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& opti
     std::vector<TileOutcome> outcomes;
     outcomes.reserve(runs.size());
     for (TileRun& run : runs) outcomes.push_back(run.finish());
-    runs.clear();
+    return outcomes;
+}
+
+SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level) {
+    const GridPlan plan = plan_grid(map);
+    tile_level = std::min(tile_level, plan.levels);
+    SimplifyStats pinning;
+    const std::vector<std::uint8_t> pinned = pinned_vertices(map, options, pinning);
+    std::vector<TileOutcome> outcomes;
+    for (std::vector<TileInput>& group : group_tiles(split_into_tiles(map, plan, tile_level, pinned))) {
+        for (TileOutcome& outcome : run_tile_group(std::move(group), plan, options)) outcomes.push_back(std::move(outcome));
+    }
     SimplifyResult result = simplify_from_tiles(map, options, tile_level, outcomes, pinned);
     result.stats.predicates += pinning.predicates;
     return result;

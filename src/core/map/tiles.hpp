@@ -128,6 +128,14 @@ std::vector<std::uint8_t> pinned_vertices(const MapData& map, const SimplifyOpti
 SimplifyResult simplify_from_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level,
                                    std::span<const TileOutcome> tiles, std::span<const std::uint8_t> pinned);
 
+// The tiles that must run together, level by level: those sharing a split ring that its cut
+// ends do not settle (most tiles are alone). In the order of the tiles' first members.
+std::vector<std::vector<TileInput>> group_tiles(std::vector<TileInput> tiles);
+
+// Runs a group of tiles through the levels below their tile level, deciding their open rings
+// together; one outcome per tile, in order. Each tile task of a distributed run is one call.
+std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options);
+
 // simplify() run in parts in this process: split, every tile level by level (open rings decided
 // over all tiles), then the levels above. For tests and as the reference for a distributed run.
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level);

@@ -1,0 +1,156 @@
+"""toposimp map with the engine's tiles run as Dask tasks.
+
+    python3 -m toposimp.dask map INPUT -o OUTPUT --max [map options] [--scheduler tcp://host:8786]
+
+runs `toposimp map` (the same options, messages, output files and exit statuses) with the
+simplification cut at a level of its block hierarchy: every tile (a block of that level) is
+simplified below it as a Dask task that holds only the tile's chains and control points, and the
+levels above run here over what the tiles leave. The output is byte for byte the one `toposimp
+map` writes, for any number of workers (docs/distributed.md says why).
+
+Without --scheduler, a LocalCluster of --workers processes runs the tasks. With one, start it and
+its workers first, on every host that should work (Dask's own commands):
+
+    dask scheduler                       # on one host: prints tcp://HOST:8786
+    dask worker tcp://HOST:8786          # on each host (PYTHONPATH must reach this package)
+
+Only the tasks' data travels (numpy arrays, through Dask); the input and the output are read and
+written here. A worker that dies has its tasks rerun elsewhere by Dask; the result is the same.
+
+Not yet: count targets (--keep, --keep-points, --remove-points: give --max or --max-area),
+--levels, and a map bigger than this process's memory (the levels above the tiles and the
+reading and writing run here).
+"""
+import argparse
+import os
+import sys
+
+from toposimp import _toposimp
+
+USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT (--max | --max-area A) [toposimp map options]
+                                   [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
+                                   [--task-threads N]
+
+toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
+
+Dask options:
+  --scheduler ADDRESS  a running Dask scheduler (tcp://host:8786); default: a LocalCluster here
+  --workers N          the LocalCluster's worker processes (default: the cores here)
+  --tile-level T       the block level cut into tasks (default: the coarsest whose biggest tile
+                       holds at most --tile-points vertices and control points)
+  --tile-points N      see --tile-level (default 4000000)
+  --task-threads N     threads each task's engine uses (default 1: the workers are the parallelism)
+
+Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
+"""
+
+
+def _run_group(group, plan, options):
+    """A Dask task: one group of tiles through the levels below the tile level."""
+    from toposimp import _toposimp as engine
+    return engine.run_tile_group(group, plan, options)
+
+
+class _Progress:
+    def __init__(self, quiet):
+        self.quiet = quiet
+        self.terminal = sys.stderr.isatty()
+
+    def tiles(self, done, total):
+        if self.quiet:
+            return
+        line = f"toposimp.dask: tiles {done}/{total} done"
+        if self.terminal:
+            sys.stderr.write("\r" + line + ("\n" if done == total else ""))
+        elif done == total or done % max(1, total // 10) == 0:
+            sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+
+
+def _split_arguments(argv):
+    """(Dask options, toposimp map's arguments)."""
+    parser = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    parser.add_argument("--scheduler")
+    parser.add_argument("--workers", type=int)
+    parser.add_argument("--tile-level", type=int, default=-1)
+    parser.add_argument("--tile-points", type=int, default=4_000_000)
+    parser.add_argument("--task-threads", type=int, default=1)
+    options, rest = parser.parse_known_args(argv)
+    if options.workers is not None and options.workers < 1:
+        parser.error("--workers must be at least 1")
+    if options.task_threads < 1:
+        parser.error("--task-threads must be at least 1")
+    if options.tile_points < 1:
+        parser.error("--tile-points must be at least 1")
+    return options, rest
+
+
+def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=4_000_000, task_threads=1,
+        client=None, quiet=False):
+    """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
+
+    `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
+    of `workers` processes, and closed at the end)."""
+    from distributed import Client, LocalCluster, as_completed
+
+    progress = _Progress(quiet)
+    own_cluster = None
+    if client is None:
+        if scheduler:
+            client = Client(scheduler)
+        else:
+            own_cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+            client = Client(own_cluster)
+        own_client = True
+    else:
+        own_client = False
+
+    def run_groups(groups, plan, options):
+        options = dict(options, threads=task_threads)
+        futures = client.map(_run_group, groups, plan=plan, options=options, pure=False)
+        place = {future.key: k for k, future in enumerate(futures)}
+        results = [None] * len(futures)
+        progress.tiles(0, len(futures))
+        for done, future in enumerate(as_completed(futures), 1):
+            results[place[future.key]] = future.result()
+            progress.tiles(done, len(futures))
+        return results
+
+    try:
+        status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level, tile_points, None,
+                                                 sys.stderr.isatty(), threading_main())
+    finally:
+        if own_client:
+            client.close()
+        if own_cluster is not None:
+            own_cluster.close()
+    sys.stdout.write(out)
+    sys.stderr.write(err)
+    return status
+
+
+def threading_main():
+    import threading
+    return threading.current_thread() is threading.main_thread()
+
+
+def main(argv=None):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if not argv or argv[0] in ("-h", "--help"):
+        sys.stdout.write(USAGE)
+        return 0 if argv else 2
+    if argv[0] != "map":
+        sys.stderr.write(f"toposimp.dask: error: the command is 'map', not '{argv[0]}'\n" + USAGE)
+        return 2
+    if any(a in ("-h", "--help") for a in argv[1:]):
+        sys.stdout.write(USAGE)
+        return 0
+    options, rest = _split_arguments(argv[1:])
+    quiet = "-q" in rest or "--quiet" in rest
+    return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
+               tile_points=options.tile_points, task_threads=options.task_threads, quiet=quiet)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

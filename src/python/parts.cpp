@@ -1,0 +1,322 @@
+#include "python/parts.hpp"
+
+#include "cli/guard.hpp"
+#include "core/parallel/blocks.hpp"
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <limits>
+#include <map>
+#include <string>
+#include <vector>
+
+namespace toposimp::python {
+
+namespace {
+
+[[noreturn]] void malformed(const std::string& what) {
+    throw py::value_error("toposimp: a tile task's data is malformed: " + what);
+}
+
+template <class T>
+py::array_t<T> array_of(const std::vector<T>& values) {
+    py::array_t<T> array(static_cast<py::ssize_t>(values.size()));
+    if (!values.empty()) std::memcpy(array.mutable_data(), values.data(), values.size() * sizeof(T));
+    return array;
+}
+
+py::array_t<double> points_array(const std::vector<Point>& points) {
+    py::array_t<double> array({static_cast<py::ssize_t>(points.size()), py::ssize_t{2}});
+    double* out = array.mutable_data();
+    for (std::size_t k = 0; k < points.size(); ++k) {
+        out[2 * k] = points[k].x;
+        out[2 * k + 1] = points[k].y;
+    }
+    return array;
+}
+
+py::array_t<std::uint32_t> pairs_array(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs) {
+    py::array_t<std::uint32_t> array({static_cast<py::ssize_t>(pairs.size()), py::ssize_t{2}});
+    std::uint32_t* out = array.mutable_data();
+    for (std::size_t k = 0; k < pairs.size(); ++k) {
+        out[2 * k] = pairs[k].first;
+        out[2 * k + 1] = pairs[k].second;
+    }
+    return array;
+}
+
+py::object item(const py::dict& dict, const char* key) {
+    if (!dict.contains(key)) malformed(std::string("no '") + key + "'");
+    return dict[key];
+}
+
+// A 1-D array of `width`-tuples (width 1: a plain array) as a flat vector.
+template <class T>
+std::vector<T> flat(const py::dict& dict, const char* key, std::size_t width = 1) {
+    const auto array = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(item(dict, key));
+    if (!array) malformed(std::string("'") + key + "' is not an array of numbers");
+    const bool shaped = width == 1 ? array.ndim() == 1 : array.ndim() == 2 && array.shape(1) == static_cast<py::ssize_t>(width);
+    if (!shaped && array.size() != 0) malformed(std::string("'") + key + "' has the wrong shape");
+    return std::vector<T>(array.data(), array.data() + array.size());
+}
+
+std::vector<Point> points_of(const py::dict& dict, const char* key) {
+    const std::vector<double> flat_points = flat<double>(dict, key, 2);
+    std::vector<Point> points(flat_points.size() / 2);
+    for (std::size_t k = 0; k < points.size(); ++k) points[k] = {flat_points[2 * k], flat_points[2 * k + 1]};
+    return points;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_of(const py::dict& dict, const char* key) {
+    const std::vector<std::uint32_t> values = flat<std::uint32_t>(dict, key, 2);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs(values.size() / 2);
+    for (std::size_t k = 0; k < pairs.size(); ++k) pairs[k] = {values[2 * k], values[2 * k + 1]};
+    return pairs;
+}
+
+py::dict tile_dict(map::TileInput&& tile) {
+    py::dict dict;
+    dict["level"] = tile.level;
+    dict["column"] = tile.column;
+    dict["row"] = tile.row;
+    dict["vertices"] = points_array(tile.map.vertices);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
+    for (const map::Chain& chain : tile.map.chains) chains.emplace_back(chain.first, chain.last);
+    dict["chains"] = pairs_array(chains);
+    dict["control_points"] = points_array(tile.map.control_points);
+    dict["vertex_id"] = array_of(tile.vertex_id);
+    dict["pinned"] = array_of(tile.pinned);
+    dict["chain_id"] = array_of(tile.chain_id);
+    dict["whole_level"] = array_of(tile.whole_level);
+    dict["settled"] = array_of(tile.settled);
+    return dict;
+}
+
+// A tile dict back, checked to be one: every array the size its structure needs, the chains
+// cutting the vertices into consecutive ranges.
+map::TileInput tile_of(const py::dict& dict) {
+    map::TileInput tile;
+    tile.level = item(dict, "level").cast<unsigned>();
+    tile.column = item(dict, "column").cast<std::uint32_t>();
+    tile.row = item(dict, "row").cast<std::uint32_t>();
+    tile.map.vertices = points_of(dict, "vertices");
+    tile.map.control_points = points_of(dict, "control_points");
+    const std::size_t n = tile.map.vertices.size();
+    if (n >= std::numeric_limits<std::uint32_t>::max()) malformed("too many vertices");
+    std::size_t next = 0;
+    for (const auto& [first, last] : pairs_of(dict, "chains")) {
+        if (first != next || last < first || last >= n) malformed("the chains do not cut the vertices into consecutive ranges");
+        tile.map.chains.push_back({first, last});
+        next = std::size_t{last} + 1;
+    }
+    if (next != n) malformed("the chains do not cover the vertices");
+    tile.vertex_id = flat<std::uint32_t>(dict, "vertex_id");
+    tile.pinned = flat<std::uint8_t>(dict, "pinned");
+    tile.chain_id = flat<std::uint32_t>(dict, "chain_id");
+    tile.whole_level = flat<std::uint8_t>(dict, "whole_level");
+    tile.settled = flat<std::uint8_t>(dict, "settled");
+    const std::size_t c = tile.map.chains.size();
+    if (tile.vertex_id.size() != n || tile.pinned.size() != n) malformed("vertex_id or pinned is not one per vertex");
+    if (tile.chain_id.size() != c || tile.whole_level.size() != c || tile.settled.size() != c) {
+        malformed("chain_id, whole_level or settled is not one per chain");
+    }
+    return tile;
+}
+
+py::dict plan_dict(const map::GridPlan& plan) {
+    const map::PointGrid::Geometry& g = plan.grid;
+    py::dict dict;
+    dict["origin"] = py::make_tuple(g.origin_x, g.origin_y);
+    dict["scale"] = py::make_tuple(g.scale_x, g.scale_y);
+    dict["cells"] = py::make_tuple(g.columns, g.rows);
+    dict["base_scale"] = py::make_tuple(g.base_scale_x, g.base_scale_y);
+    dict["base_cells"] = py::make_tuple(g.base_columns, g.base_rows);
+    dict["row_split"] = g.row_split;
+    dict["shift"] = plan.shift;
+    dict["levels"] = plan.levels;
+    return dict;
+}
+
+map::GridPlan plan_of(const py::dict& dict) {
+    map::GridPlan plan;
+    map::PointGrid::Geometry& g = plan.grid;
+    std::tie(g.origin_x, g.origin_y) = item(dict, "origin").cast<std::pair<double, double>>();
+    std::tie(g.scale_x, g.scale_y) = item(dict, "scale").cast<std::pair<double, double>>();
+    std::tie(g.columns, g.rows) = item(dict, "cells").cast<std::pair<std::uint32_t, std::uint32_t>>();
+    std::tie(g.base_scale_x, g.base_scale_y) = item(dict, "base_scale").cast<std::pair<double, double>>();
+    std::tie(g.base_columns, g.base_rows) = item(dict, "base_cells").cast<std::pair<std::uint32_t, std::uint32_t>>();
+    g.row_split = item(dict, "row_split").cast<unsigned>();
+    plan.shift = item(dict, "shift").cast<unsigned>();
+    plan.levels = item(dict, "levels").cast<unsigned>();
+    if (g.columns == 0 || g.rows == 0 || g.base_columns == 0 || g.base_rows == 0 || g.row_split > 8 || plan.shift > 31 ||
+        plan.levels == 0 || plan.levels > 32) {
+        malformed("the plan's grid is not one");
+    }
+    return plan;
+}
+
+py::dict options_dict(const map::SimplifyOptions& options) {
+    py::dict dict;
+    dict["target"] = static_cast<int>(options.stop.target);
+    dict["value"] = options.stop.value;
+    dict["weighting"] = options.ranking.weighting;
+    dict["spherical"] = options.ranking.spherical;
+    dict["arithmetic"] = static_cast<int>(options.arithmetic);
+    dict["threads"] = options.threads;
+    return dict;
+}
+
+map::SimplifyOptions options_of(const py::dict& dict) {
+    map::SimplifyOptions options;
+    const int target = item(dict, "target").cast<int>();
+    if (target != static_cast<int>(map::Target::max) && target != static_cast<int>(map::Target::max_area)) {
+        malformed("the target is not one run in parts");
+    }
+    options.stop = {static_cast<map::Target>(target), item(dict, "value").cast<double>()};
+    options.ranking = {item(dict, "weighting").cast<double>(), item(dict, "spherical").cast<bool>()};
+    const int arithmetic = item(dict, "arithmetic").cast<int>();
+    if (arithmetic < static_cast<int>(exact::Arithmetic::exact) || arithmetic > static_cast<int>(exact::Arithmetic::floating)) {
+        malformed("the arithmetic is not one");
+    }
+    options.arithmetic = static_cast<exact::Arithmetic>(arithmetic);
+    options.threads = item(dict, "threads").cast<int>();
+    return options;
+}
+
+py::dict outcome_dict(const map::TileOutcome& outcome) {
+    py::dict dict;
+    dict["removed"] = array_of(outcome.removed);
+    dict["refused"] = array_of(outcome.refused);
+    dict["waits"] = pairs_array(outcome.waits);
+    py::list later;
+    for (const std::vector<std::uint32_t>& list : outcome.later) later.append(array_of(list));
+    dict["later"] = later;
+    dict["locations_lost"] = pairs_array(outcome.locations_lost);
+    const map::SimplifyStats& s = outcome.stats;
+    dict["stats"] = py::make_tuple(s.removed, s.blocked_by_point, s.blocked_by_ring, s.blocked_by_coincidence,
+                                   s.predicates.filter_decided, s.predicates.expansion_decided, s.predicates.gmp_fallbacks);
+    return dict;
+}
+
+// An outcome dict back, its ids checked against the map's vertices and chains.
+map::TileOutcome outcome_of(const py::dict& dict, const map::MapData& map) {
+    map::TileOutcome outcome;
+    const auto n = static_cast<std::uint32_t>(map.vertices.size());
+    const auto c = static_cast<std::uint32_t>(map.chains.size());
+    auto ids = [&](std::vector<std::uint32_t> list) {
+        if (std::any_of(list.begin(), list.end(), [&](std::uint32_t v) { return v >= n; })) malformed("an outcome names a vertex the map has not");
+        return list;
+    };
+    outcome.removed = ids(flat<std::uint32_t>(dict, "removed"));
+    outcome.refused = ids(flat<std::uint32_t>(dict, "refused"));
+    outcome.waits = pairs_of(dict, "waits");
+    for (const auto& [waiter, blocker] : outcome.waits) {
+        if (waiter >= n || blocker >= n) malformed("an outcome's wait names a vertex the map has not");
+    }
+    for (const py::handle list : item(dict, "later").cast<py::list>()) {
+        py::dict holder;
+        holder["list"] = list;
+        outcome.later.push_back(ids(flat<std::uint32_t>(holder, "list")));
+    }
+    outcome.locations_lost = pairs_of(dict, "locations_lost");
+    for (const auto& [chain, lost] : outcome.locations_lost) {
+        if (chain >= c) malformed("an outcome names a chain the map has not");
+    }
+    map::SimplifyStats& s = outcome.stats;
+    std::tie(s.removed, s.blocked_by_point, s.blocked_by_ring, s.blocked_by_coincidence, s.predicates.filter_decided,
+             s.predicates.expansion_decided, s.predicates.gmp_fallbacks) =
+        item(dict, "stats").cast<std::tuple<std::uint64_t, std::uint64_t, std::uint64_t, std::uint64_t, std::uint64_t, std::uint64_t,
+                                            std::uint64_t>>();
+    return outcome;
+}
+
+// The coarsest level below the top whose biggest tile holds at most `budget` vertices and
+// control points (0 if none does: every level-0 block a tile).
+unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std::uint64_t budget) {
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint64_t> blocks;  // level-0 block → points
+    for (const auto* points : {&map.vertices, &map.control_points}) {
+        for (const Point p : *points) ++blocks[{plan.block_column(p, 0), plan.block_row(p, 0)}];
+    }
+    unsigned best = 0;
+    for (unsigned level = 1; level + 1 < plan.levels; ++level) {
+        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint64_t> tiles;
+        std::uint64_t biggest = 0;
+        for (const auto& [block, count] : blocks) {
+            biggest = std::max(biggest, tiles[{block.first >> level, block.second >> level}] += count);
+        }
+        if (biggest <= budget) best = level;
+    }
+    return best;
+}
+
+}  // namespace
+
+map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
+                                 int tile_level, std::uint64_t tile_points) {
+    if (options.stop.target != map::Target::max && options.stop.target != map::Target::max_area) {
+        throw cli::UsageError{"count targets (--keep, --keep-points, --remove-points) are not run in parts yet: give --max or --max-area"};
+    }
+    using Clock = std::chrono::steady_clock;
+    const auto start = Clock::now();
+    const map::GridPlan plan = map::plan_grid(map);
+    const unsigned level =
+        tile_level >= 0 ? std::min(static_cast<unsigned>(tile_level), plan.levels) : tile_level_for(map, plan, tile_points);
+    map::SimplifyStats pinning;
+    const std::vector<std::uint8_t> pinned = map::pinned_vertices(map, options, pinning);
+    const auto pinned_at = Clock::now();
+    std::vector<std::vector<map::TileInput>> groups = map::group_tiles(map::split_into_tiles(map, plan, level, pinned));
+    std::vector<map::TileOutcome> outcomes;
+    {
+        py::gil_scoped_acquire gil;
+        py::list tasks;
+        std::vector<std::size_t> sizes;
+        for (std::vector<map::TileInput>& group : groups) {
+            py::list tiles;
+            for (map::TileInput& tile : group) tiles.append(tile_dict(std::move(tile)));
+            sizes.push_back(group.size());
+            std::vector<map::TileInput>().swap(group);
+            tasks.append(tiles);
+        }
+        const py::object done = run_groups(tasks, plan_dict(plan), options_dict(options));
+        tasks = py::list();
+        const auto results = done.cast<py::list>();
+        if (results.size() != sizes.size()) malformed("not one outcome list per group");
+        for (std::size_t k = 0; k < sizes.size(); ++k) {
+            const auto group = results[k].cast<py::list>();
+            if (group.size() != sizes[k]) malformed("not one outcome per tile");
+            for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
+        }
+    }
+    const auto tiles_done = Clock::now();
+    map::SimplifyResult result = map::simplify_from_tiles(map, options, level, outcomes, pinned);
+    result.stats.predicates += pinning.predicates;
+    // The phases: planning and the crossing search; the tiles and the levels above (sweep).
+    auto seconds = [](Clock::time_point from, Clock::time_point to) { return std::chrono::duration<double>(to - from).count(); };
+    result.stats.seconds_crossings = seconds(start, pinned_at);
+    result.stats.seconds_sweep += seconds(pinned_at, tiles_done);
+    return result;
+}
+
+py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options) {
+    std::vector<map::TileInput> tiles;
+    for (const py::handle tile : group) tiles.push_back(tile_of(tile.cast<py::dict>()));
+    const map::GridPlan grid = plan_of(plan);
+    const map::SimplifyOptions simplify = options_of(options);
+    for (const map::TileInput& tile : tiles) {
+        if (tile.level != tiles.front().level || tile.level > grid.levels) malformed("the tiles are not of one level of the plan");
+    }
+    std::vector<map::TileOutcome> outcomes;
+    {
+        py::gil_scoped_release release;
+        outcomes = map::run_tile_group(std::move(tiles), grid, simplify);
+    }
+    py::list out;
+    for (const map::TileOutcome& outcome : outcomes) out.append(outcome_dict(outcome));
+    return out;
+}
+
+}  // namespace toposimp::python

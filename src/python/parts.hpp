@@ -1,0 +1,24 @@
+// The map engine in parts for Python (python/toposimp/dask.py): tiles and their outcomes as dicts
+// of numpy arrays, which Dask moves between processes as they are.
+#pragma once
+
+#include "core/map/simplify.hpp"
+#include "core/map/tiles.hpp"
+
+#include <pybind11/pybind11.h>
+
+namespace toposimp::python {
+
+namespace py = pybind11;
+
+// Runs the map in parts through `run_groups(groups, plan, options) -> outcomes` (a list per group
+// of tile dicts in, a list per group of outcome dicts back, in the same order), at `tile_level`
+// (or, if negative, the level whose biggest tile holds at most `tile_points` vertices and
+// control points). Called with the GIL released; takes it to call run_groups.
+map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
+                                 int tile_level, std::uint64_t tile_points);
+
+// A task: one group of tile dicts → their outcome dicts (the engine runs without the GIL).
+py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options);
+
+}  // namespace toposimp::python
