@@ -86,11 +86,12 @@ def _split_arguments(argv):
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=4_000_000, task_threads=1,
-        client=None, quiet=False):
+        client=None, quiet=False, on_progress=None):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
-    of `workers` processes, and closed at the end)."""
+    of `workers` processes, and closed at the end). `on_progress(done, total)`: called as the
+    tile tasks finish."""
     from distributed import Client, LocalCluster, as_completed
 
     progress = _Progress(quiet)
@@ -115,6 +116,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
         for done, future in enumerate(as_completed(futures), 1):
             results[place[future.key]] = future.result()
             progress.tiles(done, len(futures))
+            if on_progress is not None:
+                on_progress(done, len(futures))
         return results
 
     try:

@@ -131,6 +131,14 @@ TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
         }
     }
     EXPECT_EQ(pieces, 3) << "A–B on the left, B's piece on the right, B–A–q…–A on the left";
+    // The two tiles holding its pieces run as one group; every other tile alone.
+    const std::vector<TileInput> tiles = split_into_tiles(map, plan, 1, pinned);
+    const std::vector<std::vector<TileInput>> groups = group_tiles(split_into_tiles(map, plan, 1, pinned));
+    EXPECT_EQ(groups.size(), tiles.size() - 1);
+    for (const std::vector<TileInput>& group : groups) {
+        const bool holds = std::any_of(group.front().chain_id.begin(), group.front().chain_id.end(), [](std::uint32_t c) { return c == 0; });
+        EXPECT_EQ(group.size(), holds ? 2u : 1u);
+    }
     ASSERT_EQ(fixed.size(), 2u);
     EXPECT_TRUE(same_location(fixed[0], ring[0]) || same_location(fixed[1], ring[0]));
     EXPECT_TRUE(same_location(fixed[0], ring[1]) || same_location(fixed[1], ring[1]));

@@ -1,0 +1,145 @@
+"""python3 -m toposimp.dask: the map engine's tiles as Dask tasks on a real scheduler and workers
+(separate processes, TCP on 127.0.0.1), the output byte for byte toposimp map's, also when a
+worker is killed in the middle."""
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+
+distributed = pytest.importorskip("distributed", reason="python3-distributed is not installed (apt install python3-distributed)")
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(ROOT / "scripts" / "bench"))
+import generate_map  # noqa: E402
+
+# GeoPackages stamp the time they are written; both runs are given the same.
+SAME_DATE = ["--config", "OGR_CURRENT_DATE", "2000-01-01T00:00:00Z"]
+
+
+@pytest.fixture(scope="module")
+def cluster(tmp_path_factory):
+    """A scheduler and three workers (no nanny: a killed worker stays dead), and a client."""
+    folder = tmp_path_factory.mktemp("dask")
+    address_file = folder / "scheduler.json"
+    env = dict(os.environ)
+    common = ["--no-dashboard"]
+    processes = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                                   "--scheduler-file", str(address_file), *common],
+                                  env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)]
+    deadline = time.monotonic() + 60
+    while not address_file.exists() and time.monotonic() < deadline:
+        time.sleep(0.1)
+    assert address_file.exists(), "the scheduler did not start"
+    workers = []
+    for k in range(3):
+        worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(address_file),
+                                   "--nthreads", "1", "--no-nanny", "--local-directory", str(folder / f"w{k}"), *common],
+                                  env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+        processes.append(worker)
+        workers.append(worker)
+    client = distributed.Client(scheduler_file=str(address_file))
+    client.wait_for_workers(3, timeout=60)
+    yield client, workers
+    client.close()
+    for process in processes:
+        process.kill()
+        process.wait()
+
+
+@pytest.fixture(scope="module")
+def generated(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("map")
+    return generate_map.generate(folder, cells=24, edge_vertices=30, rivers=40, river_steps=400, roads=6, points=8000, seed=3)
+
+
+def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path):
+    from toposimp import dask as toposimp_dask
+
+    client, workers = cluster
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--max-area", "0.002", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+
+    pids = client.run(os.getpid)  # worker address → its process id
+    killed = {}
+
+    def kill_one(done, total):
+        if killed or done < 2:
+            return
+        # A worker with tasks under way, so that they are lost with it and run again elsewhere.
+        for address, keys in client.processing().items():
+            if keys and pids.get(address) in [w.pid for w in workers]:
+                killed["address"], killed["tasks"] = address, len(keys)
+                os.kill(pids[address], signal.SIGKILL)
+                return
+
+    output = tmp_path / "dask.gpkg"
+    status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, quiet=True, on_progress=kill_one)
+    assert status == 0
+    assert killed, "no worker had tasks under way after the first results"
+    assert killed["tasks"] > 0
+    assert killed["address"] not in client.scheduler_info()["workers"]
+    assert output.read_bytes() == reference.read_bytes()
+
+
+def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp_path):
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--max", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    for level in (0, 2, 3, -1):
+        output = tmp_path / f"level{level}.gpkg"
+        assert toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=level, quiet=True) == 0
+        assert output.read_bytes() == reference.read_bytes(), f"tile level {level}"
+
+
+def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys):
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    broken = tmp_path / "broken.geojson"
+    broken.write_text('{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {}, '
+                      '"geometry": {"type": "LineString", "coordinates": [[0, 0], [1, "x"]]}}]}')
+    output = tmp_path / "out.gpkg"
+    status = toposimp_dask.run([str(broken), "-o", str(output), "--max"], client=client, quiet=True)
+    assert status == 2
+    assert "broken.geojson" in capsys.readouterr().err
+    assert not output.exists()
+    assert not list(tmp_path.glob("*.tmp*")) and sorted(p.name for p in tmp_path.iterdir()) == ["broken.geojson"]
+
+
+def test_count_targets_are_refused_clearly(cluster, generated, tmp_path, capsys):
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    polygons_and_lines, _ = generated
+    output = tmp_path / "out.gpkg"
+    assert toposimp_dask.run([str(polygons_and_lines), "-o", str(output), "--keep", "10%"], client=client, quiet=True) == 2
+    assert "count targets" in capsys.readouterr().err
+    assert not output.exists()
+
+
+def test_command_line(generated, binary, tmp_path):
+    """The module as a command: its own LocalCluster, toposimp map's options and --json."""
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--max", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    output = tmp_path / "dask.gpkg"
+    done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "2",
+                           "--tile-level", "2", "--json"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert '"command":"map"' in done.stdout
+    assert "tiles" in done.stderr and "done" in done.stderr
+    assert output.read_bytes() == reference.read_bytes()
+    usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
+    assert usage.returncode == 0 and "--scheduler" in usage.stdout
