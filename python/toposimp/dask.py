@@ -1,12 +1,14 @@
 """toposimp map with the engine's tiles run as Dask tasks.
 
-    python3 -m toposimp.dask map INPUT -o OUTPUT --max [map options] [--scheduler tcp://host:8786]
+    python3 -m toposimp.dask map INPUT -o OUTPUT --keep 10% [map options] [--scheduler tcp://host:8786]
 
 runs `toposimp map` (the same options, messages, output files and exit statuses) with the
 simplification cut at a level of its block hierarchy: every tile (a block of that level) is
 simplified below it as a Dask task that holds only the tile's chains and control points, and the
-levels above run here over what the tiles leave. The output is byte for byte the one `toposimp
-map` writes, for any number of workers (docs/distributed.md says why).
+levels above run here over what the tiles leave. Count targets (--keep, --keep-points,
+--remove-points) run rounds: each round's budget is chosen here, over the whole map, and its
+tiles are tasks. The output is byte for byte the one `toposimp map` writes, for any number of
+workers (docs/distributed.md says why).
 
 Without --scheduler, a LocalCluster of --workers processes runs the tasks. With one, start it and
 its workers first, on every host that should work (Dask's own commands):
@@ -17,9 +19,8 @@ its workers first, on every host that should work (Dask's own commands):
 Only the tasks' data travels (numpy arrays, through Dask); the input and the output are read and
 written here. A worker that dies has its tasks rerun elsewhere by Dask; the result is the same.
 
-Not yet: count targets (--keep, --keep-points, --remove-points: give --max or --max-area),
---levels, and a map bigger than this process's memory (the levels above the tiles and the
-reading and writing run here).
+Not yet: --levels, and a map bigger than this process's memory (the reading and writing, each
+round's budget and the levels above the tiles run here).
 """
 import argparse
 import os
@@ -27,7 +28,7 @@ import sys
 
 from toposimp import _toposimp
 
-USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT (--max | --max-area A) [toposimp map options]
+USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
                                    [--task-threads N]
 
@@ -55,11 +56,12 @@ class _Progress:
     def __init__(self, quiet):
         self.quiet = quiet
         self.terminal = sys.stderr.isatty()
+        self.round = 1
 
     def tiles(self, done, total):
         if self.quiet:
             return
-        line = f"toposimp.dask: tiles {done}/{total} done"
+        line = f"toposimp.dask: round {self.round}: tiles {done}/{total} done"
         if self.terminal:
             sys.stderr.write("\r" + line + ("\n" if done == total else ""))
         elif done == total or done % max(1, total // 10) == 0:
@@ -107,7 +109,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     else:
         own_client = False
 
-    def run_groups(groups, plan, options):
+    def run_groups(groups, plan, options, round_number):
+        progress.round = round_number
         options = dict(options, threads=task_threads)
         futures = client.map(_run_group, groups, plan=plan, options=options, pure=False)
         place = {future.key: k for k, future in enumerate(futures)}

@@ -89,10 +89,16 @@ py::dict tile_dict(map::TileInput&& tile) {
     dict["chains"] = pairs_array(chains);
     dict["control_points"] = points_array(tile.map.control_points);
     dict["vertex_id"] = array_of(tile.vertex_id);
-    dict["pinned"] = array_of(tile.pinned);
+    dict["state"] = array_of(tile.state);
+    dict["marked"] = array_of(tile.marked);
     dict["chain_id"] = array_of(tile.chain_id);
     dict["whole_level"] = array_of(tile.whole_level);
     dict["settled"] = array_of(tile.settled);
+    dict["distinct"] = array_of(tile.distinct);
+    dict["orientation"] = array_of(tile.orientation);
+    dict["waits"] = pairs_array(tile.waits);
+    dict["marks"] = tile.marks;
+    dict["bound"] = py::make_tuple(tile.bound_key, tile.bound_id);
     return dict;
 }
 
@@ -115,14 +121,31 @@ map::TileInput tile_of(const py::dict& dict) {
     }
     if (next != n) malformed("the chains do not cover the vertices");
     tile.vertex_id = flat<std::uint32_t>(dict, "vertex_id");
-    tile.pinned = flat<std::uint8_t>(dict, "pinned");
+    tile.state = flat<std::uint8_t>(dict, "state");
+    tile.marked = flat<std::uint8_t>(dict, "marked");
     tile.chain_id = flat<std::uint32_t>(dict, "chain_id");
     tile.whole_level = flat<std::uint8_t>(dict, "whole_level");
     tile.settled = flat<std::uint8_t>(dict, "settled");
+    tile.distinct = flat<std::uint32_t>(dict, "distinct");
+    tile.orientation = flat<std::int8_t>(dict, "orientation");
+    tile.waits = pairs_of(dict, "waits");
+    tile.marks = item(dict, "marks").cast<bool>();
+    std::tie(tile.bound_key, tile.bound_id) = item(dict, "bound").cast<std::pair<double, std::uint32_t>>();
     const std::size_t c = tile.map.chains.size();
-    if (tile.vertex_id.size() != n || tile.pinned.size() != n) malformed("vertex_id or pinned is not one per vertex");
-    if (tile.chain_id.size() != c || tile.whole_level.size() != c || tile.settled.size() != c) {
-        malformed("chain_id, whole_level or settled is not one per chain");
+    if (tile.vertex_id.size() != n || tile.state.size() != n) malformed("vertex_id or state is not one per vertex");
+    if (tile.marked.size() != (tile.marks ? n : 0)) malformed("marked is not one per vertex with marks, none without");
+    if (tile.chain_id.size() != c || tile.whole_level.size() != c || tile.settled.size() != c || tile.distinct.size() != c ||
+        tile.orientation.size() != c) {
+        malformed("chain_id, whole_level, settled, distinct or orientation is not one per chain");
+    }
+    if (std::any_of(tile.state.begin(), tile.state.end(), [](std::uint8_t s) { return s > static_cast<std::uint8_t>(map::VertexState::removed); })) {
+        malformed("a vertex state is not one");
+    }
+    if (std::any_of(tile.orientation.begin(), tile.orientation.end(), [](std::int8_t o) { return o < -1 || o > 2; })) {
+        malformed("an orientation is not one");
+    }
+    for (const auto& [waiter, blocker] : tile.waits) {
+        if (waiter >= n || blocker >= n) malformed("a wait names a vertex the tile has not");
     }
     return tile;
 }
@@ -173,8 +196,8 @@ py::dict options_dict(const map::SimplifyOptions& options) {
 map::SimplifyOptions options_of(const py::dict& dict) {
     map::SimplifyOptions options;
     const int target = item(dict, "target").cast<int>();
-    if (target != static_cast<int>(map::Target::max) && target != static_cast<int>(map::Target::max_area)) {
-        malformed("the target is not one run in parts");
+    if (target < static_cast<int>(map::Target::keep_fraction) || target > static_cast<int>(map::Target::max)) {
+        malformed("the target is not one");
     }
     options.stop = {static_cast<map::Target>(target), item(dict, "value").cast<double>()};
     options.ranking = {item(dict, "weighting").cast<double>(), item(dict, "spherical").cast<bool>()};
@@ -189,9 +212,11 @@ map::SimplifyOptions options_of(const py::dict& dict) {
 
 py::dict outcome_dict(const map::TileOutcome& outcome) {
     py::dict dict;
-    dict["removed"] = array_of(outcome.removed);
-    dict["refused"] = array_of(outcome.refused);
+    dict["ids"] = array_of(outcome.ids);
+    dict["states"] = array_of(outcome.states);
     dict["waits"] = pairs_array(outcome.waits);
+    dict["oriented"] = array_of(outcome.oriented);
+    dict["orientations"] = array_of(outcome.orientations);
     py::list later;
     for (const std::vector<std::uint32_t>& list : outcome.later) later.append(array_of(list));
     dict["later"] = later;
@@ -211,8 +236,21 @@ map::TileOutcome outcome_of(const py::dict& dict, const map::MapData& map) {
         if (std::any_of(list.begin(), list.end(), [&](std::uint32_t v) { return v >= n; })) malformed("an outcome names a vertex the map has not");
         return list;
     };
-    outcome.removed = ids(flat<std::uint32_t>(dict, "removed"));
-    outcome.refused = ids(flat<std::uint32_t>(dict, "refused"));
+    outcome.ids = ids(flat<std::uint32_t>(dict, "ids"));
+    outcome.states = flat<std::uint8_t>(dict, "states");
+    if (outcome.states.size() != outcome.ids.size()) malformed("an outcome's states are not one per vertex");
+    if (std::any_of(outcome.states.begin(), outcome.states.end(),
+                    [](std::uint8_t s) { return s > static_cast<std::uint8_t>(map::VertexState::removed); })) {
+        malformed("an outcome's vertex state is not one");
+    }
+    outcome.oriented = flat<std::uint32_t>(dict, "oriented");
+    outcome.orientations = flat<std::int8_t>(dict, "orientations");
+    if (outcome.orientations.size() != outcome.oriented.size()) malformed("an outcome's orientations are not one per ring");
+    for (std::size_t k = 0; k < outcome.oriented.size(); ++k) {
+        if (outcome.oriented[k] >= c || outcome.orientations[k] < -1 || outcome.orientations[k] > 1) {
+            malformed("an outcome's ring orientation is not one");
+        }
+    }
     outcome.waits = pairs_of(dict, "waits");
     for (const auto& [waiter, blocker] : outcome.waits) {
         if (waiter >= n || blocker >= n) malformed("an outcome's wait names a vertex the map has not");
@@ -257,47 +295,43 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
                                  int tile_level, std::uint64_t tile_points) {
-    if (options.stop.target != map::Target::max && options.stop.target != map::Target::max_area) {
-        throw cli::UsageError{"count targets (--keep, --keep-points, --remove-points) are not run in parts yet: give --max or --max-area"};
-    }
     using Clock = std::chrono::steady_clock;
+    auto seconds = [](Clock::time_point from) { return std::chrono::duration<double>(Clock::now() - from).count(); };
     const auto start = Clock::now();
-    const map::GridPlan plan = map::plan_grid(map);
-    const unsigned level =
-        tile_level >= 0 ? std::min(static_cast<unsigned>(tile_level), plan.levels) : tile_level_for(map, plan, tile_points);
-    map::SimplifyStats pinning;
-    const std::vector<std::uint8_t> pinned = map::pinned_vertices(map, options, pinning);
-    const auto pinned_at = Clock::now();
-    std::vector<std::vector<map::TileInput>> groups = map::group_tiles(map::split_into_tiles(map, plan, level, pinned));
-    std::vector<map::TileOutcome> outcomes;
-    {
-        py::gil_scoped_acquire gil;
-        py::list tasks;
-        std::vector<std::size_t> sizes;
-        for (std::vector<map::TileInput>& group : groups) {
-            py::list tiles;
-            for (map::TileInput& tile : group) tiles.append(tile_dict(std::move(tile)));
-            sizes.push_back(group.size());
-            std::vector<map::TileInput>().swap(group);
-            tasks.append(tiles);
+    const unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : tile_level_for(map, map::plan_grid(map), tile_points);
+    map::MapInParts parts(map, options, level);
+    const double set_up = seconds(start);
+    const auto rounds_start = Clock::now();
+    for (unsigned round = 1; parts.next_round(); ++round) {
+        std::vector<std::vector<map::TileInput>> groups = parts.tile_groups();
+        std::vector<map::TileOutcome> outcomes;
+        {
+            py::gil_scoped_acquire gil;
+            py::list tasks;
+            std::vector<std::size_t> sizes;
+            for (std::vector<map::TileInput>& group : groups) {
+                py::list tiles;
+                for (map::TileInput& tile : group) tiles.append(tile_dict(std::move(tile)));
+                sizes.push_back(group.size());
+                std::vector<map::TileInput>().swap(group);
+                tasks.append(tiles);
+            }
+            const py::object done = run_groups(tasks, plan_dict(parts.plan()), options_dict(options), round);
+            tasks = py::list();
+            const auto results = done.cast<py::list>();
+            if (results.size() != sizes.size()) malformed("not one outcome list per group");
+            for (std::size_t k = 0; k < sizes.size(); ++k) {
+                const auto group = results[k].cast<py::list>();
+                if (group.size() != sizes[k]) malformed("not one outcome per tile");
+                for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
+            }
         }
-        const py::object done = run_groups(tasks, plan_dict(plan), options_dict(options));
-        tasks = py::list();
-        const auto results = done.cast<py::list>();
-        if (results.size() != sizes.size()) malformed("not one outcome list per group");
-        for (std::size_t k = 0; k < sizes.size(); ++k) {
-            const auto group = results[k].cast<py::list>();
-            if (group.size() != sizes[k]) malformed("not one outcome per tile");
-            for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
-        }
+        parts.finish_round(outcomes);
     }
-    const auto tiles_done = Clock::now();
-    map::SimplifyResult result = map::simplify_from_tiles(map, options, level, outcomes, pinned);
-    result.stats.predicates += pinning.predicates;
-    // The phases: planning and the crossing search; the tiles and the levels above (sweep).
-    auto seconds = [](Clock::time_point from, Clock::time_point to) { return std::chrono::duration<double>(to - from).count(); };
-    result.stats.seconds_crossings = seconds(start, pinned_at);
-    result.stats.seconds_sweep += seconds(pinned_at, tiles_done);
+    map::SimplifyResult result = parts.result();
+    // The phases: set-up and the crossing search; the rounds (tiles and the levels above).
+    result.stats.seconds_crossings = set_up;
+    result.stats.seconds_sweep = seconds(rounds_start);
     return result;
 }
 

@@ -11,10 +11,11 @@ namespace toposimp::python {
 
 namespace py = pybind11;
 
-// Runs the map in parts through `run_groups(groups, plan, options) -> outcomes` (a list per group
-// of tile dicts in, a list per group of outcome dicts back, in the same order), at `tile_level`
-// (or, if negative, the level whose biggest tile holds at most `tile_points` vertices and
-// control points). Called with the GIL released; takes it to call run_groups.
+// Runs the map in parts (map::MapInParts): each round's tile groups go to
+// `run_groups(groups, plan, options, round) -> outcomes` (a list per group of tile dicts in, a
+// list per group of outcome dicts back, in the same order). The tile level is `tile_level`, or,
+// if negative, the coarsest whose biggest tile holds at most `tile_points` vertices and control
+// points. Called with the GIL released; takes it to call run_groups.
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
                                  int tile_level, std::uint64_t tile_points);
 

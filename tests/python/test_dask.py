@@ -61,7 +61,7 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path):
 
     client, workers = cluster
     polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--max-area", "0.002", *SAME_DATE]
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "10%", *SAME_DATE]
     reference = tmp_path / "reference.gpkg"
     done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -93,13 +93,14 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
 
     client, _ = cluster
     polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--max", *SAME_DATE]
-    reference = tmp_path / "reference.gpkg"
-    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
-    for level in (0, 2, 3, -1):
-        output = tmp_path / f"level{level}.gpkg"
-        assert toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=level, quiet=True) == 0
-        assert output.read_bytes() == reference.read_bytes(), f"tile level {level}"
+    for target in (["--max"], ["--max-area", "0.002"], ["--keep-points", "30000"], ["--remove-points", "5000"]):
+        arguments = [str(polygons_and_lines), "-p", str(places), *target, *SAME_DATE]
+        reference = tmp_path / "reference.gpkg"
+        subprocess.run([binary, "map", *arguments, "-o", str(reference), "--overwrite"], check=True, capture_output=True)
+        for level in (0, 2, -1):
+            output = tmp_path / f"level{level}.gpkg"
+            assert toposimp_dask.run([*arguments, "-o", str(output), "--overwrite"], client=client, tile_level=level, quiet=True) == 0
+            assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}"
 
 
 def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys):
@@ -117,21 +118,21 @@ def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys
     assert not list(tmp_path.glob("*.tmp*")) and sorted(p.name for p in tmp_path.iterdir()) == ["broken.geojson"]
 
 
-def test_count_targets_are_refused_clearly(cluster, generated, tmp_path, capsys):
+def test_levels_are_refused_clearly(cluster, generated, tmp_path, capsys):
     from toposimp import dask as toposimp_dask
 
     client, _ = cluster
     polygons_and_lines, _ = generated
-    output = tmp_path / "out.gpkg"
-    assert toposimp_dask.run([str(polygons_and_lines), "-o", str(output), "--keep", "10%"], client=client, quiet=True) == 2
-    assert "count targets" in capsys.readouterr().err
-    assert not output.exists()
+    output = tmp_path / "out_{level}.gpkg"
+    assert toposimp_dask.run([str(polygons_and_lines), "-o", str(output), "--levels", "10%,5%"], client=client, quiet=True) == 2
+    assert "--levels" in capsys.readouterr().err
+    assert not list(tmp_path.iterdir())
 
 
 def test_command_line(generated, binary, tmp_path):
     """The module as a command: its own LocalCluster, toposimp map's options and --json."""
     polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--max", *SAME_DATE]
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "20%", *SAME_DATE]
     reference = tmp_path / "reference.gpkg"
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     output = tmp_path / "dask.gpkg"
@@ -139,7 +140,7 @@ def test_command_line(generated, binary, tmp_path):
                            "--tile-level", "2", "--json"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert '"command":"map"' in done.stdout
-    assert "tiles" in done.stderr and "done" in done.stderr
+    assert "round 2: tiles" in done.stderr and "done" in done.stderr
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
     assert usage.returncode == 0 and "--scheduler" in usage.stdout

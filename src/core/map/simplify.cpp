@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <span>
@@ -154,6 +155,12 @@ public:
     bool waits(std::uint32_t waiter) {
         const std::lock_guard lock(mutex_);
         return blocker_of_.count(waiter) != 0;
+    }
+
+    void clear() {
+        const std::lock_guard lock(mutex_);
+        blocker_of_.clear();
+        waiters_of_.clear();
     }
 
     // Every (waiter, blocker), in no order.
@@ -347,16 +354,32 @@ public:
         return finish();
     }
 
-    // ---- runs in parts (tiles.hpp) ---------------------------------------------------------
+    // ---- runs in parts (tiles.hpp): a tile --------------------------------------------------
 
-    // A tile: set up, pinned as the whole map says, its candidates listed by level.
+    // A tile: set up in the state the whole map gives, its candidates listed by level.
     void start_tile() {
+        const TileInput& tile = *tile_;
         set_up();
-        pin(tile_->pinned);
-        start_single_sweep();
+        state_.resize(vertex_count_);
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) state_[v] = static_cast<State>(tile.state[v]);
+        has_waiters_.assign(vertex_count_, 0);
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) {
+            if (state_[v] != State::removed) continue;  // (a whole ring's, removed in an earlier round)
+            grid_->remove(v);
+            if (prev_[v] != kNone) next_[prev_[v]] = next_[v];
+            if (next_[v] != kNone) prev_[next_[v]] = prev_[v];
+        }
+        for (std::uint32_t c = 0; c < map_.chains.size(); ++c) orientation_[c] = tile.orientation[c];
+        later_.assign(levels_ + 1, {});
+        work_ = static_cast<double>(vertex_count_);
+        use_marks_ = tile.marks;
+        marked_ = tile.marks ? tile.marked : std::vector<std::uint8_t>(vertex_count_, 0);
+        bound_ = {tile.bound_key, kNone};  // (its id is compared as a whole-map id: past_bound)
+        for (const auto& [waiter, blocker] : tile.waits) wait_on(waiter, blocker);
         schedule_queued();
         slot_.assign(vertex_count_, kNone);
         initial_distinct_ = distinct_;
+        initial_orientation_ = orientation_;
     }
 
     std::vector<RingLocations> open_rings(unsigned level) const {
@@ -378,15 +401,18 @@ public:
         stop_if_cancelled(options_.cancel);
     }
 
+    bool inside_tile(std::uint32_t v) const {
+        const unsigned shift = tile_->level;
+        return ((block_xy_[v] >> 16) >> shift) == tile_->column && ((block_xy_[v] & 0xffffu) >> shift) == tile_->row;
+    }
+
     TileOutcome finish_tile() {
         TileOutcome out;
         const auto id = [&](std::uint32_t v) { return tile_->vertex_id[v]; };
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            switch (state_[v]) {
-                case State::removed: out.removed.push_back(id(v)); break;
-                case State::refused: out.refused.push_back(id(v)); break;
-                default: break;
-            }
+            if (!inside_tile(v)) continue;
+            out.ids.push_back(id(v));
+            out.states.push_back(static_cast<std::uint8_t>(state_[v]));
         }
         for (const auto& [waiter, blocker] : waits_.all()) out.waits.emplace_back(id(waiter), id(blocker));
         std::sort(out.waits.begin(), out.waits.end());
@@ -398,45 +424,196 @@ public:
         for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
             const std::uint32_t lost = initial_distinct_[c] - distinct_[c];  // (modulo 2^32: pieces start at 0)
             if (whole_level_[c] != kOpen && lost != 0) out.locations_lost.emplace_back(tile_->chain_id[c], lost);
+            if (orientation_[c] != initial_orientation_[c]) {
+                out.oriented.push_back(tile_->chain_id[c]);
+                out.orientations.push_back(orientation_[c]);
+            }
         }
         out.stats = stats_;
         return out;
     }
 
-    // The whole map from the tiles' outcomes: the levels from `tile_level` up.
-    SimplifyResult run_from_tiles(unsigned tile_level, std::span<const TileOutcome> tiles, std::span<const std::uint8_t> pinned) {
-        auto start = Clock::now();
+    // ---- runs in parts: the whole map (MapInParts) -----------------------------------------
+
+    // Set up and pinned; `tile_level` capped at the levels.
+    unsigned start_parts(unsigned tile_level) {
         set_up();
-        stats_.seconds_index = lap(start);
+        std::vector<std::uint8_t> pinned = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_, options_.cancel);
+        stop_if_cancelled(options_.cancel);
+        pin_from_improper(map_, pinned, threads_, vertex_count_ >= parallel_min_);
         pin(pinned);
-        start_single_sweep();
+        tile_level_ = std::min(tile_level, levels_);
+        goal_ = removal_goal(options_.stop, vertex_count_);
+        const Target target = options_.stop.target;
+        if (target == Target::max || target == Target::max_area) {
+            start_single_sweep();
+        } else {
+            marked_.assign(vertex_count_, 0);
+            later_.assign(levels_ + 1, {});
+            stats_.removal_goal = goal_;
+            work_ = static_cast<double>(goal_);
+            use_marks_ = true;
+        }
         slot_.assign(vertex_count_, kNone);
-        for (const TileOutcome& tile : tiles) {
-            for (const std::uint32_t v : tile.removed) {
-                state_[v] = State::removed;
-                grid_->remove(v);
-                next_[prev_[v]] = next_[v];
-                prev_[next_[v]] = prev_[v];
+        return tile_level_;
+    }
+
+    bool next_part_round() {
+        if (!use_marks_) return rounds_started_++ == 0;
+        if (!(stats_.removed < goal_) || !mark_smallest(goal_ - stats_.removed)) return false;
+        ++stats_.rounds;
+        return true;
+    }
+
+    // The round's tiles: per tile of the tile level holding a live vertex, its pieces and whole
+    // rings, its control points and the waits among its vertices; row-major.
+    std::vector<TileInput> split_tiles() {
+        const unsigned t = tile_level_;
+        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
+        auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
+        std::map<std::uint32_t, TileInput> by_tile;
+        auto tile = [&](std::uint32_t k) -> TileInput& {
+            TileInput& input = by_tile[k];
+            input.level = t;
+            input.column = k % columns;
+            input.row = k / columns;
+            return input;
+        };
+        std::vector<std::uint32_t> local(vertex_count_, kNone);  // an inside vertex's id in its tile
+        auto add = [&](TileInput& input, std::uint32_t v, bool cut_end) {
+            if (!cut_end) local[v] = static_cast<std::uint32_t>(input.vertex_id.size());
+            input.map.vertices.push_back(map_.vertices[v]);
+            input.vertex_id.push_back(v);
+            input.state.push_back(static_cast<std::uint8_t>(cut_end ? State::fixed : state_[v]));
+            if (use_marks_) input.marked.push_back(cut_end ? 0 : marked_[v]);
+        };
+        auto add_chain = [&](TileInput& input, std::uint32_t c, std::uint32_t first, bool settled) {
+            const auto last = static_cast<std::uint32_t>(input.vertex_id.size() - 1);
+            input.map.chains.push_back({first, last});
+            input.chain_id.push_back(c);
+            input.whole_level.push_back(whole_level_[c] == kOpen ? kOpenChain : whole_level_[c]);
+            input.settled.push_back(settled ? 1 : 0);
+            const bool whole = whole_level_[c] != kOpen && whole_level_[c] <= t;
+            input.distinct.push_back(whole ? distinct_[c] : 0);
+            input.orientation.push_back(whole ? orientation_[c] : std::int8_t{2});
+        };
+        for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
+            const Chain& chain = map_.chains[c];
+            if (whole_level_[c] != kOpen && whole_level_[c] <= t) {
+                // A ring inside one tile: whole, its removed vertices too.
+                TileInput& input = tile(tile_of(chain.first));
+                const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
+                for (std::uint32_t v = chain.first; v <= chain.last; ++v) add(input, v, false);
+                add_chain(input, c, first, false);
+                continue;
             }
-            for (const std::uint32_t v : tile.refused) state_[v] = State::refused;
-            for (const auto& [waiter, blocker] : tile.waits) wait_on(waiter, blocker);
+            // A split ring's cut ends: both ends of every live segment across a tile border.
+            bool settled = false;
+            if (whole_level_[c] != kOpen) {
+                Point ends[4];
+                int count = 0;
+                for (std::uint32_t u = chain.first; next_[u] != kNone && count < 4; u = next_[u]) {
+                    if (tile_of(u) == tile_of(next_[u])) continue;
+                    for (const std::uint32_t w : {u, next_[u]}) {
+                        const Point q = map_.vertices[w];
+                        bool seen = false;
+                        for (int k = 0; k < count; ++k) seen = seen || same_location(ends[k], q);
+                        if (!seen && count < 4) ends[count++] = q;
+                    }
+                }
+                settled = count >= 4;
+            }
+            // Runs of live vertices in one tile, each with its cut ends.
+            for (std::uint32_t u = chain.first; u != kNone;) {
+                const std::uint32_t k = tile_of(u);
+                TileInput& input = tile(k);
+                const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
+                if (prev_[u] != kNone) add(input, prev_[u], true);
+                std::uint32_t w = u;
+                for (;;) {
+                    add(input, w, false);
+                    if (next_[w] == kNone || tile_of(next_[w]) != k) break;
+                    w = next_[w];
+                }
+                if (next_[w] != kNone) add(input, next_[w], true);
+                add_chain(input, c, first, settled);
+                u = next_[w];
+            }
+        }
+        for (const Point p : map_.control_points) {
+            const std::uint32_t k = (block_row(p) >> t) * columns + (block_column(p) >> t);
+            if (const auto found = by_tile.find(k); found != by_tile.end()) found->second.map.control_points.push_back(p);
+        }
+        for (const auto& [waiter, blocker] : waits_.all()) {
+            if (tile_of(waiter) != tile_of(blocker)) continue;  // (across tiles: settled in finish_round)
+            by_tile[tile_of(waiter)].waits.emplace_back(local[waiter], local[blocker]);
+        }
+        std::vector<TileInput> tiles;
+        tiles.reserve(by_tile.size());
+        for (auto& [k, input] : by_tile) {
+            std::sort(input.waits.begin(), input.waits.end());
+            input.marks = use_marks_;
+            input.bound_key = bound_.key;
+            input.bound_id = bound_.id;
+            tiles.push_back(std::move(input));
+        }
+        return tiles;
+    }
+
+    // The tiles' outcomes into the whole map, the waits across tiles settled, then the levels
+    // from the tile level up.
+    void finish_part_round(std::span<const TileOutcome> outcomes) {
+        const unsigned t = tile_level_;
+        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
+        auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
+        for (const auto& [waiter, blocker] : waits_.all()) {
+            if (tile_of(waiter) != tile_of(blocker)) waits.emplace_back(waiter, blocker);
+        }
+        for (const TileOutcome& tile : outcomes) {
+            for (std::size_t k = 0; k < tile.ids.size(); ++k) {
+                const std::uint32_t v = tile.ids[k];
+                const auto now = static_cast<State>(tile.states[k]);
+                if (now == State::removed && state_[v] != State::removed) {
+                    grid_->remove(v);
+                    next_[prev_[v]] = next_[v];
+                    prev_[next_[v]] = prev_[v];
+                }
+                state_[v] = now;
+            }
+            waits.insert(waits.end(), tile.waits.begin(), tile.waits.end());
             for (const auto& [chain, lost] : tile.locations_lost) distinct_[chain] -= lost;
-            for (std::size_t k = 0; k < tile.later.size() && tile_level + k < levels_; ++k) {
-                later_[tile_level + k].insert(later_[tile_level + k].end(), tile.later[k].begin(), tile.later[k].end());
+            for (std::size_t k = 0; k < tile.oriented.size(); ++k) orientation_[tile.oriented[k]] = tile.orientations[k];
+            for (std::size_t k = 0; k < tile.later.size() && t + k < levels_; ++k) {
+                later_[t + k].insert(later_[t + k].end(), tile.later[k].begin(), tile.later[k].end());
             }
             add(stats_, tile.stats);
         }
-        for (unsigned level = tile_level; level < levels_; ++level) {
+        // A wait across tiles holds while its waiter still waits (else its triangle changed) and
+        // its blocker is there; a waiter whose blocker went is queued again.
+        waits_.clear();
+        std::sort(waits.begin(), waits.end());
+        for (const auto& [waiter, blocker] : waits) {
+            if (state_[waiter] != State::waiting) continue;
+            if (state_[blocker] == State::removed) {
+                state_[waiter] = State::queued;
+            } else {
+                wait_on(waiter, blocker);
+            }
+        }
+        for (unsigned level = t; level < levels_; ++level) {
             if (later_[level].empty()) continue;
             process_level(level);
             stop_if_cancelled(options_.cancel);
         }
-        stats_.seconds_sweep = lap(start);
+        if (use_marks_) keep_undecided();
+    }
+
+    SimplifyResult part_result() {
+        if (use_marks_) stats_.target_reached = stats_.removed >= goal_;
         return finish();
     }
 
-
-private:
     // ---- set-up --------------------------------------------------------------------------
 
     void set_up() {
@@ -540,7 +717,7 @@ private:
             }
             if (tile_ && tile_->whole_level[c] != kOpen) {
                 whole_level_[c] = tile_->whole_level[c];  // the whole map's chain's
-                if (!split_over_tiles(c)) distinct_[c] = count_distinct_locations(chain);
+                if (!split_over_tiles(c)) distinct_[c] = tile_->distinct[c];
             } else if (!tile_ && is_closed(c)) {
                 distinct_[c] = count_distinct_locations(chain);
                 whole_level_[c] = static_cast<std::uint8_t>(
@@ -936,12 +1113,18 @@ private:
         return tile_ && tile_->whole_level[c] != kOpen && tile_->whole_level[c] > tile_->level;
     }
 
+    // Is `top` ranked after the round's threshold? A tile compares whole-map ids.
+    bool past_bound(const Ranked& top) const {
+        if (!tile_) return bound_ < top;
+        return bound_.key < top.key || (bound_.key == top.key && tile_->bound_id < tile_->vertex_id[top.id]);
+    }
+
     // One block: remove its queued vertices smallest area first, up to the round's threshold.
     void process_block(unsigned level, std::span<const std::uint32_t> candidates, Worker& worker) {
         std::uint32_t* const slot = slot_.data();
         worker.queue.fill(candidates, [&](std::uint32_t v) { return area_of(v); }, slot);
         std::uint64_t pops = 0;
-        while (!worker.queue.empty() && !(bound_ < worker.queue.top())) {
+        while (!worker.queue.empty() && !past_bound(worker.queue.top())) {
             const std::uint32_t v = worker.queue.pop(slot).id;
             if ((++pops & 0xfff) == 0) {
                 if (cancel_requested(options_.cancel)) break;  // the level's end throws
@@ -1185,6 +1368,10 @@ private:
     const GridPlan* plan_ = nullptr;
     std::span<const std::uint32_t> outside_clear_;  // this level: split rings clear over all tiles
     std::vector<std::uint32_t> initial_distinct_;  // a tile's distinct_ at the start
+    std::vector<std::int8_t> initial_orientation_;  // a tile's orientation_ at the start
+    unsigned tile_level_ = 0;         // the whole map's side of a run in parts: its tile level
+    std::uint64_t goal_ = 0;          // and removal goal
+    unsigned rounds_started_ = 0;     // (--max and --max-area: one)
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
@@ -1228,14 +1415,6 @@ GridPlan plan_grid(const MapData& map) {
     return plan;
 }
 
-std::vector<std::uint8_t> pinned_vertices(const MapData& map, const SimplifyOptions& options, SimplifyStats& stats) {
-    const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-    std::vector<std::uint8_t> pinned = find_improper_segments(map, options.arithmetic, stats.predicates, threads, options.cancel);
-    stop_if_cancelled(options.cancel);
-    pin_from_improper(map, pinned, threads, map.vertices.size() >= options.parallel_threshold);
-    return pinned;
-}
-
 struct TileRun::Parts {
     TileInput input;
     GridPlan plan;
@@ -1245,9 +1424,6 @@ struct TileRun::Parts {
 
 TileRun::TileRun(TileInput input, const GridPlan& plan, const SimplifyOptions& options)
     : parts_(new Parts{std::move(input), plan, options, std::nullopt}) {
-    if (options.stop.target != Target::max && options.stop.target != Target::max_area) {
-        throw std::invalid_argument("a run in tiles takes --max or --max-area only (count targets are not run in parts yet)");
-    }
     parts_->engine.emplace(parts_->input, parts_->plan, parts_->options);
     parts_->engine->start_tile();
 }
@@ -1262,9 +1438,23 @@ void TileRun::run_level(unsigned level, std::span<const std::uint32_t> clear) { 
 
 TileOutcome TileRun::finish() { return parts_->engine->finish_tile(); }
 
-SimplifyResult simplify_from_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level,
-                                   std::span<const TileOutcome> tiles, std::span<const std::uint8_t> pinned) {
-    return detail::Simplifier(map, options).run_from_tiles(tile_level, tiles, pinned);
+MapInParts::MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level)
+    : engine_(std::make_unique<detail::Simplifier>(map, options)), plan_(plan_grid(map)) {
+    tile_level_ = engine_->start_parts(tile_level);
 }
+
+MapInParts::~MapInParts() = default;
+
+const GridPlan& MapInParts::plan() const { return plan_; }
+
+unsigned MapInParts::tile_level() const { return tile_level_; }
+
+bool MapInParts::next_round() { return engine_->next_part_round(); }
+
+std::vector<std::vector<TileInput>> MapInParts::tile_groups() { return group_tiles(engine_->split_tiles()); }
+
+void MapInParts::finish_round(std::span<const TileOutcome> outcomes) { engine_->finish_part_round(outcomes); }
+
+SimplifyResult MapInParts::result() { return engine_->part_result(); }
 
 }  // namespace toposimp::map

@@ -7,20 +7,23 @@
 // - Every part uses the single process's grid and blocks (GridPlan), so every vertex has the
 //   same block at every level, and a tile's grid orders the points of each cell as the whole
 //   map's grid does (ids keep the whole map's order).
-// - A tile holds its chains cut at its border: each piece runs over the vertices inside the tile
-//   and ends with the vertex beyond the border on either side (a *cut end*). A segment that
-//   crosses the border never changes below T (its ends are of level T or above), so the cut ends
-//   are fixed there, and they give the inside vertices their true levels.
+// - A tile holds its chains cut at its border: each piece runs over the live vertices inside the
+//   tile and ends with the live vertex beyond the border on either side (a *cut end*). A segment
+//   that crosses the border never changes below T (its ends are of level T or above), so the cut
+//   ends are fixed there, and they give the inside vertices their true levels. A ring inside the
+//   tile comes whole, with the vertices already removed (its orientation is the input's).
 // - What a block consults below T lies inside its tile (its triangles, the points in them, the
-//   waits); the only facts from outside are constants: which vertices are pinned by the whole
-//   map's crossings, and whether a ring split over several tiles keeps ≥ 4 distinct locations at
-//   its fixed vertices (the ring rule's question at each level). The cut ends are fixed below T,
-//   so a ring whose cut ends alone hold 4 distinct locations is settled at planning; for any
-//   other split ring, the tiles tell their fixed locations level by level (TileRun::open_rings)
-//   and the caller gives back the union's answer.
-//
-// Count targets (rounds with a global selection) are not run in parts yet: only --max and
-// --max-area.
+//   waits between its vertices); the only facts from outside are the vertices' states, and whether
+//   a ring split over several tiles keeps ≥ 4 distinct locations at its fixed vertices (the ring
+//   rule's question at each level). The cut ends are fixed below T, so a ring whose cut ends alone
+//   hold 4 distinct locations is settled at the split; the tiles holding pieces of any other split
+//   ring run together as a group, and tell each other their fixed locations level by level.
+// - Count targets run rounds: each round's budget is selected over the whole map (MapInParts),
+//   the tiles run the levels below T on it, and the levels above follow. A wait across tiles
+//   (begun at a level above T) ends when its blocker goes in another tile; the waiter is then
+//   queued after the round's levels below T, where the single process queues it after the level
+//   the blocker went at — the same, as a waiter outside a round's budget is not looked at again
+//   before the next round's selection.
 #pragma once
 
 #include "core/map/map_data.hpp"
@@ -56,22 +59,32 @@ struct GridPlan {
 // The plan simplify() makes for `map` (its vertices and control points).
 GridPlan plan_grid(const MapData& map);
 
-// One tile's share of a map: everything a tile needs to run the levels below T.
+// What a vertex is doing (the engine's own states).
+enum class VertexState : std::uint8_t { fixed, queued, waiting, refused, removed };
+
+// One tile's share of a map in one round: everything a tile needs to run the levels below T.
 struct TileInput {
     unsigned level = 0;                // T
     std::uint32_t column = 0, row = 0; // the tile: this block of level T
-    // The pieces of the chains that have vertices in the tile, in the map's order, each with its
-    // cut ends; the control points in the tile, in the map's order.
+    // The pieces of the chains that have live vertices in the tile, in the map's order, each with
+    // its cut ends, and the rings inside it, whole; the control points in the tile, in order.
     MapData map;
-    std::vector<std::uint32_t> vertex_id;   // per vertex of `map`: its id in the whole map
-    std::vector<std::uint8_t> pinned;       // per vertex: never removed (crossings of the whole map, frozen chains)
-    std::vector<std::uint32_t> chain_id;    // per chain of `map`: the whole map's chain it is part of
+    std::vector<std::uint32_t> vertex_id;  // per vertex of `map`: its id in the whole map
+    std::vector<std::uint8_t> state;       // per vertex: a VertexState (cut ends fixed)
+    std::vector<std::uint8_t> marked;      // per vertex: in this round's budget (count targets), else empty
+    std::vector<std::uint32_t> chain_id;   // per chain of `map`: the whole map's chain it is (part of)
     // Per chain: the finest level at which the whole map's chain lies in one block (kOpenChain if
     // it is not closed). A closed chain inside the tile has whole_level ≤ T and comes whole.
     std::vector<std::uint8_t> whole_level;
     // Per chain split over tiles (whole_level > T): 1 if its cut ends alone hold ≥ 4 distinct
     // locations, which settles the ring rule at every level below T.
     std::vector<std::uint8_t> settled;
+    std::vector<std::uint32_t> distinct;   // per chain: a whole ring's distinct live locations (the engine's count)
+    std::vector<std::int8_t> orientation;  // per chain: a whole ring's input orientation, 2 if not known yet
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;  // (waiter, blocker) among the tile's vertices
+    bool marks = false;                    // count targets: only marked vertices go, up to the bound
+    double bound_key = 0;                  // the round's bound: (area, whole-map id)
+    std::uint32_t bound_id = 0;
 };
 
 // A split ring's fixed locations in one tile at one level (up to 4 distinct).
@@ -82,11 +95,13 @@ struct RingLocations {
 
 // What a tile leaves after the levels below T, in whole-map ids.
 struct TileOutcome {
-    std::vector<std::uint32_t> removed;
-    std::vector<std::uint32_t> refused;                          // refused until their triangle changes
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;  // (waiter, blocker): refused until the blocker goes
+    std::vector<std::uint32_t> ids;                              // the vertices inside the tile
+    std::vector<std::uint8_t> states;                            // and their VertexStates now
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;  // (waiter, blocker) among them
     std::vector<std::vector<std::uint32_t>> later;               // [level − T]: candidates of that level
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> locations_lost;  // (chain, count): split rings' distinct locations removed
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> locations_lost;  // (chain, count): rings' distinct locations removed
+    std::vector<std::uint32_t> oriented;                         // whole rings whose orientation the tile computed
+    std::vector<std::int8_t> orientations;                       // and that orientation
     SimplifyStats stats;  // removals and refusals in the tile
 };
 
@@ -112,22 +127,6 @@ private:
     std::unique_ptr<Parts> parts_;
 };
 
-// Cuts `map` into the tiles of level `tile_level` that hold any vertex or control point, in
-// row-major order; `pinned` is per vertex of the map (see TileInput). Builds each tile's input
-// from the whole map: a reference for what a run reading the map by parts must give each tile.
-std::vector<TileInput> split_into_tiles(const MapData& map, const GridPlan& plan, unsigned tile_level,
-                                        std::span<const std::uint8_t> pinned);
-
-// Per vertex of `map`: never removed — an end of a segment with an improper contact, or on a
-// frozen chain (what simplify() pins).
-std::vector<std::uint8_t> pinned_vertices(const MapData& map, const SimplifyOptions& options, SimplifyStats& stats);
-
-// The levels from `tile_level` up over the whole map, from the tiles' outcomes (each tile that
-// has any vertex, once) and the pinned vertices. Gives what simplify(map, options) gives, but for
-// the crossing search's share of the stats (pinned_vertices has it).
-SimplifyResult simplify_from_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level,
-                                   std::span<const TileOutcome> tiles, std::span<const std::uint8_t> pinned);
-
 // The tiles that must run together, level by level: those sharing a split ring that its cut
 // ends do not settle (most tiles are alone). In the order of the tiles' first members.
 std::vector<std::vector<TileInput>> group_tiles(std::vector<TileInput> tiles);
@@ -136,8 +135,42 @@ std::vector<std::vector<TileInput>> group_tiles(std::vector<TileInput> tiles);
 // together; one outcome per tile, in order. Each tile task of a distributed run is one call.
 std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options);
 
-// simplify() run in parts in this process: split, every tile level by level (open rings decided
-// over all tiles), then the levels above. For tests and as the reference for a distributed run.
+// The whole map's side of a run in parts: the plan, the crossing search, each round's budget and
+// tiles, and the levels from T up. It holds the whole map's engine (the part that a distributed
+// run has yet to spread: docs/distributed.md).
+//
+//     MapInParts parts(map, options, tile_level);
+//     while (parts.next_round()) {
+//         std::vector<TileOutcome> outcomes = /* run_tile_group on each of parts.tile_groups() */;
+//         parts.finish_round(outcomes);
+//     }
+//     SimplifyResult result = parts.result();
+class MapInParts {
+public:
+    // `map` and `options` outlive this. tile_level is capped at the plan's levels.
+    MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level);
+    ~MapInParts();
+
+    const GridPlan& plan() const;
+    unsigned tile_level() const;
+    // Starts a round (one for --max and --max-area; count targets: while vertices are to go and
+    // can); false when there is none left.
+    bool next_round();
+    // The round's tiles, grouped (group_tiles), each group in row-major order of its first tile.
+    std::vector<std::vector<TileInput>> tile_groups();
+    // The round's outcomes (each tile's once, in any order), then the levels from T up.
+    void finish_round(std::span<const TileOutcome> outcomes);
+    SimplifyResult result();
+
+private:
+    std::unique_ptr<detail::Simplifier> engine_;
+    GridPlan plan_;
+    unsigned tile_level_;
+    bool started_ = false;
+};
+
+// simplify() run in parts in this process, every group of tiles in turn. For tests and as the
+// reference for a distributed run.
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level);
 
 }  // namespace toposimp::map

@@ -23,6 +23,9 @@ void expect_same(const SimplifyResult& parts, const SimplifyResult& whole, const
     EXPECT_EQ(parts.stats.pinned_by_crossing, whole.stats.pinned_by_crossing) << what;
     EXPECT_EQ(parts.stats.control_points, whole.stats.control_points) << what;
     EXPECT_EQ(parts.stats.levels, whole.stats.levels) << what;
+    EXPECT_EQ(parts.stats.rounds, whole.stats.rounds) << what;
+    EXPECT_EQ(parts.stats.removal_goal, whole.stats.removal_goal) << what;
+    EXPECT_EQ(parts.stats.target_reached, whole.stats.target_reached) << what;
 }
 
 // Big enough random maps for 4–5 levels of blocks: every tile level from 0 (no level in tiles)
@@ -40,9 +43,10 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
         const MapData map = testing::random_planar_map(rng, shape);
         const GridPlan plan = plan_grid(map);
         ASSERT_GE(plan.levels, 3u) << "the map should have several levels of blocks";
-        for (const Target target : {Target::max, Target::max_area}) {
+        for (const Target target : {Target::max, Target::max_area, Target::keep_fraction, Target::keep_points}) {
             SimplifyOptions options;
-            options.stop = {target, 2.0};
+            const double quarter = static_cast<double>(map.vertices.size() / 4);
+            options.stop = {target, target == Target::keep_fraction ? 0.1 : target == Target::keep_points ? quarter : 2.0};
             options.parallel_threshold = 0;
             options.threads = 2;
             const SimplifyResult whole = simplify(map, options);
@@ -113,10 +117,16 @@ TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
     // The tiles at level 1: the ring's pieces are not settled, and at level 0 their fixed
     // locations are A and B only (A's vertices and B are fixed: chain ends and cut ends; the
     // q's are of level 0), so the ring is not clear there.
-    const std::vector<std::uint8_t> pinned(map.vertices.size(), 0);
     std::vector<Point> fixed;
     int pieces = 0;
-    for (TileInput& tile : split_into_tiles(map, plan, 1, pinned)) {
+    MapInParts parts(map, options, 1);
+    ASSERT_TRUE(parts.next_round());
+    std::vector<TileInput> tiles;
+    for (std::vector<TileInput>& group : parts.tile_groups()) {
+        for (TileInput& tile : group) tiles.push_back(std::move(tile));
+    }
+    const std::size_t tile_count = tiles.size();
+    for (TileInput& tile : tiles) {
         for (std::size_t c = 0; c < tile.chain_id.size(); ++c) {
             if (tile.chain_id[c] != 0) continue;
             ++pieces;
@@ -132,9 +142,10 @@ TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
     }
     EXPECT_EQ(pieces, 3) << "A–B on the left, B's piece on the right, B–A–q…–A on the left";
     // The two tiles holding its pieces run as one group; every other tile alone.
-    const std::vector<TileInput> tiles = split_into_tiles(map, plan, 1, pinned);
-    const std::vector<std::vector<TileInput>> groups = group_tiles(split_into_tiles(map, plan, 1, pinned));
-    EXPECT_EQ(groups.size(), tiles.size() - 1);
+    MapInParts again(map, options, 1);
+    ASSERT_TRUE(again.next_round());
+    const std::vector<std::vector<TileInput>> groups = again.tile_groups();
+    EXPECT_EQ(groups.size(), tile_count - 1);
     for (const std::vector<TileInput>& group : groups) {
         const bool holds = std::any_of(group.front().chain_id.begin(), group.front().chain_id.end(), [](std::uint32_t c) { return c == 0; });
         EXPECT_EQ(group.size(), holds ? 2u : 1u);
@@ -144,6 +155,97 @@ TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
     EXPECT_TRUE(same_location(fixed[0], ring[1]) || same_location(fixed[1], ring[1]));
     for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
         expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+    }
+}
+
+// A wait across tiles that a later round ends: in round 1, w (its neighbours in two tiles, so of a
+// level above the tiles) waits on b, a vertex of another line inside w's triangle but in the
+// other tile, outside the round's budget; in round 2, b goes at level 0 in its tile, which frees
+// w, removed in round 3. (Were the wait not ended when b goes in its tile, w would wait forever.)
+TEST(MapTiles, AWaitAcrossTilesEndsWhenItsBlockerGoesInAnotherTile) {
+    std::mt19937_64 rng(5);
+    std::uniform_real_distribution<double> coordinate(0, 100);
+    std::vector<Point> background;
+    for (int k = 0; k < 20000; ++k) background.push_back({coordinate(rng), coordinate(rng)});
+    background.push_back({0, 0});
+    background.push_back({100, 100});
+    MapData sized;
+    sized.control_points = background;
+    sized.add_chain(std::vector<Point>(14, Point{50, 50}));
+    const GridPlan plan = plan_grid(sized);
+    ASSERT_GE(plan.levels, 4u);
+    // x: the border between the two halves of the top block; y: the middle of a level-0 block row.
+    auto boundary = [](auto&& below, double lo, double hi) {
+        for (int step = 0; step < 200; ++step) {
+            const double middle = 0.5 * (lo + hi);
+            (below(middle) ? lo : hi) = middle;
+        }
+        return hi;
+    };
+    const std::uint32_t half = 1u << (plan.shift + plan.levels - 2);
+    const double x = boundary([&](double v) { return plan.grid.base_column(v) < half; }, 0, 100);
+    const std::uint32_t block_row = (plan.grid.base_rows >> (plan.shift + 1)) << plan.shift;  // a level-0 block row's first cell row
+    const double c = 100.0 / plan.grid.base_columns;
+    const double y = boundary([&](double v) { return plan.grid.base_row(v) < block_row; }, 0, 100) + 4 * c;
+
+    MapData map;
+    map.add_chain({{x - 3 * c, y}, {x - 0.5 * c, y + 0.1 * c}, {x + 3 * c, y}});           // p, w, n: w's area 0.3 c²
+    map.add_chain({{x + 0.1 * c, y - 2 * c}, {x + 0.5 * c, y + 0.03 * c}, {x + 0.9 * c, y - 2 * c}});  // b in w's triangle: 0.81 c²
+    const double dx = x - 30 * c, cx = x - 50 * c;
+    map.add_chain({{dx, y}, {dx + 0.5 * c, y + c}, {dx + c, y}});  // 0.5 c², and a control point in its triangle
+    std::vector<Point> filler;                                       // tiny areas: round 1 takes them
+    for (int k = 0; k < 5; ++k) filler.push_back({cx + 0.3 * c * k, y + (k % 2) * 0.001 * c});
+    map.add_chain(filler);
+    map.control_points.push_back({dx + 0.5 * c, y + 0.5 * c});
+    for (const Point q : background) {
+        const bool near = std::fabs(q.y - y) < 6 * c && (std::fabs(q.x - x) < 6 * c || std::fabs(q.x - dx) < 4 * c || std::fabs(q.x - cx) < 4 * c);
+        if (!near) map.control_points.push_back(q);
+    }
+    while (map.vertices.size() + map.control_points.size() < sized.vertices.size() + sized.control_points.size()) {
+        map.control_points.push_back({100, 0});
+    }
+    ASSERT_EQ(plan_grid(map).shift, plan.shift);
+    ASSERT_EQ(plan_grid(map).grid.base_columns, plan.grid.base_columns);
+
+    SimplifyOptions options;
+    options.stop = {Target::keep_points, 9};  // remove 5: the filler's 3, w and b
+    const SimplifyResult whole = simplify(map, options);
+    ASSERT_EQ(whole.stats.removed, 5u);
+    EXPECT_EQ(whole.kept[1], 0) << "w went";
+    EXPECT_EQ(whole.kept[4], 0) << "b went";
+    EXPECT_EQ(whole.stats.rounds, 3u) << "w waited on b, which went in round 2";
+    for (unsigned tile_level = 0; tile_level + 1 < plan.levels; ++tile_level) {
+        expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+    }
+}
+
+// Equal areas everywhere (zigzags on a small integer lattice): a count target's rounds end on a tie,
+// broken by whole-map ids, which each tile must compare as the single process does.
+TEST(MapTiles, TiesAtARoundsBoundAreBrokenByWholeMapIds) {
+    MapData map;
+    std::mt19937_64 rng(8);
+    for (int row = 0; row < 60; ++row) {
+        for (int column = 0; column < 6; ++column) {
+            std::vector<Point> zigzag;
+            double x = column * 80.0;
+            for (int k = 0; k < 30; ++k) {
+                zigzag.push_back({x, row * 4.0 + static_cast<double>(rng() % 3)});
+                x += static_cast<double>(1 + rng() % 2);
+            }
+            map.add_chain(zigzag);
+        }
+    }
+    const GridPlan plan = plan_grid(map);
+    ASSERT_GE(plan.levels, 3u);
+    for (const double keep : {0.5, 0.3, 0.1}) {
+        SimplifyOptions options;
+        options.stop = {Target::keep_fraction, keep};
+        const SimplifyResult whole = simplify(map, options);
+        ASSERT_TRUE(whole.stats.target_reached);
+        for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
+            expect_same(simplify_in_tiles(map, options, tile_level), whole,
+                        "keep " + std::to_string(keep) + ", tile level " + std::to_string(tile_level));
+        }
     }
 }
 
@@ -157,9 +259,15 @@ TEST(MapTiles, TilesPartitionTheMap) {
     shape.control_points = 500;
     const MapData map = testing::random_planar_map(rng, shape);
     const GridPlan plan = plan_grid(map);
-    const std::vector<std::uint8_t> pinned(map.vertices.size(), 0);
+    SimplifyOptions options;
+    options.stop = {Target::max, 0};
     for (unsigned tile_level = 0; tile_level < plan.levels; ++tile_level) {
-        const std::vector<TileInput> tiles = split_into_tiles(map, plan, tile_level, pinned);
+        MapInParts parts(map, options, tile_level);
+        ASSERT_TRUE(parts.next_round());
+        std::vector<TileInput> tiles;
+        for (std::vector<TileInput>& group : parts.tile_groups()) {
+            for (TileInput& tile : group) tiles.push_back(std::move(tile));
+        }
         std::vector<int> inside(map.vertices.size(), 0);
         std::size_t points = 0;
         for (const TileInput& tile : tiles) {
