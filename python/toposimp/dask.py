@@ -30,7 +30,7 @@ from toposimp import _toposimp
 
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
-                                   [--task-threads N]
+                                   [--task-threads N] [--local-budget N]
 
 toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
 
@@ -39,8 +39,10 @@ Dask options:
   --workers N          the LocalCluster's worker processes (default: the cores here)
   --tile-level T       the block level cut into tasks (default: the coarsest whose biggest tile
                        holds at most --tile-points vertices and control points)
-  --tile-points N      see --tile-level (default 4000000)
+  --tile-points N      see --tile-level (default 1000000)
   --task-threads N     threads each task's engine uses (default 1: the workers are the parallelism)
+  --local-budget N     a round of a count target that removes fewer than N vertices runs here,
+                       whole, not as tasks (default 1000000; 0: every round as tasks)
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
@@ -64,7 +66,7 @@ class _Progress:
         line = f"toposimp.dask: round {self.round}: tiles {done}/{total} done"
         if self.terminal:
             sys.stderr.write("\r" + line + ("\n" if done == total else ""))
-        elif done == total or done % max(1, total // 10) == 0:
+        elif done == total:
             sys.stderr.write(line + "\n")
         sys.stderr.flush()
 
@@ -75,8 +77,9 @@ def _split_arguments(argv):
     parser.add_argument("--scheduler")
     parser.add_argument("--workers", type=int)
     parser.add_argument("--tile-level", type=int, default=-1)
-    parser.add_argument("--tile-points", type=int, default=4_000_000)
+    parser.add_argument("--tile-points", type=int, default=1_000_000)
     parser.add_argument("--task-threads", type=int, default=1)
+    parser.add_argument("--local-budget", type=int, default=1_000_000)
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
@@ -84,15 +87,18 @@ def _split_arguments(argv):
         parser.error("--task-threads must be at least 1")
     if options.tile_points < 1:
         parser.error("--tile-points must be at least 1")
+    if options.local_budget < 0:
+        parser.error("--local-budget must be 0 or more")
     return options, rest
 
 
-def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=4_000_000, task_threads=1,
-        client=None, quiet=False, on_progress=None):
+def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
+        local_budget=1_000_000, client=None, quiet=False, on_progress=None):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
-    of `workers` processes, and closed at the end). `on_progress(done, total)`: called as the
+    of `workers` processes, and closed at the end). A count target's round that removes fewer
+    than `local_budget` vertices runs here, whole. `on_progress(done, total)`: called as the
     tile tasks finish."""
     from distributed import Client, LocalCluster, as_completed
 
@@ -124,7 +130,7 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
         return results
 
     try:
-        status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level, tile_points, None,
+        status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level, tile_points, local_budget, None,
                                                  sys.stderr.isatty(), threading_main())
     finally:
         if own_client:
@@ -155,7 +161,8 @@ def main(argv=None):
     options, rest = _split_arguments(argv[1:])
     quiet = "-q" in rest or "--quiet" in rest
     return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
-               tile_points=options.tile_points, task_threads=options.task_threads, quiet=quiet)
+               tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
+               quiet=quiet)
 
 
 if __name__ == "__main__":

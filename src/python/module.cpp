@@ -530,11 +530,11 @@ std::vector<std::string> write_mesh_file(const std::string& path, const py::obje
 // `toposimp ARGS...` in this process, the map engine run in parts through `run_groups` (see
 // python/parts.hpp). Returns (exit status, standard output, standard error).
 py::tuple run_command(const std::vector<std::string>& args, const py::object& run_groups, int tile_level, std::uint64_t tile_points,
-                      const py::object& progress, bool err_is_terminal, bool interruptible) {
+                      std::uint64_t local_budget, const py::object& progress, bool err_is_terminal, bool interruptible) {
     Run run(progress, interruptible);
     run.context.err_is_terminal = err_is_terminal;
     run.context.map_engine = [&](const map::MapData& map, const map::SimplifyOptions& options) {
-        return python::run_in_parts(map, options, run_groups, tile_level, tile_points);
+        return python::run_in_parts(map, options, run_groups, tile_level, tile_points, local_budget);
     };
     int status = 0;
     run([&] { status = cli::run(args, run.context); });
@@ -562,7 +562,7 @@ PYBIND11_MODULE(_toposimp, module) {
     module.def("write_mesh_file", &write_mesh_file, py::arg("path"), py::arg("vertices"), py::arg("faces"),
                py::arg("vertex_columns"), py::arg("face_columns"), py::arg("format"), py::arg("ascii"), py::arg("overwrite"));
     module.def("run_command", &run_command, py::arg("args"), py::arg("run_groups"), py::arg("tile_level"), py::arg("tile_points"),
-               py::arg("progress"), py::arg("err_is_terminal"), py::arg("interruptible"));
+               py::arg("local_budget"), py::arg("progress"), py::arg("err_is_terminal"), py::arg("interruptible"));
     module.def("run_tile_group", &python::run_tile_group, py::arg("group"), py::arg("plan"), py::arg("options"));
     module.def("check_layers", &check_layers, py::arg("original"), py::arg("simplified"), py::arg("points"), py::arg("precision"),
                py::arg("interruptible"), py::arg("shapely_geos"));

@@ -294,18 +294,18 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
 }  // namespace
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
-                                 int tile_level, std::uint64_t tile_points) {
+                                 int tile_level, std::uint64_t tile_points, std::uint64_t here_below) {
     using Clock = std::chrono::steady_clock;
     auto seconds = [](Clock::time_point from) { return std::chrono::duration<double>(Clock::now() - from).count(); };
     const auto start = Clock::now();
     const unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : tile_level_for(map, map::plan_grid(map), tile_points);
-    map::MapInParts parts(map, options, level);
+    map::MapInParts parts(map, options, level, here_below);
     const double set_up = seconds(start);
     const auto rounds_start = Clock::now();
     for (unsigned round = 1; parts.next_round(); ++round) {
         std::vector<std::vector<map::TileInput>> groups = parts.tile_groups();
         std::vector<map::TileOutcome> outcomes;
-        {
+        if (!groups.empty()) {
             py::gil_scoped_acquire gil;
             py::list tasks;
             std::vector<std::size_t> sizes;

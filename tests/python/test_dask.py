@@ -80,7 +80,8 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path):
                 return
 
     output = tmp_path / "dask.gpkg"
-    status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, quiet=True, on_progress=kill_one)
+    status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, local_budget=0, quiet=True,
+                               on_progress=kill_one)
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
     assert killed["tasks"] > 0
@@ -99,7 +100,8 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
         subprocess.run([binary, "map", *arguments, "-o", str(reference), "--overwrite"], check=True, capture_output=True)
         for level in (0, 2, -1):
             output = tmp_path / f"level{level}.gpkg"
-            assert toposimp_dask.run([*arguments, "-o", str(output), "--overwrite"], client=client, tile_level=level, quiet=True) == 0
+            assert toposimp_dask.run([*arguments, "-o", str(output), "--overwrite"], client=client, tile_level=level,
+                                     local_budget=0 if level != 2 else 2000, quiet=True) == 0
             assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}"
 
 
@@ -137,7 +139,7 @@ def test_command_line(generated, binary, tmp_path):
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     output = tmp_path / "dask.gpkg"
     done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "2",
-                           "--tile-level", "2", "--json"], capture_output=True, text=True, timeout=300)
+                           "--tile-level", "2", "--local-budget", "0", "--json"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert '"command":"map"' in done.stdout
     assert "round 2: tiles" in done.stderr and "done" in done.stderr

@@ -410,7 +410,7 @@ public:
         TileOutcome out;
         const auto id = [&](std::uint32_t v) { return tile_->vertex_id[v]; };
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (!inside_tile(v)) continue;
+            if (!inside_tile(v) || static_cast<std::uint8_t>(state_[v]) == tile_->state[v]) continue;
             out.ids.push_back(id(v));
             out.states.push_back(static_cast<std::uint8_t>(state_[v]));
         }
@@ -458,16 +458,19 @@ public:
         return tile_level_;
     }
 
-    bool next_part_round() {
+    // `here_below`: a round of a count target whose budget is smaller runs here, whole.
+    bool next_part_round(std::uint64_t here_below) {
         if (!use_marks_) return rounds_started_++ == 0;
         if (!(stats_.removed < goal_) || !mark_smallest(goal_ - stats_.removed)) return false;
         ++stats_.rounds;
+        round_here_ = round_budget_ < here_below;
         return true;
     }
 
     // The round's tiles: per tile of the tile level holding a live vertex, its pieces and whole
     // rings, its control points and the waits among its vertices; row-major.
     std::vector<TileInput> split_tiles() {
+        if (round_here_) return {};
         const unsigned t = tile_level_;
         const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
         auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
@@ -500,10 +503,19 @@ public:
         for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
             const Chain& chain = map_.chains[c];
             if (whole_level_[c] != kOpen && whole_level_[c] <= t) {
-                // A ring inside one tile: whole, its removed vertices too.
+                // A ring inside one tile: its live vertices, and its removed ones too while the tile
+                // may need the input ring's orientation (unknown yet, and the round's budget may
+                // bring the ring down to 4 distinct locations, where the ring rule asks for it).
                 TileInput& input = tile(tile_of(chain.first));
                 const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
-                for (std::uint32_t v = chain.first; v <= chain.last; ++v) add(input, v, false);
+                std::uint32_t budget = 0;
+                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
+                const bool input_ring = orientation_[c] == 2 && distinct_[c] <= 4 + budget;
+                if (input_ring) {
+                    for (std::uint32_t v = chain.first; v <= chain.last; ++v) add(input, v, false);
+                } else {
+                    for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) add(input, u, false);
+                }
                 add_chain(input, c, first, false);
                 continue;
             }
@@ -563,6 +575,13 @@ public:
     // The tiles' outcomes into the whole map, the waits across tiles settled, then the levels
     // from the tile level up.
     void finish_part_round(std::span<const TileOutcome> outcomes) {
+        if (round_here_) {
+            // The single process's round.
+            schedule_queued();
+            sweep();
+            keep_undecided();
+            return;
+        }
         const unsigned t = tile_level_;
         const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
         auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
@@ -888,6 +907,7 @@ public:
         std::vector<std::span<const std::uint64_t>> runs(share);
         for (std::size_t t = 0; t < share; ++t) runs[t] = {keys.data() + offset[t], keys.data() + offset[t + 1]};
         const std::uint64_t wanted = std::min<std::uint64_t>(budget, queued);
+        round_budget_ = wanted;
         const parallel::Selection kth = parallel::select_kth(runs, wanted, threads, [](std::uint64_t own) { return own; });
         const std::uint64_t key = kth.key;
         std::uint64_t rank = wanted;
@@ -1372,6 +1392,8 @@ public:
     unsigned tile_level_ = 0;         // the whole map's side of a run in parts: its tile level
     std::uint64_t goal_ = 0;          // and removal goal
     unsigned rounds_started_ = 0;     // (--max and --max-area: one)
+    std::uint64_t round_budget_ = 0;  // count targets: this round's marked vertices
+    bool round_here_ = false;         // this round runs here, not in tiles
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
@@ -1438,8 +1460,8 @@ void TileRun::run_level(unsigned level, std::span<const std::uint32_t> clear) { 
 
 TileOutcome TileRun::finish() { return parts_->engine->finish_tile(); }
 
-MapInParts::MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level)
-    : engine_(std::make_unique<detail::Simplifier>(map, options)), plan_(plan_grid(map)) {
+MapInParts::MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below)
+    : engine_(std::make_unique<detail::Simplifier>(map, options)), plan_(plan_grid(map)), here_below_(here_below) {
     tile_level_ = engine_->start_parts(tile_level);
 }
 
@@ -1449,9 +1471,18 @@ const GridPlan& MapInParts::plan() const { return plan_; }
 
 unsigned MapInParts::tile_level() const { return tile_level_; }
 
-bool MapInParts::next_round() { return engine_->next_part_round(); }
+bool MapInParts::next_round() { return engine_->next_part_round(here_below_); }
 
-std::vector<std::vector<TileInput>> MapInParts::tile_groups() { return group_tiles(engine_->split_tiles()); }
+std::vector<std::vector<TileInput>> MapInParts::tile_groups() {
+    std::vector<std::vector<TileInput>> groups = group_tiles(engine_->split_tiles());
+    // In a round of a count target only marked vertices go: a group without any has nothing to do.
+    std::erase_if(groups, [](const std::vector<TileInput>& group) {
+        return std::all_of(group.begin(), group.end(), [](const TileInput& tile) {
+            return tile.marks && std::find(tile.marked.begin(), tile.marked.end(), 1) == tile.marked.end();
+        });
+    });
+    return groups;
+}
 
 void MapInParts::finish_round(std::span<const TileOutcome> outcomes) { engine_->finish_part_round(outcomes); }
 

@@ -64,8 +64,8 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
     return outcomes;
 }
 
-SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level) {
-    MapInParts parts(map, options, tile_level);
+SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below) {
+    MapInParts parts(map, options, tile_level, here_below);
     while (parts.next_round()) {
         std::vector<TileOutcome> outcomes;
         for (std::vector<TileInput>& group : parts.tile_groups()) {

@@ -67,7 +67,8 @@ struct TileInput {
     unsigned level = 0;                // T
     std::uint32_t column = 0, row = 0; // the tile: this block of level T
     // The pieces of the chains that have live vertices in the tile, in the map's order, each with
-    // its cut ends, and the rings inside it, whole; the control points in the tile, in order.
+    // its cut ends, and the rings inside it (whole, with their removed vertices, while the tile may
+    // need the input ring's orientation); the control points in the tile, in order.
     MapData map;
     std::vector<std::uint32_t> vertex_id;  // per vertex of `map`: its id in the whole map
     std::vector<std::uint8_t> state;       // per vertex: a VertexState (cut ends fixed)
@@ -95,7 +96,7 @@ struct RingLocations {
 
 // What a tile leaves after the levels below T, in whole-map ids.
 struct TileOutcome {
-    std::vector<std::uint32_t> ids;                              // the vertices inside the tile
+    std::vector<std::uint32_t> ids;                              // the vertices inside the tile whose state changed
     std::vector<std::uint8_t> states;                            // and their VertexStates now
     std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;  // (waiter, blocker) among them
     std::vector<std::vector<std::uint32_t>> later;               // [level − T]: candidates of that level
@@ -147,8 +148,10 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 //     SimplifyResult result = parts.result();
 class MapInParts {
 public:
-    // `map` and `options` outlive this. tile_level is capped at the plan's levels.
-    MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level);
+    // `map` and `options` outlive this. tile_level is capped at the plan's levels. A round of a
+    // count target whose budget is under `here_below` vertices runs here, whole, as the single
+    // process runs it (tile_groups() is then empty): cheaper than tasks when little is to go.
+    MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0);
     ~MapInParts();
 
     const GridPlan& plan() const;
@@ -156,7 +159,8 @@ public:
     // Starts a round (one for --max and --max-area; count targets: while vertices are to go and
     // can); false when there is none left.
     bool next_round();
-    // The round's tiles, grouped (group_tiles), each group in row-major order of its first tile.
+    // The round's tiles, grouped (group_tiles), each group in row-major order of its first tile;
+    // groups with nothing to do in the round are left out.
     std::vector<std::vector<TileInput>> tile_groups();
     // The round's outcomes (each tile's once, in any order), then the levels from T up.
     void finish_round(std::span<const TileOutcome> outcomes);
@@ -166,11 +170,12 @@ private:
     std::unique_ptr<detail::Simplifier> engine_;
     GridPlan plan_;
     unsigned tile_level_;
-    bool started_ = false;
+    std::uint64_t here_below_;
 };
 
-// simplify() run in parts in this process, every group of tiles in turn. For tests and as the
-// reference for a distributed run.
-SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level);
+// simplify() run in parts in this process, every group of tiles in turn (rounds with a budget
+// under `here_below` whole, as MapInParts says). For tests and as the reference for a
+// distributed run.
+SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0);
 
 }  // namespace toposimp::map

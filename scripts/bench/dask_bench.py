@@ -1,0 +1,88 @@
+#!/usr/bin/python3
+"""toposimp map in one process against python3 -m toposimp.dask map on 1, 2 and 4 Dask workers
+(a LocalCluster started here, outside the timing), on the same input in the same run: wall time,
+the command's peak memory, each worker's peak memory, and whether the output is byte-identical.
+
+    scripts/bench/dask_bench.py BUILD_DIR [--input build/bench-data/gshhg.shp] [--runs 3]
+                                [--workers 1,2,4] [--target "--keep 10%" --target "--max"]
+
+BUILD_DIR holds the toposimp executable and python/ (the package). Prints a Markdown table.
+"""
+import argparse
+import os
+import pathlib
+import resource
+import shlex
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+
+def timed(command, env=None):
+    """(seconds, peak RSS in MiB of the command itself) of a run that must succeed."""
+    start = time.perf_counter()
+    done = subprocess.run(["/usr/bin/time", "-f", "%M", *command], capture_output=True, text=True, env=env)
+    seconds = time.perf_counter() - start
+    if done.returncode != 0:
+        sys.exit(f"failed: {shlex.join(command)}\n{done.stderr}")
+    peak_kb = int(done.stderr.strip().splitlines()[-1])
+    return seconds, peak_kb / 1024
+
+
+def worker_peaks(client):
+    return sorted(v / 1024 for v in client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss).values())
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("build")
+    parser.add_argument("--input", default="build/bench-data/gshhg.shp")
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--workers", default="1,2,4")
+    parser.add_argument("--target", action="append")
+    parser.add_argument("--threads", type=int, default=2, help="toposimp map -j (the single process)")
+    a = parser.parse_args()
+    targets = a.target or ["--keep 10%", "--max"]
+    build = pathlib.Path(a.build).resolve()
+    env = dict(os.environ, PYTHONPATH=str(build / "python"))
+    sys.path.insert(0, str(build / "python"))
+    from distributed import Client, LocalCluster
+
+    rows = []
+    with tempfile.TemporaryDirectory() as folder:
+        out = pathlib.Path(folder)
+        for target in targets:
+            reference = out / "single.shp"
+            single = [timed([str(build / "toposimp"), "map", a.input, "-o", str(reference), "-q", "--overwrite", "-j", str(a.threads),
+                             *shlex.split(target)]) for _ in range(a.runs)]
+            seconds = statistics.median(s for s, _ in single)
+            rows.append((target, f"toposimp map -j {a.threads}", seconds, 1.0, max(m for _, m in single), "", "yes"))
+            for workers in [int(w) for w in a.workers.split(",")]:
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+                client = Client(cluster)
+                runs = []
+                identical = True
+                for _ in range(a.runs):
+                    output = out / "dask.shp"
+                    runs.append(timed([sys.executable, "-m", "toposimp.dask", "map", a.input, "-o", str(output), "-q", "--overwrite",
+                                       "--scheduler", cluster.scheduler_address, *shlex.split(target)], env=env))
+                    identical = identical and all((out / f"dask{ext}").read_bytes() == (out / f"single{ext}").read_bytes()
+                                                  for ext in (".shp", ".shx", ".dbf"))
+                peaks = worker_peaks(client)
+                client.close()
+                cluster.close()
+                d = statistics.median(s for s, _ in runs)
+                rows.append((target, f"toposimp.dask, {workers} worker{'s' if workers > 1 else ''}", d, d / seconds,
+                             max(m for _, m in runs), " / ".join(f"{p:.0f}" for p in peaks), "yes" if identical else "NO"))
+    print(f"input: {a.input}; median of {a.runs} runs; LocalCluster started before the timing, one thread per worker")
+    print()
+    print("| target | run | seconds | × single | command peak MiB | worker peaks MiB | output identical |")
+    print("|---|---|---|---|---|---|---|")
+    for target, run, seconds, ratio, peak, workers, same in rows:
+        print(f"| `{target}` | {run} | {seconds:.2f} | {ratio:.2f} | {peak:.0f} | {workers} | {same} |")
+
+
+if __name__ == "__main__":
+    main()
