@@ -19,8 +19,8 @@ its workers first, on every host that should work (Dask's own commands):
 Only the tasks' data travels (numpy arrays, through Dask); the input and the output are read and
 written here. A worker that dies has its tasks rerun elsewhere by Dask; the result is the same.
 
-Not yet: --levels, and a map bigger than this process's memory (the reading and writing, each
-round's budget and the levels above the tiles run here).
+--levels runs each level in parts. Not yet: a map bigger than this process's memory (the reading
+and writing, each round's budget and the levels above the tiles run here).
 """
 import argparse
 import os

@@ -575,8 +575,7 @@ void check_spherical(const MapOptions& options, const MapInput& input) {
 map::Levels simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
                          const std::vector<Level>& levels, const std::optional<map::GridStep>& decimal_grid, const Context& context) {
     const bool rounds = decimal_grid || options.quantize > 0;
-    if (context.map_engine) {
-        if (!options.levels.empty()) throw UsageError{"--levels is not run in parts yet: run it with toposimp map"};
+    if (context.map_engine && options.levels.empty()) {
         map::Levels one;
         one.results.push_back(context.map_engine(input.map, simplify_options));
         return one;
@@ -589,12 +588,12 @@ map::Levels simplify_all(MapInput& input, const map::SimplifyOptions& simplify_o
     }
     std::vector<map::StopCriterion> targets;
     for (const Level& level : levels) targets.push_back(level.stop);
-    if (!rounds) return map::simplify_levels(input.map, simplify_options, targets);
+    if (!rounds) return map::simplify_levels(input.map, simplify_options, targets, nullptr, context.map_engine);
     map::LevelRounding rounding;
     rounding.grid = [&](const std::vector<std::uint8_t>& kept) { return *output_grid(options, decimal_grid, input, kept); };
     rounding.options.arithmetic = simplify_options.arithmetic;
     rounding.options.written_points = input.written_points;
-    return rounding_input([&] { return map::simplify_levels(input.map, simplify_options, targets, &rounding); });
+    return rounding_input([&] { return map::simplify_levels(input.map, simplify_options, targets, &rounding, context.map_engine); });
 }
 
 // A level after the first, on the grid the first was rounded to: where its kept locations and

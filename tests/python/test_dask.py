@@ -120,15 +120,23 @@ def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys
     assert not list(tmp_path.glob("*.tmp*")) and sorted(p.name for p in tmp_path.iterdir()) == ["broken.geojson"]
 
 
-def test_levels_are_refused_clearly(cluster, generated, tmp_path, capsys):
+def test_levels_and_published_precision(cluster, generated, binary, tmp_path):
+    """--levels (each level a run in parts on the previous one) and --decimals: the same files."""
     from toposimp import dask as toposimp_dask
 
     client, _ = cluster
-    polygons_and_lines, _ = generated
-    output = tmp_path / "out_{level}.gpkg"
-    assert toposimp_dask.run([str(polygons_and_lines), "-o", str(output), "--levels", "10%,5%"], client=client, quiet=True) == 2
-    assert "--levels" in capsys.readouterr().err
-    assert not list(tmp_path.iterdir())
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--levels", "30%,10%,3%", "--decimals", "2", *SAME_DATE]
+    (tmp_path / "single").mkdir()
+    (tmp_path / "dask").mkdir()
+    subprocess.run([binary, "map", *arguments, "-o", str(tmp_path / "single" / "out_{level}.gpkg")], check=True, capture_output=True)
+    assert toposimp_dask.run([*arguments, "-o", str(tmp_path / "dask" / "out_{level}.gpkg")], client=client, tile_level=2,
+                             local_budget=0, quiet=True) == 0
+    names = sorted(p.name for p in (tmp_path / "single").iterdir())
+    assert len(names) == 3
+    assert sorted(p.name for p in (tmp_path / "dask").iterdir()) == names
+    for name in names:
+        assert (tmp_path / "dask" / name).read_bytes() == (tmp_path / "single" / name).read_bytes(), name
 
 
 def test_command_line(generated, binary, tmp_path):

@@ -6,7 +6,7 @@
 namespace toposimp::map {
 
 Levels simplify_levels(const MapData& map, const SimplifyOptions& options, std::span<const StopCriterion> levels,
-                       const LevelRounding* rounding) {
+                       const LevelRounding* rounding, const std::function<SimplifyResult(const MapData&, const SimplifyOptions&)>& engine) {
     Levels out;
     const std::uint64_t input = map.vertices.size();
     MapData current;  // the previous level's result (the first level runs on `map` itself)
@@ -21,7 +21,7 @@ Levels simplify_levels(const MapData& map, const SimplifyOptions& options, std::
             // Counted against the input, as a single run would count.
             step.stop = {Target::keep_points, static_cast<double>(input - removal_goal(level, input))};
         }
-        SimplifyResult done = simplify(from, step);
+        SimplifyResult done = engine ? engine(from, step) : simplify(from, step);
         if (first && rounding) {
             RoundingOptions round = rounding->options;
             round.grid = rounding->grid(done.kept);

@@ -35,8 +35,10 @@ struct Levels {
 
 // The simplifications of `map` to each of `levels`, finest first (a level asking for more
 // vertices than the previous one kept keeps them all), rounded if `rounding` is given. Each
-// result's stats are those of the step from the previous level.
+// result's stats are those of the step from the previous level. `engine`, if given, runs each
+// step in place of simplify() and must give what it gives (a run in parts: tiles.hpp).
 Levels simplify_levels(const MapData& map, const SimplifyOptions& options, std::span<const StopCriterion> levels,
-                       const LevelRounding* rounding = nullptr);
+                       const LevelRounding* rounding = nullptr,
+                       const std::function<SimplifyResult(const MapData&, const SimplifyOptions&)>& engine = {});
 
 }  // namespace toposimp::map
