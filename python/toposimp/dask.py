@@ -24,6 +24,7 @@ and writing, each round's budget and the levels above the tiles run here).
 """
 import argparse
 import os
+import signal
 import sys
 
 from toposimp import _toposimp
@@ -160,9 +161,20 @@ def main(argv=None):
         return 0
     options, rest = _split_arguments(argv[1:])
     quiet = "-q" in rest or "--quiet" in rest
-    return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
-               tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
-               quiet=quiet)
+
+    def terminate(number, frame):
+        raise KeyboardInterrupt
+
+    # Ctrl-C stops the engine (the module's own handler while it runs) or the wait for the tasks;
+    # a kill, the same. The output being written is removed as the run unwinds.
+    signal.signal(signal.SIGTERM, terminate)
+    try:
+        return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
+                   tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
+                   quiet=quiet)
+    except KeyboardInterrupt:
+        sys.stderr.write("toposimp.dask: interrupted; no output written\n")
+        return 128 + signal.SIGINT
 
 
 if __name__ == "__main__":

@@ -154,3 +154,22 @@ def test_command_line(generated, binary, tmp_path):
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
     assert usage.returncode == 0 and "--scheduler" in usage.stdout
+
+
+def test_interrupted_run_leaves_nothing(generated, tmp_path):
+    """Ctrl-C in the middle (after round 1's tasks): exit 130, a message, no output file."""
+    polygons_and_lines, places = generated
+    output = tmp_path / "out.gpkg"
+    run = subprocess.Popen([sys.executable, "-m", "toposimp.dask", "map", str(polygons_and_lines), "-p", str(places), "-o", str(output),
+                            "--keep", "5%", "--workers", "2", "--tile-level", "0", "--local-budget", "0"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    for line in run.stderr:
+        if "round 1:" in line:
+            break
+    run.send_signal(signal.SIGINT)
+    err = run.stderr.read()
+    assert run.wait(timeout=120) == 130, err
+    assert "interrupted" in err
+    assert not output.exists()
+    assert list(tmp_path.iterdir()) == []
+
