@@ -585,9 +585,11 @@ public:
         const unsigned t = tile_level_;
         const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
         auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
+        // The waits the tiles did not hold (across tiles), or whose tile did not run this round.
         std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
         for (const auto& [waiter, blocker] : waits_.all()) {
-            if (tile_of(waiter) != tile_of(blocker)) waits.emplace_back(waiter, blocker);
+            const std::uint32_t k = tile_of(waiter);
+            if (k != tile_of(blocker) || !std::binary_search(running_.begin(), running_.end(), k)) waits.emplace_back(waiter, blocker);
         }
         for (const TileOutcome& tile : outcomes) {
             for (std::size_t k = 0; k < tile.ids.size(); ++k) {
@@ -626,6 +628,17 @@ public:
             stop_if_cancelled(options_.cancel);
         }
         if (use_marks_) keep_undecided();
+    }
+
+    // The tiles of the round that run (tile_groups leaves the idle ones out), by their numbers in
+    // row-major order.
+    void set_running_tiles(std::vector<std::uint32_t> tiles) {
+        std::sort(tiles.begin(), tiles.end());
+        running_ = std::move(tiles);
+    }
+
+    std::uint32_t tile_number(std::uint32_t column, std::uint32_t row) const {
+        return row * blocks_.blocks(0, static_cast<int>(tile_level_)) + column;
     }
 
     SimplifyResult part_result() {
@@ -1394,6 +1407,7 @@ public:
     unsigned rounds_started_ = 0;     // (--max and --max-area: one)
     std::uint64_t round_budget_ = 0;  // count targets: this round's marked vertices
     bool round_here_ = false;         // this round runs here, not in tiles
+    std::vector<std::uint32_t> running_;  // this round's tiles that run, sorted
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
@@ -1481,6 +1495,11 @@ std::vector<std::vector<TileInput>> MapInParts::tile_groups() {
             return tile.marks && std::find(tile.marked.begin(), tile.marked.end(), 1) == tile.marked.end();
         });
     });
+    std::vector<std::uint32_t> running;
+    for (const std::vector<TileInput>& group : groups) {
+        for (const TileInput& tile : group) running.push_back(engine_->tile_number(tile.column, tile.row));
+    }
+    engine_->set_running_tiles(std::move(running));
     return groups;
 }
 

@@ -163,35 +163,59 @@ TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
     }
 }
 
+// Control points over [0, 100]² that fix the plan before a test's vertices go in (the plan
+// depends on the extent and the number of points only), and places in it: the border between the
+// top block's two halves (a tile border at every level below), the middle of a level-0 block row.
+struct Backdrop {
+    GridPlan plan;
+    double border = 0, row = 0, cell = 0;
+    std::vector<Point> points;
+    std::size_t total = 0;  // vertices and control points the plan is made for
+
+    Backdrop(std::size_t vertices, std::uint64_t seed) {
+        std::mt19937_64 rng(seed);
+        std::uniform_real_distribution<double> coordinate(0, 100);
+        for (int k = 0; k < 20000; ++k) points.push_back({coordinate(rng), coordinate(rng)});
+        points.push_back({0, 0});
+        points.push_back({100, 100});
+        MapData sized;
+        sized.control_points = points;
+        sized.add_chain(std::vector<Point>(vertices, Point{50, 50}));
+        plan = plan_grid(sized);
+        total = vertices + points.size();
+        auto boundary = [](auto&& below, double lo, double hi) {
+            for (int step = 0; step < 200; ++step) {
+                const double middle = 0.5 * (lo + hi);
+                (below(middle) ? lo : hi) = middle;
+            }
+            return hi;
+        };
+        const std::uint32_t half = 1u << (plan.shift + plan.levels - 2);
+        border = boundary([&](double v) { return plan.grid.base_column(v) < half; }, 0, 100);
+        cell = 100.0 / plan.grid.base_columns;
+        const std::uint32_t block_row = (plan.grid.base_rows >> (plan.shift + 1)) << plan.shift;  // a level-0 block row's first
+        row = boundary([&](double v) { return plan.grid.base_row(v) < block_row; }, 0, 100) + 4 * cell;
+    }
+
+    // The backdrop's points into `map`, but those `near` its vertices, then padding up to the count.
+    template <class Near>
+    void fill(MapData& map, Near&& near) const {
+        for (const Point q : points) {
+            if (!near(q)) map.control_points.push_back(q);
+        }
+        while (map.vertices.size() + map.control_points.size() < total) map.control_points.push_back({100, 0});
+    }
+};
+
 // A wait across tiles that a later round ends: in round 1, w (its neighbours in two tiles, so of a
 // level above the tiles) waits on b, a vertex of another line inside w's triangle but in the
 // other tile, outside the round's budget; in round 2, b goes at level 0 in its tile, which frees
 // w, removed in round 3. (Were the wait not ended when b goes in its tile, w would wait forever.)
 TEST(MapTiles, AWaitAcrossTilesEndsWhenItsBlockerGoesInAnotherTile) {
-    std::mt19937_64 rng(5);
-    std::uniform_real_distribution<double> coordinate(0, 100);
-    std::vector<Point> background;
-    for (int k = 0; k < 20000; ++k) background.push_back({coordinate(rng), coordinate(rng)});
-    background.push_back({0, 0});
-    background.push_back({100, 100});
-    MapData sized;
-    sized.control_points = background;
-    sized.add_chain(std::vector<Point>(14, Point{50, 50}));
-    const GridPlan plan = plan_grid(sized);
+    const Backdrop backdrop(14, 5);
+    const GridPlan& plan = backdrop.plan;
     ASSERT_GE(plan.levels, 4u);
-    // x: the border between the two halves of the top block; y: the middle of a level-0 block row.
-    auto boundary = [](auto&& below, double lo, double hi) {
-        for (int step = 0; step < 200; ++step) {
-            const double middle = 0.5 * (lo + hi);
-            (below(middle) ? lo : hi) = middle;
-        }
-        return hi;
-    };
-    const std::uint32_t half = 1u << (plan.shift + plan.levels - 2);
-    const double x = boundary([&](double v) { return plan.grid.base_column(v) < half; }, 0, 100);
-    const std::uint32_t block_row = (plan.grid.base_rows >> (plan.shift + 1)) << plan.shift;  // a level-0 block row's first cell row
-    const double c = 100.0 / plan.grid.base_columns;
-    const double y = boundary([&](double v) { return plan.grid.base_row(v) < block_row; }, 0, 100) + 4 * c;
+    const double x = backdrop.border, y = backdrop.row, c = backdrop.cell;
 
     MapData map;
     map.add_chain({{x - 3 * c, y}, {x - 0.5 * c, y + 0.1 * c}, {x + 3 * c, y}});           // p, w, n: w's area 0.3 c²
@@ -202,13 +226,9 @@ TEST(MapTiles, AWaitAcrossTilesEndsWhenItsBlockerGoesInAnotherTile) {
     for (int k = 0; k < 5; ++k) filler.push_back({cx + 0.3 * c * k, y + (k % 2) * 0.001 * c});
     map.add_chain(filler);
     map.control_points.push_back({dx + 0.5 * c, y + 0.5 * c});
-    for (const Point q : background) {
-        const bool near = std::fabs(q.y - y) < 6 * c && (std::fabs(q.x - x) < 6 * c || std::fabs(q.x - dx) < 4 * c || std::fabs(q.x - cx) < 4 * c);
-        if (!near) map.control_points.push_back(q);
-    }
-    while (map.vertices.size() + map.control_points.size() < sized.vertices.size() + sized.control_points.size()) {
-        map.control_points.push_back({100, 0});
-    }
+    backdrop.fill(map, [&](Point q) {
+        return std::fabs(q.y - y) < 6 * c && (std::fabs(q.x - x) < 6 * c || std::fabs(q.x - dx) < 4 * c || std::fabs(q.x - cx) < 4 * c);
+    });
     ASSERT_EQ(plan_grid(map).shift, plan.shift);
     ASSERT_EQ(plan_grid(map).grid.base_columns, plan.grid.base_columns);
 
@@ -219,6 +239,42 @@ TEST(MapTiles, AWaitAcrossTilesEndsWhenItsBlockerGoesInAnotherTile) {
     EXPECT_EQ(whole.kept[1], 0) << "w went";
     EXPECT_EQ(whole.kept[4], 0) << "b went";
     EXPECT_EQ(whole.stats.rounds, 3u) << "w waited on b, which went in round 2";
+    for (unsigned tile_level = 0; tile_level + 1 < plan.levels; ++tile_level) {
+        expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+    }
+}
+
+// A wait inside one tile while that tile sits out a round (no vertex of it in the budget): in
+// round 1, w waits on b (both in the left tile, b outside the budget); in round 2 the budget is
+// all in the right tile; in round 3 b goes, which must free w, removed in round 4.
+TEST(MapTiles, AWaitInATileThatSitsOutARoundHolds) {
+    const Backdrop backdrop(3 + 3 + 5 * 3, 6);
+    const GridPlan& plan = backdrop.plan;
+    ASSERT_GE(plan.levels, 4u);
+    const double c = backdrop.cell, y = backdrop.row + c;
+    const double x = backdrop.border - 4 * c;  // the middle of the left tile's last level-0 block
+    MapData map;
+    map.add_chain({{x - c, y}, {x, y + 0.02 * c}, {x + c, y}});                                // w: 0.02 c²
+    map.add_chain({{x + 0.1 * c, y - 2 * c}, {x + 0.2 * c, y + 0.005 * c}, {x + 0.3 * c, y - 2 * c}});  // b in w's triangle: 0.2 c²
+    const double ax = backdrop.border + 20 * c;  // the right tile: a1…a4 refused (a control point each), a5 free
+    for (int k = 0; k < 5; ++k) {
+        const double ay = y + 2 * c * (k - 2), h = (0.1 + 0.02 * k) * c;  // areas 0.05 … 0.09 c²
+        map.add_chain({{ax - 0.5 * c, ay}, {ax, ay + h}, {ax + 0.5 * c, ay}});
+        if (k < 4) map.control_points.push_back({ax, ay + h / 3});
+    }
+    backdrop.fill(map, [&](Point q) {
+        return std::fabs(q.y - y) < 8 * c && (std::fabs(q.x - x) < 4 * c || std::fabs(q.x - ax) < 3 * c);
+    });
+    ASSERT_EQ(plan_grid(map).shift, plan.shift);
+    ASSERT_EQ(plan_grid(map).grid.base_columns, plan.grid.base_columns);
+
+    SimplifyOptions options;
+    options.stop = {Target::remove_points, 3};  // a5, b and w
+    const SimplifyResult whole = simplify(map, options);
+    ASSERT_EQ(whole.stats.removed, 3u);
+    EXPECT_EQ(whole.kept[1], 0) << "w went";
+    EXPECT_EQ(whole.kept[4], 0) << "b went";
+    EXPECT_EQ(whole.stats.rounds, 4u);
     for (unsigned tile_level = 0; tile_level + 1 < plan.levels; ++tile_level) {
         expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
     }
