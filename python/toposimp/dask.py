@@ -98,28 +98,31 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
-    of `workers` processes, and closed at the end). A count target's round that removes fewer
+    of `workers` processes, when the first tasks are ready — not for a run that stops on bad usage
+    or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices runs here, whole. `on_progress(done, total)`: called as the
     tile tasks finish."""
     from distributed import Client, LocalCluster, as_completed
 
     progress = _Progress(quiet)
-    own_cluster = None
-    if client is None:
-        if scheduler:
-            client = Client(scheduler)
-        else:
-            own_cluster = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
-            client = Client(own_cluster)
-        own_client = True
-    else:
-        own_client = False
+    own = {}  # the client and LocalCluster made here, if any
+
+    def connected():
+        if client is not None:
+            return client
+        if "client" not in own:
+            if scheduler:
+                own["client"] = Client(scheduler)
+            else:
+                own["cluster"] = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
+                                              dashboard_address=None)
+                own["client"] = Client(own["cluster"])
+        return own["client"]
 
     def run_groups(groups, plan, options, round_number):
         progress.round = round_number
         options = dict(options, threads=task_threads)
-        futures = client.map(_run_group, groups, plan=plan, options=options, pure=False)
+        futures = connected().map(_run_group, groups, plan=plan, options=options, pure=False)
         place = {future.key: k for k, future in enumerate(futures)}
         results = [None] * len(futures)
         progress.tiles(0, len(futures))
@@ -132,18 +135,18 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
 
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level, tile_points, local_budget, None,
-                                                 sys.stderr.isatty(), threading_main())
+                                                 sys.stderr.isatty(), _main_thread())
     finally:
-        if own_client:
-            client.close()
-        if own_cluster is not None:
-            own_cluster.close()
+        if "client" in own:
+            own["client"].close()
+        if "cluster" in own:
+            own["cluster"].close()
     sys.stdout.write(out)
     sys.stderr.write(err)
     return status
 
 
-def threading_main():
+def _main_thread():
     import threading
     return threading.current_thread() is threading.main_thread()
 
@@ -162,7 +165,10 @@ def main(argv=None):
     options, rest = _split_arguments(argv[1:])
     quiet = "-q" in rest or "--quiet" in rest
 
+    ended_by = []
+
     def terminate(number, frame):
+        ended_by.append(number)
         raise KeyboardInterrupt
 
     # Ctrl-C stops the engine (the module's own handler while it runs) or the wait for the tasks;
@@ -174,7 +180,7 @@ def main(argv=None):
                    quiet=quiet)
     except KeyboardInterrupt:
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")
-        return 128 + signal.SIGINT
+        return 128 + (ended_by[0] if ended_by else signal.SIGINT)
 
 
 if __name__ == "__main__":

@@ -1,8 +1,5 @@
 #include "python/parts.hpp"
 
-#include "cli/guard.hpp"
-#include "core/parallel/blocks.hpp"
-
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
