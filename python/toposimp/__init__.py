@@ -220,7 +220,7 @@ def simplify(data, keep: Union[float, str, None] = None, *, keep_points: Optiona
              levels: Union[str, Sequence[Union[float, int, str]], None] = None, points=None,
              precision: Union[float, str, None] = None, decimals: Optional[int] = None, weighting: float = 0.0,
              spherical: bool = False, arithmetic: str = "exact", threads: Optional[int] = None,
-             progress: Optional[Progress] = None, verbose: int = 0):
+             progress: Optional[Progress] = None, verbose: int = 0, client=None):
     """Simplify line and polygon layers without changing their topology (``toposimp map``).
 
     ``data`` is a GeoDataFrame or GeoSeries, or a list (or dict by name) of them: several layers
@@ -250,6 +250,9 @@ def simplify(data, keep: Union[float, str, None] = None, *, keep_points: Optiona
     "float" (unsafe, for experiments). ``threads``: None for all cores; the result is the same for
     any number. ``progress``: a callable taking (phase, share done 0…1); raising from it stops
     the run. ``verbose``: 1 or 2 log the command line's -v/-vv details to the "toposimp" logger.
+    ``client``: a ``distributed.Client`` (or a ``toposimp.dask.Tiles`` around one, to size the
+    tasks): the engine's tiles run as tasks on its workers, as ``python3 -m toposimp.dask`` runs
+    them, with the same result (see :mod:`toposimp.dask`).
 
     The summary of ``toposimp map --json`` (vertices in and out, refusals, seconds...) is in the
     result's ``.attrs["toposimp"]`` (see :func:`summary`). Raises :class:`InputError` for input
@@ -298,8 +301,12 @@ def simplify(data, keep: Union[float, str, None] = None, *, keep_points: Optiona
     if not named:
         raise UsageError("no layers to simplify")
     layers = [_layer(name, value) for name, value in named]
+    parts = None
+    if client is not None:
+        from toposimp import dask as _dask
+        parts = (client if isinstance(client, _dask.Tiles) else _dask.Tiles(client))._parts()
     levels_out, summaries, messages = _toposimp.simplify_layers(source, layers, _points_layers(points), options,
-                                                                progress, _interruptible(), _shares_geos())
+                                                                progress, _interruptible(), _shares_geos(), parts)
     _report(messages)
     results = []
     for level, text in zip(levels_out, summaries):

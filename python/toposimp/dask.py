@@ -102,7 +102,7 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices runs here, whole. `on_progress(done, total)`: called as the
     tile tasks finish."""
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, LocalCluster
 
     progress = _Progress(quiet)
     own = {}  # the client and LocalCluster made here, if any
@@ -119,20 +119,7 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                 own["client"] = Client(own["cluster"])
         return own["client"]
 
-    def run_groups(groups, plan, options, round_number):
-        progress.round = round_number
-        options = dict(options, threads=task_threads)
-        futures = connected().map(_run_group, groups, plan=plan, options=options, pure=False)
-        place = {future.key: k for k, future in enumerate(futures)}
-        results = [None] * len(futures)
-        progress.tiles(0, len(futures))
-        for done, future in enumerate(as_completed(futures), 1):
-            results[place[future.key]] = future.result()
-            progress.tiles(done, len(futures))
-            if on_progress is not None:
-                on_progress(done, len(futures))
-        return results
-
+    run_groups = _tasks(connected, task_threads, progress, on_progress)
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level, tile_points, local_budget, None,
                                                  sys.stderr.isatty(), _main_thread())
@@ -144,6 +131,44 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     sys.stdout.write(out)
     sys.stderr.write(err)
     return status
+
+
+def _tasks(connected, task_threads, progress=None, on_progress=None):
+    """run_groups for the engine (src/python/parts.hpp): each round's tile groups as tasks on the
+    client `connected()` gives, their outcomes back in order."""
+    from distributed import as_completed
+
+    def run_groups(groups, plan, options, round_number):
+        if progress is not None:
+            progress.round = round_number
+        options = dict(options, threads=task_threads)
+        futures = connected().map(_run_group, groups, plan=plan, options=options, pure=False)
+        place = {future.key: k for k, future in enumerate(futures)}
+        results = [None] * len(futures)
+        if progress is not None:
+            progress.tiles(0, len(futures))
+        for done, future in enumerate(as_completed(futures), 1):
+            results[place[future.key]] = future.result()
+            if progress is not None:
+                progress.tiles(done, len(futures))
+            if on_progress is not None:
+                on_progress(done, len(futures))
+        return results
+
+    return run_groups
+
+
+class Tiles:
+    """A distributed.Client and how to cut the work for it (the options of the same names above):
+    toposimp.simplify(..., client=Tiles(client, tile_points=200_000)). A plain Client takes the
+    defaults."""
+
+    def __init__(self, client, *, tile_level=-1, tile_points=1_000_000, task_threads=1, local_budget=1_000_000):
+        self.client, self.tile_level, self.tile_points = client, tile_level, tile_points
+        self.task_threads, self.local_budget = task_threads, local_budget
+
+    def _parts(self):
+        return (_tasks(lambda: self.client, self.task_threads), self.tile_level, self.tile_points, self.local_budget)
 
 
 def _main_thread():

@@ -282,8 +282,10 @@ void set_if(const py::dict& options, const char* key, T& field) {
 
 // toposimp map on layers in memory. Returns ([per level: [per layer: [wkb or None]]],
 // [per level: JSON summary], messages).
+// `parts`: None, or (run_groups, tile_level, tile_points, local_budget) to run the engine in parts
+// (python/parts.hpp), as toposimp.dask does.
 py::tuple simplify_layers(const std::string& source, const py::list& layers, const py::object& points, const py::dict& options,
-                          const py::object& progress, bool interruptible, bool shapely_geos) {
+                          const py::object& progress, bool interruptible, bool shapely_geos, const py::object& parts) {
     cli::MapOptions map;
     map.input = source;
     map.output = "<memory>";
@@ -314,6 +316,16 @@ py::tuple simplify_layers(const std::string& source, const py::list& layers, con
     memory.points = control_points ? &*control_points : nullptr;
     memory.point_coordinates = &coordinates;
     Run run(progress, interruptible);
+    if (!parts.is_none()) {
+        const auto how = parts.cast<py::tuple>();
+        const py::object run_groups = how[0];
+        const int tile_level = how[1].cast<int>();
+        const auto tile_points = how[2].cast<std::uint64_t>();
+        const auto local_budget = how[3].cast<std::uint64_t>();
+        run.context.map_engine = [&, tile_level, tile_points, local_budget](const map::MapData& data, const map::SimplifyOptions& simplify) {
+            return python::run_in_parts(data, simplify, run_groups, tile_level, tile_points, local_budget);
+        };
+    }
     run([&] {
         auto log = cli::make_logger(run.context.err, map.verbosity, false);
         cli::map_job(map, run.context, *log, &memory);
@@ -555,7 +567,7 @@ PYBIND11_MODULE(_toposimp, module) {
     topology_error = make("TopologyError", nullptr);
     module.def("same_geos", &same_geos, py::arg("geos_version_address"));
     module.def("simplify_layers", &simplify_layers, py::arg("source"), py::arg("layers"), py::arg("points"), py::arg("options"),
-               py::arg("progress"), py::arg("interruptible"), py::arg("shapely_geos"));
+               py::arg("progress"), py::arg("interruptible"), py::arg("shapely_geos"), py::arg("parts") = py::none());
     module.def("simplify_mesh_arrays", &simplify_mesh_arrays, py::arg("vertices"), py::arg("faces"), py::arg("vertex_columns"),
                py::arg("face_columns"), py::arg("options"), py::arg("progress"), py::arg("interruptible"));
     module.def("read_mesh_file", &read_mesh_file, py::arg("path"), py::arg("triangulate"));

@@ -173,3 +173,26 @@ def test_interrupted_run_leaves_nothing(generated, tmp_path):
     assert not output.exists()
     assert list(tmp_path.iterdir()) == []
 
+
+
+def test_python_api_with_a_client(cluster, generated):
+    """toposimp.simplify(..., client=client): the same geometries as without."""
+    import geopandas
+    import toposimp
+
+    client, _ = cluster
+    polygons_and_lines, places = generated
+    layers = {name: geopandas.read_file(polygons_and_lines, layer=name) for name in ("cells", "rivers", "roads")}
+    points = geopandas.read_file(places, layer="places")
+    from toposimp.dask import Tiles
+
+    def tasks_run():
+        return client.run_on_scheduler(lambda dask_scheduler: dask_scheduler.transition_counter)
+
+    alone = toposimp.simplify(layers, keep="40%", points=points)
+    before = tasks_run()
+    parts = toposimp.simplify(layers, keep="40%", points=points, client=Tiles(client, tile_level=2, local_budget=0))
+    assert tasks_run() > before, "the tiles ran as tasks"
+    assert toposimp.summary(parts["cells"])["vertices_out"] == toposimp.summary(alone["cells"])["vertices_out"]
+    for name in layers:
+        assert list(parts[name].geometry.to_wkb()) == list(alone[name].geometry.to_wkb()), name
