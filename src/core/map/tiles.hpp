@@ -11,7 +11,8 @@
 //   tile and ends with the live vertex beyond the border on either side (a *cut end*). A segment
 //   that crosses the border never changes below T (its ends are of level T or above), so the cut
 //   ends are fixed there, and they give the inside vertices their true levels. A ring inside the
-//   tile comes whole, with the vertices already removed (its orientation is the input's).
+//   tile comes whole, with its removed vertices too while the tile may need the input ring's
+//   orientation (the ring rule's last test).
 // - What a block consults below T lies inside its tile (its triangles, the points in them, the
 //   waits between its vertices); the only facts from outside are the vertices' states, and whether
 //   a ring split over several tiles keeps ≥ 4 distinct locations at its fixed vertices (the ring
@@ -20,7 +21,7 @@
 //   ring run together as a group, and tell each other their fixed locations level by level.
 // - Count targets run rounds: each round's budget is selected over the whole map (MapInParts),
 //   the tiles run the levels below T on it, and the levels above follow. A wait across tiles
-//   (begun at a level above T) ends when its blocker goes in another tile; the waiter is then
+//   (begun at level T or above) ends when its blocker goes in another tile; the waiter is then
 //   queued after the round's levels below T, where the single process queues it after the level
 //   the blocker went at — the same, as a waiter outside a round's budget is not looked at again
 //   before the next round's selection.
