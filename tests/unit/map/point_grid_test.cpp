@@ -142,5 +142,65 @@ TEST(PointGrid, Issue34SplitRowsFindTheSameFirstPointAsTheBaseGrid) {
     }
 }
 
+// A grid over a window of another grid's cells (a tile, core/map/tiles.hpp), holding the points
+// inside the window in order and some outside it (kept in the window's edge cells): for boxes
+// inside the window, the same first point and the same points as the whole grid.
+TEST(PointGrid, AWindowAnswersAsTheWholeGridInsideIt) {
+    std::mt19937_64 rng(26);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<Point> points;
+    for (int k = 0; k < 4000; ++k) {
+        const double t = unit(rng);
+        points.push_back({t * 100, 50 + 20 * std::sin(t * 40)});
+        points.push_back({std::floor(unit(rng) * 60), unit(rng) * 100});
+    }
+    for (const unsigned split : {0u, 2u}) {
+        const PointGrid whole(points, {}, 2.0, 1, split);
+        const PointGrid::Geometry& g = whole.geometry();
+        for (int trial = 0; trial < 20; ++trial) {
+            const std::uint32_t c0 = static_cast<std::uint32_t>(unit(rng) * g.columns / 2), r0 = static_cast<std::uint32_t>(unit(rng) * g.rows / 2);
+            const PointGrid::Window window{c0, r0, std::min(g.columns - 1, c0 + 1 + static_cast<std::uint32_t>(unit(rng) * g.columns / 2)),
+                                           std::min(g.rows - 1, r0 + 1 + static_cast<std::uint32_t>(unit(rng) * g.rows / 2))};
+            auto inside = [&](Point p) {
+                const std::uint32_t x = g.column(p.x), y = g.row(p.y);
+                return x >= window.first_column && x <= window.last_column && y >= window.first_row && y <= window.last_row;
+            };
+            std::vector<Point> part;
+            std::vector<std::uint32_t> id_of;  // the part's points by id: their ids in `points`
+            for (std::uint32_t id = 0; id < points.size(); ++id) {
+                if (inside(points[id]) || id % 97 == 0) {  // (and a few from outside, as cut ends come)
+                    part.push_back(points[id]);
+                    id_of.push_back(id);
+                }
+            }
+            const PointGrid tile(g, window, part, {}, 1);
+            std::vector<std::uint32_t> in;
+            for (std::uint32_t k = 0; k < part.size(); ++k) {
+                if (inside(part[k])) in.push_back(k);
+            }
+            ASSERT_FALSE(in.empty());
+            for (int k = 0; k < 100; ++k) {
+                // A box between two points inside the window lies inside it (cells are monotone).
+                const Point a = part[in[static_cast<std::size_t>(unit(rng) * static_cast<double>(in.size()))]];
+                const Point b = part[in[static_cast<std::size_t>(unit(rng) * static_cast<double>(in.size()))]];
+                const Box box{std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
+                auto accept_whole = [&](std::uint32_t id, Point q) { return box_contains(box, q) && id % 3 != 0; };
+                auto accept_tile = [&](std::uint32_t id, Point q) { return box_contains(box, q) && id_of[id] % 3 != 0; };
+                const std::uint32_t expected = whole.first_in_cells(box, accept_whole);
+                const std::uint32_t found = tile.first_in_cells(box, accept_tile);
+                ASSERT_EQ(found == PointGrid::kRemoved ? PointGrid::kRemoved : id_of[found], expected) << "split " << split;
+                std::set<std::uint32_t> from_tile, from_whole;
+                for (const std::uint32_t id : in_cells(tile, box)) {
+                    if (box_contains(box, part[id])) from_tile.insert(id_of[id]);
+                }
+                for (const std::uint32_t id : in_cells(whole, box)) {
+                    if (box_contains(box, points[id])) from_whole.insert(id);
+                }
+                EXPECT_EQ(from_tile, from_whole);
+            }
+        }
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::map
