@@ -60,11 +60,12 @@ class _Progress:
         self.quiet = quiet
         self.terminal = sys.stderr.isatty()
         self.round = 1
+        self.tile_level = 0
 
     def tiles(self, done, total):
         if self.quiet:
             return
-        line = f"toposimp.dask: round {self.round}: tiles {done}/{total} done"
+        line = f"toposimp.dask: round {self.round}, tiles of level {self.tile_level}: {done} of {total} tasks done"
         if self.terminal:
             sys.stderr.write("\r" + line + ("\n" if done == total else ""))
         elif done == total:
@@ -140,7 +141,7 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
 
     def run_groups(groups, plan, options, round_number):
         if progress is not None:
-            progress.round = round_number
+            progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
         options = dict(options, threads=task_threads)
         futures = connected().map(_run_group, groups, plan=plan, options=options, pure=False)
         place = {future.key: k for k, future in enumerate(futures)}

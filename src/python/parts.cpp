@@ -313,7 +313,9 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
                 std::vector<map::TileInput>().swap(group);
                 tasks.append(tiles);
             }
-            const py::object done = run_groups(tasks, plan_dict(parts.plan()), options_dict(options), round);
+            py::dict plan = plan_dict(parts.plan());
+            plan["tile_level"] = parts.tile_level();  // (for progress; the tiles carry their level)
+            const py::object done = run_groups(tasks, plan, options_dict(options), round);
             tasks = py::list();
             const auto results = done.cast<py::list>();
             if (results.size() != sizes.size()) malformed("not one outcome list per group");

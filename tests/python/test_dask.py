@@ -150,7 +150,7 @@ def test_command_line(generated, binary, tmp_path):
                            "--tile-level", "2", "--local-budget", "0", "--json"], capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert '"command":"map"' in done.stdout
-    assert "round 2: tiles" in done.stderr and "done" in done.stderr
+    assert "round 2, tiles of level 2:" in done.stderr and "tasks done" in done.stderr
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
     assert usage.returncode == 0 and "--scheduler" in usage.stdout
@@ -164,7 +164,7 @@ def test_interrupted_run_leaves_nothing(generated, tmp_path):
                             "--keep", "5%", "--workers", "2", "--tile-level", "0", "--local-budget", "0"],
                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     for line in run.stderr:
-        if "round 1:" in line:
+        if "round 1," in line:
             break
     run.send_signal(signal.SIGINT)
     err = run.stderr.read()
