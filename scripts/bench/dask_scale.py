@@ -1,0 +1,79 @@
+#!/usr/bin/python3
+"""A generated map much bigger than a Dask worker may hold, simplified by python3 -m toposimp.dask
+on workers whose memory is limited (Dask's memory_limit: a worker over it is stopped), against
+toposimp map in one process: times, peak memory of the command and of each worker, the output byte
+for byte, and toposimp check on it.
+
+    scripts/bench/dask_scale.py BUILD_DIR [--cells 250] [--edge-vertices 40] [--rivers 2000]
+                                [--river-steps 2000] [--points 2000000] [--workers 2]
+                                [--memory-limit 1GiB] [--target "--keep 10%"] [--data DIR]
+
+The map (generate_map.py --shapefiles) is written to --data (default build/bench-data/scale-N)
+once. Prints a Markdown table.
+"""
+import argparse
+import os
+import pathlib
+import shlex
+import sys
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent))
+import dask_bench  # noqa: E402
+import generate_map  # noqa: E402
+
+SAME_DATE = ["--config", "OGR_CURRENT_DATE", "2000-01-01T00:00:00Z"]
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("build")
+    parser.add_argument("--cells", type=int, default=250)
+    parser.add_argument("--edge-vertices", type=int, default=40)
+    parser.add_argument("--rivers", type=int, default=2000)
+    parser.add_argument("--river-steps", type=int, default=2000)
+    parser.add_argument("--points", type=int, default=2_000_000)
+    parser.add_argument("--workers", type=int, default=2)
+    parser.add_argument("--memory-limit", default="1GiB")
+    parser.add_argument("--target", default="--keep 10%")
+    parser.add_argument("--data")
+    a = parser.parse_args()
+    build = pathlib.Path(a.build).resolve()
+    data = pathlib.Path(a.data or f"build/bench-data/scale-{a.cells}").resolve()
+    if not (data / "places.shp").exists():
+        generate_map.generate_shapefiles(data, a.cells, a.edge_vertices, a.rivers, a.river_steps, 6, a.points, 1)
+    # (cells' rings: 4 borders of K + 1 vertices and the closing one; rivers; roads of 3)
+    vertices = a.cells ** 2 * (4 * (a.edge_vertices + 1) + 1) + a.rivers * a.river_steps + 6 * 3
+    map_arguments = [str(data), "-l", "cells", "-l", "rivers", "-l", "roads", "-p", str(data / "places.shp"),
+                     *shlex.split(a.target), "-q", "--overwrite", *SAME_DATE]
+    single_out, dask_out = data / "single.gpkg", data / "dask.gpkg"
+    single = dask_bench.timed([str(build / "toposimp"), "map", *map_arguments, "-o", str(single_out)])
+
+    env = dict(os.environ, PYTHONPATH=str(build / "python"))
+    sys.path.insert(0, str(build / "python"))
+    from distributed import Client, LocalCluster
+
+    cluster = LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                           memory_limit=a.memory_limit)
+    client = Client(cluster)
+    distributed = dask_bench.timed([sys.executable, "-m", "toposimp.dask", "map", *map_arguments, "-o", str(dask_out),
+                                    "--scheduler", cluster.scheduler_address], env=env)
+    peaks = dask_bench.worker_peaks(client)
+    client.close()
+    cluster.close()
+    identical = dask_out.read_bytes() == single_out.read_bytes()
+    check = dask_bench.timed([str(build / "toposimp"), "check", str(data), str(dask_out), "-l", "cells", "-l", "rivers",
+                              "-l", "roads", "-p", str(data / "places.shp")])
+    sizes = {name: (data / f"{name}.shp").stat().st_size for name in ("cells", "rivers", "roads", "places")}
+    print(f"map: {data}: {vertices / 1e6:.1f} M vertices and {a.points / 1e6:.1f} M control points "
+          f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each")
+    print()
+    print("| run | seconds | command peak MiB | worker peaks MiB | output identical |")
+    print("|---|---|---|---|---|")
+    print(f"| toposimp map | {single[0]:.1f} | {single[1]:.0f} |  | |")
+    print(f"| toposimp.dask | {distributed[0]:.1f} | {distributed[1]:.0f} | {' / '.join(f'{p:.0f}' for p in peaks)} | "
+          f"{'yes' if identical else 'NO'} |")
+    print(f"| toposimp check (dask output) | {check[0]:.1f} | {check[1]:.0f} | | clean |")
+
+
+if __name__ == "__main__":
+    main()
