@@ -40,7 +40,8 @@ Dask options:
   --workers N          the LocalCluster's worker processes (default: the cores here)
   --tile-level T       the block level cut into tasks (default: the coarsest whose biggest tile
                        holds at most --tile-points vertices and control points)
-  --tile-points N      see --tile-level (default 1000000)
+  --tile-points N      see --tile-level (default 1000000, or less where the workers' memory
+                       limit would not hold such a tile in half of it)
   --task-threads N     threads each task's engine uses (default 1: the workers are the parallelism)
   --local-budget N     a round of a count target that removes fewer than N vertices runs here,
                        whole, not as tasks (default 1000000; 0: every round as tasks)
@@ -122,7 +123,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
 
     run_groups = _tasks(connected, task_threads, progress, on_progress)
     try:
-        status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level, tile_points, local_budget, None,
+        status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
+                                                 lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
                                                  sys.stderr.isatty(), _main_thread())
     finally:
         if "client" in own:
@@ -132,6 +134,35 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     sys.stdout.write(out)
     sys.stderr.write(err)
     return status
+
+
+# What a worker holds besides its tiles (Python, Dask, numpy, this package: 115 MiB measured), and
+# per vertex or control point of a tile at its peak (the tile's arrays as they come, the engine's,
+# its grid, the outcome: 220 bytes measured on GSHHG's tiles; taken with room to spare).
+WORKER_BASE = 128 * 2**20
+BYTES_PER_POINT = 320
+
+
+def fitting_tile_points(client, wanted, timeout=120):
+    """The tile size (vertices and control points) to use on `client`'s workers: `wanted`, or less
+    where the workers' memory limit (Dask's memory_limit) would not hold such a tile in half of
+    it. (A worker over 80 % of its limit stops taking tasks, and memory the engine frees stays
+    counted until it is given back: a tile too big for a worker would stall the run.)"""
+    from toposimp import UsageError
+
+    try:
+        client.wait_for_workers(1, timeout=timeout)
+    except Exception as error:  # (distributed raises TimeoutError, or OSError when the scheduler is gone)
+        raise UsageError(f"no Dask worker joined the scheduler within {timeout} s ({error})") from None
+    limits = [worker.get("memory_limit") or 0 for worker in client.scheduler_info()["workers"].values()]
+    limits = [limit for limit in limits if limit > 0]
+    if not limits:
+        return wanted
+    fits = int((0.5 * min(limits) - WORKER_BASE) // BYTES_PER_POINT)
+    if fits < 10_000:
+        raise UsageError(f"the Dask workers' memory limit ({min(limits) / 2**20:.0f} MiB) leaves no room for a tile: "
+                         f"give them at least {(2 * (WORKER_BASE + 10_000 * BYTES_PER_POINT)) / 2**20:.0f} MiB")
+    return min(wanted, fits)
 
 
 def _tasks(connected, task_threads, progress=None, on_progress=None):
@@ -169,7 +200,8 @@ class Tiles:
         self.task_threads, self.local_budget = task_threads, local_budget
 
     def _parts(self):
-        return (_tasks(lambda: self.client, self.task_threads), self.tile_level, self.tile_points, self.local_budget)
+        return (_tasks(lambda: self.client, self.task_threads), self.tile_level,
+                lambda: fitting_tile_points(self.client, self.tile_points), self.local_budget)
 
 
 def _main_thread():
@@ -207,6 +239,12 @@ def main(argv=None):
     except KeyboardInterrupt:
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")
         return 128 + (ended_by[0] if ended_by else signal.SIGINT)
+    except Exception as error:
+        from toposimp import UsageError
+        if not isinstance(error, UsageError):
+            raise
+        sys.stderr.write(f"toposimp.dask: error: {error}\n")
+        return 2
 
 
 if __name__ == "__main__":

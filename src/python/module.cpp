@@ -320,9 +320,9 @@ py::tuple simplify_layers(const std::string& source, const py::list& layers, con
         const auto how = parts.cast<py::tuple>();
         const py::object run_groups = how[0];
         const int tile_level = how[1].cast<int>();
-        const auto tile_points = how[2].cast<std::uint64_t>();
+        const py::object tile_points = how[2];
         const auto local_budget = how[3].cast<std::uint64_t>();
-        run.context.map_engine = [&, tile_level, tile_points, local_budget](const map::MapData& data, const map::SimplifyOptions& simplify) {
+        run.context.map_engine = [&, tile_level, local_budget](const map::MapData& data, const map::SimplifyOptions& simplify) {
             return python::run_in_parts(data, simplify, run_groups, tile_level, tile_points, local_budget);
         };
     }
@@ -541,7 +541,7 @@ std::vector<std::string> write_mesh_file(const std::string& path, const py::obje
 
 // `toposimp ARGS...` in this process, the map engine run in parts through `run_groups` (see
 // python/parts.hpp). Returns (exit status, standard output, standard error).
-py::tuple run_command(const std::vector<std::string>& args, const py::object& run_groups, int tile_level, std::uint64_t tile_points,
+py::tuple run_command(const std::vector<std::string>& args, const py::object& run_groups, int tile_level, const py::object& tile_points,
                       std::uint64_t local_budget, const py::object& progress, bool err_is_terminal, bool interruptible) {
     Run run(progress, interruptible);
     run.context.err_is_terminal = err_is_terminal;

@@ -3,6 +3,10 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -291,11 +295,19 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
 }  // namespace
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
-                                 int tile_level, std::uint64_t tile_points, std::uint64_t here_below) {
+                                 int tile_level, const py::object& tile_points, std::uint64_t here_below) {
     using Clock = std::chrono::steady_clock;
     auto seconds = [](Clock::time_point from) { return std::chrono::duration<double>(Clock::now() - from).count(); };
     const auto start = Clock::now();
-    const unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : tile_level_for(map, map::plan_grid(map), tile_points);
+    unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : 0;
+    if (tile_level < 0) {
+        std::uint64_t budget = 0;
+        {
+            py::gil_scoped_acquire gil;
+            budget = (PyCallable_Check(tile_points.ptr()) ? tile_points() : tile_points).cast<std::uint64_t>();
+        }
+        level = tile_level_for(map, map::plan_grid(map), budget);
+    }
     map::MapInParts parts(map, options, level, here_below);
     const double set_up = seconds(start);
     const auto rounds_start = Clock::now();
@@ -346,6 +358,11 @@ py::list run_tile_group(const py::list& group, const py::dict& plan, const py::d
     {
         py::gil_scoped_release release;
         outcomes = map::run_tile_group(std::move(tiles), grid, simplify);
+#ifdef __GLIBC__
+        // The engine's arrays are freed; give their pages back, so that the worker's memory (what
+        // Dask's memory limit watches) falls back to what it holds.
+        malloc_trim(0);
+#endif
     }
     py::list out;
     for (const map::TileOutcome& outcome : outcomes) out.append(outcome_dict(outcome));

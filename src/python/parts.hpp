@@ -15,10 +15,10 @@ namespace py = pybind11;
 // `run_groups(groups, plan, options, round) -> outcomes` (a list per group of tile dicts in, a
 // list per group of outcome dicts back, in the same order). The tile level is `tile_level`, or,
 // if negative, the coarsest whose biggest tile holds at most `tile_points` vertices and control
-// points. A count target's round whose budget is under `here_below` vertices runs here, whole.
+// points (a number, or a callable giving it: called once the map is read). A count target's round whose budget is under `here_below` vertices runs here, whole.
 // Called with the GIL released; takes it to call run_groups.
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
-                                 int tile_level, std::uint64_t tile_points, std::uint64_t here_below);
+                                 int tile_level, const py::object& tile_points, std::uint64_t here_below);
 
 // A task: one group of tile dicts → their outcome dicts (the engine runs without the GIL).
 py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options);

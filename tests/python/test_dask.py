@@ -196,3 +196,27 @@ def test_python_api_with_a_client(cluster, generated):
     assert toposimp.summary(parts["cells"])["vertices_out"] == toposimp.summary(alone["cells"])["vertices_out"]
     for name in layers:
         assert list(parts[name].geometry.to_wkb()) == list(alone[name].geometry.to_wkb()), name
+
+
+def test_tiles_fit_the_workers_memory_limit():
+    """Under a memory limit the tiles shrink to fit half of it; a limit too small is refused."""
+    from toposimp import UsageError
+    from toposimp.dask import BYTES_PER_POINT, WORKER_BASE, fitting_tile_points
+
+    class Workers:
+        def __init__(self, *limits):
+            self.limits = limits
+
+        def wait_for_workers(self, n, timeout):
+            pass
+
+        def scheduler_info(self):
+            return {"workers": {f"tcp://w{k}": {"memory_limit": limit} for k, limit in enumerate(self.limits)}}
+
+    assert fitting_tile_points(Workers(0, 0), 1_000_000) == 1_000_000  # no limit
+    assert fitting_tile_points(Workers(8 * 2**30), 1_000_000) == 1_000_000
+    fits = fitting_tile_points(Workers(8 * 2**30, 512 * 2**20), 1_000_000)  # the smallest limit counts
+    assert fits == (256 * 2**20 - WORKER_BASE) // BYTES_PER_POINT
+    assert fits * BYTES_PER_POINT + WORKER_BASE <= 256 * 2**20
+    with pytest.raises(UsageError, match="memory limit"):
+        fitting_tile_points(Workers(200 * 2**20), 1_000_000)
