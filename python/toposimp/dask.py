@@ -174,17 +174,40 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
         if progress is not None:
             progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
         options = dict(options, threads=task_threads)
-        futures = connected().map(_run_group, groups, plan=plan, options=options, pure=False)
-        place = {future.key: k for k, future in enumerate(futures)}
-        results = [None] * len(futures)
+        client = connected()
+        total = len(groups)
+        # A few tasks per worker in flight, not all: each holds its tiles on its worker until it
+        # runs (all at once, 225 tasks of a 45 M-vertex map filled two 512 MiB workers, which
+        # then stopped), and the groups sent are dropped here.
+        window = 4 * max(1, len(client.scheduler_info()["workers"]))
+        place = {}
+        running = as_completed()
+        following = iter(range(total))
+
+        def submit_next():
+            k = next(following, None)
+            if k is None:
+                return
+            future = client.submit(_run_group, groups[k], plan=plan, options=options, pure=False)
+            groups[k] = None
+            place[future.key] = k
+            running.add(future)
+
+        for _ in range(window):
+            submit_next()
+        results = [None] * total
         if progress is not None:
-            progress.tiles(0, len(futures))
-        for done, future in enumerate(as_completed(futures), 1):
-            results[place[future.key]] = future.result()
+            progress.tiles(0, total)
+        done = 0
+        for future in running:
+            results[place.pop(future.key)] = future.result()
+            future.release()
+            done += 1
+            submit_next()
             if progress is not None:
-                progress.tiles(done, len(futures))
+                progress.tiles(done, total)
             if on_progress is not None:
-                on_progress(done, len(futures))
+                on_progress(done, total)
         return results
 
     return run_groups
