@@ -473,7 +473,7 @@ public:
         if (round_here_) return {};
         const unsigned t = tile_level_;
         const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
-        auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
+        auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
         std::map<std::uint32_t, TileInput> by_tile;
         auto tile = [&](std::uint32_t k) -> TileInput& {
             TileInput& input = by_tile[k];
@@ -583,8 +583,7 @@ public:
             return;
         }
         const unsigned t = tile_level_;
-        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
-        auto tile_of = [&](std::uint32_t v) { return ((block_xy_[v] & 0xffffu) >> t) * columns + ((block_xy_[v] >> 16) >> t); };
+        auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
         // The waits the tiles did not hold (across tiles), or whose tile did not run this round.
         std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
         for (const auto& [waiter, blocker] : waits_.all()) {
