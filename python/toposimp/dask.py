@@ -104,15 +104,16 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices runs here, whole. `on_progress(done, total)`: called as the
     tile tasks finish."""
-    from distributed import Client, LocalCluster
-
     progress = _Progress(quiet)
     own = {}  # the client and LocalCluster made here, if any
+    if client is None:
+        _import_distributed_meanwhile()
 
     def connected():
         if client is not None:
             return client
         if "client" not in own:
+            from distributed import Client, LocalCluster
             if scheduler:
                 own["client"] = Client(scheduler)
             else:
@@ -134,6 +135,20 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     sys.stdout.write(out)
     sys.stderr.write(err)
     return status
+
+
+def _import_distributed_meanwhile():
+    """Imports distributed (a third of a second) on a thread of its own while the engine reads the
+    input without the GIL; the first use of it waits for that import (Python's import lock)."""
+    import threading
+
+    def load():
+        try:
+            import distributed  # noqa: F401
+        except Exception:  # (the import in connected() raises it again, where it is reported)
+            pass
+
+    threading.Thread(target=load, name="toposimp.dask import", daemon=True).start()
 
 
 # What a worker holds besides its tiles (Python, Dask, numpy, this package: 115 MiB measured), and
@@ -168,9 +183,18 @@ def fitting_tile_points(client, wanted, timeout=120):
 def _tasks(connected, task_threads, progress=None, on_progress=None):
     """run_groups for the engine (src/python/parts.hpp): each round's tile groups as tasks on the
     client `connected()` gives, their outcomes back in order."""
-    from distributed import as_completed
-
     def run_groups(groups, plan, options, round_number):
+        import warnings
+
+        # (A task's tiles travel with it by design: each is used once. Dask's advice to scatter
+        # them first would only add a round trip; its warning must not reach the user's terminal.)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
+            return run_round(groups, plan, options, round_number)
+
+    def run_round(groups, plan, options, round_number):
+        from distributed import as_completed
+
         if progress is not None:
             progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
         options = dict(options, threads=task_threads)
@@ -181,7 +205,7 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
         # then stopped), and the groups sent are dropped here.
         window = 4 * max(1, len(client.scheduler_info()["workers"]))
         place = {}
-        running = as_completed()
+        running = as_completed(with_results=True)
         following = iter(range(total))
 
         def submit_next():
@@ -199,8 +223,8 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
         if progress is not None:
             progress.tiles(0, total)
         done = 0
-        for future in running:
-            results[place.pop(future.key)] = future.result()
+        for future, result in running:
+            results[place.pop(future.key)] = result
             future.release()
             done += 1
             submit_next()

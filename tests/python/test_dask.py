@@ -156,6 +156,25 @@ def test_command_line(generated, binary, tmp_path):
     assert usage.returncode == 0 and "--scheduler" in usage.stdout
 
 
+def test_quiet_run_with_big_tiles_prints_nothing(cluster, binary, tmp_path):
+    """-q: nothing on stderr, also when a task's tiles pass Dask's 5 MiB "large object" mark (the
+    tiles travel with their tasks on purpose; Dask's advice to scatter them is not for the user)."""
+    client, _ = cluster
+    # One tile over the whole map: 320 k vertices, over 5 MiB as the task's arguments.
+    lines, _ = generate_map.generate(tmp_path / "big", cells=4, edge_vertices=8000, rivers=1, river_steps=10, roads=1,
+                                     points=10, seed=5)
+    arguments = [str(lines), "--keep", "10%", "-q", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    output = tmp_path / "dask.gpkg"
+    done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output),
+                           "--scheduler", client.scheduler.address, "--tile-level", "99", "--local-budget", "0"],
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stderr == ""
+    assert output.read_bytes() == reference.read_bytes()
+
+
 def test_interrupted_run_leaves_nothing(generated, tmp_path):
     """Ctrl-C in the middle (after round 1's tasks): exit 130, a message, no output file."""
     polygons_and_lines, places = generated

@@ -710,13 +710,33 @@ public:
     // processed stays so, and one above it stays above it (it may drop below it).
     unsigned level_of(std::uint32_t v) const { return std::max(shared_level(v, prev_[v]), shared_level(v, next_[v])); }
 
+    // Vertex v's block of `level`, numbered row-major: over the whole map, or in a tile (whose
+    // levels are below its own) over the tile's blocks only, so that the work per level scales
+    // with the tile, not with the whole map (a map cut into a thousand tiles otherwise spent most
+    // of each task walking the whole map's empty blocks).
     std::uint32_t block_at(std::uint32_t v, unsigned level) const {
-        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(level));
-        return ((block_xy_[v] & 0xffffu) >> level) * columns + ((block_xy_[v] >> 16) >> level);
+        const std::uint32_t column = (block_xy_[v] >> 16) >> level, row = (block_xy_[v] & 0xffffu) >> level;
+        const BlockSpan span = blocks_of(level);
+        return (row - span.first_row) * span.columns + (column - span.first_column);
     }
 
     std::uint32_t blocks_at(unsigned level) const {
-        return blocks_.blocks(0, static_cast<int>(level)) * blocks_.blocks(1, static_cast<int>(level));
+        const BlockSpan span = blocks_of(level);
+        return span.columns * span.rows;
+    }
+
+    // The blocks of `level` that block_at numbers: the whole map's, or those of the whole map's
+    // that lie in the tile.
+    struct BlockSpan {
+        std::uint32_t first_column, first_row, columns, rows;
+    };
+    BlockSpan blocks_of(unsigned level) const {
+        const auto l = static_cast<int>(level);
+        if (!tile_) return {0, 0, blocks_.blocks(0, l), blocks_.blocks(1, l)};
+        const unsigned shift = tile_->level - level;
+        const std::uint32_t column = tile_->column << shift, row = tile_->row << shift;
+        return {column, row, std::min(std::uint32_t{1} << shift, blocks_.blocks(0, l) - column),
+                std::min(std::uint32_t{1} << shift, blocks_.blocks(1, l) - row)};
     }
 
     // Linked lists over the vertices and ring bookkeeping: distinct locations, and the level
