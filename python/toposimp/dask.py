@@ -202,7 +202,8 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
         total = len(groups)
         # A few tasks per worker in flight, not all: each holds its tiles on its worker until it
         # runs (all at once, 225 tasks of a 45 M-vertex map filled two 512 MiB workers, which
-        # then stopped), and the groups sent are dropped here.
+        # then stopped). groups[k] builds group k's tiles here when it is sent, and they are
+        # dropped here once sent.
         window = 4 * max(1, len(client.scheduler_info()["workers"]))
         place = {}
         running = as_completed(with_results=True)
@@ -213,7 +214,6 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
             if k is None:
                 return
             future = client.submit(_run_group, groups[k], plan=plan, options=options, pure=False)
-            groups[k] = None
             place[future.key] = k
             running.add(future)
 

@@ -294,6 +294,29 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
 
 }  // namespace
 
+RoundGroups::RoundGroups(const map::MapInParts& parts, std::size_t count) : parts_(&parts), count_(count) {}
+
+py::list RoundGroups::get(std::ptrdiff_t k) const {
+    if (k < 0) k += static_cast<std::ptrdiff_t>(count_);
+    if (k < 0 || static_cast<std::size_t>(k) >= count_) throw py::index_error("no such tile group in the round");
+    if (parts_ == nullptr) throw std::runtime_error("the round is over: its tile groups are gone");
+    std::vector<map::TileInput> group;
+    {
+        py::gil_scoped_release release;
+        group = parts_->group(static_cast<std::size_t>(k));
+    }
+    py::list tiles;
+    for (map::TileInput& tile : group) tiles.append(tile_dict(std::move(tile)));
+    return tiles;
+}
+
+void bind_parts(py::module_& module) {
+    py::class_<RoundGroups>(module, "RoundGroups",
+                            "A round's tile groups: groups[k] builds group k's tiles (a list of dicts) when asked for")
+        .def("__len__", &RoundGroups::size)
+        .def("__getitem__", &RoundGroups::get, py::arg("k"));
+}
+
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
                                  int tile_level, const py::object& tile_points, std::uint64_t here_below) {
     using Clock = std::chrono::steady_clock;
@@ -312,28 +335,26 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     const double set_up = seconds(start);
     const auto rounds_start = Clock::now();
     for (unsigned round = 1; parts.next_round(); ++round) {
-        std::vector<std::vector<map::TileInput>> groups = parts.tile_groups();
+        const std::size_t count = parts.split_round();
         std::vector<map::TileOutcome> outcomes;
-        if (!groups.empty()) {
+        if (count > 0) {
             py::gil_scoped_acquire gil;
-            py::list tasks;
-            std::vector<std::size_t> sizes;
-            for (std::vector<map::TileInput>& group : groups) {
-                py::list tiles;
-                for (map::TileInput& tile : group) tiles.append(tile_dict(std::move(tile)));
-                sizes.push_back(group.size());
-                std::vector<map::TileInput>().swap(group);
-                tasks.append(tiles);
-            }
+            py::object groups = py::cast(RoundGroups(parts, count));
             py::dict plan = plan_dict(parts.plan());
             plan["tile_level"] = parts.tile_level();  // (for progress; the tiles carry their level)
-            const py::object done = run_groups(tasks, plan, options_dict(options), round);
-            tasks = py::list();
+            py::object done;
+            try {
+                done = run_groups(groups, plan, options_dict(options), round);
+            } catch (...) {
+                groups.cast<RoundGroups&>().close();
+                throw;
+            }
+            groups.cast<RoundGroups&>().close();
             const auto results = done.cast<py::list>();
-            if (results.size() != sizes.size()) malformed("not one outcome list per group");
-            for (std::size_t k = 0; k < sizes.size(); ++k) {
+            if (results.size() != count) malformed("not one outcome list per group");
+            for (std::size_t k = 0; k < count; ++k) {
                 const auto group = results[k].cast<py::list>();
-                if (group.size() != sizes[k]) malformed("not one outcome per tile");
+                if (group.size() != parts.group_size(k)) malformed("not one outcome per tile");
                 for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
             }
         }

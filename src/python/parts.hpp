@@ -11,9 +11,27 @@ namespace toposimp::python {
 
 namespace py = pybind11;
 
+// A round's tile groups as run_groups sees them: a sequence whose item k is group k's tiles (a
+// list of dicts), built when asked for, so that the round's tiles never all exist at once (ask
+// once per task: each time builds them again). Usable while run_groups runs.
+class RoundGroups {
+public:
+    RoundGroups(const map::MapInParts& parts, std::size_t count);
+    std::size_t size() const { return count_; }
+    py::list get(std::ptrdiff_t k) const;
+    void close() { parts_ = nullptr; }
+
+private:
+    const map::MapInParts* parts_;
+    std::size_t count_;
+};
+
+// RoundGroups for Python.
+void bind_parts(py::module_& module);
+
 // Runs the map in parts (map::MapInParts): each round's tile groups go to
-// `run_groups(groups, plan, options, round) -> outcomes` (a list per group of tile dicts in, a
-// list per group of outcome dicts back, in the same order). The tile level is `tile_level`, or,
+// `run_groups(groups, plan, options, round) -> outcomes` (RoundGroups in, a list per group of
+// outcome dicts back, in the same order). The tile level is `tile_level`, or,
 // if negative, the coarsest whose biggest tile holds at most `tile_points` vertices and control
 // points (a number, or a callable giving it: called once the map is read). A count target's round whose budget is under `here_below` vertices runs here, whole.
 // Called with the GIL released; takes it to call run_groups.

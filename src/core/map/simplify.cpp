@@ -467,56 +467,43 @@ public:
         return true;
     }
 
-    // The round's tiles: per tile of the tile level holding a live vertex, its pieces and whole
-    // rings, its control points and the waits among its vertices; row-major.
-    std::vector<TileInput> split_tiles() {
-        if (round_here_) return {};
+    // The round's tiles (those of the tile level holding a live vertex), found without building
+    // them: each tile's pieces of chains and whole rings, its control points and the waits among
+    // its vertices, and the groups that run (tiles sharing a split ring that its cut ends do not
+    // settle run together; a group with nothing to do in the round is left out). Returns how many
+    // groups run; round_group(k) then builds one (a copy of its tiles' share of the live map,
+    // made when it is sent, so that the whole round's tiles never exist at once).
+    std::size_t split_round() {
+        split_ = {};
+        if (round_here_) {
+            set_running_tiles({});
+            return 0;
+        }
         const unsigned t = tile_level_;
-        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
-        auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
-        std::map<std::uint32_t, TileInput> by_tile;
-        auto tile = [&](std::uint32_t k) -> TileInput& {
-            TileInput& input = by_tile[k];
-            input.level = t;
-            input.column = k % columns;
-            input.row = k / columns;
-            return input;
-        };
-        std::vector<std::uint32_t> local(vertex_count_, kNone);  // an inside vertex's id in its tile
-        auto add = [&](TileInput& input, std::uint32_t v, bool cut_end) {
-            if (!cut_end) local[v] = static_cast<std::uint32_t>(input.vertex_id.size());
-            input.map.vertices.push_back(map_.vertices[v]);
-            input.vertex_id.push_back(v);
-            input.state.push_back(static_cast<std::uint8_t>(cut_end ? State::fixed : state_[v]));
-            if (use_marks_) input.marked.push_back(cut_end ? 0 : marked_[v]);
-        };
-        auto add_chain = [&](TileInput& input, std::uint32_t c, std::uint32_t first, bool settled) {
-            const auto last = static_cast<std::uint32_t>(input.vertex_id.size() - 1);
-            input.map.chains.push_back({first, last});
-            input.chain_id.push_back(c);
-            input.whole_level.push_back(whole_level_[c] == kOpen ? kOpenChain : whole_level_[c]);
-            input.settled.push_back(settled ? 1 : 0);
-            const bool whole = whole_level_[c] != kOpen && whole_level_[c] <= t;
-            input.distinct.push_back(whole ? distinct_[c] : 0);
-            input.orientation.push_back(whole ? orientation_[c] : std::int8_t{2});
-        };
+        const auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
+        const auto marked = [&](std::uint32_t v) { return use_marks_ && marked_[v] != 0; };
+        // Pieces in chain order, tagged with their tile; sorted by tile below (stably: each
+        // tile's pieces stay in chain order).
+        std::vector<std::pair<std::uint32_t, TilePiece>> tagged;
+        std::vector<std::uint32_t> busy_tiles;  // (tile numbers with a marked vertex)
         for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
             const Chain& chain = map_.chains[c];
             if (whole_level_[c] != kOpen && whole_level_[c] <= t) {
                 // A ring inside one tile: its live vertices, and its removed ones too while the tile
                 // may need the input ring's orientation (unknown yet, and the round's budget may
                 // bring the ring down to 4 distinct locations, where the ring rule asks for it).
-                TileInput& input = tile(tile_of(chain.first));
-                const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
+                const std::uint32_t k = tile_of(chain.first);
                 std::uint32_t budget = 0;
                 for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
                 const bool input_ring = orientation_[c] == 2 && distinct_[c] <= 4 + budget;
+                bool any = false;
                 if (input_ring) {
-                    for (std::uint32_t v = chain.first; v <= chain.last; ++v) add(input, v, false);
+                    for (std::uint32_t v = chain.first; v <= chain.last; ++v) any = any || marked(v);
                 } else {
-                    for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) add(input, u, false);
+                    for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) any = any || marked(u);
                 }
-                add_chain(input, c, first, false);
+                tagged.push_back({k, {c, chain.first, input_ring ? TilePiece::input_ring : TilePiece::live_ring, 0}});
+                if (any) busy_tiles.push_back(k);
                 continue;
             }
             // A split ring's cut ends: both ends of every live segment across a tile border.
@@ -538,38 +525,187 @@ public:
             // Runs of live vertices in one tile, each with its cut ends.
             for (std::uint32_t u = chain.first; u != kNone;) {
                 const std::uint32_t k = tile_of(u);
-                TileInput& input = tile(k);
-                const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
-                if (prev_[u] != kNone) add(input, prev_[u], true);
+                tagged.push_back({k, {c, u, TilePiece::run, static_cast<std::uint8_t>(settled ? 1 : 0)}});
+                bool any = false;
                 std::uint32_t w = u;
                 for (;;) {
-                    add(input, w, false);
+                    any = any || marked(w);
                     if (next_[w] == kNone || tile_of(next_[w]) != k) break;
                     w = next_[w];
                 }
-                if (next_[w] != kNone) add(input, next_[w], true);
-                add_chain(input, c, first, settled);
+                if (any) busy_tiles.push_back(k);
                 u = next_[w];
             }
         }
-        for (const Point p : map_.control_points) {
-            const std::uint32_t k = (block_row(p) >> t) * columns + (block_column(p) >> t);
-            if (const auto found = by_tile.find(k); found != by_tile.end()) found->second.map.control_points.push_back(p);
+        std::stable_sort(tagged.begin(), tagged.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+        RoundSplit& split = split_;
+        for (std::size_t i = 0; i < tagged.size(); ++i) {
+            if (i == 0 || tagged[i].first != tagged[i - 1].first) {
+                split.tiles.push_back(tagged[i].first);
+                split.piece_start.push_back(static_cast<std::uint32_t>(i));
+            }
+            split.pieces.push_back(tagged[i].second);
         }
-        for (const auto& [waiter, blocker] : waits_.all()) {
-            if (tile_of(waiter) != tile_of(blocker)) continue;  // (across tiles: settled in finish_round)
-            by_tile[tile_of(waiter)].waits.emplace_back(local[waiter], local[blocker]);
+        split.piece_start.push_back(static_cast<std::uint32_t>(split.pieces.size()));
+        std::vector<std::pair<std::uint32_t, TilePiece>>().swap(tagged);
+        const auto tiles = static_cast<std::uint32_t>(split.tiles.size());
+        const auto index_of = [&](std::uint32_t k) {  // a tile number's index in split.tiles, or kNone
+            const auto at = std::lower_bound(split.tiles.begin(), split.tiles.end(), k);
+            return at != split.tiles.end() && *at == k ? static_cast<std::uint32_t>(at - split.tiles.begin()) : kNone;
+        };
+        // The control points in each tile, in order (a counting sort of their indices).
+        {
+            const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
+            std::vector<std::uint32_t> tile_index(std::size_t{columns} * blocks_.blocks(1, static_cast<int>(t)), kNone);
+            for (std::uint32_t i = 0; i < tiles; ++i) tile_index[split.tiles[i]] = i;
+            const auto point_tile = [&](Point p) { return tile_index[(block_row(p) >> t) * columns + (block_column(p) >> t)]; };
+            split.point_start.assign(std::size_t{tiles} + 1, 0);
+            for (const Point p : map_.control_points) {
+                if (const std::uint32_t i = point_tile(p); i != kNone) ++split.point_start[i + 1];
+            }
+            for (std::uint32_t i = 0; i < tiles; ++i) split.point_start[i + 1] += split.point_start[i];
+            split.points.resize(split.point_start[tiles]);
+            std::vector<std::uint32_t> fill(split.point_start.begin(), split.point_start.end() - 1);
+            for (std::uint32_t j = 0; j < map_.control_points.size(); ++j) {
+                if (const std::uint32_t i = point_tile(map_.control_points[j]); i != kNone) split.points[fill[i]++] = j;
+            }
         }
-        std::vector<TileInput> tiles;
-        tiles.reserve(by_tile.size());
-        for (auto& [k, input] : by_tile) {
-            std::sort(input.waits.begin(), input.waits.end());
-            input.marks = use_marks_;
-            input.bound_key = bound_.key;
-            input.bound_id = bound_.id;
-            tiles.push_back(std::move(input));
+        // The waits among each tile's vertices (across tiles: settled in finish_round).
+        {
+            std::vector<std::pair<std::uint32_t, std::pair<std::uint32_t, std::uint32_t>>> waits;
+            for (const auto& [waiter, blocker] : waits_.all()) {
+                if (tile_of(waiter) == tile_of(blocker)) waits.push_back({index_of(tile_of(waiter)), {waiter, blocker}});
+            }
+            std::stable_sort(waits.begin(), waits.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+            split.wait_start.assign(std::size_t{tiles} + 1, 0);
+            for (const auto& wait : waits) {
+                ++split.wait_start[wait.first + 1];
+                split.waits.push_back(wait.second);
+            }
+            for (std::uint32_t i = 0; i < tiles; ++i) split.wait_start[i + 1] += split.wait_start[i];
         }
-        return tiles;
+        // The groups: union-find over the tiles, joined by the chains of their unsettled split
+        // pieces; in the order of their first tiles (row-major), each in row-major order.
+        std::vector<std::uint32_t> parent(tiles);
+        for (std::uint32_t i = 0; i < tiles; ++i) parent[i] = i;
+        const auto root = [&](std::uint32_t i) {
+            while (parent[i] != i) i = parent[i] = parent[parent[i]];
+            return i;
+        };
+        std::unordered_map<std::uint32_t, std::uint32_t> holder;  // unsettled split chain → a tile holding a piece
+        for (std::uint32_t i = 0; i < tiles; ++i) {
+            for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) {
+                const TilePiece& piece = split.pieces[j];
+                const bool open = piece.kind == TilePiece::run && whole_level_[piece.chain] != kOpen && !piece.settled;
+                if (!open) continue;
+                const auto [at, fresh] = holder.emplace(piece.chain, i);
+                if (!fresh) parent[root(i)] = root(at->second);
+            }
+        }
+        std::sort(busy_tiles.begin(), busy_tiles.end());
+        std::vector<std::uint8_t> busy(tiles, use_marks_ ? 0 : 1);
+        for (const std::uint32_t k : busy_tiles) busy[index_of(k)] = 1;
+        std::vector<std::uint32_t> group_of(tiles, kNone);  // root → group
+        std::vector<std::vector<std::uint32_t>> groups;
+        for (std::uint32_t i = 0; i < tiles; ++i) {
+            std::uint32_t& group = group_of[root(i)];
+            if (group == kNone) {
+                group = static_cast<std::uint32_t>(groups.size());
+                groups.emplace_back();
+            }
+            groups[group].push_back(i);
+        }
+        // In a round of a count target only marked vertices go: a group without any has nothing to do.
+        std::vector<std::uint32_t> running;
+        for (std::vector<std::uint32_t>& group : groups) {
+            if (std::none_of(group.begin(), group.end(), [&](std::uint32_t i) { return busy[i] != 0; })) continue;
+            for (const std::uint32_t i : group) running.push_back(split.tiles[i]);
+            split.groups.push_back(std::move(group));
+        }
+        set_running_tiles(std::move(running));
+        return split.groups.size();
+    }
+
+    // Group k of the round (split_round): its tiles' inputs.
+    std::vector<TileInput> round_group(std::size_t k) const {
+        std::vector<TileInput> group;
+        for (const std::uint32_t i : split_.groups.at(k)) group.push_back(tile_input(i));
+        return group;
+    }
+
+    std::size_t round_group_size(std::size_t k) const { return split_.groups.at(k).size(); }
+
+    TileInput tile_input(std::uint32_t i) const {
+        const RoundSplit& split = split_;
+        const unsigned t = tile_level_;
+        const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
+        const std::uint32_t k = split.tiles[i];
+        const auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
+        TileInput input;
+        input.level = t;
+        input.column = k % columns;
+        input.row = k / columns;
+        // The tile's ids of the vertices its waits name (sorted by whole-map id, found as added).
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> local;
+        for (std::uint32_t j = split.wait_start[i]; j < split.wait_start[i + 1]; ++j) {
+            local.push_back({split.waits[j].first, kNone});
+            local.push_back({split.waits[j].second, kNone});
+        }
+        std::sort(local.begin(), local.end());
+        local.erase(std::unique(local.begin(), local.end()), local.end());
+        auto add = [&](std::uint32_t v, bool cut_end) {
+            if (!cut_end && !local.empty()) {
+                const auto at = std::lower_bound(local.begin(), local.end(), std::pair{v, std::uint32_t{0}});
+                if (at != local.end() && at->first == v) at->second = static_cast<std::uint32_t>(input.vertex_id.size());
+            }
+            input.map.vertices.push_back(map_.vertices[v]);
+            input.vertex_id.push_back(v);
+            input.state.push_back(static_cast<std::uint8_t>(cut_end ? State::fixed : state_[v]));
+            if (use_marks_) input.marked.push_back(cut_end ? 0 : marked_[v]);
+        };
+        for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) {
+            const TilePiece& piece = split.pieces[j];
+            const std::uint32_t c = piece.chain;
+            const Chain& chain = map_.chains[c];
+            const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
+            if (piece.kind == TilePiece::input_ring) {
+                for (std::uint32_t v = chain.first; v <= chain.last; ++v) add(v, false);
+            } else if (piece.kind == TilePiece::live_ring) {
+                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) add(u, false);
+            } else {
+                const std::uint32_t u = piece.start;
+                if (prev_[u] != kNone) add(prev_[u], true);
+                std::uint32_t w = u;
+                for (;;) {
+                    add(w, false);
+                    if (next_[w] == kNone || tile_of(next_[w]) != k) break;
+                    w = next_[w];
+                }
+                if (next_[w] != kNone) add(next_[w], true);
+            }
+            const auto last = static_cast<std::uint32_t>(input.vertex_id.size() - 1);
+            input.map.chains.push_back({first, last});
+            input.chain_id.push_back(c);
+            input.whole_level.push_back(whole_level_[c] == kOpen ? kOpenChain : whole_level_[c]);
+            input.settled.push_back(piece.settled);
+            const bool whole = piece.kind != TilePiece::run;
+            input.distinct.push_back(whole ? distinct_[c] : 0);
+            input.orientation.push_back(whole ? orientation_[c] : std::int8_t{2});
+        }
+        for (std::uint32_t j = split.point_start[i]; j < split.point_start[i + 1]; ++j) {
+            input.map.control_points.push_back(map_.control_points[split.points[j]]);
+        }
+        const auto local_id = [&](std::uint32_t v) {
+            return std::lower_bound(local.begin(), local.end(), std::pair{v, std::uint32_t{0}})->second;
+        };
+        for (std::uint32_t j = split.wait_start[i]; j < split.wait_start[i + 1]; ++j) {
+            input.waits.emplace_back(local_id(split.waits[j].first), local_id(split.waits[j].second));
+        }
+        std::sort(input.waits.begin(), input.waits.end());
+        input.marks = use_marks_;
+        input.bound_key = bound_.key;
+        input.bound_id = bound_.id;
+        return input;
     }
 
     // The tiles' outcomes into the whole map, the waits across tiles settled, then the levels
@@ -629,7 +765,7 @@ public:
         if (use_marks_) keep_undecided();
     }
 
-    // The tiles of the round that run (tile_groups leaves the idle ones out), by their numbers in
+    // The tiles of the round that run (split_round leaves the idle ones out), by their numbers in
     // row-major order.
     void set_running_tiles(std::vector<std::uint32_t> tiles) {
         std::sort(tiles.begin(), tiles.end());
@@ -1427,6 +1563,21 @@ public:
     std::uint64_t round_budget_ = 0;  // count targets: this round's marked vertices
     bool round_here_ = false;         // this round runs here, not in tiles
     std::vector<std::uint32_t> running_;  // this round's tiles that run, sorted
+    // This round's tiles (split_round): per tile (numbers row-major) its pieces, control points
+    // (indices) and waits (whole-map ids), each from its start; the groups that run (indices).
+    struct TilePiece {
+        enum Kind : std::uint8_t { run, live_ring, input_ring };
+        std::uint32_t chain;
+        std::uint32_t start;  // a run's first live vertex
+        Kind kind;
+        std::uint8_t settled;  // a run of a split ring that its cut ends settle
+    };
+    struct RoundSplit {
+        std::vector<std::uint32_t> tiles, piece_start, point_start, points, wait_start;
+        std::vector<TilePiece> pieces;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
+        std::vector<std::vector<std::uint32_t>> groups;
+    } split_;
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
@@ -1506,19 +1657,15 @@ unsigned MapInParts::tile_level() const { return tile_level_; }
 
 bool MapInParts::next_round() { return engine_->next_part_round(here_below_); }
 
+std::size_t MapInParts::split_round() { return engine_->split_round(); }
+
+std::vector<TileInput> MapInParts::group(std::size_t k) const { return engine_->round_group(k); }
+
+std::size_t MapInParts::group_size(std::size_t k) const { return engine_->round_group_size(k); }
+
 std::vector<std::vector<TileInput>> MapInParts::tile_groups() {
-    std::vector<std::vector<TileInput>> groups = group_tiles(engine_->split_tiles());
-    // In a round of a count target only marked vertices go: a group without any has nothing to do.
-    std::erase_if(groups, [](const std::vector<TileInput>& group) {
-        return std::all_of(group.begin(), group.end(), [](const TileInput& tile) {
-            return tile.marks && std::find(tile.marked.begin(), tile.marked.end(), 1) == tile.marked.end();
-        });
-    });
-    std::vector<std::uint32_t> running;
-    for (const std::vector<TileInput>& group : groups) {
-        for (const TileInput& tile : group) running.push_back(engine_->tile_number(tile.column, tile.row));
-    }
-    engine_->set_running_tiles(std::move(running));
+    std::vector<std::vector<TileInput>> groups(split_round());
+    for (std::size_t k = 0; k < groups.size(); ++k) groups[k] = group(k);
     return groups;
 }
 

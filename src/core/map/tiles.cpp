@@ -6,34 +6,6 @@
 
 namespace toposimp::map {
 
-std::vector<std::vector<TileInput>> group_tiles(std::vector<TileInput> tiles) {
-    // Union-find over the tiles, joined by the chains of their unsettled split pieces.
-    std::vector<std::size_t> parent(tiles.size());
-    for (std::size_t k = 0; k < tiles.size(); ++k) parent[k] = k;
-    auto root = [&](std::size_t k) {
-        while (parent[k] != k) k = parent[k] = parent[parent[k]];
-        return k;
-    };
-    std::map<std::uint32_t, std::size_t> holder;  // unsettled chain → a tile holding a piece
-    for (std::size_t k = 0; k < tiles.size(); ++k) {
-        const TileInput& tile = tiles[k];
-        for (std::size_t c = 0; c < tile.chain_id.size(); ++c) {
-            const bool open = tile.whole_level[c] != kOpenChain && tile.whole_level[c] > tile.level && !tile.settled[c];
-            if (!open) continue;
-            const auto [at, fresh] = holder.emplace(tile.chain_id[c], k);
-            if (!fresh) parent[root(k)] = root(at->second);
-        }
-    }
-    std::vector<std::vector<TileInput>> groups;
-    std::map<std::size_t, std::size_t> group_of;  // root → group
-    for (std::size_t k = 0; k < tiles.size(); ++k) {
-        const auto [at, fresh] = group_of.emplace(root(k), groups.size());
-        if (fresh) groups.emplace_back();
-        groups[at->second].push_back(std::move(tiles[k]));
-    }
-    return groups;
-}
-
 std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options) {
     if (group.empty()) return {};
     const unsigned tile_level = group.front().level;
@@ -68,8 +40,9 @@ SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& opti
     MapInParts parts(map, options, tile_level, here_below);
     while (parts.next_round()) {
         std::vector<TileOutcome> outcomes;
-        for (std::vector<TileInput>& group : parts.tile_groups()) {
-            for (TileOutcome& outcome : run_tile_group(std::move(group), parts.plan(), options)) outcomes.push_back(std::move(outcome));
+        const std::size_t groups = parts.split_round();
+        for (std::size_t k = 0; k < groups; ++k) {
+            for (TileOutcome& outcome : run_tile_group(parts.group(k), parts.plan(), options)) outcomes.push_back(std::move(outcome));
         }
         parts.finish_round(outcomes);
     }

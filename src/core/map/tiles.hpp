@@ -129,10 +129,6 @@ private:
     std::unique_ptr<Parts> parts_;
 };
 
-// The tiles that must run together, level by level: those sharing a split ring that its cut
-// ends do not settle (most tiles are alone). In the order of the tiles' first members.
-std::vector<std::vector<TileInput>> group_tiles(std::vector<TileInput> tiles);
-
 // Runs a group of tiles through the levels below their tile level, deciding their open rings
 // together; one outcome per tile, in order. Each tile task of a distributed run is one call.
 std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options);
@@ -143,7 +139,7 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 //
 //     MapInParts parts(map, options, tile_level);
 //     while (parts.next_round()) {
-//         std::vector<TileOutcome> outcomes = /* run_tile_group on each of parts.tile_groups() */;
+//         std::vector<TileOutcome> outcomes = /* run_tile_group on each parts.group(k), k < parts.split_round() */;
 //         parts.finish_round(outcomes);
 //     }
 //     SimplifyResult result = parts.result();
@@ -151,7 +147,7 @@ class MapInParts {
 public:
     // `map` and `options` outlive this. tile_level is capped at the plan's levels. A round of a
     // count target whose budget is under `here_below` vertices runs here, whole, as the single
-    // process runs it (tile_groups() is then empty): cheaper than tasks when little is to go.
+    // process runs it (split_round() is then 0): cheaper than tasks when little is to go.
     MapInParts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0);
     ~MapInParts();
 
@@ -160,8 +156,16 @@ public:
     // Starts a round (one for --max and --max-area; count targets: while vertices are to go and
     // can); false when there is none left.
     bool next_round();
-    // The round's tiles, grouped (group_tiles), each group in row-major order of its first tile;
-    // groups with nothing to do in the round are left out.
+    // Starts the round's tiles: returns how many groups of them run (0 when the round runs here).
+    // The tiles that must run together form a group: those sharing a split ring that its cut
+    // ends do not settle (most tiles are alone). Groups are in row-major order of their first
+    // tiles, each in row-major order; groups with nothing to do in the round are left out.
+    std::size_t split_round();
+    // Group k (< split_round()) of the round: its tiles' inputs, built now (the round's tiles
+    // are never all built at once; a group may be built again, e.g. for a task run again).
+    std::vector<TileInput> group(std::size_t k) const;
+    std::size_t group_size(std::size_t k) const;  // its tiles
+    // split_round() and every group.
     std::vector<std::vector<TileInput>> tile_groups();
     // The round's outcomes (each tile's once, in any order), then the levels from T up.
     void finish_round(std::span<const TileOutcome> outcomes);

@@ -1,0 +1,60 @@
+"""The engine in parts without Dask: run_command with tile groups run in this process. Each
+round's groups come as a sequence that builds group k when it is asked for (the round's tiles
+never all exist at once); the output is toposimp map's byte for byte."""
+import numpy
+import pytest
+
+from conftest import DATA
+from toposimp import _toposimp
+
+SAME_DATE = ["--config", "OGR_CURRENT_DATE", "2000-01-01T00:00:00Z"]
+
+
+def same_tiles(a, b):
+    assert len(a) == len(b)
+    for one, other in zip(a, b):
+        assert one.keys() == other.keys()
+        for key in one:
+            assert numpy.array_equal(numpy.asarray(one[key]), numpy.asarray(other[key])), key
+
+
+def test_groups_built_when_asked_for(binary, tmp_path):
+    import subprocess
+
+    arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "-p", f"{DATA / 'nh_borders.gpkg'}:places", "--keep", "10%",
+                 *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+
+    rounds = []
+
+    def run_groups(groups, plan, options, round_number):
+        count = len(groups)
+        assert count > 0
+        first = groups[0]
+        same_tiles(groups[-count], first)  # (built again: the same)
+        with pytest.raises(IndexError):
+            groups[count]
+        rounds.append(groups)
+        # (the sequence protocol: iteration ends at the IndexError)
+        return [_toposimp.run_tile_group(group, plan, options) for group in groups]
+
+    output = tmp_path / "parts.gpkg"
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output)], run_groups, 2, 0, 0, None, False, False)
+    assert status == 0, err
+    assert len(rounds) > 1, "a count target runs rounds"
+    assert output.read_bytes() == reference.read_bytes()
+    with pytest.raises(RuntimeError, match="the round is over"):
+        rounds[0][0]
+
+
+def test_outcomes_must_match_the_groups(tmp_path):
+    """run_groups giving back the wrong number of outcomes stops the run with an error, no output."""
+    arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "--max", "-o", str(tmp_path / "out.gpkg")]
+
+    def too_few(groups, plan, options, round_number):
+        return [_toposimp.run_tile_group(group, plan, options) for group in groups][1:]
+
+    with pytest.raises(Exception, match="outcome"):
+        _toposimp.run_command(["map", *arguments], too_few, 2, 0, 0, None, False, False)
+    assert not (tmp_path / "out.gpkg").exists()
