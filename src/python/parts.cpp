@@ -274,22 +274,42 @@ map::TileOutcome outcome_of(const py::dict& dict, const map::MapData& map) {
 }
 
 // The coarsest level below the top whose biggest tile holds at most `budget` vertices and
-// control points (0 if none does: every level-0 block a tile).
+// control points (0 if none does: every level-0 block a tile). Counted in a dense array at the
+// finest level whose blocks number at most 2^22, and summed up from there: tiles are never finer
+// than that level (a map of more than 2^22 level-0 blocks has tiles of a few blocks at least).
 unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std::uint64_t budget) {
-    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint64_t> blocks;  // level-0 block → points
+    const auto blocks_at = [&](unsigned level) {
+        return std::pair{((plan.grid.base_columns - 1) >> (plan.shift + level)) + 1, ((plan.grid.base_rows - 1) >> (plan.shift + level)) + 1};
+    };
+    unsigned dense = 0;
+    while (dense + 1 < plan.levels) {
+        const auto [columns, rows] = blocks_at(dense);
+        if (std::uint64_t{columns} * rows <= (std::uint64_t{1} << 22)) break;
+        ++dense;
+    }
+    std::vector<std::uint64_t> count;
+    auto [columns, rows] = blocks_at(dense);
+    count.assign(std::size_t{columns} * rows, 0);
     for (const auto* points : {&map.vertices, &map.control_points}) {
-        for (const Point p : *points) ++blocks[{plan.block_column(p, 0), plan.block_row(p, 0)}];
+        for (const Point p : *points) ++count[std::size_t{plan.block_row(p, dense)} * columns + plan.block_column(p, dense)];
     }
     unsigned best = 0;
-    for (unsigned level = 1; level + 1 < plan.levels; ++level) {
-        std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint64_t> tiles;
-        std::uint64_t biggest = 0;
-        for (const auto& [block, count] : blocks) {
-            biggest = std::max(biggest, tiles[{block.first >> level, block.second >> level}] += count);
+    for (unsigned level = dense; level + 1 < plan.levels; ++level) {
+        if (level > dense) {  // (the counts one level up)
+            const auto [up_columns, up_rows] = blocks_at(level);
+            std::vector<std::uint64_t> up(std::size_t{up_columns} * up_rows, 0);
+            for (std::uint32_t row = 0; row < rows; ++row) {
+                for (std::uint32_t column = 0; column < columns; ++column) {
+                    up[std::size_t{row >> 1} * up_columns + (column >> 1)] += count[std::size_t{row} * columns + column];
+                }
+            }
+            count = std::move(up);
+            columns = up_columns;
+            rows = up_rows;
         }
-        if (biggest <= budget) best = level;
+        if (level >= 1 && *std::max_element(count.begin(), count.end()) <= budget) best = level;
     }
-    return best;
+    return best != 0 ? best : dense;
 }
 
 }  // namespace
