@@ -50,10 +50,31 @@ Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp
 """
 
 
-def _run_group(group, plan, options):
-    """A Dask task: one group of tiles through the levels below the tile level."""
+def _run_groups(groups, plan, options):
+    """A Dask task: groups of tiles, each through the levels below the tile level in turn."""
     from toposimp import _toposimp as engine
-    return engine.run_tile_group(group, plan, options)
+    return [engine.run_tile_group(group, plan, options) for group in groups]
+
+
+def _batches(points, workers):
+    """The round's groups (their sizes in points) as tasks: the biggest first, so that the round
+    does not wait at its end on one big task begun late; the small ones together, up to the
+    biggest group's size or a share of the round (whichever is smaller), so that Dask's own cost
+    per task (a few milliseconds of CPU over the processes) stays small against the work. A task
+    never holds more than the biggest group: the workers' memory bound holds."""
+    if not points:
+        return []
+    order = sorted(range(len(points)), key=lambda k: (-points[k], k))
+    limit = min(points[order[0]], -(-sum(points) // (2 * max(1, workers))))
+    batches, current, size = [], [], 0
+    for k in order:
+        if current and size + points[k] > limit:
+            batches.append(current)
+            current, size = [], 0
+        current.append(k)
+        size += points[k]
+    batches.append(current)
+    return batches
 
 
 class _Progress:
@@ -199,32 +220,35 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
             progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
         options = dict(options, threads=task_threads)
         client = connected()
-        total = len(groups)
+        workers = max(1, len(client.scheduler_info()["workers"]))
+        batches = _batches([groups.points(k) for k in range(len(groups))], workers)
+        total = len(batches)
         # A few tasks per worker in flight, not all: each holds its tiles on its worker until it
         # runs (all at once, 225 tasks of a 45 M-vertex map filled two 512 MiB workers, which
-        # then stopped). groups[k] builds group k's tiles here when it is sent, and they are
-        # dropped here once sent.
-        window = 4 * max(1, len(client.scheduler_info()["workers"]))
+        # then stopped). groups[k] builds group k's tiles here when its task is sent, and they
+        # are dropped here once sent.
+        window = 4 * workers
         place = {}
         running = as_completed(with_results=True)
-        following = iter(range(total))
+        following = iter(batches)
 
         def submit_next():
-            k = next(following, None)
-            if k is None:
+            batch = next(following, None)
+            if batch is None:
                 return
-            future = client.submit(_run_group, groups[k], plan=plan, options=options, pure=False)
-            place[future.key] = k
+            future = client.submit(_run_groups, [groups[k] for k in batch], plan=plan, options=options, pure=False)
+            place[future.key] = batch
             running.add(future)
 
         for _ in range(window):
             submit_next()
-        results = [None] * total
+        results = [None] * len(groups)
         if progress is not None:
             progress.tiles(0, total)
         done = 0
         for future, result in running:
-            results[place.pop(future.key)] = result
+            for k, outcomes in zip(place.pop(future.key), result):
+                results[k] = outcomes
             future.release()
             done += 1
             submit_next()

@@ -316,6 +316,12 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
 
 RoundGroups::RoundGroups(const map::MapInParts& parts, std::size_t count) : parts_(&parts), count_(count) {}
 
+std::uint64_t RoundGroups::points(std::size_t k) const {
+    if (k >= count_) throw py::index_error("no such tile group in the round");
+    if (parts_ == nullptr) throw std::runtime_error("the round is over: its tile groups are gone");
+    return parts_->group_points(k);
+}
+
 py::list RoundGroups::get(std::ptrdiff_t k) const {
     if (k < 0) k += static_cast<std::ptrdiff_t>(count_);
     if (k < 0 || static_cast<std::size_t>(k) >= count_) throw py::index_error("no such tile group in the round");
@@ -334,7 +340,9 @@ void bind_parts(py::module_& module) {
     py::class_<RoundGroups>(module, "RoundGroups",
                             "A round's tile groups: groups[k] builds group k's tiles (a list of dicts) when asked for")
         .def("__len__", &RoundGroups::size)
-        .def("__getitem__", &RoundGroups::get, py::arg("k"));
+        .def("__getitem__", &RoundGroups::get, py::arg("k"))
+        .def("points", &RoundGroups::points, py::arg("k"),
+             "group k's vertices (with its tiles' cut ends) and control points, known before it is built");
 }
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,

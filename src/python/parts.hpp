@@ -7,6 +7,8 @@
 
 #include <pybind11/pybind11.h>
 
+#include <cstdint>
+
 namespace toposimp::python {
 
 namespace py = pybind11;
@@ -19,6 +21,7 @@ public:
     RoundGroups(const map::MapInParts& parts, std::size_t count);
     std::size_t size() const { return count_; }
     py::list get(std::ptrdiff_t k) const;
+    std::uint64_t points(std::size_t k) const;  // what group k holds, without building it
     void close() { parts_ = nullptr; }
 
 private:

@@ -58,3 +58,19 @@ def test_outcomes_must_match_the_groups(tmp_path):
     with pytest.raises(Exception, match="outcome"):
         _toposimp.run_command(["map", *arguments], too_few, 2, 0, 0, None, False, False)
     assert not (tmp_path / "out.gpkg").exists()
+
+
+def test_tasks_take_the_biggest_groups_first_and_small_ones_together():
+    from toposimp.dask import _batches
+
+    points = [5, 900, 40, 40, 1000, 30, 20, 10, 700, 1]
+    batches = _batches(points, workers=2)
+    assert sorted(k for batch in batches for k in batch) == list(range(len(points)))  # each group once
+    assert batches[0] == [4] and batches[1] == [1] and batches[2] == [8]  # the biggest first, alone
+    assert len(batches) < len(points)  # the small ones together
+    limit = min(max(points), -(-sum(points) // 4))
+    assert all(sum(points[k] for k in batch) <= limit or len(batch) == 1 for batch in batches)
+    sizes = [sum(points[k] for k in batch) for batch in batches]
+    assert max(sizes) == max(points)  # no task holds more than the biggest group
+    assert _batches([], workers=3) == []
+    assert _batches([7], workers=3) == [[0]]

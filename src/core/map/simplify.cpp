@@ -497,12 +497,13 @@ public:
                 for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
                 const bool input_ring = orientation_[c] == 2 && distinct_[c] <= 4 + budget;
                 bool any = false;
+                std::uint32_t points = 0;
                 if (input_ring) {
-                    for (std::uint32_t v = chain.first; v <= chain.last; ++v) any = any || marked(v);
+                    for (std::uint32_t v = chain.first; v <= chain.last; ++v, ++points) any = any || marked(v);
                 } else {
-                    for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) any = any || marked(u);
+                    for (std::uint32_t u = chain.first; u != kNone; u = next_[u], ++points) any = any || marked(u);
                 }
-                tagged.push_back({k, {c, chain.first, input_ring ? TilePiece::input_ring : TilePiece::live_ring, 0}});
+                tagged.push_back({k, {c, chain.first, points, input_ring ? TilePiece::input_ring : TilePiece::live_ring, 0}});
                 if (any) busy_tiles.push_back(k);
                 continue;
             }
@@ -525,14 +526,17 @@ public:
             // Runs of live vertices in one tile, each with its cut ends.
             for (std::uint32_t u = chain.first; u != kNone;) {
                 const std::uint32_t k = tile_of(u);
-                tagged.push_back({k, {c, u, TilePiece::run, static_cast<std::uint8_t>(settled ? 1 : 0)}});
+                TilePiece& piece = tagged.emplace_back(k, TilePiece{c, u, prev_[u] != kNone ? 1u : 0u, TilePiece::run,
+                                                                     static_cast<std::uint8_t>(settled ? 1 : 0)}).second;
                 bool any = false;
                 std::uint32_t w = u;
                 for (;;) {
                     any = any || marked(w);
+                    ++piece.points;
                     if (next_[w] == kNone || tile_of(next_[w]) != k) break;
                     w = next_[w];
                 }
+                if (next_[w] != kNone) ++piece.points;
                 if (any) busy_tiles.push_back(k);
                 u = next_[w];
             }
@@ -619,8 +623,14 @@ public:
         std::vector<std::uint32_t> running;
         for (std::vector<std::uint32_t>& group : groups) {
             if (std::none_of(group.begin(), group.end(), [&](std::uint32_t i) { return busy[i] != 0; })) continue;
-            for (const std::uint32_t i : group) running.push_back(split.tiles[i]);
+            std::uint64_t points = 0;
+            for (const std::uint32_t i : group) {
+                running.push_back(split.tiles[i]);
+                points += split.point_start[i + 1] - split.point_start[i];
+                for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) points += split.pieces[j].points;
+            }
             split.groups.push_back(std::move(group));
+            split.group_points.push_back(points);
         }
         set_running_tiles(std::move(running));
         return split.groups.size();
@@ -634,6 +644,7 @@ public:
     }
 
     std::size_t round_group_size(std::size_t k) const { return split_.groups.at(k).size(); }
+    std::uint64_t round_group_points(std::size_t k) const { return split_.group_points.at(k); }
 
     TileInput tile_input(std::uint32_t i) const {
         const RoundSplit& split = split_;
@@ -1568,7 +1579,8 @@ public:
     struct TilePiece {
         enum Kind : std::uint8_t { run, live_ring, input_ring };
         std::uint32_t chain;
-        std::uint32_t start;  // a run's first live vertex
+        std::uint32_t start;   // a run's first live vertex
+        std::uint32_t points;  // the vertices the tile gets for it (a run's with its cut ends)
         Kind kind;
         std::uint8_t settled;  // a run of a split ring that its cut ends settle
     };
@@ -1577,6 +1589,7 @@ public:
         std::vector<TilePiece> pieces;
         std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
         std::vector<std::vector<std::uint32_t>> groups;
+        std::vector<std::uint64_t> group_points;  // per group: its tiles' vertices and control points
     } split_;
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
@@ -1662,6 +1675,8 @@ std::size_t MapInParts::split_round() { return engine_->split_round(); }
 std::vector<TileInput> MapInParts::group(std::size_t k) const { return engine_->round_group(k); }
 
 std::size_t MapInParts::group_size(std::size_t k) const { return engine_->round_group_size(k); }
+
+std::uint64_t MapInParts::group_points(std::size_t k) const { return engine_->round_group_points(k); }
 
 std::vector<std::vector<TileInput>> MapInParts::tile_groups() {
     std::vector<std::vector<TileInput>> groups(split_round());

@@ -164,7 +164,8 @@ public:
     // Group k (< split_round()) of the round: its tiles' inputs, built now (the round's tiles
     // are never all built at once; a group may be built again, e.g. for a task run again).
     std::vector<TileInput> group(std::size_t k) const;
-    std::size_t group_size(std::size_t k) const;  // its tiles
+    std::size_t group_size(std::size_t k) const;       // its tiles
+    std::uint64_t group_points(std::size_t k) const;   // its tiles' vertices (with cut ends) and control points
     // split_round() and every group.
     std::vector<std::vector<TileInput>> tile_groups();
     // The round's outcomes (each tile's once, in any order), then the levels from T up.

@@ -65,6 +65,50 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
     }
 }
 
+// What split_round says of each group before it is built (its tiles, its vertices with cut ends
+// and control points: what a distributed run sizes its tasks by) is what group(k) builds, in every
+// round; building a group twice gives the same tiles.
+TEST(MapTiles, GroupSizesAreWhatTheGroupsHold) {
+    std::mt19937_64 rng(7);
+    testing::RandomMapOptions shape;
+    shape.chains = 150;
+    shape.max_steps = 60;
+    shape.rings = 60;
+    shape.control_points = 1500;
+    shape.roads = 6;
+    const MapData map = testing::random_planar_map(rng, shape);
+    SimplifyOptions options;
+    options.stop = {Target::keep_fraction, 0.1};
+    options.parallel_threshold = 0;
+    MapInParts parts(map, options, 1);
+    int rounds = 0, groups_seen = 0;
+    while (parts.next_round()) {
+        ++rounds;
+        const std::size_t groups = parts.split_round();
+        std::vector<TileOutcome> outcomes;
+        for (std::size_t k = 0; k < groups; ++k) {
+            std::vector<TileInput> group = parts.group(k);
+            ++groups_seen;
+            ASSERT_EQ(parts.group_size(k), group.size());
+            std::uint64_t points = 0;
+            for (const TileInput& tile : group) points += tile.map.vertices.size() + tile.map.control_points.size();
+            EXPECT_EQ(parts.group_points(k), points) << "round " << rounds << ", group " << k;
+            const std::vector<TileInput> again = parts.group(k);
+            ASSERT_EQ(again.size(), group.size());
+            for (std::size_t t = 0; t < group.size(); ++t) {
+                EXPECT_EQ(again[t].vertex_id, group[t].vertex_id);
+                EXPECT_EQ(again[t].state, group[t].state);
+                EXPECT_EQ(again[t].waits, group[t].waits);
+            }
+            for (TileOutcome& outcome : run_tile_group(std::move(group), parts.plan(), options)) outcomes.push_back(std::move(outcome));
+        }
+        parts.finish_round(outcomes);
+    }
+    EXPECT_GT(rounds, 1);
+    EXPECT_GT(groups_seen, rounds);
+    EXPECT_EQ(parts.result().stats.removed, simplify(map, options).stats.removed);
+}
+
 // A ring whose only segments across the tile border are one segment out and the same one back
 // (A, B, A): its cut ends hold 2 locations, so its pieces cannot settle the ring rule alone; the
 // tiles tell each other their fixed locations level by level (here the fold-back rule would keep
