@@ -201,6 +201,30 @@ def fitting_tile_points(client, wanted, timeout=120):
     return min(wanted, fits)
 
 
+def check_workers(client):
+    """Raises UsageError unless every worker of `client` runs tiles with this engine (the toposimp
+    package importable there, of this version and tile format)."""
+    from toposimp import UsageError
+
+    def engine_there():  # (defined here so that Dask sends it by value: the worker may lack the package)
+        try:
+            from toposimp import _toposimp as engine
+        except ImportError as error:
+            return f"cannot import toposimp ({error})"
+        return [engine.version, getattr(engine, "parts_protocol", 0)]
+
+    mine = [_toposimp.version, _toposimp.parts_protocol]
+    for address, answer in sorted(client.run(engine_there).items()):
+        if answer == mine:
+            continue
+        if isinstance(answer, str):
+            why = answer
+        else:
+            why = f"it has toposimp {answer[0]} with tile format {answer[1]}, this is {mine[0]} with {mine[1]}"
+        raise UsageError(f"the Dask worker {address} cannot run the tiles: {why}; make this toposimp package importable "
+                         "on every worker (PYTHONPATH, or install it there)")
+
+
 def _tasks(connected, task_threads, progress=None, on_progress=None):
     """run_groups for the engine (src/python/parts.hpp): each round's tile groups as tasks on the
     client `connected()` gives, their outcomes back in order."""
@@ -213,13 +237,19 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
             warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
             return run_round(groups, plan, options, round_number)
 
+    checked = []  # the clients whose workers were checked
+
     def run_round(groups, plan, options, round_number):
         from distributed import as_completed
+        from toposimp import UsageError
 
         if progress is not None:
             progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
         options = dict(options, threads=task_threads)
         client = connected()
+        if not any(c is client for c in checked):
+            check_workers(client)
+            checked.append(client)
         workers = max(1, len(client.scheduler_info()["workers"]))
         batches = _batches([groups.points(k) for k in range(len(groups))], workers)
         total = len(batches)
@@ -246,16 +276,20 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
         if progress is not None:
             progress.tiles(0, total)
         done = 0
-        for future, result in running:
-            for k, outcomes in zip(place.pop(future.key), result):
-                results[k] = outcomes
-            future.release()
-            done += 1
-            submit_next()
-            if progress is not None:
-                progress.tiles(done, total)
-            if on_progress is not None:
-                on_progress(done, total)
+        try:
+            for future, result in running:
+                for k, outcomes in zip(place.pop(future.key), result):
+                    results[k] = outcomes
+                future.release()
+                done += 1
+                submit_next()
+                if progress is not None:
+                    progress.tiles(done, total)
+                if on_progress is not None:
+                    on_progress(done, total)
+        except ImportError as error:  # (a worker that joined after the check, without the package)
+            raise UsageError(f"a Dask worker cannot run the tiles: {error}; make this toposimp package importable on "
+                             "every worker (PYTHONPATH, or install it there)") from None
         return results
 
     return run_groups

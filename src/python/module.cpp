@@ -576,6 +576,8 @@ PYBIND11_MODULE(_toposimp, module) {
     module.def("run_command", &run_command, py::arg("args"), py::arg("run_groups"), py::arg("tile_level"), py::arg("tile_points"),
                py::arg("local_budget"), py::arg("progress"), py::arg("err_is_terminal"), py::arg("interruptible"));
     python::bind_parts(module);
+    module.attr("version") = TOPOSIMP_VERSION;
+    module.attr("parts_protocol") = python::kPartsProtocol;
     module.def("run_tile_group", &python::run_tile_group, py::arg("group"), py::arg("plan"), py::arg("options"));
     module.def("check_layers", &check_layers, py::arg("original"), py::arg("simplified"), py::arg("points"), py::arg("precision"),
                py::arg("interruptible"), py::arg("shapely_geos"));

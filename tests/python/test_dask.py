@@ -120,6 +120,38 @@ def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys
     assert not list(tmp_path.glob("*.tmp*")) and sorted(p.name for p in tmp_path.iterdir()) == ["broken.geojson"]
 
 
+def test_worker_without_the_package_is_named(tmp_path):
+    """A worker that cannot import toposimp: exit 2, a message naming it and what to do, no output
+    (not a traceback from inside a task)."""
+    address_file = tmp_path / "scheduler.json"
+    bare = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    processes = [subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_scheduler", "--host", "127.0.0.1", "--port", "0",
+                                   "--scheduler-file", str(address_file), "--no-dashboard"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=tmp_path, env=bare)]
+    try:
+        deadline = time.monotonic() + 60
+        while not address_file.exists() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        processes.append(subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(address_file),
+                                           "--nthreads", "1", "--no-nanny", "--no-dashboard", "--local-directory", str(tmp_path / "w")],
+                                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=tmp_path, env=bare))
+        with distributed.Client(scheduler_file=str(address_file)) as client:
+            client.wait_for_workers(1, timeout=60)
+            address = client.scheduler.address
+        output = tmp_path / "out.gpkg"
+        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", str(ROOT / "testdata" / "nh_borders.gpkg"), "-o", str(output),
+                               "--keep", "10%", "--scheduler", address, "--local-budget", "0", "--tile-level", "1"],
+                              capture_output=True, text=True, timeout=120)
+        assert done.returncode == 2, done.stderr
+        assert "cannot import toposimp" in done.stderr and "PYTHONPATH" in done.stderr
+        assert "Traceback" not in done.stderr
+        assert not output.exists()
+    finally:
+        for process in processes:
+            process.kill()
+            process.wait()
+
+
 def test_levels_and_published_precision(cluster, generated, binary, tmp_path):
     """--levels (each level a run in parts on the previous one) and --decimals: the same files."""
     from toposimp import dask as toposimp_dask
