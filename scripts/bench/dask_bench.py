@@ -11,7 +11,6 @@ BUILD_DIR holds the toposimp executable and python/ (the package). Prints a Mark
 import argparse
 import os
 import pathlib
-import resource
 import shlex
 import statistics
 import subprocess
@@ -32,7 +31,16 @@ def timed(command, env=None):
 
 
 def worker_peaks(client):
-    return sorted(v / 1024 for v in client.run(lambda: resource.getrusage(resource.RUSAGE_SELF).ru_maxrss).values())
+    """Each worker's peak resident memory in MiB: VmHWM, its own address space's high-water mark.
+    (Not getrusage's ru_maxrss: Linux carries that over the exec that starts a spawned worker, so
+    a worker would report its parent's peak when that was higher.)"""
+    def peak():
+        with open("/proc/self/status") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1])
+        return 0
+    return sorted(v / 1024 for v in client.run(peak).values())
 
 
 def main():
