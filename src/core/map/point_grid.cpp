@@ -90,10 +90,18 @@ PointGrid::PointGrid(const Geometry& geometry, const Window& window, std::span<c
     build<true>(first, second, threads_wanted);
 }
 
+PointGrid::PointGrid(const Geometry& geometry, std::span<const Point> first, std::span<const Point> second,
+                     std::span<const std::uint8_t> skip_first, int threads_wanted)
+    : geometry_(geometry), columns_(geometry.columns), rows_(geometry.rows), row_split_(geometry.row_split) {
+    build<false>(first, second, threads_wanted, skip_first);
+}
+
 template <bool Windowed>
-void PointGrid::build(std::span<const Point> first, std::span<const Point> second, int threads_wanted) {
+void PointGrid::build(std::span<const Point> first, std::span<const Point> second, int threads_wanted,
+                      std::span<const std::uint8_t> skip_first) {
     const std::size_t f = first.size(), n = f + second.size();
     auto point = [&](std::size_t i) { return i < f ? first[i] : second[i - f]; };
+    auto kept = [&](std::size_t i) { return skip_first.empty() || i >= f || skip_first[i] == 0; };
     // Where a point is stored: its cell, or the window's nearest one.
     auto cell_column = [&](double x) { return Windowed ? in_window(geometry_.column(x), first_column_, columns_) : geometry_.column(x); };
     auto cell_row = [&](double y) { return Windowed ? in_window(geometry_.row(y), first_row_, rows_) : geometry_.row(y); };
@@ -110,18 +118,22 @@ void PointGrid::build(std::span<const Point> first, std::span<const Point> secon
     parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = chunk(t);
         std::vector<std::size_t> count(rows_, 0);
-        for (std::size_t i = begin; i < end; ++i) ++count[cell_row(point(i).y)];
+        for (std::size_t i = begin; i < end; ++i) {
+            if (kept(i)) ++count[cell_row(point(i).y)];
+        }
         for (std::uint32_t y = 0; y < rows_; ++y) row_start[std::size_t{y} * share + static_cast<std::size_t>(t) + 1] = count[y];
     });
     for (std::size_t k = 1; k < row_start.size(); ++k) row_start[k] += row_start[k - 1];
-    points_.resize(n);
-    ids_.resize(n);
+    const std::size_t held = row_start.back();  // (n less the points skipped)
+    points_.resize(held);
+    ids_.resize(held);
 #pragma omp parallel num_threads(threads) if (parallel)
     parallel::for_my_shares(threads, [&](int t) {
         const auto [begin, end] = chunk(t);
         std::vector<std::size_t> fill(rows_);
         for (std::uint32_t y = 0; y < rows_; ++y) fill[y] = row_start[std::size_t{y} * share + static_cast<std::size_t>(t)];
         for (std::size_t i = begin; i < end; ++i) {
+            if (!kept(i)) continue;
             const Point p = point(i);
             const std::size_t slot = fill[cell_row(p.y)]++;
             points_[slot] = p;
@@ -129,7 +141,7 @@ void PointGrid::build(std::span<const Point> first, std::span<const Point> secon
         }
     });
     cell_start_.resize(std::size_t{columns_} * rows_ + 1);
-    cell_start_.back() = static_cast<std::uint32_t>(n);
+    cell_start_.back() = static_cast<std::uint32_t>(held);
 #pragma omp parallel num_threads(threads) if (parallel)
     {
         std::vector<std::pair<Point, std::uint32_t>> entries;
@@ -168,7 +180,7 @@ void PointGrid::build(std::span<const Point> first, std::span<const Point> secon
     }
     slot_.resize(f);
 #pragma omp parallel for schedule(static) num_threads(threads) if (parallel)
-    for (std::size_t k = 0; k < n; ++k) {
+    for (std::size_t k = 0; k < held; ++k) {
         if (ids_[k] < f) slot_[ids_[k]] = static_cast<std::uint32_t>(k);
     }
 }

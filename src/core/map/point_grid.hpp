@@ -69,6 +69,12 @@ public:
     PointGrid(const Geometry& geometry, const Window& window, std::span<const Point> first,
               std::span<const Point> second = {}, int threads = 0);
 
+    // A grid with all of `geometry`'s cells over `first` (ids [0, f)) but those marked in
+    // `skip_first` (points already taken out: the grid then answers as the grid over all of them
+    // would once they are taken out), and `second` (ids [f, f + s)).
+    PointGrid(const Geometry& geometry, std::span<const Point> first, std::span<const Point> second,
+              std::span<const std::uint8_t> skip_first, int threads = 0);
+
     const Geometry& geometry() const { return geometry_; }
 
     // Calls visit(id, point) for each point not taken out whose x lies in the box's x range,
@@ -167,7 +173,8 @@ private:
     }
 
     template <bool Windowed>
-    void build(std::span<const Point> first, std::span<const Point> second, int threads_wanted);
+    void build(std::span<const Point> first, std::span<const Point> second, int threads_wanted,
+               std::span<const std::uint8_t> skip_first = {});
 
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;

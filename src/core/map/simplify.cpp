@@ -438,6 +438,7 @@ public:
     // Set up and pinned; `tile_level` capped at the levels.
     unsigned start_parts(unsigned tile_level) {
         set_up();
+        drop_grid();
         std::vector<std::uint8_t> pinned = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_, options_.cancel);
         stop_if_cancelled(options_.cancel);
         pin_from_improper(map_, pinned, threads_, vertex_count_ >= parallel_min_);
@@ -724,6 +725,7 @@ public:
     void finish_part_round(std::span<const TileOutcome> outcomes) {
         if (round_here_) {
             // The single process's round.
+            ensure_grid();
             schedule_queued();
             sweep();
             keep_undecided();
@@ -742,7 +744,7 @@ public:
                 const std::uint32_t v = tile.ids[k];
                 const auto now = static_cast<State>(tile.states[k]);
                 if (now == State::removed && state_[v] != State::removed) {
-                    grid_->remove(v);
+                    if (grid_) grid_->remove(v);
                     next_[prev_[v]] = next_[v];
                     prev_[next_[v]] = prev_[v];
                 }
@@ -770,6 +772,7 @@ public:
         }
         for (unsigned level = t; level < levels_; ++level) {
             if (later_[level].empty()) continue;
+            ensure_grid();
             process_level(level);
             stop_if_cancelled(options_.cancel);
         }
@@ -809,16 +812,31 @@ public:
         } else {
             grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit);
         }
+        geometry_ = grid_->geometry();
         stats_.control_points = control_points_.size();
+        indexed_points_ = control_points_;
         control_points_ = {};
         owned_points_ = std::vector<Point>();  // freed: the grid has them
+    }
+
+    // A run in parts: the whole map's grid is needed only for the rounds run here and the levels
+    // from the tile level up. It goes after the set-up and comes back over the live vertices when
+    // first needed (after the first round of tiles, a fraction of the map), answering as the
+    // grid over all of them with the removed ones taken out would (PointGrid).
+    void drop_grid() { grid_.reset(); }
+
+    void ensure_grid() {
+        if (grid_) return;
+        std::vector<std::uint8_t> removed(vertex_count_);
+        for (std::uint32_t v = 0; v < vertex_count_; ++v) removed[v] = state_[v] == State::removed ? 1 : 0;
+        grid_.emplace(geometry_, map_.vertices, indexed_points_, removed, threads_);
     }
 
     // The point grid's cells grouped into blocks (parallel/blocks.hpp, axis 0 the columns, axis
     // 1 the rows): 2^shift × 2^shift cells at level 0, levels up to one block.
     void set_up_levels() {
-        blocks_.cells = {grid_->base_columns(), grid_->base_rows()};
-        blocks_.shift = static_cast<int>(block_shift(grid_->base_columns(), grid_->base_rows()));
+        blocks_.cells = {geometry_.base_columns, geometry_.base_rows};
+        blocks_.shift = static_cast<int>(block_shift(geometry_.base_columns, geometry_.base_rows));
         levels_ = static_cast<unsigned>(blocks_.top_level()) + 1;
         stats_.levels = levels_;
     }
@@ -839,12 +857,13 @@ public:
         for (const Point p : control_points_) take(p);
         if (window.first_column == kNone) window = {0, 0, 0, 0};
         grid_.emplace(g, window, map_.vertices, control_points_, threads_);
+        geometry_ = g;
         stats_.control_points = control_points_.size();
         control_points_ = {};
     }
 
-    std::uint32_t block_column(Point p) const { return blocks_.block(grid_->base_column(p.x), 0); }
-    std::uint32_t block_row(Point p) const { return blocks_.block(grid_->base_row(p.y), 0); }
+    std::uint32_t block_column(Point p) const { return blocks_.block(geometry_.base_column(p.x), 0); }
+    std::uint32_t block_row(Point p) const { return blocks_.block(geometry_.base_row(p.y), 0); }
 
     // The finest level at which two vertices fall in one block.
     unsigned shared_level(std::uint32_t u, std::uint32_t w) const {
@@ -1545,6 +1564,8 @@ public:
     const int threads_;
     const std::size_t parallel_min_;  // below this many items a loop runs on one thread
     std::optional<PointGrid> grid_;
+    PointGrid::Geometry geometry_;           // the grid's cells (also while a run in parts has dropped it)
+    std::span<const Point> indexed_points_;  // the control points the grid was built over
     using Blocks = parallel::BlockLevels<2>;
     Blocks blocks_;
     unsigned levels_ = 1;

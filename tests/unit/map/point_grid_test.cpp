@@ -202,5 +202,48 @@ TEST(PointGrid, AWindowAnswersAsTheWholeGridInsideIt) {
     }
 }
 
+// A grid built without the points already taken out answers every query as the grid over all of
+// them does once they are taken out: the same points, the same first point, the same ids (the
+// second span's too).
+TEST(PointGrid, SkippingPointsIsTakingThemOut) {
+    std::mt19937_64 rng(27);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<Point> points, others;
+    for (int k = 0; k < 4000; ++k) {
+        const double t = unit(rng);
+        points.push_back({t * 100, 50 + 20 * std::sin(t * 40)});
+        points.push_back({std::floor(unit(rng) * 60), unit(rng) * 100});
+    }
+    for (int k = 0; k < 500; ++k) others.push_back({unit(rng) * 100, unit(rng) * 100});
+    for (const unsigned split : {0u, 2u}) {
+        for (const double share : {0.0, 0.7, 1.0}) {
+            PointGrid whole(points, others, 2.0, 1, split);
+            std::vector<std::uint8_t> skip(points.size(), 0);
+            for (std::uint32_t id = 0; id < points.size(); ++id) {
+                if (unit(rng) < share) {
+                    skip[id] = 1;
+                    whole.remove(id);
+                }
+            }
+            PointGrid live(whole.geometry(), points, others, skip, 2);
+            for (int k = 0; k < 200; ++k) {
+                const Point a{unit(rng) * 100, unit(rng) * 100}, b{unit(rng) * 100, unit(rng) * 100};
+                const Box box{std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
+                auto accept = [&](std::uint32_t id, Point q) { return box_contains(box, q) && id % 3 != 0; };
+                ASSERT_EQ(live.first_in_cells(box, accept), whole.first_in_cells(box, accept)) << "split " << split << ", share " << share;
+                EXPECT_EQ(in_cells(live, box), in_cells(whole, box));
+            }
+            // Taking out a point of the live grid works as in the whole one.
+            for (std::uint32_t id = 0; id < points.size(); id += 7) {
+                if (skip[id]) continue;
+                live.remove(id);
+                whole.remove(id);
+            }
+            const Box all{0, 0, 100, 100};
+            EXPECT_EQ(in_cells(live, all), in_cells(whole, all));
+        }
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::map
