@@ -136,7 +136,11 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
         if "client" not in own:
             from distributed import Client, LocalCluster
             if scheduler:
-                own["client"] = Client(scheduler)
+                try:
+                    own["client"] = Client(scheduler)
+                except (OSError, ValueError) as error:  # (unreachable: OSError after Dask's connect timeout)
+                    from toposimp import UsageError
+                    raise UsageError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
             else:
                 own["cluster"] = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
                                               dashboard_address=None)

@@ -152,6 +152,24 @@ def test_worker_without_the_package_is_named(tmp_path):
             process.wait()
 
 
+def test_unreachable_scheduler_is_a_usage_error(tmp_path):
+    """--scheduler where none listens: exit 2 and a message naming it, no output, no traceback."""
+    import socket
+
+    with socket.socket() as probe:  # a port nobody listens on
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    output = tmp_path / "out.gpkg"
+    env = dict(os.environ, DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT="2s")
+    done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", str(ROOT / "testdata" / "nh_borders.gpkg"), "-o", str(output),
+                           "--keep", "10%", "--scheduler", f"tcp://127.0.0.1:{port}", "--local-budget", "0", "--tile-level", "1"],
+                          capture_output=True, text=True, timeout=120, env=env)
+    assert done.returncode == 2, done.stderr
+    assert f"cannot reach the Dask scheduler at tcp://127.0.0.1:{port}" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not output.exists()
+
+
 def test_levels_and_published_precision(cluster, generated, binary, tmp_path):
     """--levels (each level a run in parts on the previous one) and --decimals: the same files."""
     from toposimp import dask as toposimp_dask
