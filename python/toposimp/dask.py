@@ -205,6 +205,9 @@ def fitting_tile_points(client, wanted, timeout=120):
     return min(wanted, fits)
 
 
+_INSTALL_HINT = "make this toposimp package importable on every worker (PYTHONPATH, or install it there)"
+
+
 def check_workers(client):
     """Raises UsageError unless every worker of `client` runs tiles with this engine (the toposimp
     package importable there, of this version and tile format)."""
@@ -225,8 +228,7 @@ def check_workers(client):
             why = answer
         else:
             why = f"it has toposimp {answer[0]} with tile format {answer[1]}, this is {mine[0]} with {mine[1]}"
-        raise UsageError(f"the Dask worker {address} cannot run the tiles: {why}; make this toposimp package importable "
-                         "on every worker (PYTHONPATH, or install it there)")
+        raise UsageError(f"the Dask worker {address} cannot run the tiles: {why}; {_INSTALL_HINT}")
 
 
 def _tasks(connected, task_threads, progress=None, on_progress=None):
@@ -292,8 +294,7 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
                 if on_progress is not None:
                     on_progress(done, total)
         except ImportError as error:  # (a worker that joined after the check, without the package)
-            raise UsageError(f"a Dask worker cannot run the tiles: {error}; make this toposimp package importable on "
-                             "every worker (PYTHONPATH, or install it there)") from None
+            raise UsageError(f"a Dask worker cannot run the tiles: {error}; {_INSTALL_HINT}") from None
         return results
 
     return run_groups

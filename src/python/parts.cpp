@@ -316,20 +316,21 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
 
 RoundGroups::RoundGroups(const map::MapInParts& parts, std::size_t count) : parts_(&parts), count_(count) {}
 
-std::uint64_t RoundGroups::points(std::size_t k) const {
-    if (k >= count_) throw py::index_error("no such tile group in the round");
-    if (parts_ == nullptr) throw std::runtime_error("the round is over: its tile groups are gone");
-    return parts_->group_points(k);
-}
-
-py::list RoundGroups::get(std::ptrdiff_t k) const {
+std::size_t RoundGroups::index(std::ptrdiff_t k) const {
     if (k < 0) k += static_cast<std::ptrdiff_t>(count_);
     if (k < 0 || static_cast<std::size_t>(k) >= count_) throw py::index_error("no such tile group in the round");
     if (parts_ == nullptr) throw std::runtime_error("the round is over: its tile groups are gone");
+    return static_cast<std::size_t>(k);
+}
+
+std::uint64_t RoundGroups::points(std::ptrdiff_t k) const { return parts_->group_points(index(k)); }
+
+py::list RoundGroups::get(std::ptrdiff_t k) const {
+    const std::size_t at = index(k);
     std::vector<map::TileInput> group;
     {
         py::gil_scoped_release release;
-        group = parts_->group(static_cast<std::size_t>(k));
+        group = parts_->group(at);
     }
     py::list tiles;
     for (map::TileInput& tile : group) tiles.append(tile_dict(std::move(tile)));

@@ -25,10 +25,12 @@ public:
     RoundGroups(const map::MapInParts& parts, std::size_t count);
     std::size_t size() const { return count_; }
     py::list get(std::ptrdiff_t k) const;
-    std::uint64_t points(std::size_t k) const;  // what group k holds, without building it
+    std::uint64_t points(std::ptrdiff_t k) const;  // what group k holds, without building it
     void close() { parts_ = nullptr; }
 
 private:
+    std::size_t index(std::ptrdiff_t k) const;  // k (negative from the end) checked, while the round lasts
+
     const map::MapInParts* parts_;
     std::size_t count_;
 };

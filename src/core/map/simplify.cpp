@@ -467,6 +467,24 @@ public:
         return true;
     }
 
+    // This round's tiles (split_round): per tile (numbers row-major) its pieces, control points
+    // (indices) and waits (whole-map ids), each from its start; the groups that run (indices).
+    struct TilePiece {
+        enum Kind : std::uint8_t { run, live_ring, input_ring };
+        std::uint32_t chain;
+        std::uint32_t start;   // a run's first live vertex
+        std::uint32_t points;  // the vertices the tile gets for it (a run's with its cut ends)
+        Kind kind;
+        std::uint8_t settled;  // a run of a split ring that its cut ends settle
+    };
+    struct RoundSplit {
+        std::vector<std::uint32_t> tiles, piece_start, point_start, points, wait_start;
+        std::vector<TilePiece> pieces;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
+        std::vector<std::vector<std::uint32_t>> groups;
+        std::vector<std::uint64_t> group_points;  // per group: its tiles' vertices and control points
+    };
+
     // The round's tiles (those of the tile level holding a live vertex), found without building
     // them: each tile's pieces of chains and whole rings, its control points and the waits among
     // its vertices, and the groups that run (tiles sharing a split ring that its cut ends do not
@@ -480,7 +498,6 @@ public:
             return 0;
         }
         const unsigned t = tile_level_;
-        const auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
         const auto marked = [&](std::uint32_t v) { return use_marks_ && marked_[v] != 0; };
         // Pieces in chain order, tagged with their tile; sorted by tile below (stably: each
         // tile's pieces stay in chain order).
@@ -496,14 +513,13 @@ public:
                 std::uint32_t budget = 0;
                 for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
                 const bool input_ring = orientation_[c] == 2 && distinct_[c] <= 4 + budget;
+                TilePiece& piece = tagged.emplace_back(k, TilePiece{c, chain.first, 0, input_ring ? TilePiece::input_ring : TilePiece::live_ring, 0})
+                                       .second;
                 bool any = false;
-                std::uint32_t points = 0;
-                if (input_ring) {
-                    for (std::uint32_t v = chain.first; v <= chain.last; ++v, ++points) any = any || marked(v);
-                } else {
-                    for (std::uint32_t u = chain.first; u != kNone; u = next_[u], ++points) any = any || marked(u);
-                }
-                tagged.push_back({k, {c, chain.first, points, input_ring ? TilePiece::input_ring : TilePiece::live_ring, 0}});
+                for_each_piece_vertex(piece, k, [&](std::uint32_t v, bool) {
+                    ++piece.points;
+                    any = any || marked(v);
+                });
                 if (any) busy_tiles.push_back(k);
                 continue;
             }
@@ -526,19 +542,17 @@ public:
             // Runs of live vertices in one tile, each with its cut ends.
             for (std::uint32_t u = chain.first; u != kNone;) {
                 const std::uint32_t k = tile_of(u);
-                TilePiece& piece = tagged.emplace_back(k, TilePiece{c, u, prev_[u] != kNone ? 1u : 0u, TilePiece::run,
-                                                                     static_cast<std::uint8_t>(settled ? 1 : 0)}).second;
+                TilePiece& piece = tagged.emplace_back(k, TilePiece{c, u, 0, TilePiece::run, static_cast<std::uint8_t>(settled ? 1 : 0)}).second;
                 bool any = false;
-                std::uint32_t w = u;
-                for (;;) {
-                    any = any || marked(w);
+                std::uint32_t last = u;  // the run's last vertex in the tile
+                for_each_piece_vertex(piece, k, [&](std::uint32_t v, bool cut_end) {
                     ++piece.points;
-                    if (next_[w] == kNone || tile_of(next_[w]) != k) break;
-                    w = next_[w];
-                }
-                if (next_[w] != kNone) ++piece.points;
+                    if (cut_end) return;
+                    any = any || marked(v);
+                    last = v;
+                });
                 if (any) busy_tiles.push_back(k);
-                u = next_[w];
+                u = next_[last];
             }
         }
         std::stable_sort(tagged.begin(), tagged.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -643,6 +657,36 @@ public:
         return group;
     }
 
+    // Calls visit(v, cut_end) for each vertex tile k gets for `piece`, in order: a whole ring's
+    // (with its removed vertices for an input ring), or a run of live vertices in the tile with
+    // the live vertex beyond it on either side (its cut ends).
+    template <class Visit>
+    void for_each_piece_vertex(const TilePiece& piece, std::uint32_t k, Visit&& visit) const {
+        const Chain& chain = map_.chains[piece.chain];
+        if (piece.kind == TilePiece::input_ring) {
+            for (std::uint32_t v = chain.first; v <= chain.last; ++v) visit(v, false);
+            return;
+        }
+        if (piece.kind == TilePiece::live_ring) {
+            for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) visit(u, false);
+            return;
+        }
+        const std::uint32_t u = piece.start;
+        if (prev_[u] != kNone) visit(prev_[u], true);
+        std::uint32_t w = u;
+        for (;;) {
+            visit(w, false);
+            if (next_[w] == kNone || tile_of(next_[w]) != k) break;
+            w = next_[w];
+        }
+        if (next_[w] != kNone) visit(next_[w], true);
+    }
+
+    std::uint32_t tile_of(std::uint32_t v) const {
+        const unsigned t = tile_level_;
+        return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t);
+    }
+
     std::size_t round_group_size(std::size_t k) const { return split_.groups.at(k).size(); }
     std::uint64_t round_group_points(std::size_t k) const { return split_.group_points.at(k); }
 
@@ -651,7 +695,6 @@ public:
         const unsigned t = tile_level_;
         const std::uint32_t columns = blocks_.blocks(0, static_cast<int>(t));
         const std::uint32_t k = split.tiles[i];
-        const auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
         TileInput input;
         input.level = t;
         input.column = k % columns;
@@ -677,23 +720,8 @@ public:
         for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) {
             const TilePiece& piece = split.pieces[j];
             const std::uint32_t c = piece.chain;
-            const Chain& chain = map_.chains[c];
             const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
-            if (piece.kind == TilePiece::input_ring) {
-                for (std::uint32_t v = chain.first; v <= chain.last; ++v) add(v, false);
-            } else if (piece.kind == TilePiece::live_ring) {
-                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) add(u, false);
-            } else {
-                const std::uint32_t u = piece.start;
-                if (prev_[u] != kNone) add(prev_[u], true);
-                std::uint32_t w = u;
-                for (;;) {
-                    add(w, false);
-                    if (next_[w] == kNone || tile_of(next_[w]) != k) break;
-                    w = next_[w];
-                }
-                if (next_[w] != kNone) add(next_[w], true);
-            }
+            for_each_piece_vertex(piece, k, add);
             const auto last = static_cast<std::uint32_t>(input.vertex_id.size() - 1);
             input.map.chains.push_back({first, last});
             input.chain_id.push_back(c);
@@ -731,7 +759,6 @@ public:
             return;
         }
         const unsigned t = tile_level_;
-        auto tile_of = [&](std::uint32_t v) { return tile_number(block_xy_[v] >> 16 >> t, (block_xy_[v] & 0xffffu) >> t); };
         // The waits the tiles did not hold (across tiles), or whose tile did not run this round.
         std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
         for (const auto& [waiter, blocker] : waits_.all()) {
@@ -1594,23 +1621,7 @@ public:
     std::uint64_t round_budget_ = 0;  // count targets: this round's marked vertices
     bool round_here_ = false;         // this round runs here, not in tiles
     std::vector<std::uint32_t> running_;  // this round's tiles that run, sorted
-    // This round's tiles (split_round): per tile (numbers row-major) its pieces, control points
-    // (indices) and waits (whole-map ids), each from its start; the groups that run (indices).
-    struct TilePiece {
-        enum Kind : std::uint8_t { run, live_ring, input_ring };
-        std::uint32_t chain;
-        std::uint32_t start;   // a run's first live vertex
-        std::uint32_t points;  // the vertices the tile gets for it (a run's with its cut ends)
-        Kind kind;
-        std::uint8_t settled;  // a run of a split ring that its cut ends settle
-    };
-    struct RoundSplit {
-        std::vector<std::uint32_t> tiles, piece_start, point_start, points, wait_start;
-        std::vector<TilePiece> pieces;
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
-        std::vector<std::vector<std::uint32_t>> groups;
-        std::vector<std::uint64_t> group_points;  // per group: its tiles' vertices and control points
-    } split_;
+    RoundSplit split_;  // this round's tiles (split_round)
     bool use_marks_ = false;
     Ranked bound_{0, 0};  // the round's threshold: vertices ranked above it wait
     double work_ = 0;
