@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <omp.h>
 
 namespace toposimp::map {
@@ -181,6 +182,57 @@ void PointGrid::build(std::span<const Point> first, std::span<const Point> secon
     slot_.resize(f);
 #pragma omp parallel for schedule(static) num_threads(threads) if (parallel)
     for (std::size_t k = 0; k < held; ++k) {
+        if (ids_[k] < f) slot_[ids_[k]] = static_cast<std::uint32_t>(k);
+    }
+}
+
+void PointGrid::compact(int threads_wanted) {
+    const std::size_t cells = std::size_t{columns_} * rows_;
+    const bool parallel = held() >= (1u << 16);
+    const int threads = !parallel ? 1 : threads_wanted > 0 ? threads_wanted : omp_get_max_threads();
+    const auto share = static_cast<std::size_t>(threads);
+    // Each thread moves the points it keeps in its own run of cells to the run's start (never
+    // past a point it has yet to read), then the runs are moved together in order.
+    std::vector<std::size_t> first_cell(share + 1), run_start(share + 1), kept(share, 0);
+    for (std::size_t t = 0; t <= share; ++t) {
+        first_cell[t] = cells * t / share;
+        run_start[t] = cell_start_[first_cell[t]];
+    }
+#pragma omp parallel num_threads(threads) if (parallel)
+    parallel::for_my_shares(threads, [&](int thread) {
+        const auto t = static_cast<std::size_t>(thread);
+        std::size_t write = run_start[t];
+        std::size_t from = run_start[t];
+        for (std::size_t cell = first_cell[t]; cell < first_cell[t + 1]; ++cell) {
+            const std::size_t to = cell + 1 < first_cell[t + 1] ? cell_start_[cell + 1] : run_start[t + 1];
+            cell_start_[cell] = static_cast<std::uint32_t>(write);
+            for (std::size_t k = from; k < to; ++k) {
+                if (ids_[k] == kRemoved) continue;
+                points_[write] = points_[k];
+                ids_[write] = ids_[k];
+                ++write;
+            }
+            from = to;
+        }
+        kept[t] = write - run_start[t];
+    });
+    std::vector<std::size_t> moved_to(share + 1, 0);
+    for (std::size_t t = 0; t < share; ++t) {
+        moved_to[t + 1] = moved_to[t] + kept[t];
+        if (moved_to[t] == run_start[t]) continue;
+        std::memmove(points_.data() + moved_to[t], points_.data() + run_start[t], kept[t] * sizeof(Point));
+        std::memmove(ids_.data() + moved_to[t], ids_.data() + run_start[t], kept[t] * sizeof(std::uint32_t));
+    }
+#pragma omp parallel num_threads(threads) if (parallel)
+    parallel::for_my_shares(threads, [&](int thread) {
+        const auto t = static_cast<std::size_t>(thread);
+        const auto shift = static_cast<std::uint32_t>(run_start[t] - moved_to[t]);
+        for (std::size_t cell = first_cell[t]; cell < first_cell[t + 1]; ++cell) cell_start_[cell] -= shift;
+    });
+    cell_start_[cells] = static_cast<std::uint32_t>(moved_to[share]);
+    const std::size_t f = slot_.size(), total = moved_to[share];
+#pragma omp parallel for schedule(static) num_threads(threads) if (parallel)
+    for (std::size_t k = 0; k < total; ++k) {
         if (ids_[k] < f) slot_[ids_[k]] = static_cast<std::uint32_t>(k);
     }
 }

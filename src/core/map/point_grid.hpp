@@ -123,10 +123,17 @@ public:
         return best;
     }
 
-    // Takes point `id` of the first span out: queries skip it from now on. Points that other
+    // Takes point `id` of the first span out, once: queries skip it from now on. Points that other
     // threads may be taking out at the same time can lie in the cells a query scans (outside
     // its box), hence the relaxed atomic accesses to ids.
     void remove(std::uint32_t id) { std::atomic_ref<std::uint32_t>(ids_[slot_[id]]).store(kRemoved, std::memory_order_relaxed); }
+
+    // Drops the taken-out points from the cells, keeping the order of the others: queries give
+    // the same answers and read less. On `threads` threads (0: OpenMP's default).
+    void compact(int threads = 0);
+
+    // Points held, taken-out ones included until compact().
+    std::size_t held() const { return cell_start_[cell_start_.size() - 1]; }
 
     // The base cells (see the constructor).
     std::uint32_t base_columns() const { return geometry_.base_columns; }
@@ -157,10 +164,39 @@ private:
         const std::size_t row_start = std::size_t{y} * columns_;
         const Point* p = points_.data() + cell_start_[row_start + x0];
         const Point* last = points_.data() + cell_start_[row_start + x1 + 1];
-        // Few points per cell on average: a short linear skip beats a binary search.
-        if (last - p > 16) return {std::partition_point(p, last, [&](const Point& q) { return q.x < min_x; }), last};
-        while (p != last && p->x < min_x) ++p;
-        return {p, last};
+        // The first point with x ≥ min_x is in cell x0, or it is the next cell's first (a point
+        // in a later column is not left of min_x, column() being monotone).
+        const Point* end = points_.data() + cell_start_[row_start + x0 + 1];
+        // Few points per cell on average: a short linear skip.
+        if (end - p <= 16) {
+            while (p != end && p->x < min_x) ++p;
+            return {p, last};
+        }
+        // A crowded cell: points along a line spread over its width, so start where min_x would
+        // be if they were even, and gallop from there to the exact place.
+        const double left = geometry_.origin_x + static_cast<double>(x0 + first_column_) / geometry_.scale_x;
+        const double at = (min_x - left) * geometry_.scale_x;
+        const std::ptrdiff_t count = end - p;
+        const double share = at > 0 ? (at < 1 ? at : 1) : 0;  // (NaN, from a grid of no width: 0)
+        const auto guess = static_cast<std::ptrdiff_t>(share * static_cast<double>(count));
+        auto before = [&](const Point& q) { return q.x < min_x; };
+        const Point* from = p + guess;
+        if (from != end && before(*from)) {
+            std::ptrdiff_t step = 1;
+            const Point* lo = from + 1;  // lo − 1 is before min_x
+            while (end - lo > step && before(lo[step - 1])) {
+                lo += step;
+                step *= 2;
+            }
+            return {std::partition_point(lo, std::min(end, lo + step), before), last};
+        }
+        std::ptrdiff_t step = 1;
+        const Point* hi = from;  // *hi is not before min_x (or hi is the end)
+        while (hi - p > step && !before(hi[-step])) {
+            hi -= step;
+            step *= 2;
+        }
+        return {std::partition_point(std::max(p, hi - step), hi, before), last};
     }
 
     static std::uint32_t load(const std::uint32_t& id) {

@@ -856,6 +856,18 @@ public:
         std::vector<std::uint8_t> removed(vertex_count_);
         for (std::uint32_t v = 0; v < vertex_count_; ++v) removed[v] = state_[v] == State::removed ? 1 : 0;
         grid_.emplace(geometry_, map_.vertices, indexed_points_, removed, threads_);
+        compacted_at_ = stats_.removed;
+    }
+
+    // Removed vertices stay in the grid, taken out, and every query reads past them; once they are
+    // most of what it holds (after the first level of the first round, two thirds of GSHHG at
+    // 10 %), they go.
+    void compact_grid() {
+        if (!grid_) return;
+        const std::uint64_t gone = stats_.removed - compacted_at_;
+        if (gone * 2 <= grid_->held()) return;
+        grid_->compact(vertex_count_ >= parallel_min_ ? threads_ : 1);
+        compacted_at_ = stats_.removed;
     }
 
     // The point grid's cells grouped into blocks (parallel/blocks.hpp, axis 0 the columns, axis
@@ -966,6 +978,10 @@ public:
                 whole_level_[c] = static_cast<std::uint8_t>(
                     std::max(Blocks::shared_level(min_column, max_column), Blocks::shared_level(min_row, max_row)));
             }
+        }
+        split_rings_.clear();
+        for (std::uint32_t c = 0; c < chains; ++c) {
+            if (whole_level_[c] != kOpen && whole_level_[c] > 0) split_rings_.push_back(c);
         }
     }
 
@@ -1225,6 +1241,7 @@ public:
         if (slot_.empty()) slot_.assign(vertex_count_, kNone);  // (after the first round's selection, not beside it)
         for (unsigned level = 0; level < levels_; ++level) {
             if (later_[level].empty()) continue;  // (nothing to do there: late rounds leave most levels empty)
+            compact_grid();
             process_level(level);
             stop_if_cancelled(options_.cancel);
         }
@@ -1317,10 +1334,11 @@ public:
     // For each ring not within one block at this level: can its fixed vertices alone keep it
     // at 4 or more distinct locations? Then the ring rule cannot bite here.
     void decide_split_rings(unsigned level) {
-        const auto chains = static_cast<std::uint32_t>(map_.chains.size());
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= parallel_min_)
-        for (std::uint32_t c = 0; c < chains; ++c) {
-            if (whole_level_[c] == kOpen || whole_level_[c] <= level) continue;
+        const auto rings = static_cast<std::ptrdiff_t>(split_rings_.size());
+#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (rings >= 256)
+        for (std::ptrdiff_t i = 0; i < rings; ++i) {
+            const std::uint32_t c = split_rings_[static_cast<std::size_t>(i)];
+            if (whole_level_[c] <= level) continue;
             if (split_over_tiles(c)) {
                 // A piece: its cut ends settle it, or the tiles' fixed locations together do.
                 ring_clear_[c] = tile_->settled[c] ||
@@ -1590,6 +1608,7 @@ public:
     const int threads_;
     const std::size_t parallel_min_;  // below this many items a loop runs on one thread
     std::optional<PointGrid> grid_;
+    std::uint64_t compacted_at_ = 0;  // vertices removed when the grid last dropped them
     PointGrid::Geometry geometry_;           // the grid's cells (also while a run in parts has dropped it)
     std::span<const Point> indexed_points_;  // the control points the grid was built over
     using Blocks = parallel::BlockLevels<2>;
@@ -1602,6 +1621,7 @@ public:
     std::vector<std::uint8_t> marked_;       // count targets: this round's budget
     std::vector<std::uint32_t> distinct_;    // per closed chain: distinct live locations; 0 if open
     std::vector<std::int8_t> orientation_;   // per chain: input ring orientation, 2 = unknown
+    std::vector<std::uint32_t> split_rings_;  // the rings not in one level-0 block (whole_level_ above 0)
     std::vector<std::uint8_t> whole_level_;  // per chain: first level where the ring is in one block; kOpen
     std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
     Waits waits_;

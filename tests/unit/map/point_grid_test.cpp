@@ -45,6 +45,64 @@ TEST(PointGrid, NeverMissesAPointInsideAQueryBox) {
     }
 }
 
+// Crowded cells (hundreds of points along lines, clusters at one x, equal x runs) are searched
+// from where the query's left edge would fall if their points were even: the points in the box
+// are still all found, and the first point in (base row, x, id) order is the one brute force
+// finds — whole grid and window, with and without split rows.
+TEST(PointGrid, CrowdedCellsAnswerAsBruteForce) {
+    std::mt19937_64 rng(35);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<Point> points;
+    for (int k = 0; k < 3000; ++k) points.push_back({unit(rng) * 100, 30 + unit(rng) * 1e-3});  // a thin band
+    for (int k = 0; k < 3000; ++k) points.push_back({70 + unit(rng) * 1e-9, unit(rng) * 100});  // almost one x
+    for (int k = 0; k < 1000; ++k) points.push_back({std::floor(unit(rng) * 4) * 25, unit(rng) * 100});  // equal x
+    for (int k = 0; k < 2000; ++k) points.push_back({unit(rng) * 100, unit(rng) * 100});
+    points.push_back({0, 0});
+    points.push_back({100, 100});
+    for (const unsigned split : {0u, 2u}) {
+        const PointGrid whole(points, {}, 2.0, 1, split);
+        const PointGrid::Window window{whole.columns() / 4, whole.rows() / 4, whole.columns() * 3 / 4, whole.rows() * 3 / 4};
+        const PointGrid part(whole.geometry(), window, points, {}, 1);
+        const PointGrid::Geometry& g = whole.geometry();
+        for (int k = 0; k < 3000; ++k) {
+            const bool windowed = k % 2 == 1;
+            const double span = k % 3 == 0 ? 1e-6 : k % 3 == 1 ? 0.5 : 20;
+            Point a{unit(rng) * 100, unit(rng) * 100};
+            if (k % 5 == 0) a = points[static_cast<std::size_t>(unit(rng) * static_cast<double>(points.size()))];  // on a point
+            if (k % 7 == 0) a.x = 70;
+            Box box{a.x, a.y, a.x + unit(rng) * span, a.y + unit(rng) * span};
+            if (windowed) {
+                // Keep the box inside the window's cells (queries of a window must be).
+                const double x0 = g.origin_x + (window.first_column + 1) / g.scale_x, x1 = g.origin_x + window.last_column / g.scale_x;
+                const double y0 = g.origin_y + (window.first_row + 1) / g.scale_y, y1 = g.origin_y + window.last_row / g.scale_y;
+                box = {std::clamp(box.min_x, x0, x1), std::clamp(box.min_y, y0, y1), std::clamp(box.max_x, x0, x1),
+                       std::clamp(box.max_y, y0, y1)};
+            }
+            const PointGrid& grid = windowed ? part : whole;
+            std::set<std::uint32_t> inside;
+            std::uint32_t first = PointGrid::kRemoved;
+            auto earlier = [&](std::uint32_t i, std::uint32_t j) {
+                const std::uint32_t ri = g.base_row(points[i].y), rj = g.base_row(points[j].y);
+                if (ri != rj) return ri < rj;
+                return points[i].x < points[j].x || (points[i].x == points[j].x && i < j);
+            };
+            for (std::uint32_t i = 0; i < points.size(); ++i) {
+                if (!box_contains(box, points[i])) continue;
+                inside.insert(i);
+                if (first == PointGrid::kRemoved || earlier(i, first)) first = i;
+            }
+            std::set<std::uint32_t> found;
+            grid.any_in_cells(box, [&](std::uint32_t id, Point q) {
+                if (box_contains(box, q)) found.insert(id);
+                return false;
+            });
+            ASSERT_EQ(found, inside) << "split " << split << ", query " << k;
+            ASSERT_EQ(grid.first_in_cells(box, [&](std::uint32_t, Point q) { return box_contains(box, q); }), first)
+                << "split " << split << ", query " << k;
+        }
+    }
+}
+
 TEST(PointGrid, HandlesDegenerateAndExtremeExtents) {
     expect_no_point_missed({{1, 1}, {1, 1}, {1, 1}}, {1, 1, 1, 1});
     expect_no_point_missed({{0, 0}, {0, 5}, {0, 9}}, {0, 4, 0, 9});
@@ -241,6 +299,65 @@ TEST(PointGrid, SkippingPointsIsTakingThemOut) {
             }
             const Box all{0, 0, 100, 100};
             EXPECT_EQ(in_cells(live, all), in_cells(whole, all));
+        }
+    }
+}
+
+// compact() drops the taken-out points: every cell then holds the others in the same order, so
+// queries answer as before, and points can still be taken out afterwards. The split and the
+// thread counts move where each thread's run of cells ends.
+TEST(PointGrid, CompactingKeepsTheAnswers) {
+    std::mt19937_64 rng(34);
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<Point> points, others;
+    for (int k = 0; k < 40000; ++k) {
+        const double t = unit(rng);
+        points.push_back({t * 100, 50 + 20 * std::sin(t * 40)});
+        points.push_back({std::floor(unit(rng) * 60), unit(rng) * 100});
+    }
+    for (int k = 0; k < 500; ++k) others.push_back({unit(rng) * 100, unit(rng) * 100});
+    for (const unsigned split : {0u, 2u}) {
+        for (const int threads : {1, 2, 3}) {
+            for (const double share : {0.0, 0.7, 1.0}) {
+                PointGrid whole(points, others, 2.0, 1, split);
+                PointGrid compacted(points, others, 2.0, 1, split);
+                std::size_t live = points.size() + others.size();
+                std::vector<std::uint8_t> out(points.size(), 0);
+                for (std::uint32_t id = 0; id < points.size(); ++id) {
+                    if (unit(rng) < share) {
+                        out[id] = 1;
+                        whole.remove(id);
+                        compacted.remove(id);
+                        --live;
+                    }
+                }
+                compacted.compact(threads);
+                ASSERT_EQ(compacted.held(), live) << "split " << split << ", threads " << threads << ", share " << share;
+                for (std::uint32_t y = 0; y < compacted.rows(); ++y) {
+                    for (std::uint32_t x = 0; x < compacted.columns(); ++x) {
+                        std::vector<std::uint32_t> kept;
+                        for (const std::uint32_t id : whole.cell_ids(x, y)) {
+                            if (id != PointGrid::kRemoved) kept.push_back(id);
+                        }
+                        const auto ids = compacted.cell_ids(x, y);
+                        ASSERT_EQ(std::vector<std::uint32_t>(ids.begin(), ids.end()), kept) << "cell " << x << ", " << y;
+                    }
+                }
+                for (int k = 0; k < 100; ++k) {
+                    const Point a{unit(rng) * 100, unit(rng) * 100}, b{a.x + unit(rng) * 10, a.y + unit(rng) * 10};
+                    const Box box{std::min(a.x, b.x), std::min(a.y, b.y), std::max(a.x, b.x), std::max(a.y, b.y)};
+                    auto accept = [&](std::uint32_t id, Point q) { return box_contains(box, q) && id % 3 != 0; };
+                    ASSERT_EQ(compacted.first_in_cells(box, accept), whole.first_in_cells(box, accept));
+                    EXPECT_EQ(in_cells(compacted, box), in_cells(whole, box));
+                }
+                for (std::uint32_t id = 0; id < points.size(); id += 7) {
+                    if (out[id]) continue;  // (a point is taken out once)
+                    compacted.remove(id);
+                    whole.remove(id);
+                }
+                const Box all{0, 0, 100, 100};
+                EXPECT_EQ(in_cells(compacted, all), in_cells(whole, all));
+            }
         }
     }
 }
