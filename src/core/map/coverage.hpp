@@ -45,14 +45,15 @@ public:
     std::uint32_t source_of(std::uint32_t v) const { return source_[v - first_vertex_]; }
 
     std::uint32_t ring_count() const { return static_cast<std::uint32_t>(ring_start_.size()); }
-    std::uint32_t point_count() const { return static_cast<std::uint32_t>(points_.size()); }
+    // Ring points given (every one, closing vertices included).
+    std::uint32_t point_count() const { return ring_start_.empty() ? 0 : ring_start_.back() + ring_size_.back(); }
     std::uint64_t arc_count() const { return arcs_; }
     std::uint64_t shared_arc_count() const { return shared_arcs_; }
     std::uint64_t degenerate_ring_count() const { return degenerate_rings_; }
 
 private:
 
-    std::vector<Point> points_;               // every ring point as given
+    std::vector<Point> points_;               // every ring point as given, until build()
     std::vector<std::uint32_t> ring_start_;   // into points_
     std::vector<std::uint32_t> ring_size_;
     std::vector<std::uint32_t> uses_start_;   // per ring, into uses_ (one past the end: next ring's)

@@ -563,6 +563,8 @@ void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
             z[v] = ring_z[origin];
             m[v] = ring_m[origin];
         }
+        std::vector<double>().swap(ring_z);
+        std::vector<double>().swap(ring_m);
     }
     // Grown by doubling while reading: up to half of it spare, held through simplification.
     map.vertices.shrink_to_fit();

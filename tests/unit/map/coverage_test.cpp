@@ -7,6 +7,7 @@
 
 #include <gmpxx.h>
 
+#include <cmath>
 #include <map>
 #include <random>
 
@@ -174,6 +175,58 @@ TEST(Coverage, RandomGridCoveragesStayValid) {
             ASSERT_EQ(area_sign(ring), area_sign(input[r])) << "seed " << seed << " ring " << r;
         }
         EXPECT_GT(result.stats.removed, 0u);
+    }
+}
+
+// A coverage of more than 65 536 ring points groups the points by location a bucket of
+// locations at a time (coverage.cpp): a 60 × 60 grid of cells with five points on each border
+// gets a node at every corner where three or more cells (or two and the outside) meet, one arc
+// per border (the corner cells' two outer borders one), and every ring comes back as it was
+// given.
+TEST(Coverage, BigGridHasTheArcsOfItsBorders) {
+    const int n = 60;
+    auto corner = [&](int i, int j) { return Point{i * 10.0, j * 10.0}; };
+    auto border = [&](int i0, int j0, int i1, int j1) {
+        std::vector<Point> line;
+        const Point p = corner(i0, j0), q = corner(i1, j1);
+        for (int k = 1; k < 6; ++k) {
+            const double t = k / 6.0;
+            // A wiggle that depends on the border alone, so both cells carry the same points.
+            const double wiggle = 0.5 * std::sin(0.7 * (p.x + q.x) + 1.3 * (p.y + q.y) + k);
+            line.push_back({p.x + t * (q.x - p.x) + (p.y == q.y ? 0.0 : wiggle), p.y + t * (q.y - p.y) + (p.x == q.x ? 0.0 : wiggle)});
+        }
+        return line;
+    };
+    Coverage coverage;
+    std::vector<std::vector<Point>> input;
+    for (int i = 0; i < n; ++i) {
+        for (int j = 0; j < n; ++j) {
+            const int c[4][2] = {{i, j}, {i + 1, j}, {i + 1, j + 1}, {i, j + 1}};
+            std::vector<Point> ring;
+            for (int k = 0; k < 4; ++k) {
+                const auto [a0, a1] = c[k];
+                const auto [b0, b1] = c[(k + 1) % 4];
+                ring.push_back(corner(a0, a1));
+                std::vector<Point> line = a0 < b0 || a1 < b1 ? border(a0, a1, b0, b1) : border(b0, b1, a0, a1);
+                if (!(a0 < b0 || a1 < b1)) std::reverse(line.begin(), line.end());
+                ring.insert(ring.end(), line.begin(), line.end());
+            }
+            ring.push_back(ring.front());
+            input.push_back(ring);
+            coverage.add_ring(ring);
+        }
+    }
+    ASSERT_GT(coverage.point_count(), 65536u);
+    MapData map;
+    coverage.build(map);
+    EXPECT_EQ(coverage.point_count(), static_cast<std::uint32_t>(n * n * 25));
+    EXPECT_EQ(coverage.shared_arc_count(), 2u * n * (n - 1));
+    EXPECT_EQ(coverage.arc_count(), 2u * n * (n - 1) + 4u * n - 4u);
+    const std::vector<std::uint8_t> all(map.vertices.size(), 1);
+    for (std::uint32_t r = 0; r < coverage.ring_count(); ++r) {
+        const auto ring = points_of(map, coverage.ring_vertices(r, all));
+        ASSERT_EQ(ring.size(), input[r].size()) << "ring " << r;
+        for (std::size_t k = 0; k < ring.size(); ++k) ASSERT_TRUE(same_location(ring[k], input[r][k])) << "ring " << r << ", point " << k;
     }
 }
 
