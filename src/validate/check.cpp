@@ -532,11 +532,15 @@ private:
                     matches[k].clear();
                 }
             }
-            if (before.type == Feature::Type::polygons && after->geometry) {
+            if (before.type == Feature::Type::polygons && after->has_geometry) {
                 Point where{};
-                if (geos_.invalid_reason(*before.geometry, where)) {
+                auto invalid = [&](const Feature& feature) {
+                    return feature.geometry ? geos_.invalid_reason(*feature.geometry, where)
+                                            : geos_.invalid_reason(feature.parts, feature.rings_per_polygon, where);
+                };
+                if (invalid(before)) {
                     ++report_.invalid_in_original;
-                } else if (const auto reason = geos_.invalid_reason(*after->geometry, where)) {
+                } else if (const auto reason = invalid(*after)) {
                     violation(ViolationKind::invalid_polygon, layer, before.key, where, *reason, "GEOS");
                 }
             }

@@ -8,8 +8,10 @@
 #include <geos_c.h>
 #include <ogr_geometry.h>
 
+#include <cstdint>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace toposimp::validate {
 
@@ -24,7 +26,19 @@ public:
 
     // IsValidOp on a polygon geometry: empty if valid, else the reason; `where` gets the location.
     std::optional<std::string> invalid_reason(const OGRGeometry& geometry, Point& where) const {
-        GEOSGeometry* g = geometry.exportToGEOS(handle_);
+        return invalid_reason(geometry.exportToGEOS(handle_), where);
+    }
+
+    // The same for polygons given as rings, `rings_per_polygon[i]` rings (shell first) for
+    // polygon i: a polygon if there is one, else a multipolygon.
+    std::optional<std::string> invalid_reason(const std::vector<std::vector<Point>>& rings,
+                                              const std::vector<std::uint32_t>& rings_per_polygon, Point& where) const {
+        return invalid_reason(polygons(rings, rings_per_polygon), where);
+    }
+
+private:
+    // Takes `g` (null: GEOS could not make it).
+    std::optional<std::string> invalid_reason(GEOSGeometry* g, Point& where) const {
         if (g == nullptr) return std::string("GEOS cannot read the geometry");
         char* reason = nullptr;
         GEOSGeometry* location = nullptr;
@@ -42,6 +56,42 @@ public:
         GEOSGeom_destroy_r(handle_, g);
         return result;
     }
+
+    // GEOS polygons from rings (as invalid_reason takes them); null if GEOS refuses a ring (not
+    // closed, too few points: as it refuses them in a geometry OGR hands it).
+    GEOSGeometry* polygons(const std::vector<std::vector<Point>>& rings, const std::vector<std::uint32_t>& rings_per_polygon) const {
+        std::vector<GEOSGeometry*> made;
+        auto drop = [&] {
+            for (GEOSGeometry* g : made) GEOSGeom_destroy_r(handle_, g);
+            return nullptr;
+        };
+        std::size_t next = 0;
+        for (const std::uint32_t count : rings_per_polygon) {
+            std::vector<GEOSGeometry*> ring_geometries;
+            for (std::uint32_t k = 0; k < count; ++k) {
+                const std::vector<Point>& ring = rings.at(next++);
+                GEOSCoordSequence* sequence = GEOSCoordSeq_create_r(handle_, static_cast<unsigned>(ring.size()), 2);
+                for (std::size_t i = 0; i < ring.size(); ++i) GEOSCoordSeq_setXY_r(handle_, sequence, static_cast<unsigned>(i), ring[i].x, ring[i].y);
+                GEOSGeometry* linear = sequence ? GEOSGeom_createLinearRing_r(handle_, sequence) : nullptr;
+                if (linear == nullptr) {
+                    for (GEOSGeometry* g : ring_geometries) GEOSGeom_destroy_r(handle_, g);
+                    return drop();
+                }
+                ring_geometries.push_back(linear);
+            }
+            GEOSGeometry* polygon = ring_geometries.empty()
+                                        ? nullptr
+                                        : GEOSGeom_createPolygon_r(handle_, ring_geometries[0], ring_geometries.data() + 1,
+                                                                   static_cast<unsigned>(ring_geometries.size() - 1));
+            if (polygon == nullptr) return drop();  // (GEOS has destroyed the rings it was given)
+            made.push_back(polygon);
+        }
+        if (made.size() == 1) return made[0];
+        // (GEOS owns the polygons from here, made or not.)
+        return GEOSGeom_createCollection_r(handle_, GEOS_MULTIPOLYGON, made.data(), static_cast<unsigned>(made.size()));
+    }
+
+public:
 
     // Where segments pq and rs meet (a point of their intersection).
     Point meeting_point(Point p, Point q, Point r, Point s) const {

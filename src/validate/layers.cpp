@@ -41,6 +41,25 @@ void add_geometry(Feature& feature, const OGRGeometry& geometry) {
     }
 }
 
+// Do the rings in `parts` (and rings_per_polygon) give GEOS this polygon geometry as it is?
+// Polygons and multipolygons without an empty ring or member: yes.
+bool rings_stand_for(const OGRGeometry& geometry) {
+    const OGRwkbGeometryType type = wkbFlatten(geometry.getGeometryType());
+    auto whole = [](const OGRPolygon& polygon) {
+        if (polygon.IsEmpty()) return false;
+        for (const OGRLinearRing* ring : polygon) {
+            if (ring->IsEmpty()) return false;
+        }
+        return true;
+    };
+    if (type == wkbPolygon) return whole(*geometry.toPolygon());
+    if (type != wkbMultiPolygon) return false;
+    for (const OGRPolygon* polygon : *geometry.toMultiPolygon()) {
+        if (!whole(*polygon)) return false;
+    }
+    return true;
+}
+
 }  // namespace
 
 std::vector<Layer> read_layers(const std::string& path, const std::vector<std::string>& names, const std::string& key) {
@@ -66,7 +85,8 @@ std::vector<Layer> read_layers(const std::string& path, const std::vector<std::s
             feature.key = key_field >= 0 ? ogr_feature->GetFieldAsString(key_field) : std::to_string(index);
             if (const OGRGeometry* geometry = ogr_feature->GetGeometryRef()) {
                 add_geometry(feature, *geometry);
-                feature.geometry.reset(geometry->clone());
+                feature.has_geometry = true;
+                if (feature.type == Feature::Type::polygons && !rings_stand_for(*geometry)) feature.geometry.reset(geometry->clone());
             }
             layer.features.push_back(std::move(feature));
             ++index;

@@ -1,5 +1,6 @@
 // The datasets `toposimp check` compares, read through OGR: each feature's lines or polygon rings
-// as point lists (and its geometry, for GEOS), keyed by a field or by order.
+// as point lists (and, where those cannot stand for it in GEOS, its geometry), keyed by a field
+// or by order.
 #pragma once
 
 #include "core/geometry.hpp"
@@ -19,6 +20,10 @@ struct Feature {
     Type type = Type::none;
     std::vector<std::vector<Point>> parts;  // lines: line parts; polygons: rings, polygon by polygon
     std::vector<std::uint32_t> rings_per_polygon;
+    bool has_geometry = false;  // (a feature may have none)
+    // The geometry as read, kept only for polygons that `parts` cannot give GEOS as they were: an
+    // empty ring or polygon, a collection of polygons and other things. Otherwise GEOS gets the
+    // rings from `parts` (a copy of every polygon kept through the check was a sixth of its memory).
     std::unique_ptr<OGRGeometry> geometry;
 };
 

@@ -195,6 +195,35 @@ TEST(CheckCli, InvalidPolygonByGeos) {
     FAIL() << "no invalid subset found";
 }
 
+// GEOS judges polygons from the rings the check keeps (not from a copy of each geometry): the
+// same reasons and places as GEOS gives for the geometries OGR reads — a bow tie, overlapping
+// members of a multipolygon, a hole outside its shell, a ring of three points, a ring left open
+// — and an original that is invalid already is counted, not reported.
+TEST(CheckCli, PolygonValidityFromTheKeptRings) {
+    auto square = [](int x) {
+        return "POLYGON ((" + std::to_string(x) + " 0, " + std::to_string(x + 4) + " 0, " + std::to_string(x + 4) + " 4, " +
+               std::to_string(x) + " 4, " + std::to_string(x) + " 0))";
+    };
+    const Case c = make_case(
+        "validity", wkbUnknown,
+        {square(0), "MULTIPOLYGON (((10 0, 14 0, 14 4, 12 5, 10 4, 10 0)), ((20 0, 24 0, 24 4, 20 4, 20 0)))",
+         "POLYGON ((30 0, 34 0, 34 4, 32 5, 30 4, 30 0), (31 1, 33 1, 33 3, 31 3, 31 1))", square(40), square(50),
+         "POLYGON ((60 0, 64 4, 64 0, 60 4, 60 0))"},
+        {"POLYGON ((0 0, 4 4, 4 0, 0 4, 0 0))", "MULTIPOLYGON (((10 0, 14 0, 14 4, 10 4, 10 0)), ((12 0, 24 0, 24 4, 12 4, 12 0)))",
+         "POLYGON ((30 0, 34 0, 34 4, 30 4, 30 0), (35 1, 36 1, 36 2, 35 2, 35 1))", "POLYGON ((40 0, 44 0, 40 0))",
+         "POLYGON ((50 0, 54 0, 54 4, 50 4))", "POLYGON ((60 0, 64 4, 64 0, 60 0))"});
+    const Checked checked = run_check(c, "invalid_polygon");
+    EXPECT_EQ(checked.count, 5) << checked.json;
+    for (const char* expected : {"\"feature\":\"0\",\"other\":\"\",\"x\":2,\"y\":2,\"detail\":\"Self-intersection\"",
+                                 "\"feature\":\"1\",\"other\":\"\",\"x\":14,\"y\":0,\"detail\":\"Self-intersection\"",
+                                 "\"feature\":\"2\",\"other\":\"\",\"x\":35,\"y\":1,\"detail\":\"Hole lies outside shell\"",
+                                 "\"feature\":\"3\",\"other\":\"\",\"x\":40,\"y\":0,\"detail\":\"Too few points in geometry component\"",
+                                 "\"feature\":\"4\",\"other\":\"\",\"x\":0,\"y\":0,\"detail\":\"GEOS cannot read the geometry\""}) {
+        EXPECT_NE(checked.json.find(expected), std::string::npos) << expected << " in " << checked.json;
+    }
+    EXPECT_NE(checked.json.find("\"invalid_in_original\":1"), std::string::npos) << checked.json;
+}
+
 TEST(CheckCli, ControlPointChangedPolygonAndSide) {
     const Case c = make_case("points", wkbPolygon,
                              {"POLYGON ((0 0, 1 0, 1.3 1, 1 2, 0 2, 0 0))", "POLYGON ((1 0, 2 0, 2 2, 1 2, 1.3 1, 1 0))"},
