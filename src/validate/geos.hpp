@@ -36,6 +36,32 @@ public:
         return invalid_reason(polygons(rings, rings_per_polygon), where);
     }
 
+    // Where segments pq and rs meet (a point of their intersection).
+    Point meeting_point(Point p, Point q, Point r, Point s) const {
+        auto segment = [&](Point a, Point b) {
+            GEOSCoordSequence* sequence = GEOSCoordSeq_create_r(handle_, 2, 2);
+            GEOSCoordSeq_setXY_r(handle_, sequence, 0, a.x, a.y);
+            GEOSCoordSeq_setXY_r(handle_, sequence, 1, b.x, b.y);
+            return GEOSGeom_createLineString_r(handle_, sequence);
+        };
+        GEOSGeometry* a = segment(p, q);
+        GEOSGeometry* b = segment(r, s);
+        Point where{(p.x + q.x) / 2, (p.y + q.y) / 2};
+        if (GEOSGeometry* meet = GEOSIntersection_r(handle_, a, b)) {
+            if (!GEOSisEmpty_r(handle_, meet)) {
+                if (GEOSGeometry* centre = GEOSGetCentroid_r(handle_, meet)) {
+                    GEOSGeomGetX_r(handle_, centre, &where.x);
+                    GEOSGeomGetY_r(handle_, centre, &where.y);
+                    GEOSGeom_destroy_r(handle_, centre);
+                }
+            }
+            GEOSGeom_destroy_r(handle_, meet);
+        }
+        GEOSGeom_destroy_r(handle_, a);
+        GEOSGeom_destroy_r(handle_, b);
+        return where;
+    }
+
 private:
     // Takes `g` (null: GEOS could not make it).
     std::optional<std::string> invalid_reason(GEOSGeometry* g, Point& where) const {
@@ -91,35 +117,6 @@ private:
         return GEOSGeom_createCollection_r(handle_, GEOS_MULTIPOLYGON, made.data(), static_cast<unsigned>(made.size()));
     }
 
-public:
-
-    // Where segments pq and rs meet (a point of their intersection).
-    Point meeting_point(Point p, Point q, Point r, Point s) const {
-        auto segment = [&](Point a, Point b) {
-            GEOSCoordSequence* sequence = GEOSCoordSeq_create_r(handle_, 2, 2);
-            GEOSCoordSeq_setXY_r(handle_, sequence, 0, a.x, a.y);
-            GEOSCoordSeq_setXY_r(handle_, sequence, 1, b.x, b.y);
-            return GEOSGeom_createLineString_r(handle_, sequence);
-        };
-        GEOSGeometry* a = segment(p, q);
-        GEOSGeometry* b = segment(r, s);
-        Point where{(p.x + q.x) / 2, (p.y + q.y) / 2};
-        if (GEOSGeometry* meet = GEOSIntersection_r(handle_, a, b)) {
-            if (!GEOSisEmpty_r(handle_, meet)) {
-                if (GEOSGeometry* centre = GEOSGetCentroid_r(handle_, meet)) {
-                    GEOSGeomGetX_r(handle_, centre, &where.x);
-                    GEOSGeomGetY_r(handle_, centre, &where.y);
-                    GEOSGeom_destroy_r(handle_, centre);
-                }
-            }
-            GEOSGeom_destroy_r(handle_, meet);
-        }
-        GEOSGeom_destroy_r(handle_, a);
-        GEOSGeom_destroy_r(handle_, b);
-        return where;
-    }
-
-private:
     GEOSContextHandle_t handle_;
 };
 
