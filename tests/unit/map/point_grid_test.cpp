@@ -260,19 +260,29 @@ TEST(PointGrid, AWindowAnswersAsTheWholeGridInsideIt) {
     }
 }
 
+// `pairs` points on a wavy line across the map and as many in 60 columns of equal x (the first
+// span), and 500 scattered ones (the second): crowded cells, equal x, and points alone.
+std::pair<std::vector<Point>, std::vector<Point>> shore_and_columns(std::mt19937_64& rng, int pairs) {
+    std::uniform_real_distribution<double> unit(0, 1);
+    std::vector<Point> points, others;
+    for (int k = 0; k < pairs; ++k) {
+        const double t = unit(rng);
+        points.push_back({t * 100, 50 + 20 * std::sin(t * 40)});
+        points.push_back({std::floor(unit(rng) * 60), unit(rng) * 100});
+    }
+    for (int k = 0; k < 500; ++k) others.push_back({unit(rng) * 100, unit(rng) * 100});
+    return {points, others};
+}
+
 // A grid built without the points already taken out answers every query as the grid over all of
 // them does once they are taken out: the same points, the same first point, the same ids (the
 // second span's too).
 TEST(PointGrid, SkippingPointsIsTakingThemOut) {
     std::mt19937_64 rng(27);
     std::uniform_real_distribution<double> unit(0, 1);
-    std::vector<Point> points, others;
-    for (int k = 0; k < 4000; ++k) {
-        const double t = unit(rng);
-        points.push_back({t * 100, 50 + 20 * std::sin(t * 40)});
-        points.push_back({std::floor(unit(rng) * 60), unit(rng) * 100});
-    }
-    for (int k = 0; k < 500; ++k) others.push_back({unit(rng) * 100, unit(rng) * 100});
+    const auto drawn = shore_and_columns(rng, 4000);
+    const std::vector<Point>& points = drawn.first;
+    const std::vector<Point>& others = drawn.second;
     for (const unsigned split : {0u, 2u}) {
         for (const double share : {0.0, 0.7, 1.0}) {
             PointGrid whole(points, others, 2.0, 1, split);
@@ -309,13 +319,9 @@ TEST(PointGrid, SkippingPointsIsTakingThemOut) {
 TEST(PointGrid, CompactingKeepsTheAnswers) {
     std::mt19937_64 rng(34);
     std::uniform_real_distribution<double> unit(0, 1);
-    std::vector<Point> points, others;
-    for (int k = 0; k < 40000; ++k) {
-        const double t = unit(rng);
-        points.push_back({t * 100, 50 + 20 * std::sin(t * 40)});
-        points.push_back({std::floor(unit(rng) * 60), unit(rng) * 100});
-    }
-    for (int k = 0; k < 500; ++k) others.push_back({unit(rng) * 100, unit(rng) * 100});
+    const auto drawn = shore_and_columns(rng, 40000);
+    const std::vector<Point>& points = drawn.first;
+    const std::vector<Point>& others = drawn.second;
     for (const unsigned split : {0u, 2u}) {
         for (const int threads : {1, 2, 3}) {
             for (const double share : {0.0, 0.7, 1.0}) {
