@@ -87,7 +87,7 @@ public:
     // Built on `threads` threads (0: OpenMP's default) when big; the grid is the same for any.
     explicit FaceGrid(const Mesh& m, std::span<const V> near = {}, std::int64_t radius = 0, int threads = 0) : mesh_(m) {
         if (m.faces.empty()) return;
-        // The box of the points, and the mean edge and area of up to 65 536 faces spread over the
+        // The box of the points, and the mean edge and area of up to 8 192 faces spread over the
         // mesh (the cell size needs no more; the distances do not depend on it), in fixed chunks
         // on all threads, the chunks' sums added in order: the same numbers for any thread count.
         const std::size_t faces = m.faces.size(), chunks = (faces + kChunk - 1) / kChunk;
@@ -110,7 +110,7 @@ public:
             lo_ = {std::min(lo_.x, lo.x), std::min(lo_.y, lo.y), std::min(lo_.z, lo.z)};
             hi_ = {std::max(hi_.x, hi.x), std::max(hi_.y, hi.y), std::max(hi_.z, hi.z)};
         }
-        const std::size_t stride = std::max<std::size_t>(1, faces / 65536);
+        const std::size_t stride = std::max<std::size_t>(1, faces / 8192);
         double edges = 0, area = 0;
         std::size_t measured = 0;
         for (std::size_t i = 0; i < faces; i += stride, ++measured) {
@@ -187,7 +187,9 @@ public:
                     }
                     if (!near_one) continue;
                 }
-                const bool one_cell = lo[0] == hi[0] && lo[1] == hi[1] && lo[2] == hi[2];
+                // (A face whose box spans 2 × 2 × 2 cells or fewer is listed in all of them: the
+                // separating axis test costs more than the few extra faces a search then measures.)
+                const bool few_cells = (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1) <= 8;
                 const V a = v(m.points[m.faces[f][0]]), b = v(m.points[m.faces[f][1]]), c = v(m.points[m.faces[f][2]]);
                 // Half a cell, and a millionth more (with the cells' clamping at the grid's edges,
                 // a cell of the edge row may hold points beyond it: those rows take the whole box).
@@ -199,7 +201,7 @@ public:
                             const V centre{lo_.x + (static_cast<double>(x) + 0.5) * size_, lo_.y + (static_cast<double>(y) + 0.5) * size_,
                                            lo_.z + (static_cast<double>(z) + 0.5) * size_};
                             if (!wanted.empty() && !wanted[static_cast<std::size_t>(key(x, y, z))]) continue;
-                            if (one_cell || edge || triangle_meets_box(a, b, c, centre, {half, half, half})) {
+                            if (few_cells || edge || triangle_meets_box(a, b, c, centre, {half, half, half})) {
                                 entries.emplace_back(key(x, y, z), f);
                             }
                         }
@@ -211,22 +213,23 @@ public:
         std::size_t total = 0;
         for (const auto& part : listed) total += part.size();
         const auto cells = static_cast<std::size_t>(n_[0] * n_[1] * n_[2]);
-        keys_.resize(total);
         faces_.resize(total);
         // (A count per cell: at most 16 MB more than the entries, or 16 bytes a cell per entry.)
         if ((cells <= 4 * total || cells <= (std::size_t{1} << 22)) && total < std::numeric_limits<std::uint32_t>::max()) {
-            std::vector<std::uint32_t> start(cells + 1, 0);
+            // Kept: cell c's faces are faces_[start_[c], start_[c + 1]).
+            start_.assign(cells + 1, 0);
             for (const auto& part : listed) {
-                for (const auto& [cell_key, face] : part) ++start[static_cast<std::size_t>(cell_key) + 1];
+                for (const auto& [cell_key, face] : part) ++start_[static_cast<std::size_t>(cell_key) + 1];
             }
-            for (std::size_t c = 0; c < cells; ++c) start[c + 1] += start[c];
+            for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
             for (const auto& part : listed) {
-                for (const auto& [cell_key, face] : part) {
-                    const std::uint32_t at = start[static_cast<std::size_t>(cell_key)]++;
-                    keys_[at] = cell_key, faces_[at] = face;
-                }
+                for (const auto& [cell_key, face] : part) faces_[start_[static_cast<std::size_t>(cell_key)]++] = face;
             }
+            // (Each start_[c] moved on to where cell c + 1 begins: one place back.)
+            for (std::size_t c = cells; c > 0; --c) start_[c] = start_[c - 1];
+            start_[0] = 0;
         } else {
+            keys_.resize(total);
             std::vector<std::pair<std::int64_t, std::uint32_t>> entries;
             entries.reserve(total);
             for (const auto& part : listed) entries.insert(entries.end(), part.begin(), part.end());
@@ -249,9 +252,10 @@ public:
                     for (std::int64_t z = c[2] - r; z <= c[2] + r; ++z) {
                         const bool shell = std::max({std::llabs(x - c[0]), std::llabs(y - c[1]), std::llabs(z - c[2])}) == r;
                         if (!shell || x < 0 || y < 0 || z < 0 || x >= n_[0] || y >= n_[1] || z >= n_[2]) continue;
-                        const std::int64_t k = key(x, y, z);
-                        for (auto it = std::lower_bound(keys_.begin(), keys_.end(), k); it != keys_.end() && *it == k; ++it) {
-                            const Face& f = mesh_.faces[faces_[static_cast<std::size_t>(it - keys_.begin())]];
+                        if (r > 0 && beyond(p, x, y, z, best)) continue;
+                        const auto [first, last] = listed_in(key(x, y, z));
+                        for (std::size_t i = first; i < last; ++i) {
+                            const Face& f = mesh_.faces[faces_[i]];
                             best = std::min(best, distance2(p, v(mesh_.points[f[0]]), v(mesh_.points[f[1]]), v(mesh_.points[f[2]])));
                         }
                     }
@@ -277,20 +281,50 @@ private:
     double extent(int k) const { return k == 0 ? hi_.x - lo_.x : (k == 1 ? hi_.y - lo_.y : hi_.z - lo_.z); }
     std::int64_t cell(double value, int k) const {
         const double origin = k == 0 ? lo_.x : (k == 1 ? lo_.y : lo_.z);
-        const double c = std::floor((value - origin) / size_);
-        return static_cast<std::int64_t>(std::clamp(c, 0.0, static_cast<double>(n_[k] - 1)));
+        // (Truncation floors what is not negative.)
+        const double c = (value - origin) / size_;
+        if (!(c >= 0)) return 0;
+        return c >= static_cast<double>(n_[k] - 1) ? n_[k] - 1 : static_cast<std::int64_t>(c);
     }
     std::int64_t key(std::int64_t x, std::int64_t y, std::int64_t z) const { return (x * n_[1] + y) * n_[2] + z; }
+    // Is every point of cell (x, y, z), widened by the margin the faces were listed with, farther
+    // from p than a squared distance `best`, by more than a rounding of distance2 on a face near p
+    // (a millionth of a cell's side, squared)? Then no face listed there comes nearer than `best`
+    // where it meets the cell, and one meeting nearer cells is measured there: skipping the cell
+    // leaves the minimum as it is.
+    bool beyond(V p, std::int64_t x, std::int64_t y, std::int64_t z, double best) const {
+        const double at[3] = {p.x, p.y, p.z}, origin[3] = {lo_.x, lo_.y, lo_.z};
+        const std::int64_t c[3] = {x, y, z};
+        const double margin = 1e-6 * size_;
+        double gap2 = 0;
+        for (int k = 0; k < 3; ++k) {
+            // (Edge cells also hold what lies beyond the grid: no gap on that side.)
+            const double low = c[k] == 0 ? -INFINITY : origin[k] + static_cast<double>(c[k]) * size_ - margin;
+            const double high = c[k] == n_[k] - 1 ? INFINITY : origin[k] + static_cast<double>(c[k] + 1) * size_ + margin;
+            const double gap = at[k] < low ? low - at[k] : (at[k] > high ? at[k] - high : 0.0);
+            gap2 += gap * gap;
+        }
+        return gap2 > best + 1e-12 * size_ * size_;
+    }
 
-    static constexpr std::size_t kChunk = 1 << 15;
+    // Where cell k's faces are in faces_.
+    std::pair<std::size_t, std::size_t> listed_in(std::int64_t k) const {
+        if (!start_.empty()) return {start_[static_cast<std::size_t>(k)], start_[static_cast<std::size_t>(k) + 1]};
+        const auto begin = std::lower_bound(keys_.begin(), keys_.end(), k);
+        const auto end = std::upper_bound(begin, keys_.end(), k);
+        return {static_cast<std::size_t>(begin - keys_.begin()), static_cast<std::size_t>(end - keys_.begin())};
+    }
+
+    static constexpr std::size_t kChunk = 1 << 12;
 
     const Mesh& mesh_;
     std::int64_t limit_ = -1;  // with `near`: the shells filled around those points
     V lo_{0, 0, 0}, hi_{0, 0, 0};
     double size_ = 1.0;
     std::int64_t n_[3] = {1, 1, 1};
-    std::vector<std::int64_t> keys_;
-    std::vector<std::uint32_t> faces_;
+    std::vector<std::uint32_t> faces_;   // by cell, in face order within a cell
+    std::vector<std::uint32_t> start_;   // per cell, where its faces begin (and one past the last cell)
+    std::vector<std::int64_t> keys_;     // or, for a grid of many more cells than entries: each entry's cell
 };
 
 std::vector<V> samples_of(const Mesh& m, std::size_t face_samples) {
@@ -357,16 +391,22 @@ OneWayDistance over_samples(const std::vector<V>& samples, int threads, Measure 
 // `count` points of a mesh spread over it by area, stratified: the k-th lies where the running sum
 // of the faces' areas reaches (k + ½)/count of the whole, placed inside its face by the R2
 // low-discrepancy sequence (Roberts 2018), so the points are deterministic and even.
-std::vector<V> spread_samples(const Mesh& m, std::size_t count) {
+std::vector<V> spread_samples(const Mesh& m, std::size_t count, int threads) {
     std::vector<V> out;
     if (m.faces.empty() || count == 0) return out;
+    // Each face's (twice) area on all threads, then their running sum in face order.
     std::vector<double> running(m.faces.size());
-    double total = 0;
-    for (std::size_t f = 0; f < m.faces.size(); ++f) {
-        const Face& face = m.faces[f];
+    const auto faces = static_cast<std::int64_t>(m.faces.size());
+#pragma omp parallel for schedule(static) num_threads(threads) if (faces >= 65536)
+    for (std::int64_t f = 0; f < faces; ++f) {
+        const Face& face = m.faces[static_cast<std::size_t>(f)];
         const V n = cross(v(m.points[face[1]]) - v(m.points[face[0]]), v(m.points[face[2]]) - v(m.points[face[0]]));
-        total += std::sqrt(dot(n, n));
-        running[f] = total;
+        running[static_cast<std::size_t>(f)] = std::sqrt(dot(n, n));
+    }
+    double total = 0;
+    for (double& area : running) {
+        total += area;
+        area = total;
     }
     if (!(total > 0)) {
         for (std::size_t k = 0; k < count; ++k) out.push_back(v(m.points[m.faces[k * m.faces.size() / count][0]]));
@@ -544,8 +584,8 @@ HausdorffDistance spread_hausdorff(const Mesh& a, const Mesh& b, std::size_t cou
     const Mesh& second = in ? in->b : b;
     const double unscale = in ? in->unscale : 1.0;
     HausdorffDistance d;
-    d.forward = unscaled(one_way_near(spread_samples(first, count), second, threads), unscale);
-    d.backward = unscaled(one_way_near(spread_samples(second, count), first, threads), unscale);
+    d.forward = unscaled(one_way_near(spread_samples(first, count, threads), second, threads), unscale);
+    d.backward = unscaled(one_way_near(spread_samples(second, count, threads), first, threads), unscale);
     d.diagonal = diagonal_of(first) * unscale;
     return d;
 }
@@ -558,7 +598,7 @@ VerticalError spread_vertical_error(const Mesh& a, const Mesh& b, std::size_t co
         const Mesh* from = from_mesh;
         const Mesh* to = to_mesh;
         OneWayDistance* side = one_side;
-        const std::vector<V> samples = spread_samples(*from, count);
+        const std::vector<V> samples = spread_samples(*from, count, threads);
         std::vector<Point> near;
         near.reserve(samples.size());
         for (const V& p : samples) near.push_back({p.x, p.y});
@@ -576,7 +616,7 @@ VerticalError spread_vertical_error(const Mesh& a, const Mesh& b, std::size_t co
 
 std::vector<Point3> spread_points(const Mesh& m, std::size_t count) {
     std::vector<Point3> out;
-    for (const V& p : spread_samples(m, count)) out.push_back({p.x, p.y, p.z});
+    for (const V& p : spread_samples(m, count, 1)) out.push_back({p.x, p.y, p.z});
     return out;
 }
 
@@ -591,7 +631,7 @@ TerrainMeasure spread_terrain_measure(const Mesh& a, const Mesh& b, std::size_t 
         // (Plain locals: clang 14 does not capture structured bindings in lambdas.)
         const Mesh* from = from_mesh;
         const Mesh* to = to_mesh;
-        const std::vector<V> samples = spread_samples(*from, count);
+        const std::vector<V> samples = spread_samples(*from, count, threads);
         std::vector<Point> near;
         near.reserve(samples.size());
         for (const V& p : samples) near.push_back({p.x, p.y});

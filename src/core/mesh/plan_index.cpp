@@ -12,13 +12,9 @@ struct PlanBox {
     double x0, x1, y0, y1;
 };
 
-PlanBox plan_box(const Mesh& mesh, const Face& f) {
-    PlanBox box{mesh.points[f[0]].x, mesh.points[f[0]].x, mesh.points[f[0]].y, mesh.points[f[0]].y};
-    for (std::uint32_t w : f) {
-        box.x0 = std::min(box.x0, mesh.points[w].x), box.x1 = std::max(box.x1, mesh.points[w].x);
-        box.y0 = std::min(box.y0, mesh.points[w].y), box.y1 = std::max(box.y1, mesh.points[w].y);
-    }
-    return box;
+inline PlanBox plan_box(const Mesh& mesh, const Face& f) {
+    const Point3 &a = mesh.points[f[0]], &b = mesh.points[f[1]], &c = mesh.points[f[2]];
+    return {std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y})};
 }
 
 // Do two triangles, both turned `turn` in the map plane, overlap there beyond their borders?
@@ -89,6 +85,7 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
     const double cells = std::max(1.0, static_cast<double>(mesh.faces.size()) / 2.0);
     const double width = hi_x - lo_x, height = hi_y - lo_y;
     size_ = width > 0 && height > 0 ? std::sqrt(width * height / cells) : std::max({width, height, 1.0});
+    per_size_ = 1.0 / size_;
     n_x_ = std::min<std::int64_t>(static_cast<std::int64_t>(width / size_) + 1, 1 << 14);
     n_y_ = std::min<std::int64_t>(static_cast<std::int64_t>(height / size_) + 1, 1 << 14);
     first_.assign(static_cast<std::size_t>(n_x_ * n_y_) + 1, 0);
@@ -118,31 +115,58 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
             }
         }
     }
-    // The wanted cells only (few faces listed): each chunk's (cell, face) pairs in face order on
-    // all threads, then a counting sort by cell.
-    std::vector<std::vector<std::pair<std::uint32_t, std::uint32_t>>> listed(chunks);
-#pragma omp parallel for schedule(dynamic, 1) num_threads(team) if (parallel)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
-        const auto [first, last] = chunk_range(k);
-        auto& pairs = listed[static_cast<std::size_t>(k)];
-        for (std::size_t f = first; f < last; ++f) {
-            const PlanBox box = plan_box(mesh, mesh.faces[f]);
-            for (std::int64_t x = cell(box.x0, lo_x_, n_x_); x <= cell(box.x1, lo_x_, n_x_); ++x) {
-                for (std::int64_t y = cell(box.y0, lo_y_, n_y_); y <= cell(box.y1, lo_y_, n_y_); ++y) {
-                    const auto c = static_cast<std::size_t>(x * n_y_ + y);
-                    if (wanted[c]) pairs.emplace_back(static_cast<std::uint32_t>(c), static_cast<std::uint32_t>(f));
-                }
+    // The wanted cells only (few faces listed), a counting sort on all threads: each thread
+    // counts, then places, the entries of a contiguous run of faces, its entries in a cell after
+    // those of the runs before it, so that a cell lists its faces in face order for any team.
+    const int workers = parallel ? team : 1;
+    const auto cell_count = static_cast<std::size_t>(n_x_ * n_y_);
+    std::vector<std::vector<std::uint32_t>> counts(static_cast<std::size_t>(workers));
+    auto faces_of = [&](int t) {
+        return std::pair{faces * static_cast<std::size_t>(t) / static_cast<std::size_t>(workers),
+                         faces * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(workers)};
+    };
+    auto for_wanted_cells = [&](std::size_t f, auto each) {
+        const PlanBox box = plan_box(mesh, mesh.faces[f]);
+        const std::int64_t x0 = cell(box.x0, lo_x_, n_x_), x1 = cell(box.x1, lo_x_, n_x_);
+        const std::int64_t y0 = cell(box.y0, lo_y_, n_y_), y1 = cell(box.y1, lo_y_, n_y_);
+        for (std::int64_t x = x0; x <= x1; ++x) {
+            for (std::int64_t y = y0; y <= y1; ++y) {
+                const auto c = static_cast<std::size_t>(x * n_y_ + y);
+                if (wanted[c]) each(c);
             }
         }
-    }
-    for (const auto& pairs : listed) {
-        for (const auto& [c, f] : pairs) ++first_[c + 1];
-    }
-    for (std::size_t c = 1; c < first_.size(); ++c) first_[c] += first_[c - 1];
-    faces_.resize(first_.back());
-    std::vector<std::size_t> next(first_.begin(), first_.end() - 1);
-    for (const auto& pairs : listed) {
-        for (const auto& [c, f] : pairs) faces_[next[c]++] = f;
+    };
+#pragma omp parallel num_threads(workers)
+    {
+        const int t = omp_get_thread_num();
+        std::vector<std::uint32_t>& mine = counts[static_cast<std::size_t>(t)];
+        mine.assign(cell_count, 0);
+        const auto [first, last] = faces_of(t);
+        std::vector<std::uint32_t> listed;  // this run's faces in a wanted cell, to place
+        for (std::size_t f = first; f < last; ++f) {
+            bool any = false;
+            for_wanted_cells(f, [&](std::size_t c) { ++mine[c], any = true; });
+            if (any) listed.push_back(static_cast<std::uint32_t>(f));
+        }
+#pragma omp barrier
+#pragma omp single
+        {
+            // Where each thread's entries of each cell go (counts become offsets).
+            std::size_t at = 0;
+            for (std::size_t c = 0; c < cell_count; ++c) {
+                first_[c] = at;
+                for (auto& count : counts) {
+                    const std::uint32_t here = count[c];
+                    count[c] = static_cast<std::uint32_t>(at - first_[c]);
+                    at += here;
+                }
+            }
+            first_[cell_count] = at;
+            faces_.resize(at);
+        }
+        for (const std::uint32_t f : listed) {
+            for_wanted_cells(f, [&](std::size_t c) { faces_[first_[c] + mine[c]++] = f; });
+        }
     }
 }
 

@@ -61,12 +61,14 @@ public:
 
 private:
     std::int64_t cell(double value, double origin, std::int64_t n) const {
-        const double c = std::floor((value - origin) / size_);
-        if (!(c >= 0)) return 0;  // (NaN too)
+        // (Truncation floors what is not negative; the rest, NaN too, is cell 0.)
+        const double c = (value - origin) * per_size_;
+        if (!(c >= 0)) return 0;
         return c >= static_cast<double>(n - 1) ? n - 1 : static_cast<std::int64_t>(c);
     }
 
     double lo_x_ = 0, lo_y_ = 0, size_ = 1;
+    double per_size_ = 1;  // 1 / size_ (any monotone rounding of a position to cells will do)
     std::int64_t reach_ = -1;  // with `near`: the cells filled around each point's
     std::int64_t n_x_ = 1, n_y_ = 1;
     std::vector<std::size_t> first_;  // per cell (x-major), where its faces start; one more at the end

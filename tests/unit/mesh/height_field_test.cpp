@@ -8,6 +8,7 @@
 #include "core/mesh/plan_index.hpp"
 #include "core/mesh/simplify.hpp"
 #include "support/exact_checker.hpp"
+#include "support/random_meshes.hpp"
 
 #include <gtest/gtest.h>
 
@@ -192,6 +193,33 @@ TEST(HeightField, RandomPiecesAgreeWithTheBruteForce) {
     }
     EXPECT_GT(overlapping, 3);
     EXPECT_GT(clean, 3);
+}
+
+// The index the quick measure builds around its points lists, in each cell it fills, what the
+// index of every face lists there, in the same (face) order, whatever the number of threads
+// (each thread counts and places a run of faces; a cell takes the runs in order).
+TEST(PlanIndex, CellsNearThePointsListWhatTheWholeIndexListsInFaceOrder) {
+    const Mesh m = toposimp::testing::noisy_heightfield(140, 0.3, 8);  // 38 642 faces: two runs or more
+    ASSERT_GT(m.faces.size(), std::size_t{32768});
+    const PlanIndex whole(m);
+    std::mt19937 random(9);
+    std::uniform_real_distribution<double> where(-0.1, 1.1);
+    Box3 box = point_box(m.points[0]);
+    for (const Point3& p : m.points) box.add(p);
+    std::vector<Point> near;
+    for (int k = 0; k < 300; ++k) {
+        near.push_back({box.lo.x + where(random) * (box.hi.x - box.lo.x), box.lo.y + where(random) * (box.hi.y - box.lo.y)});
+    }
+    for (const int threads : {1, 2, 3}) {
+        const PlanIndex index(m, near, 1, threads);
+        std::size_t listed = 0;
+        for (const Point p : near) {
+            const auto here = index.at(p.x, p.y), all = whole.at(p.x, p.y);
+            ASSERT_TRUE(std::equal(here.begin(), here.end(), all.begin(), all.end())) << threads << " threads, at " << p.x << " " << p.y;
+            listed += here.size();
+        }
+        EXPECT_GT(listed, near.size());
+    }
 }
 
 }  // namespace
