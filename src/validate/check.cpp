@@ -188,20 +188,22 @@ struct Matched {
 // a route a track drives 10 000 times one segment of one feature, 10 000 times. Contacts are
 // then counted per pair of features by multiplying, not by listing every pair of segments
 // (issue 29: 5·10^9 pairs for a 100 000-vertex track back and forth over one stretch).
+// Memory (issue 32: a 200 M-vertex map's check): an added segment is 16 bytes, a pointer into its
+// feature's points (which outlive the Linework) rather than its two ends' keys; a distinct
+// segment then 52 bytes (its two points, chain, member and where its members begin).
 class Linework {
 public:
     struct Member {
         std::uint32_t feature;
-        std::uint64_t times;
+        std::uint32_t times;  // (products of two: take them in 64 bits)
     };
+
+    // Room for `segments` added segments in all (exactly: no slack doubling the array).
+    void reserve(std::size_t segments) { added_.reserve(segments); }
 
     void add(const Feature& feature, std::uint32_t id) {
         for (const auto& part : feature.parts) {
-            for (std::size_t k = 0; k + 1 < part.size(); ++k) {
-                map::LocationKey a(part[k]), b(part[k + 1]);
-                if (b < a) std::swap(a, b);
-                added_.push_back({a, b, id, static_cast<std::uint32_t>(added_.size())});
-            }
+            for (std::size_t k = 0; k + 1 < part.size(); ++k) added_.push_back({part.data() + k, id, static_cast<std::uint32_t>(added_.size())});
         }
     }
 
@@ -209,7 +211,8 @@ public:
     // own (distinct segment d from vertex 2d), in order of first appearance.
     void finish() {
         std::sort(added_.begin(), added_.end(), [](const Added& x, const Added& y) {
-            return std::tie(x.a, x.b, x.order) < std::tie(y.a, y.b, y.order);
+            const auto ex = x.ends(), ey = y.ends();
+            return std::tie(ex.first, ex.second, x.order) < std::tie(ey.first, ey.second, y.order);
         });
         struct Group {
             std::uint32_t first_added, begin, end;
@@ -217,16 +220,26 @@ public:
         std::vector<Group> groups;
         for (std::uint32_t k = 0; k < added_.size();) {
             std::uint32_t end = k + 1;
-            while (end < added_.size() && added_[end].a == added_[k].a && added_[end].b == added_[k].b) ++end;
+            const auto ends = added_[k].ends();
+            while (end < added_.size() && added_[end].ends() == ends) ++end;
             groups.push_back({added_[k].order, k, end});
             k = end;
         }
         std::sort(groups.begin(), groups.end(), [](const Group& x, const Group& y) { return x.first_added < y.first_added; });
+        // (Every array at its size at once: no slack.)
+        std::size_t members = 0;
+        for (const Group& group : groups) {
+            for (std::uint32_t k = group.begin; k < group.end; ++k) members += k == group.begin || added_[k].feature != added_[k - 1].feature;
+        }
+        members_.reserve(members);
+        map_.vertices.reserve(2 * groups.size());
+        map_.chains.reserve(groups.size());
+        start_.reserve(groups.size() + 1);
         start_.push_back(0);
         for (const Group& group : groups) {
-            const Added& one = added_[group.begin];
-            map_.vertices.push_back(one.a.point());
-            map_.vertices.push_back(one.b.point());
+            const auto [a, b] = added_[group.begin].ends();
+            map_.vertices.push_back(a.point());
+            map_.vertices.push_back(b.point());
             const auto v = static_cast<std::uint32_t>(map_.vertices.size() - 2);
             map_.chains.push_back({v, v + 1});
             // Features were added in increasing order, and the group keeps that order.
@@ -234,7 +247,7 @@ public:
                 if (members_.size() > start_.back() && members_.back().feature == added_[k].feature) ++members_.back().times;
                 else members_.push_back({added_[k].feature, 1});
             }
-            start_.push_back(members_.size());
+            start_.push_back(static_cast<std::uint32_t>(members_.size()));
         }
         added_ = {};
     }
@@ -247,13 +260,18 @@ public:
 
 private:
     struct Added {
-        map::LocationKey a, b;
+        const Point* at;  // the segment is at[0]–at[1], in its feature
         std::uint32_t feature, order;
+        // Its ends as location keys, the smaller first.
+        std::pair<map::LocationKey, map::LocationKey> ends() const {
+            const map::LocationKey a(at[0]), b(at[1]);
+            return b < a ? std::pair{b, a} : std::pair{a, b};
+        }
     };
     std::vector<Added> added_;
     map::MapData map_;
     std::vector<Member> members_;
-    std::vector<std::size_t> start_;  // per distinct segment, where its members begin
+    std::vector<std::uint32_t> start_;  // per distinct segment, where its members begin
 };
 
 using PairKey = std::pair<std::uint32_t, std::uint32_t>;
@@ -355,15 +373,15 @@ std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linewor
         const map::SegmentContact itself{v, v, map::ContactKind::identical};
         const std::span<const Linework::Member> list = side.members(d);
         for (std::size_t i = 0; i < list.size(); ++i) {
-            add(list[i].feature, list[i].feature, list[i].times * (list[i].times - 1) / 2, itself);
-            for (std::size_t j = i + 1; j < list.size(); ++j) add(list[i].feature, list[j].feature, list[i].times * list[j].times, itself);
+            add(list[i].feature, list[i].feature, std::uint64_t{list[i].times} * (list[i].times - 1) / 2, itself);
+            for (std::size_t j = i + 1; j < list.size(); ++j) add(list[i].feature, list[j].feature, std::uint64_t{list[i].times} * list[j].times, itself);
         }
     }
     // Distinct segments that meet: every copy of one meets every copy of the other.
     const LineGroups lines = find_line_groups(side, stats);
     for (const map::SegmentContact& contact : map::find_segment_contacts(side.map(), exact::Arithmetic::exact, stats, 0, lines.line_of)) {
         for (const Linework::Member& a : side.members(contact.s / 2)) {
-            for (const Linework::Member& b : side.members(contact.t / 2)) add(a.feature, b.feature, a.times * b.times, contact);
+            for (const Linework::Member& b : side.members(contact.t / 2)) add(a.feature, b.feature, std::uint64_t{a.times} * b.times, contact);
         }
     }
     // Distinct segments of one line meet (improperly) where they overlap by more than a point:
@@ -409,7 +427,7 @@ std::unordered_map<PairKey, PairContacts, PairHash> count_contacts(const Linewor
                 while (closed.contains(other.segments.back())) other.segments.pop_back();
                 const std::uint32_t met = other.segments.back();
                 const map::SegmentContact contact{2 * std::min(event.segment, met), 2 * std::max(event.segment, met), map::ContactKind::touching};
-                for (const Linework::Member& m : list) add(m.feature, g, m.times * other.times, contact);
+                for (const Linework::Member& m : list) add(m.feature, g, m.times * other.times, contact);  // (other.times: 64 bits)
             }
             for (const Linework::Member& m : list) {
                 Open& mine = open[m.feature];
@@ -551,6 +569,18 @@ private:
     // shared segments that appeared or vanished.
     void check_contacts() {
         Linework before_lines, after_lines;
+        auto segments_of = [](const Feature& feature) {
+            std::size_t count = 0;
+            for (const auto& part : feature.parts) count += part.empty() ? 0 : part.size() - 1;
+            return count;
+        };
+        std::size_t before_count = 0, after_count = 0;
+        for (const Matched& m : matched_) {
+            before_count += segments_of(*m.original);
+            if (m.simplified) after_count += segments_of(*m.simplified);
+        }
+        before_lines.reserve(before_count);
+        after_lines.reserve(after_count);
         for (std::uint32_t m = 0; m < matched_.size(); ++m) {
             before_lines.add(*matched_[m].original, m);
             if (matched_[m].simplified) after_lines.add(*matched_[m].simplified, m);
