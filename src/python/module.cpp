@@ -315,14 +315,18 @@ py::tuple simplify_layers(const std::string& source, const py::list& layers, con
     memory.input = &input;
     memory.points = control_points ? &*control_points : nullptr;
     memory.point_coordinates = &coordinates;
+    // (The run's callables live here, beyond the run: the engine below refers to them. Held in
+    // the block that unpacks them, they were gone when it ran — a crash in Release builds.)
+    py::object run_groups, tile_points;
     Run run(progress, interruptible);
     if (!parts.is_none()) {
         const auto how = parts.cast<py::tuple>();
-        const py::object run_groups = how[0];
+        run_groups = how[0];
         const int tile_level = how[1].cast<int>();
-        const py::object tile_points = how[2];
+        tile_points = how[2];
         const auto local_budget = how[3].cast<std::uint64_t>();
-        run.context.map_engine = [&, tile_level, local_budget](const map::MapData& data, const map::SimplifyOptions& simplify) {
+        run.context.map_engine = [&run_groups, &tile_points, tile_level, local_budget](const map::MapData& data,
+                                                                                      const map::SimplifyOptions& simplify) {
             return python::run_in_parts(data, simplify, run_groups, tile_level, tile_points, local_budget);
         };
     }
