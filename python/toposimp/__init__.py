@@ -247,8 +247,10 @@ def simplify(data, keep: Union[float, str, None] = None, *, keep_points: Optiona
     put every coordinate on a grid, keeping the topology (``--precision``/``--decimals``).
     ``weighting`` (0…1, mapshaper's 0.7) ranks sharp angles first; ``spherical`` ranks by areas on
     the sphere (longitude, latitude input). ``arithmetic``: "exact" (the default), "rational", or
-    "float" (unsafe, for experiments). ``threads``: None for all cores; the result is the same for
-    any number. ``progress``: a callable taking (phase, share done 0…1); raising from it stops
+    "float" (unsafe, for experiments). ``threads``: None for all cores, or OMP_NUM_THREADS as it
+    was when toposimp was first imported (Dask's LocalCluster sets it to 1 in the process that
+    starts it: import toposimp first, or pass a number); the result is the same for any number.
+    ``progress``: a callable taking (phase, share done 0…1); raising from it stops
     the run. ``verbose``: 1 or 2 log the command line's -v/-vv details to the "toposimp" logger.
     ``client``: a ``distributed.Client`` (or a ``toposimp.dask.Tiles`` around one, to size the
     tasks): the engine's tiles run as tasks on its workers, as ``python3 -m toposimp.dask`` runs

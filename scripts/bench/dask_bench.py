@@ -18,11 +18,20 @@ import sys
 import tempfile
 import time
 
+# The environment as it was before Dask's LocalCluster ran here: its nannies write the variables
+# they set for their workers (OMP_NUM_THREADS=1, MALLOC_TRIM_THRESHOLD_=65536, ...: Dask's
+# distributed.nanny.pre-spawn-environ) into this process's environment too, where every command
+# started later would inherit them (a toposimp on one thread, glibc returning memory on every
+# free).
+CLEAN_ENV = dict(os.environ)
+
 
 def timed(command, env=None):
-    """(seconds, peak RSS in MiB of the command itself) of a run that must succeed."""
+    """(seconds, peak RSS in MiB of the command itself) of a run that must succeed, in `env` (default:
+    CLEAN_ENV)."""
     start = time.perf_counter()
-    done = subprocess.run(["/usr/bin/time", "-f", "%M", *command], capture_output=True, text=True, env=env)
+    done = subprocess.run(["/usr/bin/time", "-f", "%M", *command], capture_output=True, text=True,
+                          env=CLEAN_ENV if env is None else env)
     seconds = time.perf_counter() - start
     if done.returncode != 0:
         sys.exit(f"failed: {shlex.join(command)}\n{done.stderr}")
@@ -54,7 +63,7 @@ def main():
     a = parser.parse_args()
     targets = a.target or ["--keep 10%", "--max"]
     build = pathlib.Path(a.build).resolve()
-    env = dict(os.environ, PYTHONPATH=str(build / "python"))
+    env = dict(CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
 

@@ -48,7 +48,7 @@ def main():
     single_out, dask_out = data / "single.gpkg", data / "dask.gpkg"
     single = dask_bench.timed([str(build / "toposimp"), "map", *map_arguments, "-o", str(single_out)])
 
-    env = dict(os.environ, PYTHONPATH=str(build / "python"))
+    env = dict(dask_bench.CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
 
