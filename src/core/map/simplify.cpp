@@ -717,6 +717,22 @@ public:
             input.state.push_back(static_cast<std::uint8_t>(cut_end ? State::fixed : state_[v]));
             if (use_marks_) input.marked.push_back(cut_end ? 0 : marked_[v]);
         };
+        // Every array at its size before it is filled (no growing copies: the round's tiles hold
+        // every live vertex).
+        std::size_t vertices = 0;
+        for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) vertices += split.pieces[j].points;
+        const std::size_t chains = split.piece_start[i + 1] - split.piece_start[i];
+        input.map.vertices.reserve(vertices);
+        input.vertex_id.reserve(vertices);
+        input.state.reserve(vertices);
+        if (use_marks_) input.marked.reserve(vertices);
+        input.map.chains.reserve(chains);
+        input.chain_id.reserve(chains);
+        input.whole_level.reserve(chains);
+        input.settled.reserve(chains);
+        input.distinct.reserve(chains);
+        input.orientation.reserve(chains);
+        input.map.control_points.reserve(split.point_start[i + 1] - split.point_start[i]);
         for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) {
             const TilePiece& piece = split.pieces[j];
             const std::uint32_t c = piece.chain;
