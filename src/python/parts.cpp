@@ -55,27 +55,37 @@ py::object item(const py::dict& dict, const char* key) {
     return dict[key];
 }
 
-// A 1-D array of `width`-tuples (width 1: a plain array) as a flat vector.
+// A 1-D array of `width`-tuples (width 1: a plain array) of T, checked, in C order.
 template <class T>
-std::vector<T> flat(const py::dict& dict, const char* key, std::size_t width = 1) {
-    const auto array = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(item(dict, key));
+py::array_t<T, py::array::c_style | py::array::forcecast> checked(const py::dict& dict, const char* key, std::size_t width) {
+    auto array = py::array_t<T, py::array::c_style | py::array::forcecast>::ensure(item(dict, key));
     if (!array) malformed(std::string("'") + key + "' is not an array of numbers");
     const bool shaped = width == 1 ? array.ndim() == 1 : array.ndim() == 2 && array.shape(1) == static_cast<py::ssize_t>(width);
     if (!shaped && array.size() != 0) malformed(std::string("'") + key + "' has the wrong shape");
+    return array;
+}
+
+// Such an array as a flat vector.
+template <class T>
+std::vector<T> flat(const py::dict& dict, const char* key, std::size_t width = 1) {
+    const auto array = checked<T>(dict, key, width);
     return std::vector<T>(array.data(), array.data() + array.size());
 }
 
+// An array of (x, y) as points, or of pairs as pairs: one copy, straight from the array.
 std::vector<Point> points_of(const py::dict& dict, const char* key) {
-    const std::vector<double> flat_points = flat<double>(dict, key, 2);
-    std::vector<Point> points(flat_points.size() / 2);
-    for (std::size_t k = 0; k < points.size(); ++k) points[k] = {flat_points[2 * k], flat_points[2 * k + 1]};
+    const auto array = checked<double>(dict, key, 2);
+    std::vector<Point> points(static_cast<std::size_t>(array.size()) / 2);
+    const double* in = array.data();
+    for (std::size_t k = 0; k < points.size(); ++k) points[k] = {in[2 * k], in[2 * k + 1]};
     return points;
 }
 
 std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_of(const py::dict& dict, const char* key) {
-    const std::vector<std::uint32_t> values = flat<std::uint32_t>(dict, key, 2);
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs(values.size() / 2);
-    for (std::size_t k = 0; k < pairs.size(); ++k) pairs[k] = {values[2 * k], values[2 * k + 1]};
+    const auto array = checked<std::uint32_t>(dict, key, 2);
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs(static_cast<std::size_t>(array.size()) / 2);
+    const std::uint32_t* in = array.data();
+    for (std::size_t k = 0; k < pairs.size(); ++k) pairs[k] = {in[2 * k], in[2 * k + 1]};
     return pairs;
 }
 

@@ -74,3 +74,30 @@ def test_tasks_take_the_biggest_groups_first_and_small_ones_together():
     assert max(sizes) == max(points)  # no task holds more than the biggest group
     assert _batches([], workers=3) == []
     assert _batches([7], workers=3) == [[0]]
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda t: t.update(vertices=numpy.zeros((len(t["vertices"]), 3))), "'vertices' has the wrong shape"),
+    (lambda t: t.update(vertices="not numbers"), "'vertices' is not an array of numbers"),
+    (lambda t: t.update(chains=t["chains"][1:]), "the chains do not"),
+    (lambda t: t.update(waits=numpy.zeros(4, dtype=numpy.uint32)), "'waits' has the wrong shape"),
+    (lambda t: t.update(state=t["state"][1:]), "vertex_id or state is not one per vertex"),
+    (lambda t: t.pop("vertex_id"), "no 'vertex_id'"),
+])
+def test_a_malformed_tile_stops_the_run(tmp_path, damage, message):
+    """A tile task given damaged data (what a worker of another version, or a corrupted transfer,
+    could give) stops the run with the reason, and no output is left."""
+    arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "--max", "-o", str(tmp_path / "out.gpkg")]
+
+    def damaged(groups, plan, options, round_number):
+        outcomes = []
+        for group in groups:
+            group = list(group)
+            group[0] = dict(group[0])
+            damage(group[0])
+            outcomes.append(_toposimp.run_tile_group(group, plan, options))
+        return outcomes
+
+    with pytest.raises(ValueError, match="a tile task's data is malformed: " + message):
+        _toposimp.run_command(["map", *arguments], damaged, 2, 0, 0, None, False, False)
+    assert not (tmp_path / "out.gpkg").exists()
