@@ -391,18 +391,42 @@ OneWayDistance over_samples(const std::vector<V>& samples, int threads, Measure 
 // `count` points of a mesh spread over it by area, stratified: the k-th lies where the running sum
 // of the faces' areas reaches (k + ½)/count of the whole, placed inside its face by the R2
 // low-discrepancy sequence (Roberts 2018), so the points are deterministic and even.
-std::vector<V> spread_samples(const Mesh& m, std::size_t count, int threads) {
+// `box`, if given, receives faces_plan_extent(m), from the same pass over the faces.
+std::vector<V> spread_samples(const Mesh& m, std::size_t count, int threads, PlanExtent* box = nullptr) {
     std::vector<V> out;
-    if (m.faces.empty() || count == 0) return out;
-    // Each face's (twice) area on all threads, then their running sum in face order.
+    if (box) *box = {0, 0, 0, 0};
+    if (m.faces.empty()) return out;
+    // Each face's (twice) area on all threads, in fixed chunks (with their boxes if asked), then
+    // their running sum in face order.
     std::vector<double> running(m.faces.size());
-    const auto faces = static_cast<std::int64_t>(m.faces.size());
+    constexpr std::size_t kChunk = 1 << 15;
+    const std::size_t faces = m.faces.size();
+    const auto chunks = static_cast<std::int64_t>((faces + kChunk - 1) / kChunk);
+    std::vector<PlanExtent> boxes(box ? static_cast<std::size_t>(chunks) : 0);
 #pragma omp parallel for schedule(static) num_threads(threads) if (faces >= 65536)
-    for (std::int64_t f = 0; f < faces; ++f) {
-        const Face& face = m.faces[static_cast<std::size_t>(f)];
-        const V n = cross(v(m.points[face[1]]) - v(m.points[face[0]]), v(m.points[face[2]]) - v(m.points[face[0]]));
-        running[static_cast<std::size_t>(f)] = std::sqrt(dot(n, n));
+    for (std::int64_t k = 0; k < chunks; ++k) {
+        const std::size_t first = static_cast<std::size_t>(k) * kChunk, last = std::min(faces, first + kChunk);
+        const Point3& start = m.points[m.faces[first][0]];
+        PlanExtent all{start.x, start.x, start.y, start.y};
+        for (std::size_t f = first; f < last; ++f) {
+            const Face& face = m.faces[f];
+            const Point3 &a = m.points[face[0]], &b = m.points[face[1]], &c = m.points[face[2]];
+            const V n = cross(v(b) - v(a), v(c) - v(a));
+            running[f] = std::sqrt(dot(n, n));
+            if (box) {
+                all = {std::min({all.x0, a.x, b.x, c.x}), std::max({all.x1, a.x, b.x, c.x}), std::min({all.y0, a.y, b.y, c.y}),
+                       std::max({all.y1, a.y, b.y, c.y})};
+            }
+        }
+        if (box) boxes[static_cast<std::size_t>(k)] = all;
     }
+    if (box) {
+        *box = boxes[0];
+        for (const PlanExtent& b : boxes) {
+            *box = {std::min(box->x0, b.x0), std::max(box->x1, b.x1), std::min(box->y0, b.y0), std::max(box->y1, b.y1)};
+        }
+    }
+    if (count == 0) return out;
     double total = 0;
     for (double& area : running) {
         total += area;
@@ -418,7 +442,9 @@ std::vector<V> spread_samples(const Mesh& m, std::size_t count, int threads) {
     for (std::size_t k = 0; k < count; ++k) {
         const double at = (static_cast<double>(k) + 0.5) / static_cast<double>(count) * total;
         while (f + 1 < running.size() && running[f] < at) ++f;
-        double s = std::fmod(0.5 + kA * static_cast<double>(k + 1), 1.0), t = std::fmod(0.5 + kB * static_cast<double>(k + 1), 1.0);
+        // (The fractional parts: x − ⌊x⌋ is exact, as fmod(x, 1) is, and cheaper.)
+        const double u = 0.5 + kA * static_cast<double>(k + 1), w = 0.5 + kB * static_cast<double>(k + 1);
+        double s = u - std::floor(u), t = w - std::floor(w);
         if (s + t > 1) s = 1 - s, t = 1 - t;
         const Face& face = m.faces[f];
         const V a = v(m.points[face[0]]), b = v(m.points[face[1]]), c = v(m.points[face[2]]);
@@ -475,13 +501,19 @@ bool height_at(const Mesh& mesh, const PlanIndex& index, double x, double y, dou
     for (std::uint32_t face : index.at(x, y)) {
         const Face& f = mesh.faces[face];
         const Point3 &a = mesh.points[f[0]], &b = mesh.points[f[1]], &c = mesh.points[f[2]];
-        const Point a2{a.x, a.y}, b2{b.x, b.y}, c2{c.x, c.y};
-        const int turn = exact::orient2d(a2, b2, c2, unused);
-        if (turn == 0) continue;
-        if (exact::orient2d(a2, b2, p, unused) * turn < 0 || exact::orient2d(b2, c2, p, unused) * turn < 0 ||
-            exact::orient2d(c2, a2, p, unused) * turn < 0) {
+        // Most faces listed in the cell are not over p: their boxes say so without a predicate.
+        if (x < std::min({a.x, b.x, c.x}) || x > std::max({a.x, b.x, c.x}) || y < std::min({a.y, b.y, c.y}) ||
+            y > std::max({a.y, b.y, c.y})) {
             continue;
         }
+        // The three signed areas p makes with the edges sum to the face's, exactly: the face is
+        // proper and holds p (on its border too) if and only if those not zero share one sign
+        // and one is not zero.
+        const Point a2{a.x, a.y}, b2{b.x, b.y}, c2{c.x, c.y};
+        const int s_ab = exact::orient2d(a2, b2, p, unused), s_bc = exact::orient2d(b2, c2, p, unused);
+        if (s_ab * s_bc < 0) continue;
+        const int s_ca = exact::orient2d(c2, a2, p, unused);
+        if (s_ca * s_ab < 0 || s_ca * s_bc < 0 || (s_ab == 0 && s_bc == 0 && s_ca == 0)) continue;
         // Barycentric weights from areas in the plane.
         const double area = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
         if (area == 0) continue;  // (a sliver whose area rounds to zero)
@@ -627,15 +659,20 @@ TerrainMeasure spread_terrain_measure(const Mesh& a, const Mesh& b, std::size_t 
     }
     TerrainMeasure out;
     out.distance.diagonal = diagonal_of(a);
-    for (const auto& [from_mesh, to_mesh, forward] : {std::tuple{&a, &b, true}, std::tuple{&b, &a, false}}) {
+    // Both meshes' samples first: spreading them passes over each mesh's faces, and finds the
+    // box the other direction's index needs.
+    PlanExtent box_a, box_b;
+    const std::vector<V> samples_a = spread_samples(a, count, threads, &box_a);
+    const std::vector<V> samples_b = spread_samples(b, count, threads, &box_b);
+    for (const auto& [from_samples, to_mesh, to_box, forward] :
+         {std::tuple{&samples_a, &b, &box_b, true}, std::tuple{&samples_b, &a, &box_a, false}}) {
         // (Plain locals: clang 14 does not capture structured bindings in lambdas.)
-        const Mesh* from = from_mesh;
         const Mesh* to = to_mesh;
-        const std::vector<V> samples = spread_samples(*from, count, threads);
+        const std::vector<V>& samples = *from_samples;
         std::vector<Point> near;
         near.reserve(samples.size());
         for (const V& p : samples) near.push_back({p.x, p.y});
-        const PlanIndex index(*to, near, 1, threads);
+        const PlanIndex index(*to, near, 1, threads, to_box);
         const auto n = static_cast<std::int64_t>(samples.size());
         std::vector<double> vertical(samples.size(), std::numeric_limits<double>::quiet_NaN());
         std::vector<double> distance(samples.size(), std::numeric_limits<double>::quiet_NaN());

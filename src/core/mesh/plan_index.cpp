@@ -8,11 +8,7 @@ namespace toposimp::mesh {
 namespace {
 
 // A face's box in the map plane.
-struct PlanBox {
-    double x0, x1, y0, y1;
-};
-
-inline PlanBox plan_box(const Mesh& mesh, const Face& f) {
+inline PlanExtent plan_box(const Mesh& mesh, const Face& f) {
     const Point3 &a = mesh.points[f[0]], &b = mesh.points[f[1]], &c = mesh.points[f[2]];
     return {std::min({a.x, b.x, c.x}), std::max({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::max({a.y, b.y, c.y})};
 }
@@ -48,38 +44,40 @@ bool overlap_in_plan(const Mesh& mesh, const Face& f, const Face& g, int turn, e
     return true;
 }
 
+PlanExtent united(const PlanExtent& p, const PlanExtent& q) {
+    return {std::min(p.x0, q.x0), std::max(p.x1, q.x1), std::min(p.y0, q.y0), std::max(p.y1, q.y1)};
+}
+
 }  // namespace
+
+PlanExtent faces_plan_extent(const Mesh& mesh, int threads) {
+    if (mesh.faces.empty()) return {0, 0, 0, 0};
+    // The faces in fixed chunks (minima and maxima: the same in any order).
+    constexpr std::size_t kChunk = 1 << 15;
+    const std::size_t faces = mesh.faces.size(), chunks = (faces + kChunk - 1) / kChunk;
+    std::vector<PlanExtent> boxes(chunks);
+#pragma omp parallel for schedule(static) num_threads(threads) if (chunks > 1)
+    for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
+        const std::size_t first = static_cast<std::size_t>(k) * kChunk, last = std::min(faces, first + kChunk);
+        PlanExtent all = plan_box(mesh, mesh.faces[first]);
+        for (std::size_t f = first; f < last; ++f) all = united(all, plan_box(mesh, mesh.faces[f]));
+        boxes[static_cast<std::size_t>(k)] = all;
+    }
+    PlanExtent all = boxes[0];
+    for (const PlanExtent& box : boxes) all = united(all, box);
+    return all;
+}
 
 PlanIndex::PlanIndex(const Mesh& mesh) : PlanIndex(mesh, std::span<const Point>{}, 0) {}
 
-PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach, int threads) {
+PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach, int threads, const PlanExtent* faces_box) {
     first_.assign(2, 0);
     if (mesh.faces.empty()) return;
-    // The faces in fixed chunks on all threads (boxes: minima and maxima, the same in any order).
-    constexpr std::size_t kChunk = 1 << 15;
-    const std::size_t faces = mesh.faces.size(), chunks = (faces + kChunk - 1) / kChunk;
-    auto chunk_range = [&](std::int64_t k) {
-        const std::size_t first = static_cast<std::size_t>(k) * kChunk;
-        return std::pair{first, std::min(faces, first + kChunk)};
-    };
+    const std::size_t faces = mesh.faces.size();
     // (Every face, for the engine: on the calling thread, as before near points existed.)
-    const bool parallel = !near.empty() && chunks > 1;
+    const bool parallel = !near.empty() && faces > (1u << 15);
     const int team = threads > 0 ? threads : omp_get_max_threads();
-    std::vector<PlanBox> boxes(chunks);
-#pragma omp parallel for schedule(static) num_threads(team) if (parallel)
-    for (std::int64_t k = 0; k < static_cast<std::int64_t>(chunks); ++k) {
-        const auto [first, last] = chunk_range(k);
-        PlanBox all = plan_box(mesh, mesh.faces[first]);
-        for (std::size_t f = first; f < last; ++f) {
-            const PlanBox box = plan_box(mesh, mesh.faces[f]);
-            all = {std::min(all.x0, box.x0), std::max(all.x1, box.x1), std::min(all.y0, box.y0), std::max(all.y1, box.y1)};
-        }
-        boxes[static_cast<std::size_t>(k)] = all;
-    }
-    PlanBox all = boxes[0];
-    for (const PlanBox& box : boxes) {
-        all = {std::min(all.x0, box.x0), std::max(all.x1, box.x1), std::min(all.y0, box.y0), std::max(all.y1, box.y1)};
-    }
+    const PlanExtent all = faces_box != nullptr ? *faces_box : faces_plan_extent(mesh, parallel ? team : 1);
     const double lo_x = all.x0, hi_x = all.x1, lo_y = all.y0, hi_y = all.y1;
     lo_x_ = lo_x, lo_y_ = lo_y;
     const double cells = std::max(1.0, static_cast<double>(mesh.faces.size()) / 2.0);
@@ -93,7 +91,7 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
         // Every face: two passes over their cell ranges, count per cell then fill (a counting
         // sort), with no more memory than the index.
         auto for_cells = [&](const Face& f, auto each) {
-            const PlanBox box = plan_box(mesh, f);
+            const PlanExtent box = plan_box(mesh, f);
             for (std::int64_t x = cell(box.x0, lo_x_, n_x_); x <= cell(box.x1, lo_x_, n_x_); ++x) {
                 for (std::int64_t y = cell(box.y0, lo_y_, n_y_); y <= cell(box.y1, lo_y_, n_y_); ++y) each(static_cast<std::size_t>(x * n_y_ + y));
             }
@@ -125,27 +123,53 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
         return std::pair{faces * static_cast<std::size_t>(t) / static_cast<std::size_t>(workers),
                          faces * static_cast<std::size_t>(t + 1) / static_cast<std::size_t>(workers)};
     };
-    auto for_wanted_cells = [&](std::size_t f, auto each) {
-        const PlanBox box = plan_box(mesh, mesh.faces[f]);
-        const std::int64_t x0 = cell(box.x0, lo_x_, n_x_), x1 = cell(box.x1, lo_x_, n_x_);
-        const std::int64_t y0 = cell(box.y0, lo_y_, n_y_), y1 = cell(box.y1, lo_y_, n_y_);
-        for (std::int64_t x = x0; x <= x1; ++x) {
-            for (std::int64_t y = y0; y <= y1; ++y) {
-                const auto c = static_cast<std::size_t>(x * n_y_ + y);
-                if (wanted[c]) each(c);
-            }
+    // Each point's cell, x and y in 16 bits each (at most 2^14 cells a side): the cells a face's
+    // box spans run from its corners' lowest to their highest (cell() is monotone), read from
+    // an array a sixth the size of the points. `each(cell, in)`: in = 0 for a cell visited but
+    // not in the box.
+    const std::size_t points = mesh.points.size();
+    std::vector<std::uint32_t> point_cell(points);
+    auto for_cells = [&](std::size_t f, auto each) {
+        const Face& corners = mesh.faces[f];
+        const std::uint32_t p = point_cell[corners[0]], q = point_cell[corners[1]], r = point_cell[corners[2]];
+        const std::uint32_t x0 = std::min({p >> 16, q >> 16, r >> 16}), x1 = std::max({p >> 16, q >> 16, r >> 16});
+        const std::uint32_t y0 = std::min({p & 0xffff, q & 0xffff, r & 0xffff}), y1 = std::max({p & 0xffff, q & 0xffff, r & 0xffff});
+        const auto row = static_cast<std::size_t>(n_y_);
+        if (x1 - x0 <= 1 && y1 - y0 <= 1) [[likely]] {
+            // At most 2 × 2 cells (nearly every face: a cell holds about two): all four visited,
+            // those beyond the box with `in` = 0, so that no branch depends on the box's size.
+            const std::uint32_t wide = x1 != x0, tall = y1 != y0;
+            each(x0 * row + y0, 1u);
+            each(x1 * row + y0, wide);
+            each(x0 * row + y1, tall);
+            each(x1 * row + y1, wide & tall);
+            return;
+        }
+        for (std::uint32_t x = x0; x <= x1; ++x) {
+            for (std::uint32_t y = y0; y <= y1; ++y) each(x * row + y, 1u);
         }
     };
 #pragma omp parallel num_threads(workers)
     {
         const int t = omp_get_thread_num();
+#pragma omp for schedule(static)
+        for (std::size_t v = 0; v < points; ++v) {
+            const Point3& at = mesh.points[v];
+            point_cell[v] = static_cast<std::uint32_t>(cell(at.x, lo_x_, n_x_) << 16 | cell(at.y, lo_y_, n_y_));
+        }
         std::vector<std::uint32_t>& mine = counts[static_cast<std::size_t>(t)];
         mine.assign(cell_count, 0);
         const auto [first, last] = faces_of(t);
         std::vector<std::uint32_t> listed;  // this run's faces in a wanted cell, to place
+        // (Without branches on `wanted`, which about half the cells are: a branch would be
+        // mispredicted every other cell.)
         for (std::size_t f = first; f < last; ++f) {
-            bool any = false;
-            for_wanted_cells(f, [&](std::size_t c) { ++mine[c], any = true; });
+            std::uint32_t any = 0;
+            for_cells(f, [&](std::size_t c, std::uint32_t in) {
+                const std::uint32_t here = wanted[c] & in;
+                mine[c] += here;
+                any |= here;
+            });
             if (any) listed.push_back(static_cast<std::uint32_t>(f));
         }
 #pragma omp barrier
@@ -162,12 +186,18 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
                 }
             }
             first_[cell_count] = at;
-            faces_.resize(at);
+            faces_.resize(at + 1);  // (the last: where entries for cells not wanted are dropped)
         }
+        const std::size_t dropped = faces_.size() - 1;
         for (const std::uint32_t f : listed) {
-            for_wanted_cells(f, [&](std::size_t c) { faces_[first_[c] + mine[c]++] = f; });
+            for_cells(f, [&](std::size_t c, std::uint32_t in) {
+                const std::uint32_t here = wanted[c] & in;
+                faces_[here ? first_[c] + mine[c] : dropped] = f;
+                mine[c] += here;
+            });
         }
     }
+    faces_.pop_back();
 }
 
 std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn, int threads) const {
@@ -177,7 +207,7 @@ std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const M
     // found whatever the thread count.
     struct Plan {
         std::uint32_t face;
-        PlanBox box;
+        PlanExtent box;
         std::int64_t cx, cy;  // first cell
     };
     constexpr std::uint32_t kNone = 0xffffffffu;
@@ -194,7 +224,7 @@ std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const M
                 here.clear();
                 for (std::size_t i = first_[c]; i < first_[c + 1]; ++i) {
                     const std::uint32_t f = faces_[i];
-                    const PlanBox box = plan_box(mesh, mesh.faces[f]);
+                    const PlanExtent box = plan_box(mesh, mesh.faces[f]);
                     here.push_back({f, box, cell(box.x0, lo_x_, n_x_), cell(box.y0, lo_y_, n_y_)});
                 }
                 for (std::size_t i = 0; i < here.size(); ++i) {

@@ -16,6 +16,14 @@
 
 namespace toposimp::mesh {
 
+// A box in the map plane.
+struct PlanExtent {
+    double x0, x1, y0, y1;
+};
+
+// The box of a mesh's faces in the map plane (of their corners: not of vertices no face uses).
+PlanExtent faces_plan_extent(const Mesh& mesh, int threads = 1);
+
 class PlanIndex {
 public:
     explicit PlanIndex(const Mesh& mesh);
@@ -23,7 +31,10 @@ public:
     // elsewhere says nothing): for queries at those points alone, without listing every face of
     // a big mesh.
     // Built on `threads` threads (0: OpenMP's default) when big; the index is the same for any.
-    PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach = 0, int threads = 0);
+    // `faces_box`, if the caller has it, must be faces_plan_extent(mesh) (one pass over the faces
+    // fewer).
+    PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t reach = 0, int threads = 0,
+              const PlanExtent* faces_box = nullptr);
 
     // The faces whose boxes meet the cell holding (x, y) (clamped to the grid): every face over
     // that point among them.

@@ -197,10 +197,14 @@ TEST(HeightField, RandomPiecesAgreeWithTheBruteForce) {
 
 // The index the quick measure builds around its points lists, in each cell it fills, what the
 // index of every face lists there, in the same (face) order, whatever the number of threads
-// (each thread counts and places a run of faces; a cell takes the runs in order).
+// (each thread counts and places a run of faces; a cell takes the runs in order). Most faces
+// span at most 2 × 2 cells (the usual path); 300 long ones, between random corners, span many.
 TEST(PlanIndex, CellsNearThePointsListWhatTheWholeIndexListsInFaceOrder) {
-    const Mesh m = toposimp::testing::noisy_heightfield(140, 0.3, 8);  // 39 200 faces: two runs or more
+    Mesh m = toposimp::testing::noisy_heightfield(140, 0.3, 8);  // 39 200 faces: two runs or more
     ASSERT_GT(m.faces.size(), std::size_t{32768});
+    std::mt19937 corners(4);
+    std::uniform_int_distribution<std::uint32_t> corner(0, static_cast<std::uint32_t>(m.points.size() - 1));
+    for (int k = 0; k < 300; ++k) m.faces.insert(m.faces.begin() + k * 100, Face{corner(corners), corner(corners), corner(corners)});
     const PlanIndex whole(m);
     std::mt19937 random(9);
     std::uniform_real_distribution<double> where(-0.1, 1.1);
