@@ -34,13 +34,12 @@ float float_above(double value) {
 // A face's entry in the list of one of its cells.
 IndexEntry index_entry(std::uint32_t f, const UnitBox& unit, std::uint64_t key) {
     IndexEntry entry;
-    entry.first_here = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-        entry.lo[axis] = unit.lo[axis];
-        entry.hi[axis] = unit.hi[axis];
-        entry.first_here = static_cast<std::uint8_t>(entry.first_here | (Grid::unpack(key, axis) == Grid::unpack(unit.first, axis)) << axis);
-    }
     entry.face = f;
+    for (int axis = 0; axis < 3; ++axis) {
+        const std::uint32_t c = Grid::unpack(key, axis);
+        entry.lo[axis] = cell_lo(unit.lo[axis], Grid::unpack(unit.first, axis), c);
+        entry.hi[axis] = cell_hi(unit.hi[axis], Grid::unpack(unit.last, axis), c);
+    }
     return entry;
 }
 
@@ -97,20 +96,25 @@ void FaceIndex::build(const Grid& grid, const std::vector<Face>& faces, const st
 // those whose box at the start of the round overlaps it — a face another block changes lay, and
 // lies, inside that block, so its start box cannot overlap and it is never read — unless this
 // block changed them, and the faces this block changed, from its overlay, if their box now
-// overlaps it. Boxes are compared rounded outward (a few more faces, never fewer). A face
+// overlaps it. Boxes are compared rounded outward, in each cell's 8-bit coordinates (a few more
+// faces, never fewer: where a face begins is at most where the box ends in any cell's
+// coordinates if it is in the real ones, as both round the same monotone way, outward). A face
 // spanning several of the box's cells is taken in the first (lowest on every axis) of them.
 void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::uint32_t>& out) const {
     out.clear();
     const UnitBox unit = unit_box(box);
-    const std::uint64_t box_lo = unit.first;
-    const float* unit_lo = unit.lo;
-    const float* unit_hi = unit.hi;
     for_cells(unit.first, unit.last, [&](std::uint64_t key) {
-        // The first cell a face and the box share is, on each axis, the later of their first
-        // ones; the cell visited is in both: it is that one where it is the face's first or the
-        // box's on every axis.
-        std::uint8_t box_first = 0;
-        for (int axis = 0; axis < 3; ++axis) box_first |= static_cast<std::uint8_t>((Grid::unpack(key, axis) == Grid::unpack(box_lo, axis)) << axis);
+        // The box in this cell's coordinates. The first cell a face and the box share is, on each
+        // axis, the later of their first ones; the cell visited is in both: it is that one where
+        // it is the face's first or the box's on every axis (a lo of 0 says it is not) — where
+        // the box's is not, the face's lo must be at least 1.
+        std::uint8_t box_lo[3], box_hi[3], least[3];
+        for (int axis = 0; axis < 3; ++axis) {
+            const std::uint32_t c = Grid::unpack(key, axis);
+            box_lo[axis] = cell_lo(unit.lo[axis], Grid::unpack(unit.first, axis), c);
+            box_hi[axis] = cell_hi(unit.hi[axis], Grid::unpack(unit.last, axis), c);
+            least[axis] = box_lo[axis] == 0;
+        }
         // Without branches (a hit is written always, kept or overwritten), as the tests are
         // hard to predict; the index's hits then lose the faces this block changed.
         auto scan = [&](std::span<const IndexEntry> entries, bool from_index) {
@@ -119,9 +123,9 @@ void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::
             std::uint32_t* at = out.data() + start;
             for (const IndexEntry& entry : entries) {
                 *at = entry.face;
-                at += (entry.lo[0] <= unit_hi[0]) & (unit_lo[0] <= entry.hi[0]) & (entry.lo[1] <= unit_hi[1]) &
-                      (unit_lo[1] <= entry.hi[1]) & (entry.lo[2] <= unit_hi[2]) & (unit_lo[2] <= entry.hi[2]) &
-                      ((entry.first_here | box_first) == 7);
+                at += (entry.lo[0] >= least[0]) & (entry.lo[0] <= box_hi[0]) & (box_lo[0] <= entry.hi[0]) &
+                      (entry.lo[1] >= least[1]) & (entry.lo[1] <= box_hi[1]) & (box_lo[1] <= entry.hi[1]) &
+                      (entry.lo[2] >= least[2]) & (entry.lo[2] <= box_hi[2]) & (box_lo[2] <= entry.hi[2]);
             }
             if (from_index) at = std::remove_if(out.data() + start, at, [this](std::uint32_t f) { return changed_[f] != 0; });
             out.resize(static_cast<std::size_t>(at - out.data()));
