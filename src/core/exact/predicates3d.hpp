@@ -16,6 +16,7 @@
 #include "core/geometry.hpp"
 
 #include <array>
+#include <cmath>
 #include <span>
 
 namespace toposimp::exact {
@@ -26,6 +27,46 @@ using Triangle3 = std::array<Point3, 3>;
 // counter-clockwise triangle abc points to, 0 when the four points are coplanar.
 int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats);
 int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d);
+
+// orient3d(a, b, c, d) for many points d and one triangle abc: the triangle's part of the filter
+// (its edges from a and their cross product) computed once, a point's in six multiplications;
+// what the filter leaves undecided goes to orient3d itself. The filter is Shewchuk's with a as
+// the reference point instead of d: ((b − a) × (c − a)) · (d − a), evaluated as the sum of three
+// terms, each a rounded difference times a difference of two products of rounded differences,
+// has the shape his bound (7 + 56ε)ε·permanent covers, the permanent the same six products in
+// absolute value. It is taken a little wider here: (8 + 64ε)ε.
+class PlaneSide {
+public:
+    PlaneSide(Point3 a, Point3 b, Point3 c) : a_(a), b_(b), c_(c) {
+        const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+        const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+        const double yz = uy * vz, zy = uz * vy, zx = uz * vx, xz = ux * vz, xy = ux * vy, yx = uy * vx;
+        normal_ = {yz - zy, zx - xz, xy - yx};
+        magnitude_ = {std::fabs(yz) + std::fabs(zy), std::fabs(zx) + std::fabs(xz), std::fabs(xy) + std::fabs(yx)};
+    }
+    int operator()(Point3 d, PredicateStats& stats) const {
+        const double wx = d.x - a_.x, wy = d.y - a_.y, wz = d.z - a_.z;
+        const double det = wx * normal_.x + wy * normal_.y + wz * normal_.z;
+        const double permanent = std::fabs(wx) * magnitude_.x + std::fabs(wy) * magnitude_.y + std::fabs(wz) * magnitude_.z;
+        if (permanent >= 0x1p-800 && permanent <= 0x1p1000) {
+            constexpr double kRoundoff = 0x1p-53;
+            const double bound = (8.0 + 64.0 * kRoundoff) * kRoundoff * permanent;
+            if (det > bound) {
+                ++stats.filter_decided;
+                return 1;
+            }
+            if (-det > bound) {
+                ++stats.filter_decided;
+                return -1;
+            }
+        }
+        return orient3d(a_, b_, c_, d, stats);
+    }
+
+private:
+    Point3 a_, b_, c_;
+    Point3 normal_{}, magnitude_{};
+};
 // The same sign in floating-point expansions (exact), or 2 when an input lies outside
 // expansion::in_range. orient3d uses it between its filters and GMP: exact zeros (coplanar
 // points, everywhere in flat CAD regions) cost no allocation.

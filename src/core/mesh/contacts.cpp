@@ -111,6 +111,7 @@ bool Simplifier::search_contacts(Collapse& c, bool flatten, Overlay& overlay, ex
         std::array<std::uint32_t, 3> mine_ids = face_[c.star[i]];
         for (std::uint32_t& v : mine_ids) v = v == b ? a : v;
         ++sides.generation;
+        const exact::PlaneSide plane(mine[0], mine[1], mine[2]);
         // The sides of the other face's corners (`side`, for faces_conflict) and what they
         // settle.
         auto verdict = [&](const std::array<std::uint32_t, 3>& ids, const exact::Triangle3& other, std::array<int, 3>& side) {
@@ -131,7 +132,7 @@ bool Simplifier::search_contacts(Collapse& c, bool flatten, Overlay& overlay, ex
                 }
                 SideCache::Entry& entry = sides.at(v);
                 if (entry.vertex != v || entry.generation != sides.generation) {
-                    entry = {v, exact::orient3d(mine[0], mine[1], mine[2], other[k], predicates), sides.generation};
+                    entry = {v, plane(other[k], predicates), sides.generation};
                 }
                 side[k] = entry.side;
                 if (entry.side == 0) {

@@ -61,6 +61,44 @@ TEST(Orient3d, FilterAgreesWithGmpNearPlanesWhereDoublesFail) {
     EXPECT_GT(stats.expansion_decided, 0u) << "the filters cannot decide points within an ulp of the plane";
 }
 
+// PlaneSide (one triangle, many points, its own filter) gives orient3d's sign on the hard cases:
+// points on the plane through three points with large mixed coordinates, and one ulp off it;
+// exact zeros; a subnormal above the plane; huge and tiny coordinates; mixed magnitudes.
+TEST(PlaneSide, AgreesWithRationalsNearThePlane) {
+    std::mt19937_64 random(17);
+    PredicateStats stats;
+    for (const double scale : {1e6, 1.0, 1e-6, 0x1p-600, 0x1p600, 0x1p-1000, 0x1p900}) {
+        std::uniform_real_distribution<double> coordinate(-scale, scale);
+        for (int trial = 0; trial < 3000; ++trial) {
+            auto point = [&] { return Point3{coordinate(random), coordinate(random), coordinate(random)}; };
+            const Point3 a = point(), b = point(), c = point();
+            const PlaneSide side(a, b, c);
+            for (int k = 0; k < 4; ++k) {
+                const double s = std::uniform_real_distribution<double>(0, 1)(random), t = std::uniform_real_distribution<double>(0, 1)(random);
+                Point3 d{a.x + s * (b.x - a.x) + t * (c.x - a.x), a.y + s * (b.y - a.y) + t * (c.y - a.y),
+                         a.z + s * (b.z - a.z) + t * (c.z - a.z)};
+                if (k == 3) d = point();
+                d = up(d, trial % 3 - 1);
+                ASSERT_EQ(side(d, stats), reference_orient3d(a, b, c, d)) << scale << ' ' << trial << ' ' << k;
+            }
+            for (const Point3& corner : {a, b, c}) ASSERT_EQ(side(corner, stats), 0);
+        }
+    }
+    EXPECT_GT(stats.filter_decided, 0u);
+    EXPECT_GT(stats.expansion_decided, 0u) << "points within an ulp of the plane are beyond any filter";
+    // Exact zeros and the smallest offsets, on an axis-aligned plane and on an oblique one whose
+    // points have mixed magnitudes.
+    const PlaneSide flat({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+    EXPECT_EQ(flat({5, 7, 0}, stats), 0);
+    EXPECT_EQ(flat({5, 7, 0x1p-1074}, stats), 1);
+    EXPECT_EQ(flat({-5, 7, -0x1p-1074}, stats), -1);
+    const Point3 a{1e-300, 3, 2e15}, b{7e15, -1e-290, 5}, c{-2, 4e15, 1e-300};
+    const PlaneSide oblique(a, b, c);
+    for (const Point3 d : {Point3{1e-300, 3, 2e15}, up(Point3{1e-300, 3, 2e15}, 1), Point3{7e15 / 2, 2e15, 0}, Point3{0, 0, 0}}) {
+        EXPECT_EQ(oblique(d, stats), reference_orient3d(a, b, c, d));
+    }
+}
+
 // The expansion stage alone against the rational reference: points exactly on oblique planes
 // (the exact zeros of flat CAD regions), one and a few ulps off them, with coordinates of mixed
 // magnitude and sign (so the differences themselves are inexact in doubles), across the whole
