@@ -116,22 +116,41 @@ void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::
             least[axis] = box_lo[axis] == 0;
         }
         // Without branches (a hit is written always, kept or overwritten), as the tests are
-        // hard to predict; the index's hits then lose the faces this block changed.
-        auto scan = [&](std::span<const IndexEntry> entries, bool from_index) {
-            const std::size_t start = out.size();
-            out.resize(start + entries.size());
-            std::uint32_t* at = out.data() + start;
-            for (const IndexEntry& entry : entries) {
+        // hard to predict; the index's hits then lose the faces this block changed. The index's
+        // cell is compared column by column (a loop the compiler vectorizes), its hits then
+        // gathered.
+        const CellColumns cell = cells_.entries(key);
+        thread_local std::vector<std::uint8_t> hit;
+        hit.resize(cell.count);
+        const std::uint8_t *lo_x = cell.bounds[0], *lo_y = cell.bounds[1], *lo_z = cell.bounds[2];
+        const std::uint8_t *hi_x = cell.bounds[3], *hi_y = cell.bounds[4], *hi_z = cell.bounds[5];
+        std::uint8_t* const hits = hit.data();
+        for (std::size_t k = 0; k < cell.count; ++k) {
+            hits[k] = static_cast<std::uint8_t>((lo_x[k] >= least[0]) & (lo_x[k] <= box_hi[0]) & (box_lo[0] <= hi_x[k]) &
+                                                (lo_y[k] >= least[1]) & (lo_y[k] <= box_hi[1]) & (box_lo[1] <= hi_y[k]) &
+                                                (lo_z[k] >= least[2]) & (lo_z[k] <= box_hi[2]) & (box_lo[2] <= hi_z[k]));
+        }
+        std::size_t start = out.size();
+        out.resize(start + cell.count);
+        std::uint32_t* at = out.data() + start;
+        for (std::size_t k = 0; k < cell.count; ++k) {
+            *at = cell.faces[k];
+            at += hits[k];
+        }
+        at = std::remove_if(out.data() + start, at, [this](std::uint32_t f) { return changed_[f] != 0; });
+        out.resize(static_cast<std::size_t>(at - out.data()));
+        if (const std::vector<IndexEntry>* mine = overlay.find(key)) {
+            start = out.size();
+            out.resize(start + mine->size());
+            at = out.data() + start;
+            for (const IndexEntry& entry : *mine) {
                 *at = entry.face;
                 at += (entry.lo[0] >= least[0]) & (entry.lo[0] <= box_hi[0]) & (box_lo[0] <= entry.hi[0]) &
                       (entry.lo[1] >= least[1]) & (entry.lo[1] <= box_hi[1]) & (box_lo[1] <= entry.hi[1]) &
                       (entry.lo[2] >= least[2]) & (entry.lo[2] <= box_hi[2]) & (box_lo[2] <= entry.hi[2]);
             }
-            if (from_index) at = std::remove_if(out.data() + start, at, [this](std::uint32_t f) { return changed_[f] != 0; });
             out.resize(static_cast<std::size_t>(at - out.data()));
-        };
-        scan(cells_.entries(key), true);
-        if (const std::vector<IndexEntry>* mine = overlay.find(key)) scan(*mine, false);
+        }
     });
 }
 

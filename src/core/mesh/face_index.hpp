@@ -6,6 +6,7 @@
 #include "core/mesh/grid.hpp"
 #include "core/mesh/mesh.hpp"
 
+#include <array>
 #include <bit>
 #include <cstddef>
 #include <cstdint>
@@ -100,9 +101,10 @@ private:
 // (a superset of its box: a filter, never a decision). On each axis, lo is 0 if the face begins in
 // an earlier cell (this is not its first), else 1 + ⌊254 t⌋ for where it begins, t cells into this
 // one; hi is 255 if it ends in a later cell, else 1 + ⌈254 t⌉ for where it ends (cell_lo and cell_hi
-// below). 12 bytes: a query scans a cell's list in order instead of reading the faces' data one
-// cache line each. (Entries of float boxes took 32 bytes: the index of elephant-1.4M held 44 MiB
-// more at the peak, for no faster a scan.)
+// below). A query scans a cell's list in order instead of reading the faces' data one cache line
+// each: the round's index keeps the lists as columns (CellColumns, 10 bytes an entry), a block's
+// overlay as these 12-byte entries. (Entries of float boxes took 32 bytes: the index of
+// elephant-1.4M held 44 MiB more at the peak, for no faster a scan.)
 struct IndexEntry {
     std::uint32_t face;
     std::uint8_t lo[3], hi[3];
@@ -134,6 +136,15 @@ struct UnitBox {
     std::uint64_t first, last;
 };
 
+// A cell's entries in the index, as columns: each of the six 8-bit box coordinates of IndexEntry
+// (lo x, y, z, then hi x, y, z) for all of them, then their faces. A query compares a column's
+// bytes sixteen at a time instead of one entry's nine fields one after another.
+struct CellColumns {
+    std::array<const std::uint8_t*, 6> bounds{};
+    const std::uint32_t* faces = nullptr;
+    std::size_t count = 0;
+};
+
 // Faces by grid cell for one round: the entries grouped by cell, and a table from a cell to its
 // group. Built by a counting sort in parts (each a run of the entries, one thread's): each part
 // count()s its (cell, entry) pairs in a table of its own, allocate() gives every cell its group
@@ -142,7 +153,8 @@ struct UnitBox {
 class CellIndex {
 public:
     void clear(std::size_t parts) {
-        entries_.clear();
+        bounds_.clear();
+        faces_.clear();
         groups_.clear();
         parts_.resize(parts);
         for (CellMap<std::size_t>& part : parts_) part.clear();
@@ -167,20 +179,34 @@ public:
                 count = at;
             });
         }
-        entries_.resize(total);
+        bounds_.resize(6 * total);
+        faces_.resize(total);
     }
-    void place(std::size_t part, std::uint64_t key, const IndexEntry& entry) { entries_[(*parts_[part].find(key))++] = entry; }
+    void place(std::size_t part, std::uint64_t key, const IndexEntry& entry) {
+        const std::size_t at = (*parts_[part].find(key))++, total = faces_.size();
+        for (std::size_t k = 0; k < 3; ++k) {
+            bounds_[k * total + at] = entry.lo[k];
+            bounds_[(k + 3) * total + at] = entry.hi[k];
+        }
+        faces_[at] = entry.face;
+    }
     // The entries listed in a cell.
-    std::span<const IndexEntry> entries(std::uint64_t key) const {
+    CellColumns entries(std::uint64_t key) const {
         const Group* group = groups_.find(key);
-        return group == nullptr ? std::span<const IndexEntry>{} : std::span(entries_.data() + group->first, group->count);
+        if (group == nullptr) return {};
+        CellColumns cell;
+        for (std::size_t k = 0; k < 6; ++k) cell.bounds[k] = bounds_.data() + k * faces_.size() + group->first;
+        cell.faces = faces_.data() + group->first;
+        cell.count = group->count;
+        return cell;
     }
 
 private:
     struct Group {
         std::size_t first = 0, count = 0;
     };
-    std::vector<IndexEntry> entries_;
+    std::vector<std::uint8_t> bounds_;  // six columns of faces_.size() bytes
+    std::vector<std::uint32_t> faces_;
     CellMap<Group> groups_;
     std::vector<CellMap<std::size_t>> parts_;
 };
