@@ -1,35 +1,9 @@
 #include "core/mesh/face_index.hpp"
 
 #include <algorithm>
-#include <limits>
 
 namespace toposimp::mesh::detail {
 namespace {
-
-// The float next to a finite f, below or above it (std::nextafter, without the library call:
-// a neighbouring float is the neighbouring bit pattern of the same sign).
-float float_down(float f) {
-    if (f == 0) return -std::numeric_limits<float>::denorm_min();
-    const auto bits = std::bit_cast<std::uint32_t>(f);
-    return std::bit_cast<float>(f > 0 ? bits - 1 : bits + 1);
-}
-float float_up(float f) { return -float_down(-f); }
-
-// A coordinate in grid units, as a float at most (below) or at least (above) it. The double
-// scaling is monotone, so is the rounding: boxes that overlap keep overlapping. The nearest float
-// lies within half a spacing of the value, so the float below it is at most the value and the
-// float above it at least the value: taken always, without asking on which side of the nearest
-// float the value lay (a branch mispredicted half the time; a box one float spacing wider).
-float float_below(double value) {
-    if (!(value > -std::numeric_limits<float>::max())) return -std::numeric_limits<float>::infinity();
-    if (value > std::numeric_limits<float>::max()) return std::numeric_limits<float>::max();
-    return float_down(static_cast<float>(value));
-}
-float float_above(double value) {
-    if (!(value < std::numeric_limits<float>::max())) return std::numeric_limits<float>::infinity();
-    if (value < -std::numeric_limits<float>::max()) return -std::numeric_limits<float>::max();
-    return float_up(static_cast<float>(value));
-}
 
 // A face's entry in the list of one of its cells.
 IndexEntry index_entry(std::uint32_t f, const UnitBox& unit, std::uint64_t key) {
@@ -48,8 +22,8 @@ IndexEntry index_entry(std::uint32_t f, const UnitBox& unit, std::uint64_t key) 
 UnitBox FaceIndex::unit_box(const Box3& box) const {
     UnitBox unit;
     for (int axis = 0; axis < 3; ++axis) {
-        unit.lo[axis] = float_below(grid_.units(box.lo[axis], axis));
-        unit.hi[axis] = float_above(grid_.units(box.hi[axis], axis));
+        unit.lo[axis] = grid_.units(box.lo[axis], axis);
+        unit.hi[axis] = grid_.units(box.hi[axis], axis);
     }
     unit.first = grid_.cell_key(box.lo);
     unit.last = grid_.cell_key(box.hi);
@@ -64,7 +38,6 @@ void FaceIndex::build(const Grid& grid, const std::vector<Face>& faces, const st
     const auto m = static_cast<std::int64_t>(faces.size());
     grid_ = grid;
     changed_.assign(faces.size(), 0);
-    unit_boxes_.resize(faces.size());
     auto face_box = [&](std::int64_t f) {
         const Face& c = faces[static_cast<std::size_t>(f)];
         return triangle_box(points[c[0]], points[c[1]], points[c[2]]);
@@ -75,7 +48,7 @@ void FaceIndex::build(const Grid& grid, const std::vector<Face>& faces, const st
     for (std::int64_t k = 0; k < parts; ++k) {
         for (std::int64_t f = run_of(k); f < run_of(k + 1); ++f) {
             if (!alive[f]) continue;
-            const UnitBox& unit = unit_boxes_[f] = unit_box(face_box(f));
+            const UnitBox unit = unit_box(face_box(f));
             for_cells(unit.first, unit.last, [&](std::uint64_t key) { cells_.count(static_cast<std::size_t>(k), key); });
         }
     }
@@ -84,7 +57,7 @@ void FaceIndex::build(const Grid& grid, const std::vector<Face>& faces, const st
     for (std::int64_t k = 0; k < parts; ++k) {
         for (std::int64_t f = run_of(k); f < run_of(k + 1); ++f) {
             if (!alive[f]) continue;
-            const UnitBox& unit = unit_boxes_[f];
+            const UnitBox unit = unit_box(face_box(f));  // (again: cheaper than keeping 64 bytes a face)
             for_cells(unit.first, unit.last, [&](std::uint64_t key) {
                 cells_.place(static_cast<std::size_t>(k), key, index_entry(static_cast<std::uint32_t>(f), unit, key));
             });

@@ -129,10 +129,11 @@ inline std::uint8_t cell_hi(double units, std::uint32_t last, std::uint32_t c) {
     return static_cast<std::uint8_t>(1 + whole + (whole < t));
 }
 
-// A face's box in index grid units, rounded outward to floats, and the cells holding its corners
-// (lowest and highest on every axis).
+// A face's box in index grid units (Grid::units: monotone, so boxes that overlap still do, and so
+// do their 8-bit coordinates in any cell; no rounding outward is needed), and the cells holding
+// its corners (lowest and highest on every axis).
 struct UnitBox {
-    float lo[3], hi[3];
+    double lo[3], hi[3];
     std::uint64_t first, last;
 };
 
@@ -234,12 +235,11 @@ public:
     void mark_changed(std::uint32_t f) { changed_[f] = 1; }
 
 private:
-    // A face's box in grid units, rounded outward to floats, and the cells of its corners.
+    // A face's box in grid units, and the cells of its corners.
     UnitBox unit_box(const Box3& box) const;
 
     Grid grid_;  // the index's cells (not the blocks')
     CellIndex cells_;
-    std::vector<UnitBox> unit_boxes_;  // per live face, while the index is built
     // Per face: changed (moved or removed) by its block in this round; the overlay has it if it
     // lives.
     std::vector<std::uint8_t> changed_;
