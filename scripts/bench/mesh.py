@@ -4,10 +4,16 @@
 Garland-Heckbert plane policies), same inputs and face targets, one run each (or the medians of
 --runs alternating runs).
 
+toposimp runs as a user runs it: no flags but the face target and the thread count, so height
+fields are found and simplified as terrains, and the default quick distance measure runs (its
+time is a column of its own). On the terrains it also runs in space (--no-terrain), the generic
+path.
+
 For every output: wall time and peak RSS (/usr/bin/time -v), the simplification call's own
-time, the sampled Hausdorff distance to the input, and the defects the tests' independent
-brute-force checker finds (tests/tools/mesh_defects: intersecting face pairs beyond shared
-corners, non-manifold edges, map-plane folds for terrains). Prints a Markdown table.
+time, toposimp's measurement time, the sampled Hausdorff distance to the input, and the defects
+the tests' independent brute-force checker finds (tests/tools/mesh_defects: intersecting face
+pairs beyond shared corners, non-manifold edges, map-plane folds for terrains simplified as
+terrains). Prints a Markdown table.
 
 Usage: scripts/bench/mesh.py [--data DIR] [--datasets a,b,...] [--keep 0.1] [--runs N]
 Needs: build/release (scripts/build.sh release) and the packages scripts/bench/fetch-data.sh
@@ -206,7 +212,8 @@ def faces_of(path):
 def main():
     parser = argparse.ArgumentParser()
     parser.add_argument("--data", default="/work/bench-data")
-    parser.add_argument("--datasets", default="elephant,armadillo,bunny,fandisk,jacksboro,terrain-0.9M,terrain-2M,terrain-4M")
+    parser.add_argument("--datasets", default="elephant,armadillo,bunny,fandisk,jacksboro,terrain-0.9M,terrain-2M,terrain-4M,"
+                                              "armadillo-832k,elephant-1.4M")
     parser.add_argument("--keep", type=float, default=0.1)
     parser.add_argument("--runs", type=int, default=1, help="runs per tool (alternating); times are their medians")
     args = parser.parse_args()
@@ -236,54 +243,78 @@ def main():
         is_terrain = name.startswith("terrain") or name == "jacksboro"
         faces = faces_of(source)
         target = round(args.keep * faces)
-        lock = ["--terrain", "--lock-boundary"] if is_terrain else []
-        # (label, command, output, the simplification time from its JSON output)
+        # (label, command, output, (simplification, measurement) times from its output, check as
+        # a terrain). toposimp's label says the mode it chose (its JSON's terrain_mode).
         jobs = []
+
+        def toposimp_times(text):
+            summary = json.loads(text)
+            return summary["seconds"]["simplify"], summary["seconds"]["hausdorff"], summary["terrain"]
+
         for j in sorted({1, threads}):
             out = os.path.join(out_dir, f"{name}-toposimp-{j}.ply")
-            jobs.append((f"toposimp {j} thr" + (" (terrain, locked border)" if is_terrain else ""),
-                         [TOPOSIMP, "mesh", source, "-o", out, "--overwrite", "--keep-faces", str(target), "-j", str(j),
-                          "--no-hausdorff", "--json"] + lock, out, lambda text: json.loads(text)["seconds"]["simplify"]))
+            jobs.append((f"toposimp {j} thr", [TOPOSIMP, "mesh", source, "-o", out, "--overwrite", "--keep-faces", str(target),
+                                                "-j", str(j), "--json"], out, toposimp_times))
+        if is_terrain:
+            out = os.path.join(out_dir, f"{name}-toposimp-space.ply")
+            jobs.append((f"toposimp {threads} thr --no-terrain", [TOPOSIMP, "mesh", source, "-o", out, "--overwrite", "--keep-faces",
+                                                                   str(target), "-j", str(threads), "--no-terrain", "--json"],
+                         out, toposimp_times))
         for flag in ([], ["--lock-border"]):
             out = os.path.join(out_dir, f"{name}-meshopt{''.join(flag)}.ply")
             jobs.append(("meshoptimizer 0.18" + (" LockBorder" if flag else ""),
                          [os.path.join(PEERS, "meshopt_simplify"), source, out, str(target)] + flag, out,
-                         lambda text: json.loads(text)["simplify_seconds"]))
+                         lambda text: (json.loads(text)["simplify_seconds"], None, None)))
         out = os.path.join(out_dir, f"{name}-cgal.ply")
         jobs.append(("CGAL 5.5 GH", [os.path.join(PEERS, "cgal_simplify"), source, out, str(target)], out,
-                     lambda text: json.loads(text)["simplify_seconds"]))
+                     lambda text: (json.loads(text)["simplify_seconds"], None, None)))
         # Alternating runs (every tool once, then again): the machine's slow and fast minutes fall
         # on all of them alike. Medians of the times, the largest peak memory.
         times = {label: [] for label, _, _, _ in jobs}
         for _ in range(args.runs):
-            for label, command, out, simplify_of in jobs:
+            for label, command, out, times_of in jobs:
                 wall, rss, text = timed(command)
-                times[label].append((wall, simplify_of(text), rss))
-        walls = {}
-        for label, command, out, simplify_of in jobs:
-            wall = statistics.median(t[0] for t in times[label])
-            simplify = statistics.median(t[1] for t in times[label])
-            rss = max(t[2] for t in times[label])
-            walls[label] = wall
-            check = [DEFECTS, out, "--against", source] + (["--terrain"] if is_terrain else [])
+                times[label].append((wall, rss) + times_of(text))
+        walls, simplifies = {}, {}
+        for label, command, out, times_of in jobs:
+            runs_here = times[label]
+            wall = statistics.median(t[0] for t in runs_here)
+            rss = max(t[1] for t in runs_here)
+            simplify = statistics.median(t[2] for t in runs_here)
+            measure = statistics.median(t[3] for t in runs_here) if runs_here[0][3] is not None else None
+            as_terrain = runs_here[0][4]
+            if as_terrain is not None:
+                label += " (terrain)" if as_terrain else " (in space)"
+            walls[label], simplifies[label] = wall, simplify
+            # Map-plane folds only where the output was simplified as a terrain (the peers make no
+            # such promise; they are counted on terrain inputs all the same).
+            fold_check = is_terrain and as_terrain is not False
+            check = [DEFECTS, out, "--against", source] + (["--terrain"] if fold_check else [])
             try:
                 found = json.loads(subprocess.run(check, capture_output=True, text=True, timeout=900, check=True).stdout)
             except subprocess.TimeoutExpired:
                 found = {}
-            rows.append((name, faces, label, found.get("faces", "?"), wall, simplify, rss, found))
-            print(f"{name} {label}: {wall:.2f} s, simplify {simplify:.3f} s, {rss:.0f} MiB, {found}", file=sys.stderr)
-        ours = walls[jobs[len({1, threads}) - 1][0]]
-        ratios.append(f"{name}: CGAL's wall time / toposimp {threads} thr: {walls['CGAL 5.5 GH'] / ours:.2f}; "
-                      f"meshoptimizer's / toposimp {threads} thr: {walls['meshoptimizer 0.18'] / ours:.2f}")
+            rows.append((name, faces, label, found.get("faces", "?"), wall, simplify, measure, rss, found))
+            print(f"{name} {label}: {wall:.2f} s, simplify {simplify:.3f} s, measure {measure}, {rss:.0f} MiB, {found}", file=sys.stderr)
+        ours = next(label for label in walls if label.startswith(f"toposimp {threads} thr") and "--no-terrain" not in label)
+        line = (f"{name}: wall time, CGAL's / toposimp {threads} thr's {walls['CGAL 5.5 GH'] / walls[ours]:.2f}, "
+                f"meshoptimizer's / toposimp {threads} thr's {walls['meshoptimizer 0.18'] / walls[ours]:.2f}")
+        generic = next((label for label in walls if label.startswith(f"toposimp {threads} thr") and label.endswith("(in space)")), None)
+        if generic:
+            line += (f"; simplification in space, toposimp {threads} thr / meshoptimizer (1 thread): "
+                     f"{simplifies[generic] / simplifies['meshoptimizer 0.18']:.2f}")
+        ratios.append(line)
     runs = "One run each" if args.runs == 1 else f"Median of {args.runs} alternating runs each"
     print(f"Target: {args.keep:.0%} of the faces. Machine: {os.cpu_count()} cores. {runs}.\n")
-    print("| input (faces) | tool | faces out | wall s | simplify s | peak MiB | Hausdorff (% diag) | mean dist | intersecting pairs | non-manifold edges | map-plane folds |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for name, faces, label, out_faces, wall, simplify, rss, d in rows:
+    print("| input (faces) | tool | faces out | wall s | simplify s | measure s (% of simplify) | peak MiB | Hausdorff (% diag) | "
+          "mean dist | intersecting pairs | non-manifold edges | map-plane folds |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|")
+    for name, faces, label, out_faces, wall, simplify, measure, rss, d in rows:
         h = f"{100 * d['hausdorff_fraction']:.3f}" if "hausdorff_fraction" in d else "?"
         mean = f"{d['mean_distance']:.4g}" if "mean_distance" in d else "?"
         folds = d.get("map_plane_folds", "–")
-        print(f"| {name} ({faces}) | {label} | {out_faces} | {wall:.2f} | {simplify:.3f} | {rss:.0f} | {h} | {mean} | "
+        measured = "–" if measure is None else f"{measure:.3f} ({100 * measure / simplify:.1f} %)"
+        print(f"| {name} ({faces}) | {label} | {out_faces} | {wall:.2f} | {simplify:.3f} | {measured} | {rss:.0f} | {h} | {mean} | "
               f"{d.get('intersecting_pairs', '?')} | {d.get('non_manifold_edges', '?')} | {folds} |")
     print()
     for line in ratios:
