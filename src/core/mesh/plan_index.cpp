@@ -186,9 +186,10 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
                 }
             }
             first_[cell_count] = at;
-            faces_.resize(at + 1);  // (the last: where entries for cells not wanted are dropped)
+            // (One more per thread at the end: where its entries for cells not wanted are dropped.)
+            faces_.resize(at + static_cast<std::size_t>(workers));
         }
-        const std::size_t dropped = faces_.size() - 1;
+        const std::size_t dropped = first_[cell_count] + static_cast<std::size_t>(t);
         for (const std::uint32_t f : listed) {
             for_cells(f, [&](std::size_t c, std::uint32_t in) {
                 const std::uint32_t here = wanted[c] & in;
@@ -197,7 +198,7 @@ PlanIndex::PlanIndex(const Mesh& mesh, std::span<const Point> near, std::int64_t
             });
         }
     }
-    faces_.pop_back();
+    faces_.resize(first_[cell_count]);
 }
 
 std::optional<std::array<std::uint32_t, 2>> PlanIndex::overlapping_faces(const Mesh& mesh, int turn, int threads) const {
