@@ -380,6 +380,32 @@ int orient3d_expansion(Point3 a, Point3 b, Point3 c, Point3 d) {
     return sum(sum(product(nx, dx), product(ny, dy)), product(nz, dz)).sign();
 }
 
+PlaneSide::PlaneSide(Point3 a, Point3 b, Point3 c) : a_(a), b_(b), c_(c) {
+    const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
+    const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
+    const double yz = uy * vz, zy = uz * vy, zx = uz * vx, xz = ux * vz, xy = ux * vy, yx = uy * vx;
+    normal_ = {yz - zy, zx - xz, xy - yx};
+    magnitude_ = {std::fabs(yz) + std::fabs(zy), std::fabs(zx) + std::fabs(xz), std::fabs(xy) + std::fabs(yx)};
+}
+
+int PlaneSide::operator()(Point3 d, PredicateStats& stats) const {
+    const double wx = d.x - a_.x, wy = d.y - a_.y, wz = d.z - a_.z;
+    const double det = wx * normal_.x + wy * normal_.y + wz * normal_.z;
+    const double permanent = std::fabs(wx) * magnitude_.x + std::fabs(wy) * magnitude_.y + std::fabs(wz) * magnitude_.z;
+    if (permanent >= 0x1p-800 && permanent <= 0x1p1000) {
+        const double bound = (8.0 + 64.0 * kUnitRoundoff) * kUnitRoundoff * permanent;
+        if (det > bound) {
+            ++stats.filter_decided;
+            return 1;
+        }
+        if (-det > bound) {
+            ++stats.filter_decided;
+            return -1;
+        }
+    }
+    return orient3d(a_, b_, c_, d, stats);
+}
+
 int orient3d(Point3 a, Point3 b, Point3 c, Point3 d, PredicateStats& stats) {
     // Shewchuk's semi-static filter first (orient3dfast with the bound (7 + 56ε)ε·permanent);
     // his determinant det[a−d; b−d; c−d] is the negative of ours.

@@ -16,7 +16,6 @@
 #include "core/geometry.hpp"
 
 #include <array>
-#include <cmath>
 #include <span>
 
 namespace toposimp::exact {
@@ -34,34 +33,12 @@ int orient3d_gmp(Point3 a, Point3 b, Point3 c, Point3 d);
 // the reference point instead of d: ((b − a) × (c − a)) · (d − a), evaluated as the sum of three
 // terms, each a rounded difference times a difference of two products of rounded differences,
 // has the shape his bound (7 + 56ε)ε·permanent covers, the permanent the same six products in
-// absolute value. It is taken a little wider here: (8 + 64ε)ε.
+// absolute value. It is taken a little wider here: (8 + 64ε)ε. (Both members are compiled with
+// the other predicates, never contracted into FMAs: not inline.)
 class PlaneSide {
 public:
-    PlaneSide(Point3 a, Point3 b, Point3 c) : a_(a), b_(b), c_(c) {
-        const double ux = b.x - a.x, uy = b.y - a.y, uz = b.z - a.z;
-        const double vx = c.x - a.x, vy = c.y - a.y, vz = c.z - a.z;
-        const double yz = uy * vz, zy = uz * vy, zx = uz * vx, xz = ux * vz, xy = ux * vy, yx = uy * vx;
-        normal_ = {yz - zy, zx - xz, xy - yx};
-        magnitude_ = {std::fabs(yz) + std::fabs(zy), std::fabs(zx) + std::fabs(xz), std::fabs(xy) + std::fabs(yx)};
-    }
-    int operator()(Point3 d, PredicateStats& stats) const {
-        const double wx = d.x - a_.x, wy = d.y - a_.y, wz = d.z - a_.z;
-        const double det = wx * normal_.x + wy * normal_.y + wz * normal_.z;
-        const double permanent = std::fabs(wx) * magnitude_.x + std::fabs(wy) * magnitude_.y + std::fabs(wz) * magnitude_.z;
-        if (permanent >= 0x1p-800 && permanent <= 0x1p1000) {
-            constexpr double kRoundoff = 0x1p-53;
-            const double bound = (8.0 + 64.0 * kRoundoff) * kRoundoff * permanent;
-            if (det > bound) {
-                ++stats.filter_decided;
-                return 1;
-            }
-            if (-det > bound) {
-                ++stats.filter_decided;
-                return -1;
-            }
-        }
-        return orient3d(a_, b_, c_, d, stats);
-    }
+    PlaneSide(Point3 a, Point3 b, Point3 c);
+    int operator()(Point3 d, PredicateStats& stats) const;
 
 private:
     Point3 a_, b_, c_;
