@@ -88,6 +88,13 @@ void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::
             box_hi[axis] = cell_hi(unit.hi[axis], Grid::unpack(unit.last, axis), c);
             least[axis] = box_lo[axis] == 0;
         }
+        // An entry's box (its six 8-bit coordinates) meets the box here, and this is the first
+        // cell they share.
+        auto meets = [&](std::uint8_t x0, std::uint8_t y0, std::uint8_t z0, std::uint8_t x1, std::uint8_t y1, std::uint8_t z1) {
+            return static_cast<std::uint8_t>((x0 >= least[0]) & (x0 <= box_hi[0]) & (box_lo[0] <= x1) & (y0 >= least[1]) &
+                                             (y0 <= box_hi[1]) & (box_lo[1] <= y1) & (z0 >= least[2]) & (z0 <= box_hi[2]) &
+                                             (box_lo[2] <= z1));
+        };
         // Without branches (a hit is written always, kept or overwritten), as the tests are
         // hard to predict; the index's hits then lose the faces this block changed. The index's
         // cell is compared column by column (a loop the compiler vectorizes), its hits then
@@ -99,9 +106,7 @@ void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::
         const std::uint8_t *hi_x = cell.bounds[3], *hi_y = cell.bounds[4], *hi_z = cell.bounds[5];
         std::uint8_t* const hits = hit.data();
         for (std::size_t k = 0; k < cell.count; ++k) {
-            hits[k] = static_cast<std::uint8_t>((lo_x[k] >= least[0]) & (lo_x[k] <= box_hi[0]) & (box_lo[0] <= hi_x[k]) &
-                                                (lo_y[k] >= least[1]) & (lo_y[k] <= box_hi[1]) & (box_lo[1] <= hi_y[k]) &
-                                                (lo_z[k] >= least[2]) & (lo_z[k] <= box_hi[2]) & (box_lo[2] <= hi_z[k]));
+            hits[k] = meets(lo_x[k], lo_y[k], lo_z[k], hi_x[k], hi_y[k], hi_z[k]);
         }
         std::size_t start = out.size();
         out.resize(start + cell.count);
@@ -118,9 +123,7 @@ void FaceIndex::query(const Box3& box, const Overlay& overlay, std::vector<std::
             at = out.data() + start;
             for (const IndexEntry& entry : *mine) {
                 *at = entry.face;
-                at += (entry.lo[0] >= least[0]) & (entry.lo[0] <= box_hi[0]) & (box_lo[0] <= entry.hi[0]) &
-                      (entry.lo[1] >= least[1]) & (entry.lo[1] <= box_hi[1]) & (box_lo[1] <= entry.hi[1]) &
-                      (entry.lo[2] >= least[2]) & (entry.lo[2] <= box_hi[2]) & (box_lo[2] <= entry.hi[2]);
+                at += meets(entry.lo[0], entry.lo[1], entry.lo[2], entry.hi[0], entry.hi[1], entry.hi[2]);
             }
             out.resize(static_cast<std::size_t>(at - out.data()));
         }
