@@ -375,7 +375,11 @@ public:
         marked_ = tile.marks ? tile.marked : std::vector<std::uint8_t>(vertex_count_, 0);
         bound_ = {tile.bound_key, kNone};  // (its id is compared as a whole-map id: past_bound)
         for (const auto& [waiter, blocker] : tile.waits) wait_on(waiter, blocker);
-        schedule_queued();
+        if (tile.first_level == 0) {
+            schedule_queued();
+        } else {
+            for (std::size_t k = 0; k < tile.later.size() && tile.first_level + k < levels_; ++k) later_[tile.first_level + k] = tile.later[k];
+        }
         slot_.assign(vertex_count_, kNone);
         initial_distinct_ = distinct_;
         initial_orientation_ = orientation_;
@@ -763,16 +767,17 @@ public:
         return input;
     }
 
-    // The tiles' outcomes into the whole map, the waits across tiles settled, then the levels
-    // from the tile level up.
-    void finish_part_round(std::span<const TileOutcome> outcomes) {
+    // The tiles' outcomes into the whole map and the waits across tiles settled (or, for a round
+    // run here, the whole round). Returns whether the levels from the tile level up have
+    // candidates (top_input); if not, the round is over.
+    bool finish_part_tiles(std::span<const TileOutcome> outcomes) {
         if (round_here_) {
             // The single process's round.
             ensure_grid();
             schedule_queued();
             sweep();
             keep_undecided();
-            return;
+            return false;
         }
         const unsigned t = tile_level_;
         // The waits the tiles did not hold (across tiles), or whose tile did not run this round.
@@ -782,23 +787,11 @@ public:
             if (k != tile_of(blocker) || !std::binary_search(running_.begin(), running_.end(), k)) waits.emplace_back(waiter, blocker);
         }
         for (const TileOutcome& tile : outcomes) {
-            for (std::size_t k = 0; k < tile.ids.size(); ++k) {
-                const std::uint32_t v = tile.ids[k];
-                const auto now = static_cast<State>(tile.states[k]);
-                if (now == State::removed && state_[v] != State::removed) {
-                    if (grid_) grid_->remove(v);
-                    next_[prev_[v]] = next_[v];
-                    prev_[next_[v]] = prev_[v];
-                }
-                state_[v] = now;
-            }
+            take_outcome(tile);
             waits.insert(waits.end(), tile.waits.begin(), tile.waits.end());
-            for (const auto& [chain, lost] : tile.locations_lost) distinct_[chain] -= lost;
-            for (std::size_t k = 0; k < tile.oriented.size(); ++k) orientation_[tile.oriented[k]] = tile.orientations[k];
             for (std::size_t k = 0; k < tile.later.size() && t + k < levels_; ++k) {
                 later_[t + k].insert(later_[t + k].end(), tile.later[k].begin(), tile.later[k].end());
             }
-            add(stats_, tile.stats);
         }
         // A wait across tiles holds while its waiter still waits (else its triangle changed) and
         // its blocker is there; a waiter whose blocker went is queued again.
@@ -812,12 +805,145 @@ public:
                 wait_on(waiter, blocker);
             }
         }
+        const bool top = std::any_of(later_.begin() + t, later_.begin() + levels_, [](const auto& list) { return !list.empty(); });
+        if (!top && use_marks_) keep_undecided();
+        return top;
+    }
+
+    // A tile's outcome into the whole map: its vertices' states, rings and counts.
+    void take_outcome(const TileOutcome& tile) {
+        for (std::size_t k = 0; k < tile.ids.size(); ++k) {
+            const std::uint32_t v = tile.ids[k];
+            const auto now = static_cast<State>(tile.states[k]);
+            if (now == State::removed && state_[v] != State::removed) {
+                if (grid_) grid_->remove(v);
+                next_[prev_[v]] = next_[v];
+                prev_[next_[v]] = prev_[v];
+            }
+            state_[v] = now;
+        }
+        for (const auto& [chain, lost] : tile.locations_lost) distinct_[chain] -= lost;
+        for (std::size_t k = 0; k < tile.oriented.size(); ++k) orientation_[tile.oriented[k]] = tile.orientations[k];
+        add(stats_, tile.stats);
+    }
+
+    // The levels from the tile level up as one more tile: the block of the level above the top
+    // (the whole map), over the live vertices only (and a ring's removed ones while it may need
+    // its input orientation, as a tile's), with the candidates the tiles left for those levels
+    // and the control points that can lie in a triangle there. Every such triangle is three
+    // consecutive live vertices of a run of unfixed ones between two fixed ones (fixed vertices
+    // never go): a control point outside the boxes of those runs never counts, and one inside
+    // is kept (the boxes are marked on the level-0 blocks, a superset).
+    TileInput top_input() {
+        const unsigned t = tile_level_;
+        TileInput input;
+        input.level = levels_;
+        input.first_level = t;
+        const auto mark_of = [&](std::uint32_t v) { return use_marks_ ? marked_[v] : std::uint8_t{0}; };
+        const std::uint32_t columns = blocks_.blocks(0, 0), rows = blocks_.blocks(1, 0);
+        std::vector<std::int32_t> cover(std::size_t{columns + 1} * (rows + 1), 0);  // 2D differences over level-0 blocks
+        const auto add_box = [&](std::uint32_t c0, std::uint32_t r0, std::uint32_t c1, std::uint32_t r1) {
+            const std::size_t w = columns + 1;
+            ++cover[r0 * w + c0];
+            --cover[r0 * w + c1 + 1];
+            --cover[(r1 + 1) * w + c0];
+            ++cover[(r1 + 1) * w + c1 + 1];
+        };
+        for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
+            const Chain& chain = map_.chains[c];
+            const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
+            const auto take = [&](std::uint32_t v) {
+                input.map.vertices.push_back(map_.vertices[v]);
+                input.vertex_id.push_back(v);
+                input.state.push_back(static_cast<std::uint8_t>(state_[v]));
+                if (use_marks_) input.marked.push_back(mark_of(v));
+            };
+            bool input_ring = false;
+            if (whole_level_[c] != kOpen && orientation_[c] == 2) {
+                std::uint32_t budget = 0;
+                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
+                input_ring = distinct_[c] <= 4 + budget;
+            }
+            if (input_ring) {
+                for (std::uint32_t v = chain.first; v <= chain.last; ++v) take(v);
+            } else {
+                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) take(u);
+            }
+            // The runs of unfixed live vertices, each with the fixed vertex on either side.
+            std::uint32_t c0 = kNone, r0 = kNone, c1 = 0, r1 = 0;
+            bool open = false;
+            for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) {
+                const std::uint32_t xy = block_xy_[u];
+                c0 = std::min(c0, xy >> 16);
+                c1 = std::max(c1, xy >> 16);
+                r0 = std::min(r0, xy & 0xffffu);
+                r1 = std::max(r1, xy & 0xffffu);
+                if (state_[u] != State::fixed) {
+                    open = true;
+                    continue;
+                }
+                if (open) add_box(c0, r0, c1, r1);
+                c0 = c1 = xy >> 16;
+                r0 = r1 = xy & 0xffffu;
+                open = false;
+            }
+            input.map.chains.push_back({first, static_cast<std::uint32_t>(input.vertex_id.size() - 1)});
+            input.chain_id.push_back(c);
+            input.whole_level.push_back(whole_level_[c] == kOpen ? kOpenChain : whole_level_[c]);
+            input.settled.push_back(0);
+            input.distinct.push_back(distinct_[c]);
+            input.orientation.push_back(orientation_[c]);
+        }
+        {
+            const std::size_t w = columns + 1;
+            for (std::uint32_t r = 0; r <= rows; ++r) {
+                for (std::uint32_t c = 0; c <= columns; ++c) {
+                    std::int32_t& at = cover[r * w + c];
+                    if (c > 0) at += cover[r * w + c - 1];
+                    if (r > 0) at += cover[(r - 1) * w + c];
+                    if (c > 0 && r > 0) at -= cover[(r - 1) * w + c - 1];
+                }
+            }
+            for (const Point p : indexed_points_) {
+                if (cover[block_row(p) * w + block_column(p)] > 0) input.map.control_points.push_back(p);
+            }
+        }
+        const auto local = [&](std::uint32_t v) {
+            const auto at = std::lower_bound(input.vertex_id.begin(), input.vertex_id.end(), v);
+            return at != input.vertex_id.end() && *at == v ? static_cast<std::uint32_t>(at - input.vertex_id.begin()) : kNone;
+        };
+        for (const auto& [waiter, blocker] : waits_.all()) input.waits.emplace_back(local(waiter), local(blocker));
+        std::sort(input.waits.begin(), input.waits.end());
         for (unsigned level = t; level < levels_; ++level) {
+            std::vector<std::uint32_t>& list = input.later.emplace_back();
+            for (const std::uint32_t v : later_[level]) {
+                if (state_[v] != State::removed) list.push_back(local(v));
+            }
+        }
+        input.marks = use_marks_;
+        input.bound_key = bound_.key;
+        input.bound_id = bound_.id;
+        return input;
+    }
+
+    // The levels from the tile level up here, over the whole map (instead of top_input); the
+    // round is over.
+    void run_part_top_here() {
+        for (unsigned level = tile_level_; level < levels_; ++level) {
             if (later_[level].empty()) continue;
             ensure_grid();
             process_level(level);
             stop_if_cancelled(options_.cancel);
         }
+        if (use_marks_) keep_undecided();
+    }
+
+    // The top's outcome (top_input) into the whole map; the round is over.
+    void finish_part_top(const TileOutcome& top) {
+        take_outcome(top);
+        waits_.clear();
+        for (const auto& [waiter, blocker] : top.waits) wait_on(waiter, blocker);
+        for (unsigned level = tile_level_; level < levels_; ++level) std::vector<std::uint32_t>().swap(later_[level]);
         if (use_marks_) keep_undecided();
     }
 
@@ -1751,7 +1877,15 @@ std::vector<std::vector<TileInput>> MapInParts::tile_groups() {
     return groups;
 }
 
-void MapInParts::finish_round(std::span<const TileOutcome> outcomes) { engine_->finish_part_round(outcomes); }
+void MapInParts::finish_round(std::span<const TileOutcome> outcomes) {
+    if (finish_tiles(outcomes)) engine_->run_part_top_here();
+}
+
+bool MapInParts::finish_tiles(std::span<const TileOutcome> outcomes) { return engine_->finish_part_tiles(outcomes); }
+
+TileInput MapInParts::top() { return engine_->top_input(); }
+
+void MapInParts::finish_top(const TileOutcome& outcome) { engine_->finish_part_top(outcome); }
 
 SimplifyResult MapInParts::result() { return engine_->part_result(); }
 

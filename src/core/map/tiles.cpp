@@ -8,11 +8,11 @@ namespace toposimp::map {
 
 std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options) {
     if (group.empty()) return {};
-    const unsigned tile_level = group.front().level;
+    const unsigned tile_level = group.front().level, first_level = group.front().first_level;
     std::vector<TileRun> runs;
     runs.reserve(group.size());
     for (TileInput& input : group) runs.emplace_back(std::move(input), plan, options);
-    for (unsigned level = 0; level < tile_level; ++level) {
+    for (unsigned level = first_level; level < tile_level; ++level) {
         // The open rings' fixed locations over the group's tiles (which hold all their pieces):
         // clear when ≥ 4 distinct ones.
         std::map<std::uint32_t, std::vector<Point>> locations;
@@ -36,7 +36,8 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
     return outcomes;
 }
 
-SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below) {
+SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below,
+                                 bool top_here) {
     MapInParts parts(map, options, tile_level, here_below);
     while (parts.next_round()) {
         std::vector<TileOutcome> outcomes;
@@ -44,7 +45,13 @@ SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& opti
         for (std::size_t k = 0; k < groups; ++k) {
             for (TileOutcome& outcome : run_tile_group(parts.group(k), parts.plan(), options)) outcomes.push_back(std::move(outcome));
         }
-        parts.finish_round(outcomes);
+        if (top_here) {
+            parts.finish_round(outcomes);
+        } else if (parts.finish_tiles(outcomes)) {
+            std::vector<TileInput> top;
+            top.push_back(parts.top());
+            parts.finish_top(run_tile_group(std::move(top), parts.plan(), options).front());
+        }
     }
     return parts.result();
 }

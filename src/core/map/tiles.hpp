@@ -64,9 +64,14 @@ GridPlan plan_grid(const MapData& map);
 enum class VertexState : std::uint8_t { fixed, queued, waiting, refused, removed };
 
 // One tile's share of a map in one round: everything a tile needs to run the levels below T.
+//
+// The levels from T up run as one more tile (MapInParts::top): the single block of the level
+// above the top, holding the live vertices only, from first_level = T with the candidates the
+// tiles left for those levels.
 struct TileInput {
     unsigned level = 0;                // T
     std::uint32_t column = 0, row = 0; // the tile: this block of level T
+    unsigned first_level = 0;          // the levels it runs: [first_level, level)
     // The pieces of the chains that have live vertices in the tile, in the map's order, each with
     // its cut ends, and the rings inside it (whole, with their removed vertices, while the tile may
     // need the input ring's orientation); the control points in the tile, in order.
@@ -84,6 +89,9 @@ struct TileInput {
     std::vector<std::uint32_t> distinct;   // per chain: a whole ring's distinct live locations (the engine's count)
     std::vector<std::int8_t> orientation;  // per chain: a whole ring's input orientation, 2 if not known yet
     std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;  // (waiter, blocker) among the tile's vertices
+    // From first_level > 0: per level from first_level, the vertices to queue there (else the tile
+    // lists its queued vertices by their levels).
+    std::vector<std::vector<std::uint32_t>> later;
     bool marks = false;                    // count targets: only marked vertices go, up to the bound
     double bound_key = 0;                  // the round's bound: (area, whole-map id)
     std::uint32_t bound_id = 0;
@@ -140,7 +148,7 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 //     MapInParts parts(map, options, tile_level);
 //     while (parts.next_round()) {
 //         std::vector<TileOutcome> outcomes = /* run_tile_group on each parts.group(k), k < parts.split_round() */;
-//         parts.finish_round(outcomes);
+//         parts.finish_round(outcomes);  // or: if (parts.finish_tiles(outcomes)) parts.finish_top(/* run_tile_group on {parts.top()} */);
 //     }
 //     SimplifyResult result = parts.result();
 class MapInParts {
@@ -168,8 +176,15 @@ public:
     std::uint64_t group_points(std::size_t k) const;   // its tiles' vertices (with cut ends) and control points
     // split_round() and every group.
     std::vector<std::vector<TileInput>> tile_groups();
-    // The round's outcomes (each tile's once, in any order), then the levels from T up.
+    // The round's outcomes (each tile's once, in any order), then the levels from T up, here,
+    // over the whole map's engine.
     void finish_round(std::span<const TileOutcome> outcomes);
+    // Or in steps, the levels from T up run elsewhere: the outcomes in; if the levels from T up
+    // have candidates (else the round is over), they run as one more tile, top() (the live
+    // vertices and the control points that can count), whose outcome ends the round.
+    bool finish_tiles(std::span<const TileOutcome> outcomes);
+    TileInput top();
+    void finish_top(const TileOutcome& outcome);
     SimplifyResult result();
 
 private:
@@ -180,8 +195,10 @@ private:
 };
 
 // simplify() run in parts in this process, every group of tiles in turn (rounds with a budget
-// under `here_below` whole, as MapInParts says). For tests and as the reference for a
-// distributed run.
-SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0);
+// under `here_below` whole, as MapInParts says), and the levels from T up as one more tile (top)
+// or, with `top_here`, over the whole map's engine (finish_round). For tests and as the reference
+// for a distributed run.
+SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0,
+                                 bool top_here = false);
 
 }  // namespace toposimp::map

@@ -32,7 +32,8 @@ void expect_same(const SimplifyResult& parts, const SimplifyResult& whole, const
 }
 
 // Big enough random maps for 4–5 levels of blocks: every tile level from 0 (no level in tiles)
-// to the top (one tile, nothing above).
+// to the top (one tile, nothing above); the levels from the tile level up as one more tile (the
+// live vertices only) or over the whole map's engine.
 TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
     for (const std::uint64_t seed : {1, 2, 3, 4}) {
         std::mt19937_64 rng(seed);
@@ -58,6 +59,8 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
                 const std::string what = "seed " + std::to_string(seed) + ", target " + std::to_string(static_cast<int>(target)) +
                                          ", tile level " + std::to_string(tile_level);
                 expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
+                // The levels from the tile level up over the whole map's engine, not as one more tile.
+                expect_same(simplify_in_tiles(map, options, tile_level, 0, true), whole, what + ", the levels above over the whole map");
                 // Small rounds here, big ones in tiles: the same again.
                 expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8), whole, what + ", small rounds here");
             }
@@ -288,6 +291,44 @@ TEST(MapTiles, AWaitAcrossTilesEndsWhenItsBlockerGoesInAnotherTile) {
     }
 }
 
+// A ring that touches itself (a figure eight pinched at p): its left lobe, a circle of 60
+// vertices, goes down to p and two vertices, where every removal would fold it onto itself (the
+// coincident-segment rule); the pinch never goes (the ring's ends lie in its triangle); the right
+// lobe, a triangle, stays. The ring spans the map's middle, so its last removals are decided
+// above the tiles at every tile level but the top.
+TEST(MapTiles, APinchedRingKeepsItsLobesAtEveryTileLevel) {
+    const Backdrop backdrop(64, 7);
+    const GridPlan& plan = backdrop.plan;
+    ASSERT_GE(plan.levels, 4u);
+    const Point p{50, 50};
+    std::vector<Point> ring{p};
+    constexpr int kLeft = 60;
+    for (int k = 1; k < kLeft; ++k) {
+        const double angle = 2 * std::acos(-1.0) * k / kLeft;
+        ring.push_back({40 + 10 * std::cos(angle), 50 + 10 * std::sin(angle)});
+    }
+    for (const Point q : {p, Point{70, 60}, Point{70, 40}, p}) ring.push_back(q);
+    MapData map;
+    map.add_chain(ring);
+    backdrop.fill(map, [&](Point q) {
+        return std::hypot(q.x - 40, q.y - 50) < 10.5 || (q.x > 49 && q.x < 71 && q.y > 39 && q.y < 61);
+    });
+    ASSERT_EQ(plan_grid(map).levels, plan.levels);
+    for (const Target target : {Target::max, Target::keep_points}) {
+        SimplifyOptions options;
+        options.stop = {target, target == Target::max ? 0.0 : 3.0};
+        const SimplifyResult whole = simplify(map, options);
+        const std::vector<std::uint8_t> ring_kept(whole.kept.begin(), whole.kept.begin() + static_cast<std::ptrdiff_t>(ring.size()));
+        EXPECT_EQ(std::count(ring_kept.begin() + 1, ring_kept.begin() + kLeft, 1), 2) << "two of the left lobe's vertices stay";
+        for (std::size_t v = kLeft; v < ring.size(); ++v) EXPECT_EQ(ring_kept[v], 1) << "the pinch and the right lobe stay";
+        EXPECT_GT(whole.stats.blocked_by_coincidence, 0u);
+        for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
+            expect_same(simplify_in_tiles(map, options, tile_level), whole,
+                        "target " + std::to_string(static_cast<int>(target)) + ", tile level " + std::to_string(tile_level));
+        }
+    }
+}
+
 // A wait inside one tile while that tile sits out a round (no vertex of it in the budget): in
 // round 1, w waits on b (both in the left tile, b outside the budget); in round 2 the budget is
 // all in the right tile; in round 3 b goes, which must free w, removed in round 4.
@@ -351,6 +392,64 @@ TEST(MapTiles, TiesAtARoundsBoundAreBrokenByWholeMapIds) {
             expect_same(simplify_in_tiles(map, options, tile_level), whole,
                         "keep " + std::to_string(keep) + ", tile level " + std::to_string(tile_level));
         }
+    }
+}
+
+// The levels above the tiles as one more tile (MapInParts::top): it holds the live vertices
+// only, in whole-map order, and the control points that can lie in a triangle there — those
+// near a run of unfixed vertices — not the others. One line zigzags across the map's middle, among
+// the backdrop's points.
+TEST(MapTiles, TheTopHoldsTheLiveVerticesAndThePointsNearTheirRuns) {
+    const Backdrop backdrop(121, 9);
+    const GridPlan& plan = backdrop.plan;
+    ASSERT_GE(plan.levels, 4u);
+    std::vector<Point> line;
+    for (int k = 0; k <= 120; ++k) line.push_back({20 + 0.5 * k, 50 + (k % 2 == 0 ? 0.0 : 0.6)});
+    MapData map;
+    map.add_chain(line);
+    backdrop.fill(map, [](Point) { return false; });
+    ASSERT_EQ(plan_grid(map).levels, plan.levels);
+    // How far outside the line's box a kept point may be: a level-0 block.
+    const double block = 100.0 / plan.grid.base_columns * static_cast<double>(1u << plan.shift);
+    SimplifyOptions options;
+    options.stop = {Target::max, 0};
+    const SimplifyResult whole = simplify(map, options);
+    for (unsigned tile_level = 1; tile_level + 1 < plan.levels; ++tile_level) {
+        MapInParts parts(map, options, tile_level);
+        ASSERT_TRUE(parts.next_round());
+        std::vector<TileOutcome> outcomes;
+        for (std::vector<TileInput>& group : parts.tile_groups()) {
+            for (TileOutcome& outcome : run_tile_group(std::move(group), parts.plan(), options)) outcomes.push_back(std::move(outcome));
+        }
+        std::vector<std::uint8_t> removed(map.vertices.size(), 0);
+        for (const TileOutcome& outcome : outcomes) {
+            for (std::size_t k = 0; k < outcome.ids.size(); ++k) removed[outcome.ids[k]] = outcome.states[k] == static_cast<std::uint8_t>(VertexState::removed);
+        }
+        ASSERT_TRUE(parts.finish_tiles(outcomes)) << "the line crosses the middle: its last vertices go above the tiles";
+        const TileInput top = parts.top();
+        EXPECT_EQ(top.level, plan.levels);
+        EXPECT_EQ(top.first_level, tile_level);
+        std::vector<std::uint32_t> live;
+        for (std::uint32_t v = 0; v < map.vertices.size(); ++v) {
+            if (!removed[v]) live.push_back(v);
+        }
+        EXPECT_EQ(top.vertex_id, live) << "tile level " << tile_level;
+        EXPECT_LT(live.size(), line.size()) << "the tiles removed some";
+        std::size_t near = 0;
+        for (const Point q : map.control_points) near += q.x >= 20 && q.x <= 80 && q.y >= 50 && q.y <= 50.6;
+        std::size_t kept_near = 0;
+        for (const Point q : top.map.control_points) {
+            kept_near += q.x >= 20 && q.x <= 80 && q.y >= 50 && q.y <= 50.6;
+            EXPECT_TRUE(q.x > 20 - block && q.x < 80 + block && q.y > 50 - block && q.y < 50.6 + block) << q.x << " " << q.y;
+        }
+        EXPECT_GT(near, 10u);
+        EXPECT_EQ(kept_near, near) << "every point in the line's box is kept";
+        EXPECT_LT(top.map.control_points.size(), map.control_points.size() / 10);
+        std::vector<TileInput> one;
+        one.push_back(top);
+        parts.finish_top(run_tile_group(std::move(one), parts.plan(), options).front());
+        EXPECT_FALSE(parts.next_round());
+        expect_same(parts.result(), whole, "tile level " + std::to_string(tile_level));
     }
 }
 
