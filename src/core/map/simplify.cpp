@@ -717,7 +717,7 @@ public:
                 if (at != local.end() && at->first == v) at->second = static_cast<std::uint32_t>(input.vertex_id.size());
             }
             input.map.vertices.push_back(map_.vertices[v]);
-            input.vertex_id.push_back(v);
+            input.vertex_id.push_back(global(v));
             input.state.push_back(static_cast<std::uint8_t>(cut_end ? State::fixed : state_[v]));
             if (use_marks_) input.marked.push_back(cut_end ? 0 : marked_[v]);
         };
@@ -788,9 +788,9 @@ public:
         }
         for (const TileOutcome& tile : outcomes) {
             take_outcome(tile);
-            waits.insert(waits.end(), tile.waits.begin(), tile.waits.end());
+            for (const auto& [waiter, blocker] : tile.waits) waits.emplace_back(local_id(waiter), local_id(blocker));
             for (std::size_t k = 0; k < tile.later.size() && t + k < levels_; ++k) {
-                later_[t + k].insert(later_[t + k].end(), tile.later[k].begin(), tile.later[k].end());
+                for (const std::uint32_t v : tile.later[k]) later_[t + k].push_back(local_id(v));
             }
         }
         // A wait across tiles holds while its waiter still waits (else its triangle changed) and
@@ -813,7 +813,7 @@ public:
     // A tile's outcome into the whole map: its vertices' states, rings and counts.
     void take_outcome(const TileOutcome& tile) {
         for (std::size_t k = 0; k < tile.ids.size(); ++k) {
-            const std::uint32_t v = tile.ids[k];
+            const std::uint32_t v = local_id(tile.ids[k]);
             const auto now = static_cast<State>(tile.states[k]);
             if (now == State::removed && state_[v] != State::removed) {
                 if (grid_) grid_->remove(v);
@@ -834,7 +834,7 @@ public:
     // consecutive live vertices of a run of unfixed ones between two fixed ones (fixed vertices
     // never go): a control point outside the boxes of those runs never counts, and one inside
     // is kept (the boxes are marked on the level-0 blocks, a superset).
-    TileInput top_input() {
+    TileInput top_input(bool every_point = false) {
         const unsigned t = tile_level_;
         TileInput input;
         input.level = levels_;
@@ -854,7 +854,7 @@ public:
             const auto first = static_cast<std::uint32_t>(input.vertex_id.size());
             const auto take = [&](std::uint32_t v) {
                 input.map.vertices.push_back(map_.vertices[v]);
-                input.vertex_id.push_back(v);
+                input.vertex_id.push_back(global(v));
                 input.state.push_back(static_cast<std::uint8_t>(state_[v]));
                 if (use_marks_) input.marked.push_back(mark_of(v));
             };
@@ -905,12 +905,13 @@ public:
                 }
             }
             for (const Point p : indexed_points_) {
-                if (cover[block_row(p) * w + block_column(p)] > 0) input.map.control_points.push_back(p);
+                if (every_point || cover[block_row(p) * w + block_column(p)] > 0) input.map.control_points.push_back(p);
             }
         }
-        const auto local = [&](std::uint32_t v) {
-            const auto at = std::lower_bound(input.vertex_id.begin(), input.vertex_id.end(), v);
-            return at != input.vertex_id.end() && *at == v ? static_cast<std::uint32_t>(at - input.vertex_id.begin()) : kNone;
+        const auto local = [&](std::uint32_t v) {  // (an engine id: its index in the input)
+            const std::uint32_t id = global(v);
+            const auto at = std::lower_bound(input.vertex_id.begin(), input.vertex_id.end(), id);
+            return at != input.vertex_id.end() && *at == id ? static_cast<std::uint32_t>(at - input.vertex_id.begin()) : kNone;
         };
         for (const auto& [waiter, blocker] : waits_.all()) input.waits.emplace_back(local(waiter), local(blocker));
         std::sort(input.waits.begin(), input.waits.end());
@@ -938,11 +939,41 @@ public:
         if (use_marks_) keep_undecided();
     }
 
+    // ---- runs in parts over the live vertices only ------------------------------------------
+
+    // This engine, over `before`'s live vertices and every control point (its
+    // top_input(true), this engine's tile), takes over `before`'s run in parts, in a round whose
+    // tiles are done: the levels from the tile level up are next. Its ids are indices into the
+    // live vertices, in the whole map's order, so every tie breaks as before; ids it hands out
+    // or takes in (tiles, outcomes, the round's bound) are the whole map's.
+    void resume_parts(const Simplifier& before) {
+        resumed_ = true;
+        start_tile();
+        tile_level_ = before.tile_level_;
+        goal_ = before.goal_;
+        rounds_started_ = before.rounds_started_;
+        round_budget_ = before.round_budget_;
+        stats_ = before.stats_;
+        bound_ = before.bound_;
+        work_ = before.work_;
+        compacted_at_ = stats_.removed;
+    }
+
+    std::uint32_t vertex_count() const { return vertex_count_; }
+    const SimplifyOptions& options() const { return options_; }
+
+    // A vertex's whole-map id, and back (after resume_parts: a live vertex's index).
+    std::uint32_t global(std::uint32_t v) const { return resumed_ ? tile_->vertex_id[v] : v; }
+    std::uint32_t local_id(std::uint32_t id) const {
+        if (!resumed_) return id;
+        return static_cast<std::uint32_t>(std::lower_bound(tile_->vertex_id.begin(), tile_->vertex_id.end(), id) - tile_->vertex_id.begin());
+    }
+
     // The top's outcome (top_input) into the whole map; the round is over.
     void finish_part_top(const TileOutcome& top) {
         take_outcome(top);
         waits_.clear();
-        for (const auto& [waiter, blocker] : top.waits) wait_on(waiter, blocker);
+        for (const auto& [waiter, blocker] : top.waits) wait_on(local_id(waiter), local_id(blocker));
         for (unsigned level = tile_level_; level < levels_; ++level) std::vector<std::uint32_t>().swap(later_[level]);
         if (use_marks_) keep_undecided();
     }
@@ -1037,9 +1068,6 @@ public:
         for (const Point p : control_points_) take(p);
         if (window.first_column == kNone) window = {0, 0, 0, 0};
         grid_.emplace(g, window, map_.vertices, control_points_, threads_);
-        geometry_ = g;
-        stats_.control_points = control_points_.size();
-        control_points_ = {};
     }
 
     std::uint32_t block_column(Point p) const { return blocks_.block(geometry_.base_column(p.x), 0); }
@@ -1308,7 +1336,7 @@ public:
                     marked_[v] = 1;
                 } else if (own == key && seen < rank) {
                     marked_[v] = 1;
-                    if (++seen == rank) bound_ = {std::bit_cast<double>(key), v};
+                    if (++seen == rank) bound_ = {std::bit_cast<double>(key), global(v)};
                 }
             });
         });
@@ -1519,7 +1547,7 @@ public:
 
     // Is `top` ranked after the round's threshold? A tile compares whole-map ids.
     bool past_bound(const Ranked& top) const {
-        if (!tile_) return bound_ < top;
+        if (!tile_ || resumed_) return bound_.key < top.key || (bound_.key == top.key && bound_.id < global(top.id));
         return bound_.key < top.key || (bound_.key == top.key && tile_->bound_id < tile_->vertex_id[top.id]);
     }
 
@@ -1777,6 +1805,7 @@ public:
     std::span<const std::uint32_t> outside_clear_;  // this level: split rings clear over all tiles
     std::vector<std::uint32_t> initial_distinct_;  // a tile's distinct_ at the start
     std::vector<std::int8_t> initial_orientation_;  // a tile's orientation_ at the start
+    bool resumed_ = false;            // a run in parts over the live vertices only (resume_parts)
     unsigned tile_level_ = 0;         // the whole map's side of a run in parts: its tile level
     std::uint64_t goal_ = 0;          // and removal goal
     unsigned rounds_started_ = 0;     // (--max and --max-area: one)
@@ -1883,10 +1912,31 @@ void MapInParts::finish_round(std::span<const TileOutcome> outcomes) {
 
 bool MapInParts::finish_tiles(std::span<const TileOutcome> outcomes) { return engine_->finish_part_tiles(outcomes); }
 
+void MapInParts::run_top_here() { engine_->run_part_top_here(); }
+
+void MapInParts::keep_live_only() {
+    if (live_ == nullptr) input_vertices_ = engine_->vertex_count();
+    auto live = std::make_unique<TileInput>(engine_->top_input(true));
+    auto engine = std::make_unique<detail::Simplifier>(*live, plan_, engine_->options());
+    engine->resume_parts(*engine_);
+    engine_ = std::move(engine);  // (the engine before goes first: it may hold the live vertices before)
+    live_ = std::move(live);
+}
+
 TileInput MapInParts::top() { return engine_->top_input(); }
 
 void MapInParts::finish_top(const TileOutcome& outcome) { engine_->finish_part_top(outcome); }
 
-SimplifyResult MapInParts::result() { return engine_->part_result(); }
+SimplifyResult MapInParts::result() {
+    SimplifyResult result = engine_->part_result();
+    if (live_ == nullptr) return result;
+    // Back to the whole map's vertices: those not among the live ones went before.
+    std::vector<std::uint8_t> kept(input_vertices_, 0);
+    for (std::size_t i = 0; i < live_->vertex_id.size(); ++i) kept[live_->vertex_id[i]] = result.kept[i];
+    result.kept = std::move(kept);
+    result.stats.vertices_in = input_vertices_;
+    result.stats.vertices_out = input_vertices_ - result.stats.removed;
+    return result;
+}
 
 }  // namespace toposimp::map

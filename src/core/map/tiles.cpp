@@ -37,17 +37,23 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 }
 
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below,
-                                 bool top_here) {
+                                 bool top_here, bool live_only) {
     MapInParts parts(map, options, tile_level, here_below);
+    bool whole = true;  // the whole map's engine still runs
     while (parts.next_round()) {
         std::vector<TileOutcome> outcomes;
         const std::size_t groups = parts.split_round();
         for (std::size_t k = 0; k < groups; ++k) {
             for (TileOutcome& outcome : run_tile_group(parts.group(k), parts.plan(), options)) outcomes.push_back(std::move(outcome));
         }
+        if (!parts.finish_tiles(outcomes)) continue;
+        if (live_only && whole && groups > 0) {
+            parts.keep_live_only();
+            whole = false;
+        }
         if (top_here) {
-            parts.finish_round(outcomes);
-        } else if (parts.finish_tiles(outcomes)) {
+            parts.run_top_here();
+        } else {
             std::vector<TileInput> top;
             top.push_back(parts.top());
             parts.finish_top(run_tile_group(std::move(top), parts.plan(), options).front());

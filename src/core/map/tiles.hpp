@@ -185,9 +185,18 @@ public:
     bool finish_tiles(std::span<const TileOutcome> outcomes);
     TileInput top();
     void finish_top(const TileOutcome& outcome);
+    // The levels from T up here, after finish_tiles returned true.
+    void run_top_here();
+    // From here on, the run holds the live vertices only (and every control point): the whole
+    // map's engine goes, and with it every use of `map`. Call after finish_tiles returned true
+    // (the levels from T up are then still to run). The result is the same; ids in tiles and
+    // outcomes stay the whole map's.
+    void keep_live_only();
     SimplifyResult result();
 
 private:
+    std::unique_ptr<TileInput> live_;  // after keep_live_only: the live vertices the engine runs over
+    std::size_t input_vertices_ = 0;   // and the whole map's vertex count
     std::unique_ptr<detail::Simplifier> engine_;
     GridPlan plan_;
     unsigned tile_level_;
@@ -196,9 +205,10 @@ private:
 
 // simplify() run in parts in this process, every group of tiles in turn (rounds with a budget
 // under `here_below` whole, as MapInParts says), and the levels from T up as one more tile (top)
-// or, with `top_here`, over the whole map's engine (finish_round). For tests and as the reference
-// for a distributed run.
+// or, with `top_here`, over the whole map's engine (finish_round). With `live_only`, the run keeps
+// only the live vertices from the first round's tiles on (keep_live_only). For tests and as the
+// reference for a distributed run.
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0,
-                                 bool top_here = false);
+                                 bool top_here = false, bool live_only = false);
 
 }  // namespace toposimp::map

@@ -31,6 +31,16 @@ void expect_same(const SimplifyResult& parts, const SimplifyResult& whole, const
     EXPECT_EQ(parts.stats.target_reached, whole.stats.target_reached) << what;
 }
 
+// simplify_in_tiles as it is, and keeping the live vertices only from the first round's tiles on
+// (then also with the levels above the tiles and the small rounds run by that engine itself).
+void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, const SimplifyResult& whole,
+                          const std::string& what) {
+    expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
+    expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true), whole, what + ", live only");
+    expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8, true, true), whole,
+                what + ", live only, small rounds and the levels above here");
+}
+
 // Big enough random maps for 4–5 levels of blocks: every tile level from 0 (no level in tiles)
 // to the top (one tile, nothing above); the levels from the tile level up as one more tile (the
 // live vertices only) or over the whole map's engine.
@@ -63,6 +73,11 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
                 expect_same(simplify_in_tiles(map, options, tile_level, 0, true), whole, what + ", the levels above over the whole map");
                 // Small rounds here, big ones in tiles: the same again.
                 expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8), whole, what + ", small rounds here");
+                // The live vertices only from the first round's tiles on, the levels above as a tile or here, small rounds here.
+                expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true), whole, what + ", live only");
+                expect_same(simplify_in_tiles(map, options, tile_level, 0, true, true), whole, what + ", live only, the levels above here");
+                expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8, false, true), whole,
+                            what + ", live only, small rounds here");
             }
         }
     }
@@ -206,7 +221,7 @@ TEST(MapTiles, ARingWithOneSegmentOutAndBackIsDecidedOverAllTiles) {
     EXPECT_TRUE(same_location(fixed[0], ring[0]) || same_location(fixed[1], ring[0]));
     EXPECT_TRUE(same_location(fixed[0], ring[1]) || same_location(fixed[1], ring[1]));
     for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
-        expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+        expect_same_in_tiles(map, options, tile_level, whole, "tile level " + std::to_string(tile_level));
     }
 }
 
@@ -287,7 +302,7 @@ TEST(MapTiles, AWaitAcrossTilesEndsWhenItsBlockerGoesInAnotherTile) {
     EXPECT_EQ(whole.kept[4], 0) << "b went";
     EXPECT_EQ(whole.stats.rounds, 3u) << "w waited on b, which went in round 2";
     for (unsigned tile_level = 0; tile_level + 1 < plan.levels; ++tile_level) {
-        expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+        expect_same_in_tiles(map, options, tile_level, whole, "tile level " + std::to_string(tile_level));
     }
 }
 
@@ -323,7 +338,7 @@ TEST(MapTiles, APinchedRingKeepsItsLobesAtEveryTileLevel) {
         for (std::size_t v = kLeft; v < ring.size(); ++v) EXPECT_EQ(ring_kept[v], 1) << "the pinch and the right lobe stay";
         EXPECT_GT(whole.stats.blocked_by_coincidence, 0u);
         for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
-            expect_same(simplify_in_tiles(map, options, tile_level), whole,
+            expect_same_in_tiles(map, options, tile_level, whole,
                         "target " + std::to_string(static_cast<int>(target)) + ", tile level " + std::to_string(tile_level));
         }
     }
@@ -361,7 +376,7 @@ TEST(MapTiles, AWaitInATileThatSitsOutARoundHolds) {
     EXPECT_EQ(whole.kept[4], 0) << "b went";
     EXPECT_EQ(whole.stats.rounds, 4u);
     for (unsigned tile_level = 0; tile_level + 1 < plan.levels; ++tile_level) {
-        expect_same(simplify_in_tiles(map, options, tile_level), whole, "tile level " + std::to_string(tile_level));
+        expect_same_in_tiles(map, options, tile_level, whole, "tile level " + std::to_string(tile_level));
     }
 }
 
@@ -389,7 +404,7 @@ TEST(MapTiles, TiesAtARoundsBoundAreBrokenByWholeMapIds) {
         const SimplifyResult whole = simplify(map, options);
         ASSERT_TRUE(whole.stats.target_reached);
         for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
-            expect_same(simplify_in_tiles(map, options, tile_level), whole,
+            expect_same_in_tiles(map, options, tile_level, whole,
                         "keep " + std::to_string(keep) + ", tile level " + std::to_string(tile_level));
         }
     }
