@@ -152,7 +152,8 @@ map::TileInput tile_of(const py::dict& dict) {
     if (std::any_of(tile.state.begin(), tile.state.end(), [](std::uint8_t s) { return s > static_cast<std::uint8_t>(map::VertexState::removed); })) {
         malformed("a vertex state is not one");
     }
-    if (std::any_of(tile.orientation.begin(), tile.orientation.end(), [](std::int8_t o) { return o < -1 || o > 2; })) {
+    // (−1, 0, 1; 2: not known; 3 to 5 and 7 to 9: known, not yet counted: core/map/simplify.cpp)
+    if (std::any_of(tile.orientation.begin(), tile.orientation.end(), [](std::int8_t o) { return o < -1 || o > 9 || o == 6; })) {
         malformed("an orientation is not one");
     }
     for (const auto& [waiter, blocker] : tile.waits) {
@@ -373,6 +374,7 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     map::MapInParts parts(map, options, level, here_below);
     const double set_up = seconds(start);
     const auto rounds_start = Clock::now();
+    bool whole = true;  // the whole map's engine is still here
     for (unsigned round = 1; parts.next_round(); ++round) {
         const std::size_t count = parts.split_round();
         std::vector<map::TileOutcome> outcomes;
@@ -397,7 +399,13 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
                 for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
             }
         }
-        parts.finish_round(outcomes);
+        if (!parts.finish_tiles(outcomes)) continue;
+        // From the first round's tiles on, the engine here holds the live vertices only.
+        if (whole && count > 0) {
+            parts.keep_live_only();
+            whole = false;
+        }
+        parts.run_top_here();
     }
     map::SimplifyResult result = parts.result();
     // The phases: set-up and the crossing search; the rounds (tiles and the levels above).

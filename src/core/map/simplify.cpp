@@ -363,7 +363,7 @@ public:
         for (std::uint32_t v = 0; v < vertex_count_; ++v) state_[v] = static_cast<State>(tile.state[v]);
         has_waiters_.assign(vertex_count_, 0);
         for (std::uint32_t v = 0; v < vertex_count_; ++v) {
-            if (state_[v] != State::removed) continue;  // (a whole ring's, removed in an earlier round)
+            if (state_[v] != State::removed) continue;  // (a tile gets live vertices only, but it may be told otherwise)
             grid_->remove(v);
             if (prev_[v] != kNone) next_[prev_[v]] = next_[v];
             if (next_[v] != kNone) prev_[next_[v]] = prev_[v];
@@ -474,7 +474,7 @@ public:
     // This round's tiles (split_round): per tile (numbers row-major) its pieces, control points
     // (indices) and waits (whole-map ids), each from its start; the groups that run (indices).
     struct TilePiece {
-        enum Kind : std::uint8_t { run, live_ring, input_ring };
+        enum Kind : std::uint8_t { run, ring };
         std::uint32_t chain;
         std::uint32_t start;   // a run's first live vertex
         std::uint32_t points;  // the vertices the tile gets for it (a run's with its cut ends)
@@ -510,15 +510,11 @@ public:
         for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
             const Chain& chain = map_.chains[c];
             if (whole_level_[c] != kOpen && whole_level_[c] <= t) {
-                // A ring inside one tile: its live vertices, and its removed ones too while the tile
-                // may need the input ring's orientation (unknown yet, and the round's budget may
-                // bring the ring down to 4 distinct locations, where the ring rule asks for it).
+                // A ring inside one tile: its live vertices, and the input ring's orientation if
+                // the round may bring it down to 4 distinct locations, where the ring rule asks.
                 const std::uint32_t k = tile_of(chain.first);
-                std::uint32_t budget = 0;
-                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
-                const bool input_ring = orientation_[c] == 2 && distinct_[c] <= 4 + budget;
-                TilePiece& piece = tagged.emplace_back(k, TilePiece{c, chain.first, 0, input_ring ? TilePiece::input_ring : TilePiece::live_ring, 0})
-                                       .second;
+                know_orientation_if_asked(c);
+                TilePiece& piece = tagged.emplace_back(k, TilePiece{c, chain.first, 0, TilePiece::ring, 0}).second;
                 bool any = false;
                 for_each_piece_vertex(piece, k, [&](std::uint32_t v, bool) {
                     ++piece.points;
@@ -662,16 +658,12 @@ public:
     }
 
     // Calls visit(v, cut_end) for each vertex tile k gets for `piece`, in order: a whole ring's
-    // (with its removed vertices for an input ring), or a run of live vertices in the tile with
-    // the live vertex beyond it on either side (its cut ends).
+    // live ones, or a run of live vertices in the tile with the live vertex beyond it on either
+    // side (its cut ends).
     template <class Visit>
     void for_each_piece_vertex(const TilePiece& piece, std::uint32_t k, Visit&& visit) const {
         const Chain& chain = map_.chains[piece.chain];
-        if (piece.kind == TilePiece::input_ring) {
-            for (std::uint32_t v = chain.first; v <= chain.last; ++v) visit(v, false);
-            return;
-        }
-        if (piece.kind == TilePiece::live_ring) {
+        if (piece.kind == TilePiece::ring) {
             for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) visit(u, false);
             return;
         }
@@ -858,17 +850,16 @@ public:
                 input.state.push_back(static_cast<std::uint8_t>(state_[v]));
                 if (use_marks_) input.marked.push_back(mark_of(v));
             };
-            bool input_ring = false;
-            if (whole_level_[c] != kOpen && orientation_[c] == 2) {
-                std::uint32_t budget = 0;
-                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
-                input_ring = distinct_[c] <= 4 + budget;
+            // (The live vertices only: a ring whose input orientation may be asked for, or, for a
+            // run going on over the live vertices, every ring, gets it now.)
+            if (whole_level_[c] != kOpen) {
+                if (every_point) {
+                    know_orientation(c);
+                } else {
+                    know_orientation_if_asked(c);
+                }
             }
-            if (input_ring) {
-                for (std::uint32_t v = chain.first; v <= chain.last; ++v) take(v);
-            } else {
-                for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) take(u);
-            }
+            for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) take(u);
             // The runs of unfixed live vertices, each with the fixed vertex on either side.
             std::uint32_t c0 = kNone, r0 = kNone, c1 = 0, r1 = 0;
             bool open = false;
@@ -941,21 +932,31 @@ public:
 
     // ---- runs in parts over the live vertices only ------------------------------------------
 
-    // This engine, over `before`'s live vertices and every control point (its
-    // top_input(true), this engine's tile), takes over `before`'s run in parts, in a round whose
-    // tiles are done: the levels from the tile level up are next. Its ids are indices into the
+    // This engine, over the live vertices and every control point of a run in parts (its
+    // engine's top_input(true), this engine's tile), takes over that run (parts_progress: where
+    // it stands), in a round whose tiles are done: the levels from the tile level up are next. Its ids are indices into the
     // live vertices, in the whole map's order, so every tie breaks as before; ids it hands out
     // or takes in (tiles, outcomes, the round's bound) are the whole map's.
-    void resume_parts(const Simplifier& before) {
+    struct PartsProgress {
+        unsigned tile_level;
+        std::uint64_t goal, round_budget;
+        unsigned rounds_started;
+        SimplifyStats stats;
+        Ranked bound;
+        double work;
+    };
+    PartsProgress parts_progress() const { return {tile_level_, goal_, round_budget_, rounds_started_, stats_, bound_, work_}; }
+
+    void resume_parts(const PartsProgress& before) {
         resumed_ = true;
         start_tile();
-        tile_level_ = before.tile_level_;
-        goal_ = before.goal_;
-        rounds_started_ = before.rounds_started_;
-        round_budget_ = before.round_budget_;
-        stats_ = before.stats_;
-        bound_ = before.bound_;
-        work_ = before.work_;
+        tile_level_ = before.tile_level;
+        goal_ = before.goal;
+        rounds_started_ = before.rounds_started;
+        round_budget_ = before.round_budget;
+        stats_ = before.stats;
+        bound_ = before.bound;
+        work_ = before.work;
         compacted_at_ = stats_.removed;
     }
 
@@ -1640,8 +1641,15 @@ public:
     }
 
     // Sign of the input ring's signed area, exactly (computed once, only for rings that get
-    // down to their last triangle, by the one thread that owns the whole ring).
+    // down to their last triangle, by the one thread that owns the whole ring; or known before,
+    // see know_orientation).
     int ring_orientation(std::uint32_t chain, exact::PredicateStats& stats) {
+        std::int8_t& known = orientation_[chain];
+        if (known >= kOrientedByFilter - 1) {
+            // Known before: counted now, where the single process computes it.
+            ++(known >= kOrientedByGmp - 1 ? stats.gmp_fallbacks : stats.filter_decided);
+            known = static_cast<std::int8_t>(known - (known >= kOrientedByGmp - 1 ? kOrientedByGmp : kOrientedByFilter));
+        }
         if (orientation_[chain] != 2) return orientation_[chain];
         const Chain& range = map_.chains[chain];
         const std::span<const Point> ring(map_.vertices.data() + range.first, range.last - range.first + 1);
@@ -1649,6 +1657,31 @@ public:
                                                            ? exact::ring_area_sign_gmp(ring)
                                                            : exact::ring_area_sign(ring, stats));
         return orientation_[chain];
+    }
+
+    // A run in parts sends a ring's live vertices only, so the input ring's orientation goes with
+    // it when the ring rule may ask for it: computed here, but counted in the predicates' stats
+    // where it is asked for (as the single process counts it), kept until then as the sign plus
+    // kOrientedByFilter or kOrientedByGmp (the counter it goes to; 2 stays "unknown").
+    static constexpr std::int8_t kOrientedByFilter = 4, kOrientedByGmp = 8;
+    void know_orientation(std::uint32_t c) {
+        if (orientation_[c] != 2) return;
+        const Chain& range = map_.chains[c];
+        const std::span<const Point> ring(map_.vertices.data() + range.first, range.last - range.first + 1);
+        if (options_.arithmetic == exact::Arithmetic::rational) {
+            orientation_[c] = static_cast<std::int8_t>(exact::ring_area_sign_gmp(ring));  // (never counted)
+            return;
+        }
+        exact::PredicateStats counted;
+        const int sign = exact::ring_area_sign(ring, counted);
+        orientation_[c] = static_cast<std::int8_t>(sign + (counted.gmp_fallbacks != 0 ? kOrientedByGmp : kOrientedByFilter));
+    }
+    // When a round's budget may bring the ring down to 4 distinct locations.
+    void know_orientation_if_asked(std::uint32_t c) {
+        if (orientation_[c] != 2) return;
+        std::uint32_t budget = 0;
+        for (std::uint32_t u = map_.chains[c].first; u != kNone; u = next_[u]) budget += use_marks_ ? marked_[u] : 1;
+        if (distinct_[c] <= 4 + budget) know_orientation(c);
     }
 
     // Rule 3: would the new segment p–n lie on another live segment with the same end locations?
@@ -1917,10 +1950,12 @@ void MapInParts::run_top_here() { engine_->run_part_top_here(); }
 void MapInParts::keep_live_only() {
     if (live_ == nullptr) input_vertices_ = engine_->vertex_count();
     auto live = std::make_unique<TileInput>(engine_->top_input(true));
-    auto engine = std::make_unique<detail::Simplifier>(*live, plan_, engine_->options());
-    engine->resume_parts(*engine_);
-    engine_ = std::move(engine);  // (the engine before goes first: it may hold the live vertices before)
+    const auto progress = engine_->parts_progress();
+    const SimplifyOptions& options = engine_->options();  // (the caller's)
+    engine_.reset();  // the engine before goes before the new one is built (it may use live_, which goes next)
     live_ = std::move(live);
+    engine_ = std::make_unique<detail::Simplifier>(*live_, plan_, options);
+    engine_->resume_parts(progress);
 }
 
 TileInput MapInParts::top() { return engine_->top_input(); }

@@ -11,8 +11,8 @@
 //   tile and ends with the live vertex beyond the border on either side (a *cut end*). A segment
 //   that crosses the border never changes below T (its ends are of level T or above), so the cut
 //   ends are fixed there, and they give the inside vertices their true levels. A ring inside the
-//   tile comes whole, with its removed vertices too while the tile may need the input ring's
-//   orientation (the ring rule's last test).
+//   tile comes whole (its live vertices), with the input ring's orientation when the tile may
+//   need it (the ring rule's last test).
 // - What a block consults below T lies inside its tile (its triangles, the points in them, the
 //   waits between its vertices); the only facts from outside are the vertices' states, and whether
 //   a ring split over several tiles keeps ≥ 4 distinct locations at its fixed vertices (the ring
@@ -73,8 +73,8 @@ struct TileInput {
     std::uint32_t column = 0, row = 0; // the tile: this block of level T
     unsigned first_level = 0;          // the levels it runs: [first_level, level)
     // The pieces of the chains that have live vertices in the tile, in the map's order, each with
-    // its cut ends, and the rings inside it (whole, with their removed vertices, while the tile may
-    // need the input ring's orientation); the control points in the tile, in order.
+    // its cut ends, and the rings inside it (whole); the control points in the tile, in order.
+    // Only live vertices.
     MapData map;
     std::vector<std::uint32_t> vertex_id;  // per vertex of `map`: its id in the whole map
     std::vector<std::uint8_t> state;       // per vertex: a VertexState (cut ends fixed)
@@ -87,7 +87,9 @@ struct TileInput {
     // locations, which settles the ring rule at every level below T.
     std::vector<std::uint8_t> settled;
     std::vector<std::uint32_t> distinct;   // per chain: a whole ring's distinct live locations (the engine's count)
-    std::vector<std::int8_t> orientation;  // per chain: a whole ring's input orientation, 2 if not known yet
+    // Per chain: a whole ring's input orientation: −1, 0 or 1; 2 if not known; or known but not yet
+    // counted in the predicates' stats (core/map/simplify.cpp: know_orientation).
+    std::vector<std::int8_t> orientation;
     std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;  // (waiter, blocker) among the tile's vertices
     // From first_level > 0: per level from first_level, the vertices to queue there (else the tile
     // lists its queued vertices by their levels).
