@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <mutex>
 #include <optional>
 #include <span>
@@ -1868,9 +1869,8 @@ SimplifyResult simplify_releasing_points(MapData& map, const SimplifyOptions& op
 // ---- runs in parts (tiles.hpp) ------------------------------------------------------------------
 
 GridPlan plan_grid(const MapData& map) {
-    GridPlan plan;
     const std::size_t n = map.vertices.size() + map.control_points.size();
-    if (n == 0) return plan;
+    if (n == 0) return {};
     double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
     for (const auto* points : {&map.vertices, &map.control_points}) {
         for (const Point p : *points) {
@@ -1880,7 +1880,13 @@ GridPlan plan_grid(const MapData& map) {
             max_y = std::max(max_y, p.y);
         }
     }
-    plan.grid = PointGrid::Geometry::plan(min_x, min_y, max_x, max_y, n, 2.0, kRowSplit);
+    return plan_grid(min_x, min_y, max_x, max_y, n);
+}
+
+GridPlan plan_grid(double min_x, double min_y, double max_x, double max_y, std::size_t points) {
+    GridPlan plan;
+    if (points == 0) return plan;
+    plan.grid = PointGrid::Geometry::plan(min_x, min_y, max_x, max_y, points, 2.0, kRowSplit);
     plan.shift = block_shift(plan.grid.base_columns, plan.grid.base_rows);
     parallel::BlockLevels<2> blocks;
     blocks.cells = {plan.grid.base_columns, plan.grid.base_rows};
@@ -1972,6 +1978,425 @@ SimplifyResult MapInParts::result() {
     result.stats.vertices_in = input_vertices_;
     result.stats.vertices_out = input_vertices_ - result.stats.removed;
     return result;
+}
+
+}  // namespace toposimp::map
+
+namespace toposimp::map {
+
+MapInParts::MapInParts(TileInput live, std::size_t input_vertices, const GridPlan& plan, const SimplifyOptions& options,
+                       unsigned tile_level, std::uint64_t here_below, const PartsSoFar& so_far)
+    : live_(std::make_unique<TileInput>(std::move(live))),
+      input_vertices_(input_vertices),
+      engine_(std::make_unique<detail::Simplifier>(*live_, plan, options)),
+      plan_(plan),
+      tile_level_(tile_level),
+      here_below_(here_below) {
+    detail::Simplifier::PartsProgress progress{tile_level, so_far.goal, so_far.round_budget, so_far.rounds_started,
+                                               so_far.stats, {so_far.bound_key, so_far.bound_id}, so_far.work};
+    engine_->resume_parts(progress);
+}
+
+// The first round's tiles as they are built: each a TileInput without states, marks and
+// control points yet, with what the crossing search needs besides.
+struct FirstRound::Impl {
+    struct Tile {
+        TileInput input;
+        std::vector<std::uint8_t> cut_end;  // per vertex of input.map
+        std::vector<std::uint8_t> frozen;   // per chain of input.map
+        MapData passing;                    // segments of other tiles' chains whose boxes meet the tile, a chain each
+        std::vector<std::uint32_t> passing_id;  // and their first vertices' whole-map ids
+        std::vector<std::uint8_t> improper;  // per vertex of input.map: its segment to the next, by this tile's search
+        std::vector<std::uint32_t> points;  // its control points (indices)
+        bool busy = false;                  // a count target marked one of its vertices
+    };
+
+    GridPlan plan;
+    unsigned t;
+    const SimplifyOptions& options;
+    std::uint64_t vertices;
+    std::map<std::uint32_t, Tile> tiles;  // by number, row-major
+    std::vector<Chain> chains;            // the whole map's vertex ranges
+    std::vector<std::uint8_t> whole_level;
+    std::vector<std::uint32_t> distinct;
+    std::vector<std::int8_t> orientation;  // known for every ring (as know_orientation keeps it)
+    std::vector<std::uint8_t> frozen;
+    std::vector<Point> control_points;
+    std::vector<std::uint32_t> border_improper;  // segments leaving a tile that meet another improperly, sorted
+    std::vector<std::vector<std::uint32_t>> groups;  // the tiles (numbers) of each group that runs
+    PartsSoFar so_far;
+    bool marks = false;
+
+    Impl(const GridPlan& grid_plan, unsigned tile_level, const SimplifyOptions& simplify_options, std::uint64_t count)
+        : plan(grid_plan), t(std::min(tile_level, grid_plan.levels)), options(simplify_options), vertices(count) {}
+
+    std::uint32_t columns() const { return ((plan.grid.base_columns - 1) >> (plan.shift + t)) + 1; }
+    std::uint32_t tile_of(Point p) const { return plan.block_row(p, t) * columns() + plan.block_column(p, t); }
+
+    Tile& tile(std::uint32_t k) {
+        Tile& at = tiles[k];
+        at.input.level = t;
+        at.input.column = k % columns();
+        at.input.row = k / columns();
+        return at;
+    }
+
+    // A piece of chain c (whole-map ids first_id + i for points[i]) in tile k: points [from, to]
+    // with the cut ends beyond them, if any.
+    void add_piece(std::uint32_t k, std::uint32_t c, std::span<const Point> points, std::uint32_t first_id, std::size_t from,
+                   std::size_t to, bool whole_ring, bool settled) {
+        Tile& at = tile(k);
+        TileInput& in = at.input;
+        const auto first = static_cast<std::uint32_t>(in.vertex_id.size());
+        auto take = [&](std::size_t i, bool cut) {
+            in.map.vertices.push_back(points[i]);
+            in.vertex_id.push_back(first_id + static_cast<std::uint32_t>(i));
+            at.cut_end.push_back(cut ? 1 : 0);
+        };
+        if (from > 0) take(from - 1, true);
+        for (std::size_t i = from; i <= to; ++i) take(i, false);
+        if (to + 1 < points.size()) take(to + 1, true);
+        in.map.chains.push_back({first, static_cast<std::uint32_t>(in.vertex_id.size() - 1)});
+        in.chain_id.push_back(c);
+        in.whole_level.push_back(whole_level[c] == kOpen ? kOpenChain : whole_level[c]);
+        in.settled.push_back(settled ? 1 : 0);
+        in.distinct.push_back(whole_ring ? distinct[c] : 0);
+        in.orientation.push_back(whole_ring ? orientation[c] : std::int8_t{2});
+        at.frozen.push_back(frozen[c]);
+    }
+
+    void add_chain(std::span<const Point> points, std::uint32_t first_id, bool is_frozen) {
+        const auto c = static_cast<std::uint32_t>(chains.size());
+        const auto last = static_cast<std::uint32_t>(points.size() - 1);
+        chains.push_back({first_id, first_id + last});
+        frozen.push_back(is_frozen ? 1 : 0);
+        const bool closed = last > 0 && same_location(points.front(), points.back());
+        std::uint8_t level = kOpen;
+        std::uint32_t count = 0;
+        std::int8_t turn = 2;
+        if (closed) {
+            std::uint32_t c0 = kNone, c1 = 0, r0 = kNone, r1 = 0;
+            for (const Point p : points) {
+                c0 = std::min(c0, plan.block_column(p, 0));
+                c1 = std::max(c1, plan.block_column(p, 0));
+                r0 = std::min(r0, plan.block_row(p, 0));
+                r1 = std::max(r1, plan.block_row(p, 0));
+            }
+            using Blocks = parallel::BlockLevels<2>;
+            level = static_cast<std::uint8_t>(std::max(Blocks::shared_level(c0, c1), Blocks::shared_level(r0, r1)));
+            std::vector<LocationKey> keys;
+            keys.reserve(last);
+            for (std::uint32_t i = 0; i < last; ++i) keys.emplace_back(points[i]);
+            std::sort(keys.begin(), keys.end());
+            count = static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+            // The input orientation, counted where asked (Simplifier::know_orientation).
+            if (options.arithmetic == exact::Arithmetic::rational) {
+                turn = static_cast<std::int8_t>(exact::ring_area_sign_gmp(points));
+            } else {
+                exact::PredicateStats counted;
+                const int sign = exact::ring_area_sign(points, counted);
+                turn = static_cast<std::int8_t>(sign + (counted.gmp_fallbacks != 0 ? 8 : 4));
+            }
+        }
+        whole_level.push_back(level);
+        distinct.push_back(count);
+        orientation.push_back(turn);
+        std::vector<std::uint32_t> tile_at(points.size());
+        for (std::size_t i = 0; i < points.size(); ++i) tile_at[i] = tile_of(points[i]);
+        if (closed && level <= t) {
+            add_piece(tile_at[0], c, points, first_id, 0, last, true, false);
+            return;
+        }
+        // A split ring's cut ends: both ends of every segment across a tile border.
+        bool settled = false;
+        if (closed) {
+            Point ends[4];
+            int found = 0;
+            for (std::size_t i = 0; i < last && found < 4; ++i) {
+                if (tile_at[i] == tile_at[i + 1]) continue;
+                for (const Point q : {points[i], points[i + 1]}) {
+                    bool seen = false;
+                    for (int e = 0; e < found; ++e) seen = seen || same_location(ends[e], q);
+                    if (!seen && found < 4) ends[found++] = q;
+                }
+            }
+            settled = found >= 4;
+        }
+        for (std::size_t i = 0; i <= last;) {
+            std::size_t j = i;
+            while (j < last && tile_at[j + 1] == tile_at[i]) ++j;
+            add_piece(tile_at[i], c, points, first_id, i, j, false, settled);
+            i = j + 1;
+        }
+        // Segments that leave their tile go to every other tile their boxes meet too.
+        for (std::size_t i = 0; i < last; ++i) {
+            if (tile_at[i] == tile_at[i + 1]) continue;
+            const Point a = points[i], b = points[i + 1];
+            const Point lo{std::min(a.x, b.x), std::min(a.y, b.y)}, hi{std::max(a.x, b.x), std::max(a.y, b.y)};
+            for (std::uint32_t row = plan.block_row(lo, t); row <= plan.block_row(hi, t); ++row) {
+                for (std::uint32_t column = plan.block_column(lo, t); column <= plan.block_column(hi, t); ++column) {
+                    const std::uint32_t k = row * columns() + column;
+                    if (k == tile_at[i] || k == tile_at[i + 1]) continue;
+                    Tile& at = tile(k);
+                    at.passing.add_chain(std::vector<Point>{a, b});
+                    at.passing_id.push_back(first_id + static_cast<std::uint32_t>(i));
+                }
+            }
+        }
+    }
+
+    // Segment s (by its first vertex, whole-map id) meets another improperly: `local` is this
+    // tile's finding for it, complete unless the segment leaves the tile.
+    bool improper(std::uint32_t s, bool local) const {
+        return local || std::binary_search(border_improper.begin(), border_improper.end(), s);
+    }
+
+    std::size_t split() {
+        // The crossing search, tile by tile; the segments that leave a tile are or-ed over all.
+        SimplifyStats& stats = so_far.stats;
+        for (auto& [k, at] : tiles) {
+            MapData search = at.input.map;
+            search.control_points.clear();
+            const auto own = static_cast<std::uint32_t>(search.vertices.size());
+            for (const Chain& chain : at.passing.chains) {
+                search.add_chain(std::span<const Point>(at.passing.vertices.data() + chain.first, 2));
+            }
+            std::vector<std::uint8_t> flags = find_improper_segments(search, options.arithmetic, stats.predicates, 1);
+            at.improper.assign(flags.begin(), flags.begin() + own);
+            for (const Chain& chain : at.input.map.chains) {
+                for (std::uint32_t v = chain.first; v < chain.last; ++v) {
+                    if (flags[v] && (at.cut_end[v] || at.cut_end[v + 1])) border_improper.push_back(at.input.vertex_id[v]);
+                }
+            }
+            for (std::size_t i = 0; i < at.passing_id.size(); ++i) {
+                if (flags[own + 2 * i]) border_improper.push_back(at.passing_id[i]);
+            }
+            at.passing = MapData();
+            std::vector<std::uint32_t>().swap(at.passing_id);
+        }
+        std::sort(border_improper.begin(), border_improper.end());
+        border_improper.erase(std::unique(border_improper.begin(), border_improper.end()), border_improper.end());
+        // States: chain ends and the ends of improper segments (and frozen chains) fixed.
+        const Target target = options.stop.target;
+        marks = target != Target::max && target != Target::max_area;
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> queued;  // (area key, id)
+        for (auto& [k, at] : tiles) {
+            TileInput& in = at.input;
+            in.state.assign(in.vertex_id.size(), static_cast<std::uint8_t>(VertexState::fixed));
+            for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
+                const Chain& piece = in.map.chains[p];
+                const Chain& whole = chains[in.chain_id[p]];
+                for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
+                    const std::uint32_t id = in.vertex_id[v];
+                    if (at.cut_end[v] || id == whole.first || id == whole.last) continue;
+                    // (v is inside: the piece has the vertices before and after it)
+                    if (at.frozen[p] || improper(id, at.improper[v] != 0) || improper(id - 1, at.improper[v - 1] != 0)) {
+                        ++stats.pinned_by_crossing;
+                        continue;
+                    }
+                    in.state[v] = static_cast<std::uint8_t>(VertexState::queued);
+                    if (marks) {
+                        const Point* q = in.map.vertices.data();
+                        queued.emplace_back(std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], options.ranking)), id);
+                    }
+                }
+            }
+        }
+        stats.control_points = control_points.size();
+        stats.levels = plan.levels;
+        // The round's budget: the `missing` smallest (area, id) of the queued vertices.
+        so_far.bound_key = marks ? 0 : target == Target::max ? std::numeric_limits<double>::infinity() : options.stop.value;
+        so_far.bound_id = kNone;
+        so_far.work = static_cast<double>(vertices);
+        if (marks) {
+            so_far.goal = removal_goal(options.stop, vertices);
+            stats.removal_goal = so_far.goal;
+            so_far.work = static_cast<double>(so_far.goal);
+            if (so_far.goal == 0 || queued.empty()) return 0;
+            const std::size_t wanted = std::min<std::uint64_t>(so_far.goal, queued.size());
+            std::nth_element(queued.begin(), queued.begin() + static_cast<std::ptrdiff_t>(wanted - 1), queued.end());
+            const auto bound = queued[wanted - 1];
+            so_far.bound_key = std::bit_cast<double>(bound.first);
+            so_far.bound_id = bound.second;
+            so_far.round_budget = wanted;
+            so_far.stats.rounds = 1;
+            std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(queued);
+            for (auto& [k, at] : tiles) {
+                TileInput& in = at.input;
+                in.marked.assign(in.vertex_id.size(), 0);
+                for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
+                    const Chain& piece = in.map.chains[p];
+                    const Point* q = in.map.vertices.data();
+                    for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
+                        if (in.state[v] != static_cast<std::uint8_t>(VertexState::queued)) continue;
+                        const std::pair key{std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], options.ranking)), in.vertex_id[v]};
+                        if (key <= bound) {
+                            in.marked[v] = 1;
+                            at.busy = true;
+                        }
+                    }
+                }
+            }
+        } else {
+            for (auto& [k, at] : tiles) at.busy = true;
+        }
+        so_far.rounds_started = 1;
+        for (auto& [k, at] : tiles) {
+            at.input.marks = marks;
+            at.input.bound_key = so_far.bound_key;
+            at.input.bound_id = so_far.bound_id;
+        }
+        // Control points to their tiles (those holding vertices).
+        for (std::uint32_t j = 0; j < control_points.size(); ++j) {
+            const auto at = tiles.find(tile_of(control_points[j]));
+            if (at != tiles.end() && !at->second.input.vertex_id.empty()) at->second.points.push_back(j);
+        }
+        // Groups: tiles joined by the split rings their cut ends do not settle, in the order of their
+        // first tiles; those without a marked vertex sit the round out.
+        std::vector<std::uint32_t> numbers;
+        for (const auto& [k, at] : tiles) {
+            if (!at.input.vertex_id.empty()) numbers.push_back(k);
+        }
+        std::vector<std::uint32_t> parent(numbers.size());
+        for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+        const auto root = [&](std::uint32_t i) {
+            while (parent[i] != i) i = parent[i] = parent[parent[i]];
+            return i;
+        };
+        std::unordered_map<std::uint32_t, std::uint32_t> holder;
+        for (std::uint32_t i = 0; i < numbers.size(); ++i) {
+            const TileInput& in = tiles.at(numbers[i]).input;
+            for (std::size_t p = 0; p < in.chain_id.size(); ++p) {
+                const std::uint32_t c = in.chain_id[p];
+                const bool open = whole_level[c] != kOpen && whole_level[c] > t && !in.settled[p];
+                if (!open) continue;
+                const auto [at, fresh] = holder.emplace(c, i);
+                if (!fresh) parent[root(i)] = root(at->second);
+            }
+        }
+        std::vector<std::uint32_t> group_of(numbers.size(), kNone);
+        std::vector<std::vector<std::uint32_t>> all;
+        for (std::uint32_t i = 0; i < numbers.size(); ++i) {
+            std::uint32_t& g = group_of[root(i)];
+            if (g == kNone) {
+                g = static_cast<std::uint32_t>(all.size());
+                all.emplace_back();
+            }
+            all[g].push_back(numbers[i]);
+        }
+        for (std::vector<std::uint32_t>& group : all) {
+            if (std::any_of(group.begin(), group.end(), [&](std::uint32_t k) { return tiles.at(k).busy; })) groups.push_back(std::move(group));
+        }
+        return groups.size();
+    }
+
+    std::vector<TileInput> group(std::size_t k) const {
+        std::vector<TileInput> out;
+        for (const std::uint32_t number : groups.at(k)) {
+            const Tile& at = tiles.at(number);
+            TileInput in = at.input;
+            for (const std::uint32_t j : at.points) in.map.control_points.push_back(control_points[j]);
+            out.push_back(std::move(in));
+        }
+        return out;
+    }
+
+    std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below) {
+        // The live vertices: every tile's own (not its cut ends), with their states now.
+        struct Live {
+            std::uint32_t id;
+            Point point;
+            std::uint8_t state, marked;
+        };
+        std::vector<Live> live;
+        for (auto& [k, at] : tiles) {
+            TileInput& in = at.input;
+            for (std::size_t v = 0; v < in.vertex_id.size(); ++v) {
+                if (!at.cut_end[v]) live.push_back({in.vertex_id[v], in.map.vertices[v], in.state[v], marks ? in.marked[v] : std::uint8_t{0}});
+            }
+            in = TileInput();
+        }
+        tiles.clear();
+        std::sort(live.begin(), live.end(), [](const Live& a, const Live& b) { return a.id < b.id; });
+        const auto find = [&](std::uint32_t id) {
+            return std::lower_bound(live.begin(), live.end(), id, [](const Live& a, std::uint32_t b) { return a.id < b; });
+        };
+        SimplifyStats& stats = so_far.stats;
+        for (const TileOutcome& outcome : outcomes) {
+            for (std::size_t k = 0; k < outcome.ids.size(); ++k) find(outcome.ids[k])->state = outcome.states[k];
+            for (const auto& [chain, lost] : outcome.locations_lost) distinct[chain] -= lost;
+            for (std::size_t k = 0; k < outcome.oriented.size(); ++k) orientation[outcome.oriented[k]] = outcome.orientations[k];
+            stats.removed += outcome.stats.removed;
+            stats.blocked_by_point += outcome.stats.blocked_by_point;
+            stats.blocked_by_ring += outcome.stats.blocked_by_ring;
+            stats.blocked_by_coincidence += outcome.stats.blocked_by_coincidence;
+            stats.predicates += outcome.stats.predicates;
+        }
+        std::erase_if(live, [](const Live& v) { return v.state == static_cast<std::uint8_t>(VertexState::removed); });
+        TileInput top;
+        top.level = plan.levels;
+        top.first_level = t;
+        top.map.vertices.reserve(live.size());
+        top.vertex_id.reserve(live.size());
+        top.state.reserve(live.size());
+        for (const Live& v : live) {
+            top.map.vertices.push_back(v.point);
+            top.vertex_id.push_back(v.id);
+            top.state.push_back(v.state);
+            if (marks) top.marked.push_back(v.marked);
+        }
+        std::vector<Live>().swap(live);
+        const auto local = [&](std::uint32_t id) {
+            return static_cast<std::uint32_t>(std::lower_bound(top.vertex_id.begin(), top.vertex_id.end(), id) - top.vertex_id.begin());
+        };
+        for (std::uint32_t c = 0; c < chains.size(); ++c) {
+            top.map.chains.push_back({local(chains[c].first), local(chains[c].last)});  // (chain ends never go)
+            top.chain_id.push_back(c);
+            top.whole_level.push_back(whole_level[c] == kOpen ? kOpenChain : whole_level[c]);
+            top.settled.push_back(0);
+            top.distinct.push_back(distinct[c]);
+            top.orientation.push_back(orientation[c]);
+        }
+        top.map.control_points = std::move(control_points);
+        top.later.assign(plan.levels - t, {});
+        for (const TileOutcome& outcome : outcomes) {
+            for (const auto& [waiter, blocker] : outcome.waits) top.waits.emplace_back(local(waiter), local(blocker));
+            for (std::size_t k = 0; k < outcome.later.size() && t + k < plan.levels; ++k) {
+                for (const std::uint32_t v : outcome.later[k]) top.later[k].push_back(local(v));
+            }
+        }
+        std::sort(top.waits.begin(), top.waits.end());
+        top.marks = marks;
+        top.bound_key = so_far.bound_key;
+        top.bound_id = so_far.bound_id;
+        return std::unique_ptr<MapInParts>(new MapInParts(std::move(top), vertices, plan, options, t, here_below, so_far));
+    }
+};
+
+FirstRound::FirstRound(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices)
+    : impl_(std::make_unique<Impl>(plan, tile_level, options, vertices)) {}
+
+FirstRound::~FirstRound() = default;
+
+void FirstRound::add_chains(const MapData& part, std::uint32_t first_vertex, std::uint32_t first_chain) {
+    if (first_chain != impl_->chains.size()) throw std::invalid_argument("FirstRound: the parts' chains are not in order");
+    for (std::uint32_t c = 0; c < part.chains.size(); ++c) {
+        const Chain& chain = part.chains[c];
+        impl_->add_chain(std::span<const Point>(part.vertices.data() + chain.first, chain.last - chain.first + 1), first_vertex + chain.first,
+                         part.is_frozen(c));
+    }
+}
+
+void FirstRound::add_control_points(std::span<const Point> points) {
+    impl_->control_points.insert(impl_->control_points.end(), points.begin(), points.end());
+}
+
+std::size_t FirstRound::split() { return impl_->split(); }
+
+std::vector<TileInput> FirstRound::group(std::size_t k) const { return impl_->group(k); }
+
+std::unique_ptr<MapInParts> FirstRound::finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below) {
+    return impl_->finish(outcomes, here_below);
 }
 
 }  // namespace toposimp::map

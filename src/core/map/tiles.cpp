@@ -62,4 +62,45 @@ SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& opti
     return parts.result();
 }
 
+SimplifyResult simplify_by_parts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,
+                                 std::uint64_t here_below) {
+    const GridPlan plan = plan_grid(map);
+    FirstRound first(plan, tile_level, options, map.vertices.size());
+    const auto chains = static_cast<std::uint32_t>(map.chains.size());
+    for (std::uint32_t c = 0; c < chains;) {
+        // The next chains, about part_vertices vertices of them, as a map of their own.
+        MapData part;
+        const std::uint32_t first_chain = c, first_vertex = map.chains[c].first;
+        while (c < chains && (part.vertices.empty() || part.vertices.size() < part_vertices)) {
+            const Chain& chain = map.chains[c];
+            const std::uint32_t own = part.add_chain(std::span<const Point>(map.vertices.data() + chain.first, chain.last - chain.first + 1));
+            if (map.is_frozen(c)) part.freeze(own);
+            ++c;
+        }
+        first.add_chains(part, first_vertex, first_chain);
+    }
+    first.add_control_points(map.control_points);
+    std::vector<TileOutcome> outcomes;
+    const std::size_t groups = first.split();
+    for (std::size_t k = 0; k < groups; ++k) {
+        for (TileOutcome& outcome : run_tile_group(first.group(k), plan, options)) outcomes.push_back(std::move(outcome));
+    }
+    std::unique_ptr<MapInParts> parts = first.finish(outcomes, here_below);
+    const auto run_top = [&] {
+        std::vector<TileInput> top;
+        top.push_back(parts->top());
+        parts->finish_top(run_tile_group(std::move(top), plan, options).front());
+    };
+    run_top();
+    while (parts->next_round()) {
+        outcomes.clear();
+        const std::size_t count = parts->split_round();
+        for (std::size_t k = 0; k < count; ++k) {
+            for (TileOutcome& outcome : run_tile_group(parts->group(k), plan, options)) outcomes.push_back(std::move(outcome));
+        }
+        if (parts->finish_tiles(outcomes)) run_top();
+    }
+    return parts->result();
+}
+
 }  // namespace toposimp::map

@@ -59,6 +59,9 @@ struct GridPlan {
 
 // The plan simplify() makes for `map` (its vertices and control points).
 GridPlan plan_grid(const MapData& map);
+// The same for a map whose vertices and control points, `points` of them, span [min_x, max_x] ×
+// [min_y, max_y]: from a pass over the map that holds none of it.
+GridPlan plan_grid(double min_x, double min_y, double max_x, double max_y, std::size_t points);
 
 // What a vertex is doing (the engine's own states).
 enum class VertexState : std::uint8_t { fixed, queued, waiting, refused, removed };
@@ -153,6 +156,19 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 //         parts.finish_round(outcomes);  // or: if (parts.finish_tiles(outcomes)) parts.finish_top(/* run_tile_group on {parts.top()} */);
 //     }
 //     SimplifyResult result = parts.result();
+class FirstRound;
+
+// Where a run in parts stands when its engine changes hands (MapInParts from FirstRound).
+struct PartsSoFar {
+    std::uint64_t goal = 0;          // the removals a count target asks for (removal_goal)
+    std::uint64_t round_budget = 0;  // this round's
+    unsigned rounds_started = 0;
+    SimplifyStats stats;
+    double bound_key = 0;            // this round's bound, a whole-map id
+    std::uint32_t bound_id = 0;
+    double work = 0;                 // the progress's whole
+};
+
 class MapInParts {
 public:
     // `map` and `options` outlive this. tile_level is capped at the plan's levels. A round of a
@@ -197,12 +213,59 @@ public:
     SimplifyResult result();
 
 private:
+    friend class FirstRound;
+    // Over `live` (the live vertices and every control point, as keep_live_only makes them) of a
+    // map of `input_vertices`, in a round whose tiles are done.
+    MapInParts(TileInput live, std::size_t input_vertices, const GridPlan& plan, const SimplifyOptions& options,
+               unsigned tile_level, std::uint64_t here_below, const PartsSoFar& so_far);
+
     std::unique_ptr<TileInput> live_;  // after keep_live_only: the live vertices the engine runs over
     std::size_t input_vertices_ = 0;   // and the whole map's vertex count
     std::unique_ptr<detail::Simplifier> engine_;
     GridPlan plan_;
     unsigned tile_level_;
     std::uint64_t here_below_;
+};
+
+// The first round of a run in parts built from the map a part at a time, by no engine over the
+// whole map (the start of a run that never holds the whole map: docs/distributed.md):
+// - each chain goes to the tiles holding its vertices, cut into pieces with their cut ends as
+//   MapInParts cuts it, and every segment that leaves a tile also to the tiles its box meets;
+// - the crossing search runs tile by tile over those segments: a segment inside a tile meets
+//   only segments that reach the tile, and the flags of the segments that leave a tile are
+//   or-ed over the tiles, so every vertex is pinned as the whole map's search pins it;
+// - a count target's first budget is selected over the tiles' queued vertices (area, then id);
+// - the tiles that share a ring their cut ends do not settle form a group, as in split_round.
+// The outcomes and the tiles then give the live vertices, over which a MapInParts goes on
+// (keep_live_only's). The result is simplify()'s, stats included but the predicates the crossing
+// search counts (a pair of segments met in several tiles is decided in each).
+//
+//     FirstRound first(plan, tile_level, options, vertices);
+//     for (each part of the chains, in order) first.add_chains(part, first_vertex, first_chain);
+//     first.add_control_points(points);
+//     for (std::size_t k = 0; k < first.split(); ++k) outcomes += run_tile_group(first.group(k), plan, options);
+//     std::unique_ptr<MapInParts> parts = first.finish(outcomes, here_below);
+//     parts->run_top_here();  // (or top() / finish_top)
+//     while (parts->next_round()) ...
+class FirstRound {
+public:
+    // `vertices`: the whole map's. `options` outlives this and the MapInParts it makes.
+    FirstRound(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices);
+    ~FirstRound();
+    // The map's chains in order, a part at a time: vertex v and chain c of `part` are the whole
+    // map's first_vertex + v and first_chain + c.
+    void add_chains(const MapData& part, std::uint32_t first_vertex, std::uint32_t first_chain);
+    void add_control_points(std::span<const Point> points);
+    // After the last part: the crossings, the budget and the groups; how many groups run.
+    std::size_t split();
+    std::vector<TileInput> group(std::size_t k) const;
+    // The groups' outcomes (each tile's once, in any order): the run over the live vertices, its
+    // first round's levels from the tile level up next (run_top_here, or top and finish_top).
+    std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
 };
 
 // simplify() run in parts in this process, every group of tiles in turn (rounds with a budget
@@ -212,5 +275,9 @@ private:
 // reference for a distributed run.
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0,
                                  bool top_here = false, bool live_only = false);
+// The same with the first round built by FirstRound from parts of about `part_vertices`
+// vertices (its crossing search's predicates counted as FirstRound says).
+SimplifyResult simplify_by_parts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,
+                                 std::uint64_t here_below = 0);
 
 }  // namespace toposimp::map

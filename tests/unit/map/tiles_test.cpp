@@ -31,14 +31,26 @@ void expect_same(const SimplifyResult& parts, const SimplifyResult& whole, const
     EXPECT_EQ(parts.stats.target_reached, whole.stats.target_reached) << what;
 }
 
+// The same but for the predicates' counts, which a first round built by parts (FirstRound) counts
+// otherwise in its crossing search.
+void expect_same_but_predicates(const SimplifyResult& parts, const SimplifyResult& whole, const std::string& what) {
+    SimplifyResult same = parts;
+    same.stats.predicates = whole.stats.predicates;
+    expect_same(same, whole, what);
+    EXPECT_EQ(parts.stats.vertices_in, whole.stats.vertices_in) << what;
+    EXPECT_EQ(parts.stats.vertices_out, whole.stats.vertices_out) << what;
+}
+
 // simplify_in_tiles as it is, and keeping the live vertices only from the first round's tiles on
-// (then also with the levels above the tiles and the small rounds run by that engine itself).
+// (then also with the levels above the tiles and the small rounds run by that engine itself), and
+// with the first round built by parts.
 void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, const SimplifyResult& whole,
                           const std::string& what) {
     expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
     expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true), whole, what + ", live only");
     expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8, true, true), whole,
                 what + ", live only, small rounds and the levels above here");
+    expect_same_but_predicates(simplify_by_parts(map, options, tile_level, 64), whole, what + ", by parts");
 }
 
 // Big enough random maps for 4–5 levels of blocks: every tile level from 0 (no level in tiles)
@@ -78,6 +90,11 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
                 expect_same(simplify_in_tiles(map, options, tile_level, 0, true, true), whole, what + ", live only, the levels above here");
                 expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8, false, true), whole,
                             what + ", live only, small rounds here");
+                // The first round built from parts of the map, small and big.
+                for (const std::size_t part : {std::size_t{1}, std::size_t{300}, map.vertices.size()}) {
+                    expect_same_but_predicates(simplify_by_parts(map, options, tile_level, part), whole,
+                                               what + ", by parts of " + std::to_string(part));
+                }
             }
         }
     }
