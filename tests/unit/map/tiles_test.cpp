@@ -100,6 +100,41 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
     }
 }
 
+// The first round by parts on what random maps lack: frozen chains (never simplified, yet in the
+// crossing search: here roads frozen over the map), chains of one vertex, and long segments
+// that pass through tiles holding none of their vertices.
+TEST(MapTiles, TheFirstRoundByPartsWithFrozenChainsLoneVerticesAndLongSegments) {
+    std::mt19937_64 rng(11);
+    testing::RandomMapOptions shape;
+    shape.chains = 150;
+    shape.max_steps = 60;
+    shape.rings = 40;
+    shape.control_points = 800;
+    shape.roads = 4;
+    MapData map = testing::random_planar_map(rng, shape);
+    const auto roads = static_cast<std::uint32_t>(map.chains.size());
+    map.freeze(roads - 1);
+    map.freeze(roads - 3);
+    map.add_chain(std::vector<Point>{{50.5, 50.5}});
+    map.add_chain(std::vector<Point>{{-1, 1}, {101, 99}});      // corner to corner: through every tile on the way
+    map.add_chain(std::vector<Point>{{-1, 99}, {50, 50.25}, {101, 1}});
+    const GridPlan plan = plan_grid(map);
+    ASSERT_GE(plan.levels, 3u);
+    for (const Target target : {Target::max, Target::keep_fraction}) {
+        SimplifyOptions options;
+        options.stop = {target, 0.2};
+        const SimplifyResult whole = simplify(map, options);
+        ASSERT_GT(whole.stats.pinned_by_crossing, 0u);
+        for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
+            for (const std::size_t part : {std::size_t{1}, std::size_t{500}}) {
+                expect_same_but_predicates(simplify_by_parts(map, options, tile_level, part), whole,
+                                           "target " + std::to_string(static_cast<int>(target)) + ", tile level " +
+                                               std::to_string(tile_level) + ", parts of " + std::to_string(part));
+            }
+        }
+    }
+}
+
 // What split_round says of each group before it is built (its tiles, its vertices with cut ends
 // and control points: what a distributed run sizes its tasks by) is what group(k) builds, in every
 // round; building a group twice gives the same tiles.
