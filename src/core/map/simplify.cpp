@@ -2152,27 +2152,45 @@ struct FirstRound::Impl {
     }
 
     std::size_t split() {
-        // The crossing search, tile by tile; the segments that leave a tile are or-ed over all.
+        // The crossing search, tile by tile (on all threads, a tile each); the segments that
+        // leave a tile are or-ed over all.
         SimplifyStats& stats = so_far.stats;
-        for (auto& [k, at] : tiles) {
-            MapData search = at.input.map;
-            search.control_points.clear();
-            const auto own = static_cast<std::uint32_t>(search.vertices.size());
-            for (const Chain& chain : at.passing.chains) {
-                search.add_chain(std::span<const Point>(at.passing.vertices.data() + chain.first, 2));
-            }
-            std::vector<std::uint8_t> flags = find_improper_segments(search, options.arithmetic, stats.predicates, 1);
-            at.improper.assign(flags.begin(), flags.begin() + own);
-            for (const Chain& chain : at.input.map.chains) {
-                for (std::uint32_t v = chain.first; v < chain.last; ++v) {
-                    if (flags[v] && (at.cut_end[v] || at.cut_end[v + 1])) border_improper.push_back(at.input.vertex_id[v]);
+        std::vector<Tile*> searched;
+        for (auto& [k, at] : tiles) searched.push_back(&at);
+        const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+        const auto count = static_cast<std::ptrdiff_t>(searched.size());
+#pragma omp parallel num_threads(threads)
+        {
+            exact::PredicateStats predicates;
+            std::vector<std::uint32_t> found;
+#pragma omp for schedule(dynamic, 1)
+            for (std::ptrdiff_t i = 0; i < count; ++i) {
+                Tile& at = *searched[static_cast<std::size_t>(i)];
+                MapData search;
+                search.vertices = at.input.map.vertices;
+                search.chains = at.input.map.chains;
+                const auto own = static_cast<std::uint32_t>(search.vertices.size());
+                for (const Chain& chain : at.passing.chains) {
+                    search.add_chain(std::span<const Point>(at.passing.vertices.data() + chain.first, 2));
                 }
+                std::vector<std::uint8_t> flags = find_improper_segments(search, options.arithmetic, predicates, 1);
+                at.improper.assign(flags.begin(), flags.begin() + own);
+                for (const Chain& chain : at.input.map.chains) {
+                    for (std::uint32_t v = chain.first; v < chain.last; ++v) {
+                        if (flags[v] && (at.cut_end[v] || at.cut_end[v + 1])) found.push_back(at.input.vertex_id[v]);
+                    }
+                }
+                for (std::size_t j = 0; j < at.passing_id.size(); ++j) {
+                    if (flags[own + 2 * j]) found.push_back(at.passing_id[j]);
+                }
+                at.passing = MapData();
+                std::vector<std::uint32_t>().swap(at.passing_id);
             }
-            for (std::size_t i = 0; i < at.passing_id.size(); ++i) {
-                if (flags[own + 2 * i]) border_improper.push_back(at.passing_id[i]);
+#pragma omp critical
+            {
+                stats.predicates += predicates;
+                border_improper.insert(border_improper.end(), found.begin(), found.end());
             }
-            at.passing = MapData();
-            std::vector<std::uint32_t>().swap(at.passing_id);
         }
         std::sort(border_improper.begin(), border_improper.end());
         border_improper.erase(std::unique(border_improper.begin(), border_improper.end()), border_improper.end());
@@ -2290,6 +2308,15 @@ struct FirstRound::Impl {
         return groups.size();
     }
 
+    std::uint64_t group_points(std::size_t k) const {
+        std::uint64_t points = 0;
+        for (const std::uint32_t number : groups.at(k)) {
+            const Tile& at = tiles.at(number);
+            points += at.input.vertex_id.size() + at.points.size();
+        }
+        return points;
+    }
+
     std::vector<TileInput> group(std::size_t k) const {
         std::vector<TileInput> out;
         for (const std::uint32_t number : groups.at(k)) {
@@ -2308,22 +2335,31 @@ struct FirstRound::Impl {
             Point point;
             std::uint8_t state, marked;
         };
+        // (The states the tiles changed, by id: the tiles' vertices are then read once, the
+        // removed ones left out, each tile freed as it is read.)
+        std::vector<std::pair<std::uint32_t, std::uint8_t>> changed;
+        for (const TileOutcome& outcome : outcomes) {
+            for (std::size_t k = 0; k < outcome.ids.size(); ++k) changed.emplace_back(outcome.ids[k], outcome.states[k]);
+        }
+        std::sort(changed.begin(), changed.end());
         std::vector<Live> live;
         for (auto& [k, at] : tiles) {
             TileInput& in = at.input;
             for (std::size_t v = 0; v < in.vertex_id.size(); ++v) {
-                if (!at.cut_end[v]) live.push_back({in.vertex_id[v], in.map.vertices[v], in.state[v], marks ? in.marked[v] : std::uint8_t{0}});
+                if (at.cut_end[v]) continue;
+                std::uint8_t state = in.state[v];
+                const auto now = std::lower_bound(changed.begin(), changed.end(), std::pair{in.vertex_id[v], std::uint8_t{0}});
+                if (now != changed.end() && now->first == in.vertex_id[v]) state = now->second;
+                if (state == static_cast<std::uint8_t>(VertexState::removed)) continue;
+                live.push_back({in.vertex_id[v], in.map.vertices[v], state, marks ? in.marked[v] : std::uint8_t{0}});
             }
-            in = TileInput();
+            at = Tile();
         }
         tiles.clear();
+        std::vector<std::pair<std::uint32_t, std::uint8_t>>().swap(changed);
         std::sort(live.begin(), live.end(), [](const Live& a, const Live& b) { return a.id < b.id; });
-        const auto find = [&](std::uint32_t id) {
-            return std::lower_bound(live.begin(), live.end(), id, [](const Live& a, std::uint32_t b) { return a.id < b; });
-        };
         SimplifyStats& stats = so_far.stats;
         for (const TileOutcome& outcome : outcomes) {
-            for (std::size_t k = 0; k < outcome.ids.size(); ++k) find(outcome.ids[k])->state = outcome.states[k];
             for (const auto& [chain, lost] : outcome.locations_lost) distinct[chain] -= lost;
             for (std::size_t k = 0; k < outcome.oriented.size(); ++k) orientation[outcome.oriented[k]] = outcome.orientations[k];
             stats.removed += outcome.stats.removed;
@@ -2332,7 +2368,6 @@ struct FirstRound::Impl {
             stats.blocked_by_coincidence += outcome.stats.blocked_by_coincidence;
             stats.predicates += outcome.stats.predicates;
         }
-        std::erase_if(live, [](const Live& v) { return v.state == static_cast<std::uint8_t>(VertexState::removed); });
         TileInput top;
         top.level = plan.levels;
         top.first_level = t;
@@ -2394,6 +2429,10 @@ void FirstRound::add_control_points(std::span<const Point> points) {
 std::size_t FirstRound::split() { return impl_->split(); }
 
 std::vector<TileInput> FirstRound::group(std::size_t k) const { return impl_->group(k); }
+
+std::size_t FirstRound::group_size(std::size_t k) const { return impl_->groups.at(k).size(); }
+
+std::uint64_t FirstRound::group_points(std::size_t k) const { return impl_->group_points(k); }
 
 std::unique_ptr<MapInParts> FirstRound::finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below) {
     return impl_->finish(outcomes, here_below);

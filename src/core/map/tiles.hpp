@@ -259,6 +259,8 @@ public:
     // After the last part: the crossings, the budget and the groups; how many groups run.
     std::size_t split();
     std::vector<TileInput> group(std::size_t k) const;
+    std::size_t group_size(std::size_t k) const;       // its tiles
+    std::uint64_t group_points(std::size_t k) const;   // its tiles' vertices (with cut ends) and control points
     // The groups' outcomes (each tile's once, in any order): the run over the live vertices, its
     // first round's levels from the tile level up next (run_top_here, or top and finish_top).
     std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
