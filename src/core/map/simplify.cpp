@@ -2008,6 +2008,8 @@ struct FirstRound::Impl {
         std::vector<std::uint32_t> passing_id;  // and their first vertices' whole-map ids
         std::vector<std::uint8_t> improper;  // per vertex of input.map: its segment to the next, by this tile's search
         std::vector<std::uint32_t> points;  // its control points (indices)
+        std::vector<std::uint64_t> keys;    // a count target's: its queued vertices' area keys
+        std::vector<std::uint32_t> key_ids;  // and their whole-map ids
         bool busy = false;                  // a count target marked one of its vertices
     };
 
@@ -2197,7 +2199,7 @@ struct FirstRound::Impl {
         // States: chain ends and the ends of improper segments (and frozen chains) fixed.
         const Target target = options.stop.target;
         marks = target != Target::max && target != Target::max_area;
-        std::vector<std::pair<std::uint64_t, std::uint32_t>> queued;  // (area key, id)
+        std::uint64_t queued = 0;
         for (auto& [k, at] : tiles) {
             TileInput& in = at.input;
             in.state.assign(in.vertex_id.size(), static_cast<std::uint8_t>(VertexState::fixed));
@@ -2215,14 +2217,17 @@ struct FirstRound::Impl {
                     in.state[v] = static_cast<std::uint8_t>(VertexState::queued);
                     if (marks) {
                         const Point* q = in.map.vertices.data();
-                        queued.emplace_back(std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], options.ranking)), id);
+                        at.keys.push_back(std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], options.ranking)));
+                        at.key_ids.push_back(id);
+                        ++queued;
                     }
                 }
             }
         }
         stats.control_points = control_points.size();
         stats.levels = plan.levels;
-        // The round's budget: the `missing` smallest (area, id) of the queued vertices.
+        // The round's budget: the `missing` smallest (area, id) of the queued vertices, selected
+        // digit by digit from the tiles' histograms (a reduction: no keys gathered).
         so_far.bound_key = marks ? 0 : target == Target::max ? std::numeric_limits<double>::infinity() : options.stop.value;
         so_far.bound_id = kNone;
         so_far.work = static_cast<double>(vertices);
@@ -2230,30 +2235,42 @@ struct FirstRound::Impl {
             so_far.goal = removal_goal(options.stop, vertices);
             stats.removal_goal = so_far.goal;
             so_far.work = static_cast<double>(so_far.goal);
-            if (so_far.goal == 0 || queued.empty()) return 0;
-            const std::size_t wanted = std::min<std::uint64_t>(so_far.goal, queued.size());
-            std::nth_element(queued.begin(), queued.begin() + static_cast<std::ptrdiff_t>(wanted - 1), queued.end());
-            const auto bound = queued[wanted - 1];
-            so_far.bound_key = std::bit_cast<double>(bound.first);
-            so_far.bound_id = bound.second;
+            if (so_far.goal == 0 || queued == 0) return 0;
+            const std::uint64_t wanted = std::min<std::uint64_t>(so_far.goal, queued);
+            std::vector<Tile*> parts;
+            for (auto& [k, at] : tiles) parts.push_back(&at);
+            const parallel::KeyedSelection bound = parallel::select_kth_by_digits(
+                parts.size(), wanted,
+                [&](std::size_t part, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) {
+                    for (const std::uint64_t key : parts[part]->keys) {
+                        if (shift == 48 || key >> (shift + 16) == high) ++counts[key >> shift & 0xffff];
+                    }
+                },
+                [&](std::size_t part, std::uint64_t key, std::vector<std::uint32_t>& ids) {
+                    const Tile& at = *parts[part];
+                    for (std::size_t i = 0; i < at.keys.size(); ++i) {
+                        if (at.keys[i] == key) ids.push_back(at.key_ids[i]);
+                    }
+                });
+            so_far.bound_key = std::bit_cast<double>(bound.key);
+            so_far.bound_id = bound.id;
             so_far.round_budget = wanted;
             so_far.stats.rounds = 1;
-            std::vector<std::pair<std::uint64_t, std::uint32_t>>().swap(queued);
+            const std::pair last{bound.key, bound.id};
             for (auto& [k, at] : tiles) {
                 TileInput& in = at.input;
                 in.marked.assign(in.vertex_id.size(), 0);
-                for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
-                    const Chain& piece = in.map.chains[p];
-                    const Point* q = in.map.vertices.data();
-                    for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
-                        if (in.state[v] != static_cast<std::uint8_t>(VertexState::queued)) continue;
-                        const std::pair key{std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], options.ranking)), in.vertex_id[v]};
-                        if (key <= bound) {
-                            in.marked[v] = 1;
-                            at.busy = true;
-                        }
+                std::size_t i = 0;  // (the tile's queued vertices in order: its keys)
+                for (std::uint32_t v = 0; v < in.vertex_id.size(); ++v) {
+                    if (in.state[v] != static_cast<std::uint8_t>(VertexState::queued)) continue;
+                    if (std::pair{at.keys[i], at.key_ids[i]} <= last) {
+                        in.marked[v] = 1;
+                        at.busy = true;
                     }
+                    ++i;
                 }
+                std::vector<std::uint64_t>().swap(at.keys);
+                std::vector<std::uint32_t>().swap(at.key_ids);
             }
         } else {
             for (auto& [k, at] : tiles) at.busy = true;

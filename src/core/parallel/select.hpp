@@ -83,4 +83,41 @@ Selection select_kth(const Lists& lists, std::size_t k, int threads, KeyOf key_o
     return selection;
 }
 
+// The k-th smallest (key, id) pair (k from 1 to the number of pairs; ids distinct) of pairs held
+// apart, in parts that are only asked questions — tiles on other processes, each question one
+// reduction over them, none ever gathering the keys: four passes over the keys' 16-bit digits,
+// high to low, each the sum of one histogram per part of the digit among the keys whose higher
+// digits the passes before fixed; then the ids of the keys equal to the one found, from every
+// part (ties: few), of which the rank-th.
+//   histogram(part, shift, high, counts): adds to counts[d] (65 536 of them), for each of the
+//     part's keys whose bits above shift + 16 equal `high` (all keys when shift is 48), one
+//     where d is its 16 bits from `shift`;
+//   ids_at(part, key, ids): appends the ids of the part's pairs with that key.
+struct KeyedSelection {
+    std::uint64_t key = 0;
+    std::uint32_t id = 0;
+};
+
+template <class Histogram, class IdsAt>
+KeyedSelection select_kth_by_digits(std::size_t parts, std::uint64_t k, Histogram&& histogram, IdsAt&& ids_at) {
+    std::uint64_t high = 0;  // the digits fixed so far
+    std::vector<std::uint64_t> total(std::size_t{1} << 16), counts(total.size());
+    for (int shift = 48; shift >= 0; shift -= 16) {
+        std::fill(total.begin(), total.end(), 0);
+        for (std::size_t part = 0; part < parts; ++part) {
+            std::fill(counts.begin(), counts.end(), 0);
+            histogram(part, shift, high, counts);
+            for (std::size_t d = 0; d < total.size(); ++d) total[d] += counts[d];
+        }
+        std::uint64_t digit = 0;
+        while (digit + 1 < total.size() && total[digit] < k) k -= total[digit++];
+        high = high << 16 | digit;
+    }
+    std::vector<std::uint32_t> ids;
+    for (std::size_t part = 0; part < parts; ++part) ids_at(part, high, ids);
+    const auto at = ids.begin() + static_cast<std::ptrdiff_t>(k - 1);
+    std::nth_element(ids.begin(), at, ids.end());
+    return {high, *at};
+}
+
 }  // namespace toposimp::parallel
