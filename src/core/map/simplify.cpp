@@ -821,9 +821,9 @@ public:
     }
 
     // The levels from the tile level up as one more tile: the block of the level above the top
-    // (the whole map), over the live vertices only (and a ring's removed ones while it may need
-    // its input orientation, as a tile's), with the candidates the tiles left for those levels
-    // and the control points that can lie in a triangle there. Every such triangle is three
+    // (the whole map), over the live vertices only (with a ring's input orientation when the ring
+    // rule may ask for it), with the candidates the tiles left for those levels and the control
+    // points that can lie in a triangle there (`every_point`: all of them). Every such triangle is three
     // consecutive live vertices of a run of unfixed ones between two fixed ones (fixed vertices
     // never go): a control point outside the boxes of those runs never counts, and one inside
     // is kept (the boxes are marked on the level-0 blocks, a superset).
@@ -935,9 +935,10 @@ public:
 
     // This engine, over the live vertices and every control point of a run in parts (its
     // engine's top_input(true), this engine's tile), takes over that run (parts_progress: where
-    // it stands), in a round whose tiles are done: the levels from the tile level up are next. Its ids are indices into the
-    // live vertices, in the whole map's order, so every tie breaks as before; ids it hands out
-    // or takes in (tiles, outcomes, the round's bound) are the whole map's.
+    // it stands), in a round whose tiles are done: the levels from the tile level up are next.
+    // Its ids are indices into the live vertices, in the whole map's order, so every tie breaks
+    // as before; ids it hands out or takes in (tiles, outcomes, the round's bound) are the whole
+    // map's. Every ring's input orientation is known (it has none of the removed vertices).
     struct PartsProgress {
         unsigned tile_level;
         std::uint64_t goal, round_budget;
@@ -1667,6 +1668,7 @@ public:
     static constexpr std::int8_t kOrientedByFilter = 4, kOrientedByGmp = 8;
     void know_orientation(std::uint32_t c) {
         if (orientation_[c] != 2) return;
+        if (resumed_) throw std::logic_error("a run over the live vertices only cannot compute an input ring's orientation");
         const Chain& range = map_.chains[c];
         const std::span<const Point> ring(map_.vertices.data() + range.first, range.last - range.first + 1);
         if (options_.arithmetic == exact::Arithmetic::rational) {
@@ -1979,10 +1981,6 @@ SimplifyResult MapInParts::result() {
     result.stats.vertices_out = input_vertices_ - result.stats.removed;
     return result;
 }
-
-}  // namespace toposimp::map
-
-namespace toposimp::map {
 
 MapInParts::MapInParts(TileInput live, std::size_t input_vertices, const GridPlan& plan, const SimplifyOptions& options,
                        unsigned tile_level, std::uint64_t here_below, const PartsSoFar& so_far)
