@@ -146,16 +146,6 @@ private:
 // together; one outcome per tile, in order. Each tile task of a distributed run is one call.
 std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options);
 
-// The whole map's side of a run in parts: the plan, the crossing search, each round's budget and
-// tiles, and the levels from T up. It holds the whole map's engine (the part that a distributed
-// run has yet to spread: docs/distributed.md).
-//
-//     MapInParts parts(map, options, tile_level);
-//     while (parts.next_round()) {
-//         std::vector<TileOutcome> outcomes = /* run_tile_group on each parts.group(k), k < parts.split_round() */;
-//         parts.finish_round(outcomes);  // or: if (parts.finish_tiles(outcomes)) parts.finish_top(/* run_tile_group on {parts.top()} */);
-//     }
-//     SimplifyResult result = parts.result();
 class FirstRound;
 
 // Where a run in parts stands when its engine changes hands (MapInParts from FirstRound).
@@ -169,6 +159,16 @@ struct PartsSoFar {
     double work = 0;                 // the progress's whole
 };
 
+// The whole map's side of a run in parts: the plan, the crossing search, each round's budget and
+// tiles, and the levels from T up. It holds the whole map's engine (the part that a distributed
+// run has yet to spread: docs/distributed.md).
+//
+//     MapInParts parts(map, options, tile_level);
+//     while (parts.next_round()) {
+//         std::vector<TileOutcome> outcomes = /* run_tile_group on each parts.group(k), k < parts.split_round() */;
+//         parts.finish_round(outcomes);  // or: if (parts.finish_tiles(outcomes)) parts.finish_top(/* run_tile_group on {parts.top()} */);
+//     }
+//     SimplifyResult result = parts.result();
 class MapInParts {
 public:
     // `map` and `options` outlive this. tile_level is capped at the plan's levels. A round of a
