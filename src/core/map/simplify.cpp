@@ -1018,7 +1018,12 @@ public:
         stats_.control_points = control_points_.size();
         indexed_points_ = control_points_;
         control_points_ = {};
-        owned_points_ = std::vector<Point>();  // freed: the grid has them
+        if (!owned_points_.empty()) {
+            // Freed: the grid has them. (Handed over only to simplify(), which never reads them
+            // again; a run in parts, which does, views the map's.)
+            indexed_points_ = {};
+            owned_points_ = std::vector<Point>();
+        }
     }
 
     // A run in parts: the whole map's grid is needed only for the rounds run here and the levels
