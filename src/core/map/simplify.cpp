@@ -58,6 +58,30 @@ constexpr unsigned kRowSplit = 2;
 // whole_level_ of an open chain.
 constexpr std::uint8_t kOpen = 0xff;
 
+// The first N distinct locations among points given one by one (the ring rule's questions).
+template <int N>
+struct FirstLocations {
+    Point at[N];
+    int count = 0;
+
+    // Takes q unless all N are taken or one of them is at q's location; whether it did.
+    bool add(Point q) {
+        if (count == N) return false;
+        for (int k = 0; k < count; ++k) {
+            if (same_location(at[k], q)) return false;
+        }
+        at[count++] = q;
+        return true;
+    }
+};
+
+// The distinct locations of a ring's vertices but the closing one.
+std::uint32_t count_locations(std::span<const Point> open_ring) {
+    std::vector<LocationKey> keys(open_ring.begin(), open_ring.end());
+    std::sort(keys.begin(), keys.end());
+    return static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+}
+
 
 // What a vertex is doing. Only `queued` vertices are candidates for removal.
 enum class State : std::uint8_t {
@@ -527,18 +551,12 @@ public:
             // A split ring's cut ends: both ends of every live segment across a tile border.
             bool settled = false;
             if (whole_level_[c] != kOpen) {
-                Point ends[4];
-                int count = 0;
-                for (std::uint32_t u = chain.first; next_[u] != kNone && count < 4; u = next_[u]) {
+                FirstLocations<4> ends;
+                for (std::uint32_t u = chain.first; next_[u] != kNone && ends.count < 4; u = next_[u]) {
                     if (tile_of(u) == tile_of(next_[u])) continue;
-                    for (const std::uint32_t w : {u, next_[u]}) {
-                        const Point q = map_.vertices[w];
-                        bool seen = false;
-                        for (int k = 0; k < count; ++k) seen = seen || same_location(ends[k], q);
-                        if (!seen && count < 4) ends[count++] = q;
-                    }
+                    for (const std::uint32_t w : {u, next_[u]}) ends.add(map_.vertices[w]);
                 }
-                settled = count >= 4;
+                settled = ends.count == 4;
             }
             // Runs of live vertices in one tile, each with its cut ends.
             for (std::uint32_t u = chain.first; u != kNone;) {
@@ -834,7 +852,7 @@ public:
         input.first_level = t;
         const auto mark_of = [&](std::uint32_t v) { return use_marks_ ? marked_[v] : std::uint8_t{0}; };
         const std::uint32_t columns = blocks_.blocks(0, 0), rows = blocks_.blocks(1, 0);
-        std::vector<std::int32_t> cover(std::size_t{columns + 1} * (rows + 1), 0);  // 2D differences over level-0 blocks
+        std::vector<std::int32_t> cover(every_point ? 0 : std::size_t{columns + 1} * (rows + 1), 0);  // 2D differences over level-0 blocks
         const auto add_box = [&](std::uint32_t c0, std::uint32_t r0, std::uint32_t c1, std::uint32_t r1) {
             const std::size_t w = columns + 1;
             ++cover[r0 * w + c0];
@@ -864,7 +882,7 @@ public:
             // The runs of unfixed live vertices, each with the fixed vertex on either side.
             std::uint32_t c0 = kNone, r0 = kNone, c1 = 0, r1 = 0;
             bool open = false;
-            for (std::uint32_t u = chain.first; u != kNone; u = next_[u]) {
+            for (std::uint32_t u = every_point ? kNone : chain.first; u != kNone; u = next_[u]) {
                 const std::uint32_t xy = block_xy_[u];
                 c0 = std::min(c0, xy >> 16);
                 c1 = std::max(c1, xy >> 16);
@@ -886,7 +904,9 @@ public:
             input.distinct.push_back(distinct_[c]);
             input.orientation.push_back(orientation_[c]);
         }
-        {
+        if (every_point) {
+            input.map.control_points.assign(indexed_points_.begin(), indexed_points_.end());
+        } else {
             const std::size_t w = columns + 1;
             for (std::uint32_t r = 0; r <= rows; ++r) {
                 for (std::uint32_t c = 0; c <= columns; ++c) {
@@ -897,7 +917,7 @@ public:
                 }
             }
             for (const Point p : indexed_points_) {
-                if (every_point || cover[block_row(p) * w + block_column(p)] > 0) input.map.control_points.push_back(p);
+                if (cover[block_row(p) * w + block_column(p)] > 0) input.map.control_points.push_back(p);
             }
         }
         const auto local = [&](std::uint32_t v) {  // (an engine id: its index in the input)
@@ -1175,11 +1195,7 @@ public:
         bool alone = true;
         for (std::uint32_t v = chain.first + 1; v < chain.last && alone; ++v) alone = !shared_[v];
         if (alone) return chain.last - chain.first;
-        std::vector<LocationKey> keys;
-        keys.reserve(chain.last - chain.first);
-        for (std::uint32_t v = chain.first; v < chain.last; ++v) keys.emplace_back(map_.vertices[v]);
-        std::sort(keys.begin(), keys.end());
-        return static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+        return count_locations(std::span<const Point>(map_.vertices.data() + chain.first, chain.last - chain.first));
     }
 
     // Vertices whose location another vertex holds too (a node, a ring's closing vertex, a
@@ -1533,18 +1549,10 @@ public:
     // `level` (pinned, ends, or of a coarser level), in chain order.
     template <class Visit>
     void for_each_fixed_location(std::uint32_t c, unsigned level, int most, Visit&& visit) const {
-        Point found[4];
-        int count = 0;
-        for (std::uint32_t u = map_.chains[c].first; u != kNone && count < most; u = next_[u]) {
+        FirstLocations<4> found;
+        for (std::uint32_t u = map_.chains[c].first; u != kNone && found.count < most; u = next_[u]) {
             const bool fixed = state_[u] == State::fixed || level_of(u) > level;
-            if (!fixed) continue;
-            const Point q = map_.vertices[u];
-            bool seen = false;
-            for (int k = 0; k < count; ++k) seen = seen || same_location(found[k], q);
-            if (!seen) {
-                found[count++] = q;
-                visit(q);
-            }
+            if (fixed && found.add(map_.vertices[u])) visit(map_.vertices[u]);
         }
     }
 
@@ -1626,19 +1634,14 @@ public:
         if (whole_level_[chain] > level) return ring_clear_[chain] ? Verdict::remove : Verdict::later;
         if (distinct_[chain] <= 3) return Verdict::blocked_by_ring;
         if (distinct_[chain] > 4) return Verdict::remove;
-        Point corners[3];
-        int found = 0;
-        for (std::uint32_t u = map_.chains[chain].first; u != kNone && found < 3; u = next_[u]) {
-            if (u == v) continue;
-            const Point q = map_.vertices[u];
-            bool seen = false;
-            for (int k = 0; k < found; ++k) seen = seen || same_location(corners[k], q);
-            if (!seen) corners[found++] = q;
+        FirstLocations<3> corners;
+        for (std::uint32_t u = map_.chains[chain].first; u != kNone && corners.count < 3; u = next_[u]) {
+            if (u != v) corners.add(map_.vertices[u]);
         }
-        if (found < 3) return Verdict::blocked_by_ring;
+        if (corners.count < 3) return Verdict::blocked_by_ring;
         const int turn = options_.arithmetic == exact::Arithmetic::floating
-                             ? orient_float(corners[0], corners[1], corners[2])
-                             : exact::orient2d(corners[0], corners[1], corners[2], stats.predicates);
+                             ? orient_float(corners.at[0], corners.at[1], corners.at[2])
+                             : exact::orient2d(corners.at[0], corners.at[1], corners.at[2], stats.predicates);
         return turn != 0 && turn == ring_orientation(chain, stats.predicates) ? Verdict::remove : Verdict::blocked_by_ring;
     }
 
@@ -2089,11 +2092,7 @@ struct FirstRound::Impl {
             }
             using Blocks = parallel::BlockLevels<2>;
             level = static_cast<std::uint8_t>(std::max(Blocks::shared_level(c0, c1), Blocks::shared_level(r0, r1)));
-            std::vector<LocationKey> keys;
-            keys.reserve(last);
-            for (std::uint32_t i = 0; i < last; ++i) keys.emplace_back(points[i]);
-            std::sort(keys.begin(), keys.end());
-            count = static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
+            count = count_locations(points.first(last));
             // The input orientation, counted where asked (Simplifier::know_orientation).
             if (options.arithmetic == exact::Arithmetic::rational) {
                 turn = static_cast<std::int8_t>(exact::ring_area_sign_gmp(points));
@@ -2115,17 +2114,12 @@ struct FirstRound::Impl {
         // A split ring's cut ends: both ends of every segment across a tile border.
         bool settled = false;
         if (closed) {
-            Point ends[4];
-            int found = 0;
-            for (std::size_t i = 0; i < last && found < 4; ++i) {
+            FirstLocations<4> ends;
+            for (std::size_t i = 0; i < last && ends.count < 4; ++i) {
                 if (tile_at[i] == tile_at[i + 1]) continue;
-                for (const Point q : {points[i], points[i + 1]}) {
-                    bool seen = false;
-                    for (int e = 0; e < found; ++e) seen = seen || same_location(ends[e], q);
-                    if (!seen && found < 4) ends[found++] = q;
-                }
+                for (const Point q : {points[i], points[i + 1]}) ends.add(q);
             }
-            settled = found >= 4;
+            settled = ends.count == 4;
         }
         for (std::size_t i = 0; i <= last;) {
             std::size_t j = i;
