@@ -31,7 +31,7 @@ from toposimp import _toposimp
 
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
-                                   [--task-threads N] [--local-budget N]
+                                   [--task-threads N] [--local-budget N] [--first-round WHERE]
 
 toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
 
@@ -46,6 +46,11 @@ Dask options:
   --local-budget N     a round of a count target that removes fewer than N vertices runs here,
                        whole, not as tasks (default 4000000, about a second of one core here,
                        less than cutting the live map into tiles again; 0: every round as tasks)
+  --first-round WHERE  where the first round's tiles are built: 'here' (default: by the whole
+                       map's engine in this process) or 'workers' (the map cut into tiles,
+                       searched for crossings, queued and its budget selected on the workers;
+                       this process never holds an engine over the whole map, but still reads
+                       the whole map: on one machine slower, and no smaller, than 'here')
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
@@ -94,9 +99,12 @@ class _Progress:
         self.tile_level = 0
 
     def tiles(self, done, total):
+        self.stage(f"round {self.round}, tiles of level {self.tile_level}", done, total)
+
+    def stage(self, what, done, total):
         if self.quiet:
             return
-        line = f"toposimp.dask: round {self.round}, tiles of level {self.tile_level}: {done} of {total} tasks done"
+        line = f"toposimp.dask: {what}: {done} of {total} tasks done"
         if self.terminal:
             sys.stderr.write("\r" + line + ("\n" if done == total else ""))
         elif done == total:
@@ -113,6 +121,7 @@ def _split_arguments(argv):
     parser.add_argument("--tile-points", type=int, default=1_000_000)
     parser.add_argument("--task-threads", type=int, default=1)
     parser.add_argument("--local-budget", type=int, default=LOCAL_BUDGET)
+    parser.add_argument("--first-round", choices=("workers", "here"), default="here")
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
@@ -126,14 +135,15 @@ def _split_arguments(argv):
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
-        local_budget=None, client=None, quiet=False, on_progress=None):
+        local_budget=None, client=None, quiet=False, on_progress=None, first_round="here"):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
     of `workers` processes, when the first tasks are ready — not for a run that stops on bad usage
     or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices (default LOCAL_BUDGET) runs here, whole. `on_progress(done,
-    total)`: called as the tile tasks finish."""
+    total)`: called as the tile tasks finish. `first_round`: where the first round's tiles are
+    built, "workers" or "here" (the whole map's engine here)."""
     if local_budget is None:
         local_budget = LOCAL_BUDGET
     progress = _Progress(quiet)
@@ -158,7 +168,9 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                 own["client"] = Client(own["cluster"])
         return own["client"]
 
-    run_groups = _tasks(connected, task_threads, progress, on_progress)
+    if first_round not in ("workers", "here"):
+        raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
+    run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here")
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
                                                  lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
@@ -242,31 +254,211 @@ def check_workers(client):
         raise UsageError(f"the Dask worker {address} cannot run the tiles: {why}; {_INSTALL_HINT}")
 
 
-def _tasks(connected, task_threads, progress=None, on_progress=None):
+# The first round's tasks (src/python/parts.cpp: first_cut and the rest), each importing the
+# engine where it runs.
+
+# A budget's selection gathers the (key, id) pairs of the bucket it falls in once that holds at
+# most this many (12 bytes each), instead of a pass more over every tile.
+PAIRS_GATHERED = 2_000_000
+def _first_cut(part, plan, options):
+    from toposimp import _toposimp as engine
+    return engine.first_cut(part, plan, plan["tile_level"], options)
+
+
+def _item(value, k):
+    return value[k]
+
+
+def _first_piece(cut, i):
+    return cut[1][i]
+
+
+def _first_search(pieces, options):
+    from toposimp import _toposimp as engine
+    return engine.first_search(pieces, options)
+
+
+def _first_queue(searched, border, marks, options):
+    from toposimp import _toposimp as engine
+    return engine.first_queue(searched[0], border, marks, options)
+
+
+def _first_histogram(queued, shift, high):
+    from toposimp import _toposimp as engine
+    return engine.first_histogram([q[0] for q in queued], shift, high)
+
+
+def _first_ids_at(queued, key):
+    from toposimp import _toposimp as engine
+    return engine.first_ids_at([q[0] for q in queued], key)
+
+
+def _first_pairs_in(queued, shift, prefix):
+    from toposimp import _toposimp as engine
+    return engine.first_pairs_in([q[0] for q in queued], shift, prefix)
+
+
+def _first_run(queued, points, marks, bound, plan, options):
+    from toposimp import _toposimp as engine
+    return engine.first_run([q[0] for q in queued], points, marks, bound, plan, options)
+
+
+def _first_live(queued, marks, bound):
+    from toposimp import _toposimp as engine
+    return engine.first_live(queued[0], marks, bound)
+
+
+class _Tasks:
     """run_groups for the engine (src/python/parts.hpp): each round's tile groups as tasks on the
-    client `connected()` gives, their outcomes back in order."""
-    def run_groups(groups, plan, options, round_number):
+    client `connected()` gives, their outcomes back in order; and the first round built on the
+    workers (first_round), unless `first_here`."""
+
+    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True):
+        self.connected, self.task_threads = connected, task_threads
+        self.progress, self.on_progress = progress, on_progress
+        self.checked = []  # the clients whose workers were checked
+        if not first_here:
+            self.first_round = self._first_round
+
+    def _client(self):
+        client = self.connected()
+        if not any(c is client for c in self.checked):
+            check_workers(client)
+            self.checked.append(client)
+        return client
+
+    def __call__(self, groups, plan, options, round_number):
         import warnings
 
         # (A task's tiles travel with it by design: each is used once. Dask's advice to scatter
         # them first would only add a round trip; its warning must not reach the user's terminal.)
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
-            return run_round(groups, plan, options, round_number)
+            return self._run_round(groups, plan, options, round_number)
 
-    checked = []  # the clients whose workers were checked
+    def _stage(self, what, done, total):
+        if self.progress is not None:
+            self.progress.stage(what, done, total)
 
-    def run_round(groups, plan, options, round_number):
+    def _gather(self, client, futures, what, on_progress=None):
+        """The futures' results in order, with progress."""
         from distributed import as_completed
         from toposimp import UsageError
 
+        results = [None] * len(futures)
+        place = {future.key: k for k, future in enumerate(futures)}
+        self._stage(what, 0, len(futures))
+        try:
+            for done, (future, result) in enumerate(as_completed(futures, with_results=True), 1):
+                results[place[future.key]] = result
+                self._stage(what, done, len(futures))
+                if on_progress is not None:
+                    on_progress(done, len(futures))
+        except ImportError as error:  # (a worker that joined after the check, without the package)
+            raise UsageError(f"a Dask worker cannot run the tiles: {error}; {_INSTALL_HINT}") from None
+        return results
+
+    def _first_round(self, steps, plan, options):
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
+            return self._first(steps, plan, options)
+
+    def _first(self, steps, plan, options):
+        """The first round: the map's parts cut into tiles on the workers, each tile searched for
+        crossings, queued, its budget selected over all tiles by reductions, its groups run; the
+        live vertices back to `steps` (FirstSteps), which goes on here."""
+        if self.progress is not None:
+            self.progress.round, self.progress.tile_level = 1, plan.get("tile_level", 0)
+        options = dict(options, threads=self.task_threads)
+        client = self._client()
+        submit = client.submit
+        # Cut: each part's facts here, its tiles' pieces stay on the workers.
+        cuts = [submit(_first_cut, steps.part(k), plan, options, pure=False) for k in range(len(steps))]
+        facts = self._gather(client, [submit(_item, cut, 0, pure=False) for cut in cuts], "cutting the map into tiles")
+        pieces = {}  # tile number -> its pieces' futures, in the parts' order
+        for cut, part in zip(cuts, facts):
+            steps.add_facts(part)
+            for i, number in enumerate(part["tiles"].tolist()):
+                pieces.setdefault(number, []).append(submit(_first_piece, cut, i, pure=False))
+        del cuts
+        numbers = sorted(pieces)
+        # Search: each tile's crossings; the segments leaving tiles or-ed here.
+        searched = [submit(_first_search, pieces[number], options, pure=False) for number in numbers]
+        del pieces
+        for answer in self._gather(client, [submit(_item, s, 1, pure=False) for s in searched], "searching the tiles for crossings"):
+            steps.found(answer)
+        border = steps.border()
+        marks = steps.marks
+        queued = [submit(_first_queue, s, border, marks, options, pure=False) for s in searched]
+        del searched
+        answers = self._gather(client, [submit(_item, q, 1, pure=False) for q in queued], "queueing the tiles' vertices")
+        for answer in answers:
+            steps.queued(answer["pinned"], answer["queued"])
+        # The budget: the wanted-th smallest (key, id) over all tiles, a 16-bit digit of the keys a
+        # pass (the first pass came with the answers above), until the bucket it falls in is small
+        # enough to be gathered here.
+        wanted = steps.wanted()
+        import numpy
+
+        def dense(histograms):
+            total = numpy.zeros(1 << 16, dtype=numpy.uint64)
+            for histogram in histograms:
+                numpy.add.at(total, histogram["digits"], histogram["counts"])
+            return total
+
+        if wanted > 0:
+            selector = _toposimp.DigitSelector(wanted)
+            total = dense(answer["histogram"] for answer in answers)
+            selector.counted(total)
+            while selector.counting and int(total[selector.high & 0xffff]) > PAIRS_GATHERED:
+                total = dense(self._gather(client, [submit(_first_histogram, [q], selector.shift, selector.high, pure=False)
+                                                    for q in queued], "selecting the round's budget"))
+                selector.counted(total)
+            if selector.counting:
+                pairs = self._gather(client, [submit(_first_pairs_in, [q], selector.shift + 16, selector.high, pure=False) for q in queued],
+                                     "selecting the round's budget")
+                bound = selector.choose_among(numpy.concatenate([p["keys"] for p in pairs]), numpy.concatenate([p["ids"] for p in pairs]))
+            else:
+                ids = self._gather(client, [submit(_first_ids_at, [q], selector.key, pure=False) for q in queued],
+                                   "selecting the round's budget")
+                bound = selector.choose(numpy.concatenate(ids))
+            steps.bound(*bound)
+        at = {number: k for k, number in enumerate(numbers)}
+        holding = [answer for answer in answers if answer["vertices"] > 0]
+        if wanted > 0 or not marks:
+            groups = steps.groups([(a["number"], marks and tuple(a["smallest"]) <= tuple(bound), a["open"]) for a in holding])
+        else:
+            groups = []  # (a count target with nothing to go)
+        bound = steps.bound_now
+        # Run: each group's tiles, the tiles of no group only their live vertices.
+        running = set()
+        runs = []
+        for group in groups:
+            runs.append(submit(_first_run, [queued[at[n]] for n in group], [steps.points(n) for n in group], marks, bound, plan, options,
+                               pure=False))
+            running.update(group)
+        lives = [submit(_first_live, queued[at[a["number"]]], marks, bound, pure=False) for a in holding if a["number"] not in running]
+        del queued
+        results = self._gather(client, runs + lives, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress)
+        live, outcomes = [], []
+        for result in results[:len(runs)]:
+            outcomes.extend(result[0])
+            live.extend(result[1])
+        live.extend(results[len(runs):])
+        del results
+        steps.finish(live, outcomes)
+
+    def _run_round(self, groups, plan, options, round_number):
+        from distributed import as_completed
+        from toposimp import UsageError
+
+        progress, on_progress = self.progress, self.on_progress
         if progress is not None:
             progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
-        options = dict(options, threads=task_threads)
-        client = connected()
-        if not any(c is client for c in checked):
-            check_workers(client)
-            checked.append(client)
+        options = dict(options, threads=self.task_threads)
+        client = self._client()
         workers = max(1, len(client.scheduler_info()["workers"]))
         batches = _batches([groups.points(k) for k in range(len(groups))], workers)
         total = len(batches)
@@ -308,7 +500,9 @@ def _tasks(connected, task_threads, progress=None, on_progress=None):
             raise UsageError(f"a Dask worker cannot run the tiles: {error}; {_INSTALL_HINT}") from None
         return results
 
-    return run_groups
+
+def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True):
+    return _Tasks(connected, task_threads, progress, on_progress, first_here)
 
 
 class Tiles:
@@ -316,13 +510,16 @@ class Tiles:
     toposimp.simplify(..., client=Tiles(client, tile_points=200_000)). A plain Client takes the
     defaults."""
 
-    def __init__(self, client, *, tile_level=-1, tile_points=1_000_000, task_threads=1, local_budget=None):
+    def __init__(self, client, *, tile_level=-1, tile_points=1_000_000, task_threads=1, local_budget=None, first_round="here"):
         self.client, self.tile_level, self.tile_points = client, tile_level, tile_points
         self.task_threads = task_threads
         self.local_budget = LOCAL_BUDGET if local_budget is None else local_budget
+        if first_round not in ("workers", "here"):
+            raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
+        self.first_here = first_round == "here"
 
     def _parts(self):
-        return (_tasks(lambda: self.client, self.task_threads), self.tile_level,
+        return (_tasks(lambda: self.client, self.task_threads, first_here=self.first_here), self.tile_level,
                 lambda: fitting_tile_points(self.client, self.tile_points), self.local_budget)
 
 
@@ -357,6 +554,7 @@ def main(argv=None):
     try:
         return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
                    tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
+                   first_round=options.first_round,
                    quiet=quiet)
     except KeyboardInterrupt:
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")

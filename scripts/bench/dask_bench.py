@@ -5,8 +5,10 @@ the command's peak memory, each worker's peak memory, and whether the output is 
 
     scripts/bench/dask_bench.py BUILD_DIR [--input build/bench-data/gshhg.shp] [--runs 3]
                                 [--workers 1,2,4] [--target "--keep 10%" --target "--max"]
+                                [--variant "" --variant "--first-round here"]
 
-BUILD_DIR holds the toposimp executable and python/ (the package). Prints a Markdown table.
+BUILD_DIR holds the toposimp executable and python/ (the package). Each --variant (toposimp.dask
+options; default: none) is a row of its own, on a LocalCluster of its own. Prints a Markdown table.
 """
 import argparse
 import os
@@ -60,6 +62,7 @@ def main():
     parser.add_argument("--workers", default="1,2,4")
     parser.add_argument("--target", action="append")
     parser.add_argument("--threads", type=int, default=2, help="toposimp map -j (the single process)")
+    parser.add_argument("--variant", action="append", help="toposimp.dask options of a row (repeat for several)")
     a = parser.parse_args()
     targets = a.target or ["--keep 10%", "--max"]
     build = pathlib.Path(a.build).resolve()
@@ -76,7 +79,7 @@ def main():
                              *shlex.split(target)]) for _ in range(a.runs)]
             seconds = statistics.median(s for s, _ in single)
             rows.append((target, f"toposimp map -j {a.threads}", seconds, 1.0, max(m for _, m in single), "", "yes"))
-            for workers in [int(w) for w in a.workers.split(",")]:
+            for workers, variant in [(int(w), v) for w in a.workers.split(",") for v in (a.variant or [""])]:
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
                 client = Client(cluster)
                 runs = []
@@ -84,14 +87,15 @@ def main():
                 for _ in range(a.runs):
                     output = out / "dask.shp"
                     runs.append(timed([sys.executable, "-m", "toposimp.dask", "map", a.input, "-o", str(output), "-q", "--overwrite",
-                                       "--scheduler", cluster.scheduler_address, *shlex.split(target)], env=env))
+                                       "--scheduler", cluster.scheduler_address, *shlex.split(target), *shlex.split(variant)],
+                                      env=env))
                     identical = identical and all((out / f"dask{ext}").read_bytes() == (out / f"single{ext}").read_bytes()
                                                   for ext in (".shp", ".shx", ".dbf"))
                 peaks = worker_peaks(client)
                 client.close()
                 cluster.close()
                 d = statistics.median(s for s, _ in runs)
-                rows.append((target, f"toposimp.dask, {workers} worker{'s' if workers > 1 else ''}", d, d / seconds,
+                rows.append((target, f"toposimp.dask{' ' + variant if variant else ''}, {workers} worker{'s' if workers > 1 else ''}", d, d / seconds,
                              max(m for _, m in runs), " / ".join(f"{p:.0f}" for p in peaks), "yes" if identical else "NO"))
     print(f"input: {a.input}; median of {a.runs} runs; LocalCluster started before the timing, one thread per worker")
     print()

@@ -7,6 +7,7 @@ for byte, and toposimp check on it.
     scripts/bench/dask_scale.py BUILD_DIR [--cells 250] [--edge-vertices 40] [--rivers 2000]
                                 [--river-steps 2000] [--points 2000000] [--workers 2]
                                 [--memory-limit 1GiB] [--target "--keep 10%"] [--data DIR]
+                                [--dask-options "--first-round here"]
 
 The map (generate_map.py --shapefiles) is written to --data (default build/bench-data/scale-N)
 once. Prints a Markdown table.
@@ -36,6 +37,7 @@ def main():
     parser.add_argument("--memory-limit", default="1GiB")
     parser.add_argument("--target", default="--keep 10%")
     parser.add_argument("--data")
+    parser.add_argument("--dask-options", default="", help="more python3 -m toposimp.dask options")
     a = parser.parse_args()
     build = pathlib.Path(a.build).resolve()
     data = pathlib.Path(a.data or f"build/bench-data/scale-{a.cells}").resolve()
@@ -56,7 +58,7 @@ def main():
                            memory_limit=a.memory_limit)
     client = Client(cluster)
     distributed = dask_bench.timed([sys.executable, "-m", "toposimp.dask", "map", *map_arguments, "-o", str(dask_out),
-                                    "--scheduler", cluster.scheduler_address], env=env)
+                                    "--scheduler", cluster.scheduler_address, *shlex.split(a.dask_options)], env=env)
     peaks = dask_bench.worker_peaks(client)
     client.close()
     cluster.close()
@@ -65,7 +67,8 @@ def main():
                               "-l", "roads", "-p", str(data / "places.shp")])
     sizes = {name: (data / f"{name}.shp").stat().st_size for name in ("cells", "rivers", "roads", "places")}
     print(f"map: {data}: {vertices / 1e6:.1f} M vertices and {a.points / 1e6:.1f} M control points "
-          f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each")
+          f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each"
+          + (f", toposimp.dask {a.dask_options}" if a.dask_options else ""))
     print()
     print("| run | seconds | command peak MiB | worker peaks MiB | output identical |")
     print("|---|---|---|---|---|")

@@ -89,62 +89,66 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs_of(const py::dict& di
     return pairs;
 }
 
-py::dict tile_dict(map::TileInput&& tile) {
-    py::dict dict;
+std::vector<std::pair<std::uint32_t, std::uint32_t>> chain_pairs(const std::vector<map::Chain>& chains) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    pairs.reserve(chains.size());
+    for (const map::Chain& chain : chains) pairs.emplace_back(chain.first, chain.last);
+    return pairs;
+}
+
+// Chains as pairs, checked to cut `n` vertices into consecutive ranges.
+std::vector<map::Chain> consecutive_chains(const py::dict& dict, const char* key, std::size_t n) {
+    std::vector<map::Chain> chains;
+    std::size_t next = 0;
+    for (const auto& [first, last] : pairs_of(dict, key)) {
+        if (first != next || last < first || last >= n) malformed("the chains do not cut the vertices into consecutive ranges");
+        chains.push_back({first, last});
+        next = std::size_t{last} + 1;
+    }
+    if (next != n) malformed("the chains do not cover the vertices");
+    return chains;
+}
+
+// (−1, 0, 1; 2: not known; 3 to 5 and 7 to 9: known, not yet counted: core/map/simplify.cpp)
+bool orientation_code(std::int8_t o) { return o >= -1 && o <= 9 && o != 6; }
+
+// What tile dicts of both kinds (TileInput, FirstTile) hold of a TileInput.
+void put_tile_input(py::dict& dict, const map::TileInput& tile) {
     dict["level"] = tile.level;
     dict["column"] = tile.column;
     dict["row"] = tile.row;
     dict["vertices"] = points_array(tile.map.vertices);
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
-    for (const map::Chain& chain : tile.map.chains) chains.emplace_back(chain.first, chain.last);
-    dict["chains"] = pairs_array(chains);
-    dict["control_points"] = points_array(tile.map.control_points);
+    dict["chains"] = pairs_array(chain_pairs(tile.map.chains));
     dict["vertex_id"] = array_of(tile.vertex_id);
     dict["state"] = array_of(tile.state);
-    dict["marked"] = array_of(tile.marked);
     dict["chain_id"] = array_of(tile.chain_id);
     dict["whole_level"] = array_of(tile.whole_level);
     dict["settled"] = array_of(tile.settled);
     dict["distinct"] = array_of(tile.distinct);
     dict["orientation"] = array_of(tile.orientation);
-    dict["waits"] = pairs_array(tile.waits);
-    dict["marks"] = tile.marks;
-    dict["bound"] = py::make_tuple(tile.bound_key, tile.bound_id);
-    return dict;
 }
 
-// A tile dict back, checked to be one: every array the size its structure needs, the chains
-// cutting the vertices into consecutive ranges.
-map::TileInput tile_of(const py::dict& dict) {
-    map::TileInput tile;
+// Those back, checked: the chains cutting the vertices into consecutive ranges, every array the
+// size its structure needs (the states may be missing where `states_optional`).
+void take_tile_input(const py::dict& dict, map::TileInput& tile, bool states_optional) {
     tile.level = item(dict, "level").cast<unsigned>();
     tile.column = item(dict, "column").cast<std::uint32_t>();
     tile.row = item(dict, "row").cast<std::uint32_t>();
     tile.map.vertices = points_of(dict, "vertices");
-    tile.map.control_points = points_of(dict, "control_points");
     const std::size_t n = tile.map.vertices.size();
     if (n >= std::numeric_limits<std::uint32_t>::max()) malformed("too many vertices");
-    std::size_t next = 0;
-    for (const auto& [first, last] : pairs_of(dict, "chains")) {
-        if (first != next || last < first || last >= n) malformed("the chains do not cut the vertices into consecutive ranges");
-        tile.map.chains.push_back({first, last});
-        next = std::size_t{last} + 1;
-    }
-    if (next != n) malformed("the chains do not cover the vertices");
+    tile.map.chains = consecutive_chains(dict, "chains", n);
     tile.vertex_id = flat<std::uint32_t>(dict, "vertex_id");
     tile.state = flat<std::uint8_t>(dict, "state");
-    tile.marked = flat<std::uint8_t>(dict, "marked");
     tile.chain_id = flat<std::uint32_t>(dict, "chain_id");
     tile.whole_level = flat<std::uint8_t>(dict, "whole_level");
     tile.settled = flat<std::uint8_t>(dict, "settled");
     tile.distinct = flat<std::uint32_t>(dict, "distinct");
     tile.orientation = flat<std::int8_t>(dict, "orientation");
-    tile.waits = pairs_of(dict, "waits");
-    tile.marks = item(dict, "marks").cast<bool>();
-    std::tie(tile.bound_key, tile.bound_id) = item(dict, "bound").cast<std::pair<double, std::uint32_t>>();
     const std::size_t c = tile.map.chains.size();
-    if (tile.vertex_id.size() != n || tile.state.size() != n) malformed("vertex_id or state is not one per vertex");
-    if (tile.marked.size() != (tile.marks ? n : 0)) malformed("marked is not one per vertex with marks, none without");
+    if (tile.vertex_id.size() != n || (tile.state.size() != n && !(states_optional && tile.state.empty()))) {
+        malformed("vertex_id or state is not one per vertex");
+    }
     if (tile.chain_id.size() != c || tile.whole_level.size() != c || tile.settled.size() != c || tile.distinct.size() != c ||
         tile.orientation.size() != c) {
         malformed("chain_id, whole_level, settled, distinct or orientation is not one per chain");
@@ -152,10 +156,31 @@ map::TileInput tile_of(const py::dict& dict) {
     if (std::any_of(tile.state.begin(), tile.state.end(), [](std::uint8_t s) { return s > static_cast<std::uint8_t>(map::VertexState::removed); })) {
         malformed("a vertex state is not one");
     }
-    // (−1, 0, 1; 2: not known; 3 to 5 and 7 to 9: known, not yet counted: core/map/simplify.cpp)
-    if (std::any_of(tile.orientation.begin(), tile.orientation.end(), [](std::int8_t o) { return o < -1 || o > 9 || o == 6; })) {
-        malformed("an orientation is not one");
-    }
+    if (!std::all_of(tile.orientation.begin(), tile.orientation.end(), orientation_code)) malformed("an orientation is not one");
+}
+
+py::dict tile_dict(map::TileInput&& tile) {
+    py::dict dict;
+    put_tile_input(dict, tile);
+    dict["control_points"] = points_array(tile.map.control_points);
+    dict["marked"] = array_of(tile.marked);
+    dict["waits"] = pairs_array(tile.waits);
+    dict["marks"] = tile.marks;
+    dict["bound"] = py::make_tuple(tile.bound_key, tile.bound_id);
+    return dict;
+}
+
+// A tile dict back, checked to be one.
+map::TileInput tile_of(const py::dict& dict) {
+    map::TileInput tile;
+    take_tile_input(dict, tile, false);
+    const std::size_t n = tile.map.vertices.size();
+    tile.map.control_points = points_of(dict, "control_points");
+    tile.marked = flat<std::uint8_t>(dict, "marked");
+    tile.waits = pairs_of(dict, "waits");
+    tile.marks = item(dict, "marks").cast<bool>();
+    std::tie(tile.bound_key, tile.bound_id) = item(dict, "bound").cast<std::pair<double, std::uint32_t>>();
+    if (tile.marked.size() != (tile.marks ? n : 0)) malformed("marked is not one per vertex with marks, none without");
     for (const auto& [waiter, blocker] : tile.waits) {
         if (waiter >= n || blocker >= n) malformed("a wait names a vertex the tile has not");
     }
@@ -323,6 +348,147 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
     return best != 0 ? best : dense;
 }
 
+// ---- The first round on the workers (map::cut_part, map::FirstTile; map::FirstRoundLead here)
+
+// Chains [c0, c1) of `map` as a part: its own map, and where it starts in the whole map's.
+py::dict part_dict(const map::MapData& map, std::uint32_t c0, std::uint32_t c1) {
+    const std::uint32_t v0 = map.chains[c0].first, v1 = map.chains[c1 - 1].last + 1;
+    py::array_t<double> vertices({static_cast<py::ssize_t>(v1 - v0), py::ssize_t{2}});
+    std::memcpy(vertices.mutable_data(), map.vertices.data() + v0, std::size_t{v1 - v0} * sizeof(Point));
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
+    std::vector<std::uint8_t> frozen;
+    for (std::uint32_t c = c0; c < c1; ++c) {
+        chains.emplace_back(map.chains[c].first - v0, map.chains[c].last - v0);
+        frozen.push_back(map.is_frozen(c) ? 1 : 0);
+    }
+    py::dict dict;
+    dict["vertices"] = vertices;
+    dict["chains"] = pairs_array(chains);
+    dict["frozen"] = array_of(frozen);
+    dict["first_vertex"] = v0;
+    dict["first_chain"] = c0;
+    return dict;
+}
+
+map::MapData part_of(const py::dict& dict) {
+    map::MapData part;
+    part.vertices = points_of(dict, "vertices");
+    if (part.vertices.size() >= std::numeric_limits<std::uint32_t>::max()) malformed("too many vertices");
+    part.chains = consecutive_chains(dict, "chains", part.vertices.size());
+    part.frozen = flat<std::uint8_t>(dict, "frozen");
+    if (part.frozen.size() != part.chains.size()) malformed("frozen is not one per chain");
+    return part;
+}
+
+py::dict facts_dict(const map::CutPart& cut, std::uint32_t first_chain) {
+    const map::ChainFacts& facts = cut.facts;
+    py::dict dict;
+    dict["first_chain"] = first_chain;
+    dict["chains"] = pairs_array(chain_pairs(facts.chains));
+    dict["whole_level"] = array_of(facts.whole_level);
+    dict["distinct"] = array_of(facts.distinct);
+    dict["orientation"] = array_of(facts.orientation);
+    std::vector<std::uint32_t> tiles;
+    for (const map::FirstTile& tile : cut.tiles) tiles.push_back(tile.number);
+    dict["tiles"] = array_of(tiles);
+    return dict;
+}
+
+// A part's facts back, checked against a map of `n` vertices.
+map::ChainFacts facts_of(const py::dict& dict, std::size_t n) {
+    map::ChainFacts facts;
+    for (const auto& [first, last] : pairs_of(dict, "chains")) {
+        if (last < first || last >= n) malformed("a chain's ends are not the map's vertices");
+        facts.chains.push_back({first, last});
+    }
+    facts.whole_level = flat<std::uint8_t>(dict, "whole_level");
+    facts.distinct = flat<std::uint32_t>(dict, "distinct");
+    facts.orientation = flat<std::int8_t>(dict, "orientation");
+    const std::size_t c = facts.chains.size();
+    if (facts.whole_level.size() != c || facts.distinct.size() != c || facts.orientation.size() != c) {
+        malformed("whole_level, distinct or orientation is not one per chain");
+    }
+    if (!std::all_of(facts.orientation.begin(), facts.orientation.end(), orientation_code)) malformed("an orientation is not one");
+    return facts;
+}
+
+py::dict first_tile_dict(const map::FirstTile& tile) {
+    py::dict dict;
+    put_tile_input(dict, tile.input);
+    dict["number"] = tile.number;
+    dict["cut_end"] = array_of(tile.cut_end);
+    dict["frozen"] = array_of(tile.frozen);
+    dict["passing"] = points_array(tile.passing);
+    dict["passing_id"] = array_of(tile.passing_id);
+    dict["improper"] = array_of(tile.improper);
+    dict["keys"] = array_of(tile.keys);
+    return dict;
+}
+
+// A first-round tile dict back, checked to be one (its stage's arrays present or empty).
+map::FirstTile first_tile_of(const py::dict& dict) {
+    map::FirstTile tile;
+    const map::TileInput& in = tile.input;
+    take_tile_input(dict, tile.input, true);
+    tile.number = item(dict, "number").cast<std::uint32_t>();
+    tile.cut_end = flat<std::uint8_t>(dict, "cut_end");
+    tile.frozen = flat<std::uint8_t>(dict, "frozen");
+    tile.passing = points_of(dict, "passing");
+    tile.passing_id = flat<std::uint32_t>(dict, "passing_id");
+    tile.improper = flat<std::uint8_t>(dict, "improper");
+    tile.keys = flat<std::uint64_t>(dict, "keys");
+    const std::size_t n = in.vertex_id.size();
+    if (tile.cut_end.size() != n) malformed("cut_end is not one per vertex");
+    if (!tile.improper.empty() && tile.improper.size() != n) malformed("improper is not one per vertex");
+    if (tile.frozen.size() != in.map.chains.size()) malformed("frozen is not one per chain");
+    if (tile.passing.size() != 2 * tile.passing_id.size()) malformed("passing is not two points per passing_id");
+    const auto queued = static_cast<std::size_t>(
+        std::count(in.state.begin(), in.state.end(), static_cast<std::uint8_t>(map::VertexState::queued)));
+    if (!tile.keys.empty() && tile.keys.size() != queued) malformed("keys are not one per queued vertex");
+    return tile;
+}
+
+py::dict live_dict(const map::LiveVertices& live) {
+    py::dict dict;
+    dict["ids"] = array_of(live.ids);
+    dict["points"] = points_array(live.points);
+    dict["states"] = array_of(live.states);
+    dict["marked"] = array_of(live.marked);
+    return dict;
+}
+
+map::LiveVertices live_of(const py::dict& dict, std::size_t n, bool marks) {
+    map::LiveVertices live;
+    live.ids = flat<std::uint32_t>(dict, "ids");
+    live.points = points_of(dict, "points");
+    live.states = flat<std::uint8_t>(dict, "states");
+    live.marked = flat<std::uint8_t>(dict, "marked");
+    const std::size_t k = live.ids.size();
+    if (live.points.size() != k || live.states.size() != k || live.marked.size() != (marks ? k : 0)) {
+        malformed("a tile's live vertices do not have one point, state (and mark) each");
+    }
+    for (std::size_t i = 0; i < k; ++i) {
+        if (live.ids[i] >= n || (i > 0 && live.ids[i] <= live.ids[i - 1])) malformed("a tile's live vertices are not the map's, in order");
+        if (live.states[i] >= static_cast<std::uint8_t>(map::VertexState::removed)) malformed("a live vertex's state is not one");
+    }
+    return live;
+}
+
+py::tuple predicates_tuple(const exact::PredicateStats& p) { return py::make_tuple(p.filter_decided, p.expansion_decided, p.gmp_fallbacks); }
+
+exact::PredicateStats predicates_of(const py::handle& tuple) {
+    exact::PredicateStats p;
+    std::tie(p.filter_decided, p.expansion_decided, p.gmp_fallbacks) = tuple.cast<std::tuple<std::uint64_t, std::uint64_t, std::uint64_t>>();
+    return p;
+}
+
+// A list of FirstTile objects.
+std::vector<const map::FirstTile*> tiles_in(const py::list& list) {
+    std::vector<const map::FirstTile*> tiles;
+    for (const py::handle tile : list) tiles.push_back(&tile.cast<const map::FirstTile&>());
+    return tiles;
+}
+
 }  // namespace
 
 RoundGroups::RoundGroups(const map::MapInParts& parts, std::size_t count) : parts_(&parts), count_(count) {}
@@ -348,6 +514,300 @@ py::list RoundGroups::get(std::ptrdiff_t k) const {
     return tiles;
 }
 
+FirstSteps::FirstSteps(const map::MapData& map, const map::SimplifyOptions& options, const map::GridPlan& plan, unsigned tile_level,
+                       std::uint64_t part_vertices)
+    : map_(map), lead_(std::make_unique<map::FirstRoundLead>(plan, tile_level, options, map.vertices.size())) {
+    lead_->add_control_points(map.control_points);
+    const auto chains = static_cast<std::uint32_t>(map.chains.size());
+    part_chain_.push_back(0);
+    for (std::uint32_t c = 0; c < chains;) {
+        const std::uint32_t first = map.chains[c].first;
+        while (c < chains && (c == part_chain_.back() || map.chains[c].last - first < part_vertices)) ++c;
+        part_chain_.push_back(c);
+    }
+}
+
+const map::FirstRoundLead& FirstSteps::lead() const {
+    if (!open_ || lead_ == nullptr) throw std::runtime_error("the first round is over: its steps are gone");
+    return *lead_;
+}
+
+map::FirstRoundLead& FirstSteps::lead() {
+    if (!open_ || lead_ == nullptr) throw std::runtime_error("the first round is over: its steps are gone");
+    return *lead_;
+}
+
+py::dict FirstSteps::part(std::ptrdiff_t k) const {
+    lead();
+    if (k < 0) k += static_cast<std::ptrdiff_t>(size());
+    if (k < 0 || static_cast<std::size_t>(k) >= size()) throw py::index_error("no such part of the map");
+    return part_dict(map_, part_chain_[static_cast<std::size_t>(k)], part_chain_[static_cast<std::size_t>(k) + 1]);
+}
+
+std::uint64_t FirstSteps::part_vertices(std::ptrdiff_t k) const {
+    lead();
+    if (k < 0 || static_cast<std::size_t>(k) >= size()) throw py::index_error("no such part of the map");
+    const auto at = static_cast<std::size_t>(k);
+    return map_.chains[part_chain_[at + 1] - 1].last + 1 - map_.chains[part_chain_[at]].first;
+}
+
+void FirstSteps::add_facts(const py::dict& dict) {
+    map::FirstRoundLead& first = lead();
+    const map::ChainFacts facts = facts_of(dict, map_.vertices.size());
+    if (item(dict, "first_chain").cast<std::uint32_t>() != next_chain_) malformed("a part's facts are not the next part's");
+    // (The chains must be this map's: the part was cut from it.)
+    for (std::size_t i = 0; i < facts.chains.size(); ++i) {
+        const std::size_t c = next_chain_ + i;
+        if (c >= map_.chains.size() || facts.chains[i].first != map_.chains[c].first || facts.chains[i].last != map_.chains[c].last) {
+            malformed("a part's facts are not of the map's chains");
+        }
+    }
+    first.add_facts(facts, next_chain_);
+    next_chain_ += static_cast<std::uint32_t>(facts.chains.size());
+}
+
+void FirstSteps::found(const py::dict& answer) {
+    const std::vector<std::uint32_t> border = flat<std::uint32_t>(answer, "border");
+    if (std::any_of(border.begin(), border.end(), [&](std::uint32_t v) { return v >= map_.vertices.size(); })) {
+        malformed("a tile's search names a segment the map has not");
+    }
+    lead().found(border, predicates_of(item(answer, "predicates")));
+}
+
+py::array_t<std::uint32_t> FirstSteps::border() {
+    map::FirstRoundLead& first = lead();
+    if (next_chain_ != map_.chains.size()) malformed("not every part's facts came");
+    return array_of(first.border());
+}
+
+void FirstSteps::queued(std::uint64_t pinned, std::uint64_t keys) { lead().queued(pinned, keys); }
+
+std::uint64_t FirstSteps::wanted() { return lead().wanted(); }
+
+void FirstSteps::bound(std::uint64_t key, std::uint32_t id) {
+    if (id >= map_.vertices.size()) malformed("the bound names a vertex the map has not");
+    lead().bound({key, id});
+}
+
+py::list FirstSteps::groups(const py::list& tiles) {
+    std::vector<map::FirstRoundLead::TileFacts> facts;
+    const std::uint32_t chains = lead().chains();
+    for (const py::handle tile : tiles) {
+        const auto [number, busy, open] = tile.cast<std::tuple<std::uint32_t, bool, py::object>>();
+        py::dict holder;
+        holder["open"] = open;
+        std::vector<std::uint32_t> list = flat<std::uint32_t>(holder, "open");
+        if (std::any_of(list.begin(), list.end(), [&](std::uint32_t c) { return c >= chains; })) malformed("a tile names a chain the map has not");
+        facts.push_back({number, busy, std::move(list)});
+    }
+    py::list out;
+    for (const std::vector<std::uint32_t>& group : lead().groups(std::move(facts))) out.append(py::cast(group));
+    return out;
+}
+
+py::array_t<double> FirstSteps::points(std::uint32_t tile) const { return points_array(lead().points(tile)); }
+
+void FirstSteps::finish(const py::list& live_list, const py::list& outcome_list) {
+    map::FirstRoundLead& first = lead();
+    std::vector<map::LiveVertices> live;
+    for (const py::handle one : live_list) live.push_back(live_of(one.cast<py::dict>(), map_.vertices.size(), first.marks()));
+    std::vector<map::TileOutcome> outcomes;
+    for (const py::handle one : outcome_list) outcomes.push_back(outcome_of(one.cast<py::dict>(), map_));
+    {
+        py::gil_scoped_release release;
+        try {
+            parts_ = first.finish(std::move(live), outcomes, here_below_);
+        } catch (const std::invalid_argument& error) {
+            py::gil_scoped_acquire gil;
+            malformed(error.what());
+        }
+    }
+    lead_.reset();
+}
+
+std::unique_ptr<map::MapInParts> FirstSteps::take() {
+    if (parts_ == nullptr) malformed("the first round did not finish");
+    return std::move(parts_);
+}
+
+namespace {
+
+// The first round's tasks (python/toposimp/dask.py).
+
+// A part of the map → (its facts, its tiles' pieces).
+py::tuple first_cut(const py::dict& part, const py::dict& plan, unsigned tile_level, const py::dict& options) {
+    const map::MapData data = part_of(part);
+    const auto first_vertex = item(part, "first_vertex").cast<std::uint32_t>();
+    const auto first_chain = item(part, "first_chain").cast<std::uint32_t>();
+    if (std::uint64_t{first_vertex} + data.vertices.size() >= std::numeric_limits<std::uint32_t>::max() ||
+        std::uint64_t{first_chain} + data.chains.size() >= std::numeric_limits<std::uint32_t>::max()) {
+        malformed("a part's vertices or chains are beyond the map's ids");
+    }
+    const map::GridPlan grid = plan_of(plan);
+    const map::SimplifyOptions simplify = options_of(options);
+    map::CutPart cut;
+    {
+        py::gil_scoped_release release;
+        cut = map::cut_part(data, first_vertex, first_chain, grid, tile_level, simplify);
+    }
+    py::dict facts = facts_dict(cut, first_chain);
+    py::list tiles;
+    for (map::FirstTile& tile : cut.tiles) tiles.append(py::cast(std::move(tile)));
+    return py::make_tuple(facts, tiles);
+}
+
+// A tile's pieces from every part (in order) → (the tile searched, {"border", "predicates"}).
+py::tuple first_search(const py::list& pieces, const py::dict& options) {
+    const map::SimplifyOptions simplify = options_of(options);
+    const std::vector<const map::FirstTile*> parts = tiles_in(pieces);
+    if (parts.empty()) malformed("a tile without pieces");
+    map::FirstTile tile;
+    std::vector<std::uint32_t> border;
+    exact::PredicateStats predicates;
+    {
+        py::gil_scoped_release release;
+        tile = *parts.front();
+        for (std::size_t k = 1; k < parts.size(); ++k) {
+            if (parts[k]->number != tile.number) malformed("a tile's pieces are not of one tile");
+            tile.add(map::FirstTile(*parts[k]));
+        }
+        border = tile.search(simplify.arithmetic, predicates);
+    }
+    py::dict answer;
+    answer["border"] = array_of(border);
+    answer["predicates"] = predicates_tuple(predicates);
+    return py::make_tuple(py::cast(std::move(tile)), answer);
+}
+
+// A histogram as its nonzero digits and their counts.
+py::dict sparse_histogram(const std::vector<std::uint64_t>& counts) {
+    std::vector<std::uint32_t> digits;
+    std::vector<std::uint64_t> nonzero;
+    for (std::size_t d = 0; d < counts.size(); ++d) {
+        if (counts[d] == 0) continue;
+        digits.push_back(static_cast<std::uint32_t>(d));
+        nonzero.push_back(counts[d]);
+    }
+    py::dict dict;
+    dict["digits"] = array_of(digits);
+    dict["counts"] = array_of(nonzero);
+    return dict;
+}
+
+std::vector<std::uint64_t> tiles_histogram(const std::vector<const map::FirstTile*>& tiles, int shift, std::uint64_t high) {
+    if (shift < 0 || shift > 48 || shift % 16 != 0) malformed("a histogram's digit is not one");
+    std::vector<std::uint64_t> counts(std::size_t{1} << 16, 0);
+    for (const map::FirstTile* tile : tiles) tile->histogram(shift, high, counts);
+    return counts;
+}
+
+// A searched tile and the lead's border → (the tile queued, what the lead needs of it: pinned and
+// queued counts, its vertices, its open chains, and a count target's smallest pair and first
+// histogram).
+py::tuple first_queue(const map::FirstTile& searched, const py::object& border, bool marks, const py::dict& options) {
+    const map::SimplifyOptions simplify = options_of(options);
+    py::dict holder;
+    holder["border"] = border;
+    const std::vector<std::uint32_t> sorted = flat<std::uint32_t>(holder, "border");
+    if (!std::is_sorted(sorted.begin(), sorted.end())) malformed("the border is not sorted");
+    if (searched.improper.size() != searched.input.vertex_id.size()) malformed("a tile queued before its search");
+    map::FirstTile tile;
+    std::uint64_t pinned = 0;
+    std::vector<std::uint64_t> counts;
+    {
+        py::gil_scoped_release release;
+        tile = searched;
+        pinned = tile.queue(sorted, marks, simplify.ranking);
+        if (marks) counts = tiles_histogram({&tile}, 48, 0);
+    }
+    py::dict answer;
+    answer["number"] = tile.number;
+    answer["pinned"] = pinned;
+    answer["queued"] = tile.queued();
+    answer["vertices"] = tile.input.vertex_id.size();
+    answer["open"] = array_of(tile.open_chains());
+    if (marks) {
+        answer["histogram"] = sparse_histogram(counts);
+        answer["smallest"] = tile.smallest();
+    }
+    return py::make_tuple(py::cast(std::move(tile)), answer);
+}
+
+// The sum of the tiles' histograms (select_kth_by_digits's), sparse.
+py::dict first_histogram(const py::list& tiles, int shift, std::uint64_t high) {
+    const std::vector<const map::FirstTile*> all = tiles_in(tiles);
+    std::vector<std::uint64_t> counts;
+    {
+        py::gil_scoped_release release;
+        counts = tiles_histogram(all, shift, high);
+    }
+    return sparse_histogram(counts);
+}
+
+py::array_t<std::uint32_t> first_ids_at(const py::list& tiles, std::uint64_t key) {
+    std::vector<std::uint32_t> ids;
+    for (const map::FirstTile* tile : tiles_in(tiles)) tile->ids_at(key, ids);
+    return array_of(ids);
+}
+
+// The tiles' (key, id) pairs in a DigitSelector's bucket.
+py::dict first_pairs_in(const py::list& tiles, int shift, std::uint64_t prefix) {
+    if (shift < 0 || shift > 48 || shift % 16 != 0) malformed("a bucket's digit is not one");
+    std::vector<std::uint64_t> keys;
+    std::vector<std::uint32_t> ids;
+    for (const map::FirstTile* tile : tiles_in(tiles)) tile->pairs_in(shift, prefix, keys, ids);
+    py::dict dict;
+    dict["keys"] = array_of(keys);
+    dict["ids"] = array_of(ids);
+    return dict;
+}
+
+// A group of queued tiles run, with their control points → (their outcomes, their live vertices).
+py::tuple first_run(const py::list& tiles, const py::list& points, bool marks, std::pair<double, std::uint32_t> bound, const py::dict& plan,
+                    const py::dict& options) {
+    const std::vector<const map::FirstTile*> group = tiles_in(tiles);
+    if (points.size() != group.size()) malformed("not one list of control points per tile");
+    std::vector<std::vector<Point>> inside;
+    for (const py::handle one : points) {
+        py::dict holder;
+        holder["points"] = one;
+        inside.push_back(points_of(holder, "points"));
+    }
+    const map::GridPlan grid = plan_of(plan);
+    const map::SimplifyOptions simplify = options_of(options);
+    for (const map::FirstTile* tile : group) {
+        if (tile->input.state.size() != tile->input.vertex_id.size() || (marks && tile->keys.size() != tile->queued())) {
+            malformed("a tile run before it is queued");
+        }
+        if (tile->input.level != group.front()->input.level || tile->input.level > grid.levels) malformed("the tiles are not of one level of the plan");
+    }
+    std::vector<map::TileOutcome> outcomes;
+    std::vector<map::LiveVertices> live;
+    {
+        py::gil_scoped_release release;
+        std::vector<map::TileInput> inputs;
+        for (std::size_t k = 0; k < group.size(); ++k) inputs.push_back(group[k]->run_input(marks, bound.first, bound.second, std::move(inside[k])));
+        outcomes = map::run_tile_group(std::move(inputs), grid, simplify);
+        const auto changed = map::changed_states(outcomes);
+        for (const map::FirstTile* tile : group) live.push_back(map::live_vertices(*tile, changed, marks, bound.first, bound.second));
+#ifdef __GLIBC__
+        malloc_trim(0);
+#endif
+    }
+    py::list outcome_list, live_list;
+    for (const map::TileOutcome& outcome : outcomes) outcome_list.append(outcome_dict(outcome));
+    for (const map::LiveVertices& one : live) live_list.append(live_dict(one));
+    return py::make_tuple(outcome_list, live_list);
+}
+
+// A queued tile whose group sat the round out → its live vertices.
+py::dict first_live(const map::FirstTile& tile, bool marks, std::pair<double, std::uint32_t> bound) {
+    if (tile.input.state.size() != tile.input.vertex_id.size()) malformed("a tile's live vertices asked for before it is queued");
+    return live_dict(map::live_vertices(tile, {}, marks, bound.first, bound.second));
+}
+
+}  // namespace
+
 void bind_parts(py::module_& module) {
     py::class_<RoundGroups>(module, "RoundGroups",
                             "A round's tile groups: groups[k] builds group k's tiles (a list of dicts) when asked for")
@@ -355,6 +815,83 @@ void bind_parts(py::module_& module) {
         .def("__getitem__", &RoundGroups::get, py::arg("k"))
         .def("points", &RoundGroups::points, py::arg("k"),
              "group k's vertices (with its tiles' cut ends) and control points, known before it is built");
+    py::class_<FirstSteps, std::shared_ptr<FirstSteps>>(module, "FirstSteps", "The first round's side here, while the run's first_round runs (python/parts.hpp)")
+        .def("__len__", &FirstSteps::size)
+        .def("part", &FirstSteps::part, py::arg("k"))
+        .def("part_vertices", &FirstSteps::part_vertices, py::arg("k"))
+        .def("add_facts", &FirstSteps::add_facts, py::arg("facts"))
+        .def("found", &FirstSteps::found, py::arg("answer"))
+        .def("border", &FirstSteps::border)
+        .def("queued", &FirstSteps::queued, py::arg("pinned"), py::arg("keys"))
+        .def("wanted", &FirstSteps::wanted)
+        .def("bound", &FirstSteps::bound, py::arg("key"), py::arg("id"))
+        .def_property_readonly("marks", &FirstSteps::marks)
+        .def_property_readonly("bound_now", &FirstSteps::bound_now)
+        .def("groups", &FirstSteps::groups, py::arg("tiles"))
+        .def("points", &FirstSteps::points, py::arg("tile"))
+        .def("points_in", &FirstSteps::points_in, py::arg("tile"))
+        .def("finish", &FirstSteps::finish, py::arg("live"), py::arg("outcomes"));
+    py::class_<parallel::DigitSelector>(module, "DigitSelector", "The k-th smallest (key, id) by a histogram of 16-bit digits a pass")
+        .def(py::init<std::uint64_t>(), py::arg("k"))
+        .def_property_readonly("counting", &parallel::DigitSelector::counting)
+        .def_property_readonly("shift", &parallel::DigitSelector::shift)
+        .def_property_readonly("high", &parallel::DigitSelector::high)
+        .def_property_readonly("key", &parallel::DigitSelector::key)
+        .def("counted",
+             [](parallel::DigitSelector& selector, const py::object& total) {
+                 if (!selector.counting()) malformed("a histogram after the last pass");
+                 py::dict holder;
+                 holder["total"] = total;
+                 const std::vector<std::uint64_t> counts = flat<std::uint64_t>(holder, "total");
+                 if (counts.size() != (std::size_t{1} << 16)) malformed("a histogram is not of 65536 counts");
+                 selector.counted(counts);
+             })
+        .def("choose_among",
+             [](const parallel::DigitSelector& selector, const py::object& keys, const py::object& ids) {
+                 // The pairs of the bucket the last pass ended in, gathered: the rank-th of them.
+                 if (selector.shift() == 48) malformed("pairs chosen among before a pass");
+                 py::dict holder;
+                 holder["keys"] = keys;
+                 holder["ids"] = ids;
+                 const std::vector<std::uint64_t> all_keys = flat<std::uint64_t>(holder, "keys");
+                 const std::vector<std::uint32_t> all_ids = flat<std::uint32_t>(holder, "ids");
+                 const int shift = selector.shift() + 16;
+                 if (all_keys.size() != all_ids.size() || selector.rank() < 1 || all_keys.size() < selector.rank()) {
+                     malformed("fewer pairs in the bucket than its rank");
+                 }
+                 std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;
+                 pairs.reserve(all_keys.size());
+                 for (std::size_t k = 0; k < all_keys.size(); ++k) {
+                     if (all_keys[k] >> shift != selector.high()) malformed("a pair is not in the bucket");
+                     pairs.emplace_back(all_keys[k], all_ids[k]);
+                 }
+                 const auto at = pairs.begin() + static_cast<std::ptrdiff_t>(selector.rank() - 1);
+                 std::nth_element(pairs.begin(), at, pairs.end());
+                 return py::make_tuple(at->first, at->second);
+             })
+        .def("choose", [](const parallel::DigitSelector& selector, const py::object& ids) {
+            if (selector.counting()) malformed("ids chosen among before the last pass");
+            py::dict holder;
+            holder["ids"] = ids;
+            std::vector<std::uint32_t> all = flat<std::uint32_t>(holder, "ids");
+            if (selector.rank() < 1 || all.size() < selector.rank()) malformed("fewer ids at the key than its rank");
+            const parallel::KeyedSelection chosen = selector.choose(std::move(all));
+            return py::make_tuple(chosen.key, chosen.id);
+        });
+    py::class_<map::FirstTile>(module, "FirstTile", "A tile of the first round as it is built (core/map/tiles.hpp)")
+        .def_property_readonly("number", [](const map::FirstTile& tile) { return tile.number; })
+        .def_property_readonly("vertices", [](const map::FirstTile& tile) { return tile.input.vertex_id.size(); })
+        .def(py::pickle([](const map::FirstTile& tile) { return first_tile_dict(tile); },
+                        [](const py::dict& dict) { return first_tile_of(dict); }));
+    module.def("first_cut", &first_cut, py::arg("part"), py::arg("plan"), py::arg("tile_level"), py::arg("options"));
+    module.def("first_search", &first_search, py::arg("pieces"), py::arg("options"));
+    module.def("first_queue", &first_queue, py::arg("tile"), py::arg("border"), py::arg("marks"), py::arg("options"));
+    module.def("first_histogram", &first_histogram, py::arg("tiles"), py::arg("shift"), py::arg("high"));
+    module.def("first_ids_at", &first_ids_at, py::arg("tiles"), py::arg("key"));
+    module.def("first_pairs_in", &first_pairs_in, py::arg("tiles"), py::arg("shift"), py::arg("prefix"));
+    module.def("first_run", &first_run, py::arg("tiles"), py::arg("points"), py::arg("marks"), py::arg("bound"), py::arg("plan"),
+               py::arg("options"));
+    module.def("first_live", &first_live, py::arg("tile"), py::arg("marks"), py::arg("bound"));
 }
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
@@ -363,26 +900,59 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     auto seconds = [](Clock::time_point from) { return std::chrono::duration<double>(Clock::now() - from).count(); };
     const auto start = Clock::now();
     unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : 0;
-    if (tile_level < 0) {
-        std::uint64_t budget = 0;
+    std::uint64_t budget = 1'000'000;  // (the first round's parts' size too; this if the tile level is given and tile_points is a callable)
+    {
+        py::gil_scoped_acquire gil;
+        if (tile_level < 0) {
+            budget = (PyCallable_Check(tile_points.ptr()) ? tile_points() : tile_points).cast<std::uint64_t>();
+        } else if (!PyCallable_Check(tile_points.ptr())) {
+            budget = tile_points.cast<std::uint64_t>();
+        }
+    }
+    if (tile_level < 0) level = tile_level_for(map, map::plan_grid(map), budget);
+    bool first_here = true;  // the first round's tiles built here (or on the workers: run_groups.first_round)
+    {
+        py::gil_scoped_acquire gil;
+        first_here = !py::hasattr(run_groups, "first_round");
+    }
+    std::unique_ptr<map::MapInParts> parts;
+    unsigned round = 1;
+    if (first_here) {
+        parts = std::make_unique<map::MapInParts>(map, options, level, here_below);
+    } else {
+        // The map is cut into parts on the workers, and the first round's tiles are built, searched
+        // and run there; this process holds only what FirstRoundLead holds, then the live map.
+        const map::GridPlan grid = map::plan_grid(map);
+        // (Held by Python too, which may keep it past the run: closed then, every call refused.)
+        const auto steps = std::make_shared<FirstSteps>(map, options, grid, level, std::max<std::uint64_t>(budget, 1));
+        steps->here_below_ = here_below;
         {
             py::gil_scoped_acquire gil;
-            budget = (PyCallable_Check(tile_points.ptr()) ? tile_points() : tile_points).cast<std::uint64_t>();
+            py::dict plan = plan_dict(grid);
+            plan["tile_level"] = std::min(level, grid.levels);
+            try {
+                run_groups.attr("first_round")(py::cast(steps), plan, options_dict(options));
+            } catch (...) {
+                steps->close();
+                throw;
+            }
+            steps->close();
         }
-        level = tile_level_for(map, map::plan_grid(map), budget);
+        parts = steps->take();
+        parts->run_top_here();
+        ++round;
     }
-    map::MapInParts parts(map, options, level, here_below);
     const double set_up = seconds(start);
     const auto rounds_start = Clock::now();
-    bool whole = true;  // the whole map's engine is still here
-    for (unsigned round = 1; parts.next_round(); ++round) {
-        const std::size_t count = parts.split_round();
+    bool whole = first_here;  // the whole map's engine is still here
+    for (; parts->next_round(); ++round) {
+        const std::size_t count = parts->split_round();
         std::vector<map::TileOutcome> outcomes;
         if (count > 0) {
             py::gil_scoped_acquire gil;
-            py::object groups = py::cast(RoundGroups(parts, count));
-            py::dict plan = plan_dict(parts.plan());
-            plan["tile_level"] = parts.tile_level();  // (for progress; the tiles carry their level)
+            py::object groups = py::cast(RoundGroups(*parts, count));
+            py::dict plan = plan_dict(parts->plan());
+            plan["tile_level"] = parts->tile_level();  // (for progress; the tiles carry their level)
             py::object done;
             try {
                 done = run_groups(groups, plan, options_dict(options), round);
@@ -395,19 +965,19 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
             if (results.size() != count) malformed("not one outcome list per group");
             for (std::size_t k = 0; k < count; ++k) {
                 const auto group = results[k].cast<py::list>();
-                if (group.size() != parts.group_size(k)) malformed("not one outcome per tile");
+                if (group.size() != parts->group_size(k)) malformed("not one outcome per tile");
                 for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
             }
         }
-        if (!parts.finish_tiles(outcomes)) continue;
+        if (!parts->finish_tiles(outcomes)) continue;
         // From the first round's tiles on, the engine here holds the live vertices only.
         if (whole && count > 0) {
-            parts.keep_live_only();
+            parts->keep_live_only();
             whole = false;
         }
-        parts.run_top_here();
+        parts->run_top_here();
     }
-    map::SimplifyResult result = parts.result();
+    map::SimplifyResult result = parts->result();
     // The phases: set-up and the crossing search; the rounds (tiles and the levels above).
     result.stats.seconds_crossings = set_up;
     result.stats.seconds_sweep = seconds(rounds_start);

@@ -5,6 +5,7 @@
 #include "core/map/simplify.hpp"
 #include "core/map/tiles.hpp"
 
+#include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 
 #include <cstdint>
@@ -35,14 +36,59 @@ private:
     std::size_t count_;
 };
 
-// RoundGroups for Python.
+// The first round of a run whose tiles are built on the workers (map::FirstRoundLead here, the
+// stages' tasks elsewhere: python/toposimp/dask.py, first_round): the map's parts to cut, and
+// the lead's side of every stage, each answer checked. Usable while the run's first_round runs.
+class FirstSteps {
+public:
+    FirstSteps(const map::MapData& map, const map::SimplifyOptions& options, const map::GridPlan& plan, unsigned tile_level,
+               std::uint64_t part_vertices);
+    std::size_t size() const { return part_chain_.size() - 1; }  // the parts
+    py::dict part(std::ptrdiff_t k) const;                         // part k's chains (a dict), built when asked for
+    std::uint64_t part_vertices(std::ptrdiff_t k) const;
+    void add_facts(const py::dict& facts);  // each part's, in order
+    void found(const py::dict& answer);     // each tile's search: {"border", "predicates"}
+    py::array_t<std::uint32_t> border();
+    void queued(std::uint64_t pinned, std::uint64_t keys);
+    std::uint64_t wanted();
+    void bound(std::uint64_t key, std::uint32_t id);
+    bool marks() const { return lead_->marks(); }
+    py::tuple bound_now() const { return py::make_tuple(lead_->bound_key(), lead_->bound_id()); }
+    py::list groups(const py::list& tiles);  // each tile holding vertices: (number, busy, open chains)
+    py::array_t<double> points(std::uint32_t tile) const;
+    std::uint64_t points_in(std::uint32_t tile) const { return lead().points_in(tile); }
+    // Every tile's live vertices (dicts) and every group's outcomes (dicts).
+    void finish(const py::list& live, const py::list& outcomes);
+    std::unique_ptr<map::MapInParts> take();  // (after close)
+    void close() { open_ = false; }
+
+private:
+    const map::FirstRoundLead& lead() const;
+    map::FirstRoundLead& lead();
+
+    const map::MapData& map_;
+    std::unique_ptr<map::FirstRoundLead> lead_;
+    std::vector<std::uint32_t> part_chain_;  // part k: chains [part_chain_[k], part_chain_[k + 1])
+    std::uint32_t next_chain_ = 0;
+    std::uint64_t here_below_ = 0;
+    std::unique_ptr<map::MapInParts> parts_;
+    bool open_ = true;
+    friend map::SimplifyResult run_in_parts(const map::MapData&, const map::SimplifyOptions&, const py::object&, int, const py::object&,
+                                            std::uint64_t);
+};
+
+// RoundGroups, FirstSteps, map::FirstTile and the first round's tasks for Python.
 void bind_parts(py::module_& module);
 
 // Runs the map in parts (map::MapInParts): each round's tile groups go to
 // `run_groups(groups, plan, options, round) -> outcomes` (RoundGroups in, a list per group of
-// outcome dicts back, in the same order). The tile level is `tile_level`, or,
-// if negative, the coarsest whose biggest tile holds at most `tile_points` vertices and control
-// points (a number, or a callable giving it: called once the map is read). A count target's round whose budget is under `here_below` vertices runs here, whole.
+// outcome dicts back, in the same order). If run_groups has a `first_round` attribute, the first
+// round is `run_groups.first_round(steps, plan, options)` instead (FirstSteps: its tiles built
+// and run on the workers, no engine over the whole map here, the map cut into parts of about
+// `tile_points` vertices). The tile level is `tile_level`, or, if negative, the coarsest whose
+// biggest tile holds at most `tile_points` vertices and control points (a number, or a callable
+// giving it: called once the map is read, and only if the level is to be chosen; 1 000 000
+// otherwise). A count target's round whose budget is under `here_below` vertices runs here, whole.
 // Called with the GIL released; takes it to call run_groups.
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
                                  int tile_level, const py::object& tile_points, std::uint64_t here_below);

@@ -56,7 +56,8 @@ def generated(tmp_path_factory):
     return generate_map.generate(folder, cells=24, edge_vertices=30, rivers=40, river_steps=400, roads=6, points=8000, seed=3)
 
 
-def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path):
+@pytest.mark.parametrize("first_round", ["here", "workers"])
+def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path, first_round):
     from toposimp import dask as toposimp_dask
 
     client, workers = cluster
@@ -81,7 +82,7 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path):
 
     output = tmp_path / "dask.gpkg"
     status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, local_budget=0, quiet=True,
-                               on_progress=kill_one)
+                               on_progress=kill_one, first_round=first_round)
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
     assert killed["tasks"] > 0
@@ -98,11 +99,11 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
         arguments = [str(polygons_and_lines), "-p", str(places), *target, *SAME_DATE]
         reference = tmp_path / "reference.gpkg"
         subprocess.run([binary, "map", *arguments, "-o", str(reference), "--overwrite"], check=True, capture_output=True)
-        for level in (0, 2, -1):
+        for level, first_round in ((0, "workers"), (2, "here"), (-1, "workers")):
             output = tmp_path / f"level{level}.gpkg"
             assert toposimp_dask.run([*arguments, "-o", str(output), "--overwrite"], client=client, tile_level=level,
-                                     local_budget=0 if level != 2 else 2000, quiet=True) == 0
-            assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}"
+                                     local_budget=0 if level != 2 else 2000, quiet=True, first_round=first_round) == 0
+            assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}, first round {first_round}"
 
 
 def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys):

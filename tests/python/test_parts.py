@@ -101,3 +101,177 @@ def test_a_malformed_tile_stops_the_run(tmp_path, damage, message):
     with pytest.raises(ValueError, match="a tile task's data is malformed: " + message):
         _toposimp.run_command(["map", *arguments], damaged, 2, 0, 0, None, False, False)
     assert not (tmp_path / "out.gpkg").exists()
+
+
+class FirstRoundHere:
+    """run_groups with a first_round: the first round's stages (as python/toposimp/dask.py runs
+    them on workers) run here in turn, every tile through a pickle round trip between stages (as
+    between workers), the pairs of the budget's bucket gathered after the first pass or not
+    (`gather_after`), and `damage(stage, value)` to break one answer."""
+
+    def __init__(self, gather_after=0, damage=None):
+        import pickle
+
+        self.gather_after, self.damage = gather_after, damage or (lambda stage, value: value)
+        self.moved = lambda tile: pickle.loads(pickle.dumps(tile))
+        self.stages = []
+
+    def __call__(self, groups, plan, options, round_number):
+        return [_toposimp.run_tile_group(group, plan, options) for group in groups]
+
+    def first_round(self, steps, plan, options):
+        level = plan["tile_level"]
+        pieces = {}
+        for k in range(len(steps)):
+            facts, tiles = _toposimp.first_cut(steps.part(k), plan, level, options)
+            steps.add_facts(self.damage("facts", facts))
+            assert [tile.number for tile in tiles] == facts["tiles"].tolist()
+            for tile in tiles:
+                pieces.setdefault(tile.number, []).append(self.moved(tile))
+        searched = {}
+        for number in sorted(pieces):
+            tile, answer = _toposimp.first_search(pieces[number], options)
+            searched[number] = self.moved(self.damage("searched", tile))
+            steps.found(answer)
+        border = steps.border()
+        queued, answers = {}, []
+        for number, tile in searched.items():
+            tile, answer = _toposimp.first_queue(tile, border, steps.marks, options)
+            queued[number] = self.moved(tile)
+            answers.append(answer)
+            steps.queued(answer["pinned"], answer["queued"])
+        tiles = list(queued.values())
+        wanted = steps.wanted()
+        bound = None
+        if wanted > 0:
+            def dense(histograms):
+                total = numpy.zeros(1 << 16, dtype=numpy.uint64)
+                for histogram in histograms:
+                    numpy.add.at(total, histogram["digits"], histogram["counts"])
+                return total
+
+            selector = _toposimp.DigitSelector(wanted)
+            total = dense(a["histogram"] for a in answers)
+            selector.counted(total)
+            passes = 1
+            while selector.counting and passes <= self.gather_after:
+                selector.counted(dense([_toposimp.first_histogram(tiles, selector.shift, selector.high)]))
+                passes += 1
+            if selector.counting:
+                pairs = _toposimp.first_pairs_in(tiles, selector.shift + 16, selector.high)
+                bound = selector.choose_among(pairs["keys"], pairs["ids"])
+                self.stages.append("pairs")
+            else:
+                bound = selector.choose(_toposimp.first_ids_at(tiles, selector.key))
+                self.stages.append("ids")
+            steps.bound(*bound)
+        holding = [a for a in answers if a["vertices"] > 0]
+        groups = []
+        if wanted > 0 or not steps.marks:
+            groups = steps.groups([(a["number"], steps.marks and tuple(a["smallest"]) <= tuple(bound), a["open"]) for a in holding])
+        now = steps.bound_now
+        live, outcomes = [], []
+        running = set()
+        for group in groups:
+            done, lives = _toposimp.first_run([queued[n] for n in group], [steps.points(n) for n in group], steps.marks, now, plan, options)
+            outcomes.extend(done)
+            live.extend(lives)
+            running.update(group)
+        live.extend(_toposimp.first_live(queued[a["number"]], steps.marks, now) for a in holding if a["number"] not in running)
+        steps.finish(self.damage("live", live), outcomes)
+        self.steps = steps
+
+
+@pytest.fixture(scope="module")
+def crossing_map(tmp_path_factory):
+    """A coverage, rivers and roads that cross them, and places: scripts/bench/generate_map.py."""
+    import sys
+
+    sys.path.insert(0, str(DATA.parent / "scripts" / "bench"))
+    import generate_map
+
+    return generate_map.generate(tmp_path_factory.mktemp("crossing"), cells=6, edge_vertices=12, rivers=12, river_steps=120, roads=4,
+                                 points=600, seed=5)
+
+
+@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"], ["--keep-points", "1500"], ["--max-area", "2e-4"]])
+@pytest.mark.parametrize("level, gather_after", [(0, 0), (2, 0), (2, 3), (3, 1)])
+def test_first_round_by_stages_gives_the_same_bytes(binary, tmp_path, crossing_map, target, level, gather_after):
+    """The first round built, searched, selected and run by the stages' tasks (each tile pickled
+    between them), the rounds after as usual: toposimp map's output, byte for byte."""
+    import subprocess
+
+    lines, places = crossing_map
+    arguments = [str(lines), "-p", str(places), *target, *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    done = subprocess.run([binary, "map", *arguments, "-o", str(reference), "--json"], check=True, capture_output=True, text=True)
+    assert '"pinned_by_crossing":0' not in done.stdout  # (crossings to find)
+    first = FirstRoundHere(gather_after)
+    output = tmp_path / "stages.gpkg"
+    # (parts of about 700 vertices: several)
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output)], first, level, 700, 0, None, False, False)
+    assert status == 0, err
+    assert output.read_bytes() == reference.read_bytes()
+    if target[0] in ("--keep", "--keep-points"):
+        assert first.stages == ["pairs" if gather_after < 3 else "ids"]
+    with pytest.raises(RuntimeError, match="the first round is over"):
+        first.steps.border()
+
+
+def _drop_a_live_vertex(live):
+    live = [dict(one) for one in live]
+    tile = max(live, key=lambda one: len(one["ids"]))
+    for key in ("ids", "points", "states"):
+        tile[key] = tile[key][1:]
+    if len(tile["marked"]):
+        tile["marked"] = tile["marked"][1:]
+    return live
+
+
+@pytest.mark.parametrize("stage, damage, message", [
+    ("facts", lambda f: dict(f, first_chain=f["first_chain"] + 1), "a part's facts are not the next part's"),
+    ("facts", lambda f: dict(f, chains=f["chains"] + 1), "not of the map's chains|not the map's vertices"),
+    ("facts", lambda f: dict(f, orientation=numpy.full(len(f["orientation"]), 6, dtype=numpy.int8)), "an orientation is not one"),
+    ("facts", lambda f: dict(f, distinct=f["distinct"][1:]), "not one per chain"),
+    ("live", lambda live: [dict(one, states=numpy.full(len(one["states"]), 4, dtype=numpy.uint8)) for one in live],
+     "a live vertex's state is not one"),
+    ("live", lambda live: [dict(one, ids=one["ids"][::-1].copy()) for one in live], "not the map's, in order"),
+    ("live", lambda live: [dict(one, points=one["points"][1:]) if len(one["ids"]) else one for one in live], "one point, state"),
+    ("live", _drop_a_live_vertex, "do not add up"),
+    ("live", lambda live: live[1:], "do not add up"),
+    ("live", lambda live: live + live[:1], "do not add up"),
+])
+def test_a_malformed_first_round_answer_stops_the_run(tmp_path, stage, damage, message):
+    """Damaged answers of the first round's tasks stop the run with the reason, no output left."""
+    arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "--keep", "20%", "-o", str(tmp_path / "out.gpkg")]
+    first = FirstRoundHere(damage=lambda at, value: damage(value) if at == stage else value)
+    with pytest.raises(ValueError, match="a tile task's data is malformed: .*(" + message + ")"):
+        _toposimp.run_command(["map", *arguments], first, 2, 0, 0, None, False, False)
+    assert not (tmp_path / "out.gpkg").exists()
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda t: t.update(cut_end=t["cut_end"][1:]), "cut_end is not one per vertex"),
+    (lambda t: t.update(passing_id=numpy.zeros(3, dtype=numpy.uint32)), "passing is not two points per passing_id"),
+    (lambda t: t.update(keys=numpy.zeros(1, dtype=numpy.uint64)), "keys are not one per queued vertex"),
+    (lambda t: t.update(frozen=t["frozen"][1:]), "not one per chain"),
+    (lambda t: t.update(chains=t["chains"][1:]), "the chains do not"),
+    (lambda t: t.pop("improper"), "no 'improper'"),
+])
+def test_a_malformed_first_round_tile_is_refused(damage, message):
+    """A first-round tile that comes back from a transfer damaged is refused with the reason."""
+    import pickle
+
+    part = {"vertices": numpy.array([[0.0, 0.0], [1.0, 0.5], [2.0, 0.0], [3.0, 1.0]]), "chains": numpy.array([[0, 3]], dtype=numpy.uint32),
+            "frozen": numpy.zeros(1, dtype=numpy.uint8), "first_vertex": 0, "first_chain": 0}
+    plan = {"origin": (0.0, 0.0), "scale": (1.0, 1.0), "cells": (4, 2), "base_scale": (1.0, 1.0), "base_cells": (4, 2), "row_split": 0,
+            "shift": 0, "levels": 3}
+    options = {"target": 0, "value": 0.5, "weighting": 0.0, "spherical": False, "arithmetic": 0, "threads": 1}
+    _, tiles = _toposimp.first_cut(part, plan, 0, options)
+    tile, _ = _toposimp.first_search([tiles[0]], options)
+    tile, _ = _toposimp.first_queue(tile, numpy.zeros(0, dtype=numpy.uint32), True, options)
+    state = tile.__getstate__()
+    assert pickle.loads(pickle.dumps(tile)).__getstate__().keys() == state.keys()
+    damage(state)
+    with pytest.raises(ValueError, match="a tile task's data is malformed: .*" + message):
+        type(tile).__new__(type(tile)).__setstate__(state)

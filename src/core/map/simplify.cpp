@@ -2003,57 +2003,37 @@ MapInParts::MapInParts(TileInput live, std::size_t input_vertices, const GridPla
     engine_->resume_parts(progress);
 }
 
-// The first round's tiles as they are built: each a TileInput without states, marks and
-// control points yet, with what the crossing search needs besides.
-struct FirstRound::Impl {
-    struct Tile {
-        TileInput input;
-        std::vector<std::uint8_t> cut_end;  // per vertex of input.map
-        std::vector<std::uint8_t> frozen;   // per chain of input.map
-        MapData passing;                    // segments of other tiles' chains whose boxes meet the tile, a chain each
-        std::vector<std::uint32_t> passing_id;  // and their first vertices' whole-map ids
-        std::vector<std::uint8_t> improper;  // per vertex of input.map: its segment to the next, by this tile's search
-        std::vector<std::uint32_t> points;  // its control points (indices)
-        std::vector<std::uint64_t> keys;    // a count target's: its queued vertices' area keys
-        std::vector<std::uint32_t> key_ids;  // and their whole-map ids
-        bool busy = false;                  // a count target marked one of its vertices
-    };
+// ---- The first round in stages (tiles.hpp: FirstTile, cut_part, FirstRoundLead, FirstRound)
 
-    GridPlan plan;
+namespace {
+
+// cut_part's work for one part.
+struct Cutter {
+    const GridPlan& plan;
     unsigned t;
     const SimplifyOptions& options;
-    std::uint64_t vertices;
-    std::map<std::uint32_t, Tile> tiles;  // by number, row-major
-    std::vector<Chain> chains;            // the whole map's vertex ranges
-    std::vector<std::uint8_t> whole_level;
-    std::vector<std::uint32_t> distinct;
-    std::vector<std::int8_t> orientation;  // known for every ring (as know_orientation keeps it)
-    std::vector<std::uint8_t> frozen;
-    std::vector<Point> control_points;
-    std::vector<std::uint32_t> border_improper;  // segments leaving a tile that meet another improperly, sorted
-    std::vector<std::vector<std::uint32_t>> groups;  // the tiles (numbers) of each group that runs
-    PartsSoFar so_far;
-    bool marks = false;
-
-    Impl(const GridPlan& grid_plan, unsigned tile_level, const SimplifyOptions& simplify_options, std::uint64_t count)
-        : plan(grid_plan), t(std::min(tile_level, grid_plan.levels)), options(simplify_options), vertices(count) {}
+    CutPart out;
+    std::map<std::uint32_t, FirstTile> tiles;
 
     std::uint32_t columns() const { return ((plan.grid.base_columns - 1) >> (plan.shift + t)) + 1; }
     std::uint32_t tile_of(Point p) const { return plan.block_row(p, t) * columns() + plan.block_column(p, t); }
 
-    Tile& tile(std::uint32_t k) {
-        Tile& at = tiles[k];
-        at.input.level = t;
-        at.input.column = k % columns();
-        at.input.row = k / columns();
-        return at;
+    FirstTile& tile(std::uint32_t k) {
+        const auto [at, fresh] = tiles.try_emplace(k);
+        if (fresh) {
+            at->second.number = k;
+            at->second.input.level = t;
+            at->second.input.column = k % columns();
+            at->second.input.row = k / columns();
+        }
+        return at->second;
     }
 
-    // A piece of chain c (whole-map ids first_id + i for points[i]) in tile k: points [from, to]
-    // with the cut ends beyond them, if any.
-    void add_piece(std::uint32_t k, std::uint32_t c, std::span<const Point> points, std::uint32_t first_id, std::size_t from,
-                   std::size_t to, bool whole_ring, bool settled) {
-        Tile& at = tile(k);
+    // A piece of chain c (part chain `own`, whole-map ids first_id + i for points[i]) in tile k:
+    // points [from, to] with the cut ends beyond them, if any.
+    void add_piece(std::uint32_t k, std::uint32_t c, std::size_t own, std::span<const Point> points, std::uint32_t first_id,
+                   std::size_t from, std::size_t to, bool whole_ring, bool settled) {
+        FirstTile& at = tile(k);
         TileInput& in = at.input;
         const auto first = static_cast<std::uint32_t>(in.vertex_id.size());
         auto take = [&](std::size_t i, bool cut) {
@@ -2064,22 +2044,24 @@ struct FirstRound::Impl {
         if (from > 0) take(from - 1, true);
         for (std::size_t i = from; i <= to; ++i) take(i, false);
         if (to + 1 < points.size()) take(to + 1, true);
+        const ChainFacts& facts = out.facts;
         in.map.chains.push_back({first, static_cast<std::uint32_t>(in.vertex_id.size() - 1)});
         in.chain_id.push_back(c);
-        in.whole_level.push_back(whole_level[c] == kOpen ? kOpenChain : whole_level[c]);
+        in.whole_level.push_back(facts.whole_level[own]);
         in.settled.push_back(settled ? 1 : 0);
-        in.distinct.push_back(whole_ring ? distinct[c] : 0);
-        in.orientation.push_back(whole_ring ? orientation[c] : std::int8_t{2});
-        at.frozen.push_back(frozen[c]);
+        in.distinct.push_back(whole_ring ? facts.distinct[own] : 0);
+        in.orientation.push_back(whole_ring ? facts.orientation[own] : std::int8_t{2});
+        at.frozen.push_back(facts.frozen[own]);
     }
 
-    void add_chain(std::span<const Point> points, std::uint32_t first_id, bool is_frozen) {
-        const auto c = static_cast<std::uint32_t>(chains.size());
+    void add_chain(std::span<const Point> points, std::uint32_t c, std::uint32_t first_id, bool is_frozen) {
+        ChainFacts& facts = out.facts;
+        const std::size_t own = facts.chains.size();
         const auto last = static_cast<std::uint32_t>(points.size() - 1);
-        chains.push_back({first_id, first_id + last});
-        frozen.push_back(is_frozen ? 1 : 0);
+        facts.chains.push_back({first_id, first_id + last});
+        facts.frozen.push_back(is_frozen ? 1 : 0);
         const bool closed = last > 0 && same_location(points.front(), points.back());
-        std::uint8_t level = kOpen;
+        std::uint8_t level = kOpenChain;
         std::uint32_t count = 0;
         std::int8_t turn = 2;
         if (closed) {
@@ -2102,13 +2084,13 @@ struct FirstRound::Impl {
                 turn = static_cast<std::int8_t>(sign + (counted.gmp_fallbacks != 0 ? 8 : 4));
             }
         }
-        whole_level.push_back(level);
-        distinct.push_back(count);
-        orientation.push_back(turn);
+        facts.whole_level.push_back(level);
+        facts.distinct.push_back(count);
+        facts.orientation.push_back(turn);
         std::vector<std::uint32_t> tile_at(points.size());
         for (std::size_t i = 0; i < points.size(); ++i) tile_at[i] = tile_of(points[i]);
         if (closed && level <= t) {
-            add_piece(tile_at[0], c, points, first_id, 0, last, true, false);
+            add_piece(tile_at[0], c, own, points, first_id, 0, last, true, false);
             return;
         }
         // A split ring's cut ends: both ends of every segment across a tile border.
@@ -2124,7 +2106,7 @@ struct FirstRound::Impl {
         for (std::size_t i = 0; i <= last;) {
             std::size_t j = i;
             while (j < last && tile_at[j + 1] == tile_at[i]) ++j;
-            add_piece(tile_at[i], c, points, first_id, i, j, false, settled);
+            add_piece(tile_at[i], c, own, points, first_id, i, j, false, settled);
             i = j + 1;
         }
         // Segments that leave their tile go to every other tile their boxes meet too.
@@ -2136,320 +2118,510 @@ struct FirstRound::Impl {
                 for (std::uint32_t column = plan.block_column(lo, t); column <= plan.block_column(hi, t); ++column) {
                     const std::uint32_t k = row * columns() + column;
                     if (k == tile_at[i] || k == tile_at[i + 1]) continue;
-                    Tile& at = tile(k);
-                    at.passing.add_chain(std::vector<Point>{a, b});
+                    FirstTile& at = tile(k);
+                    at.passing.push_back(a);
+                    at.passing.push_back(b);
                     at.passing_id.push_back(first_id + static_cast<std::uint32_t>(i));
                 }
             }
         }
     }
-
-    // Segment s (by its first vertex, whole-map id) meets another improperly: `local` is this
-    // tile's finding for it, complete unless the segment leaves the tile.
-    bool improper(std::uint32_t s, bool local) const {
-        return local || std::binary_search(border_improper.begin(), border_improper.end(), s);
-    }
-
-    std::size_t split() {
-        // The crossing search, tile by tile (on all threads, a tile each); the segments that
-        // leave a tile are or-ed over all.
-        SimplifyStats& stats = so_far.stats;
-        std::vector<Tile*> searched;
-        for (auto& [k, at] : tiles) searched.push_back(&at);
-        const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-        const auto count = static_cast<std::ptrdiff_t>(searched.size());
-#pragma omp parallel num_threads(threads)
-        {
-            exact::PredicateStats predicates;
-            std::vector<std::uint32_t> found;
-#pragma omp for schedule(dynamic, 1)
-            for (std::ptrdiff_t i = 0; i < count; ++i) {
-                Tile& at = *searched[static_cast<std::size_t>(i)];
-                MapData search;
-                search.vertices = at.input.map.vertices;
-                search.chains = at.input.map.chains;
-                const auto own = static_cast<std::uint32_t>(search.vertices.size());
-                for (const Chain& chain : at.passing.chains) {
-                    search.add_chain(std::span<const Point>(at.passing.vertices.data() + chain.first, 2));
-                }
-                std::vector<std::uint8_t> flags = find_improper_segments(search, options.arithmetic, predicates, 1);
-                at.improper.assign(flags.begin(), flags.begin() + own);
-                for (const Chain& chain : at.input.map.chains) {
-                    for (std::uint32_t v = chain.first; v < chain.last; ++v) {
-                        if (flags[v] && (at.cut_end[v] || at.cut_end[v + 1])) found.push_back(at.input.vertex_id[v]);
-                    }
-                }
-                for (std::size_t j = 0; j < at.passing_id.size(); ++j) {
-                    if (flags[own + 2 * j]) found.push_back(at.passing_id[j]);
-                }
-                at.passing = MapData();
-                std::vector<std::uint32_t>().swap(at.passing_id);
-            }
-#pragma omp critical
-            {
-                stats.predicates += predicates;
-                border_improper.insert(border_improper.end(), found.begin(), found.end());
-            }
-        }
-        std::sort(border_improper.begin(), border_improper.end());
-        border_improper.erase(std::unique(border_improper.begin(), border_improper.end()), border_improper.end());
-        // States: chain ends and the ends of improper segments (and frozen chains) fixed.
-        const Target target = options.stop.target;
-        marks = target != Target::max && target != Target::max_area;
-        std::uint64_t queued = 0;
-        for (auto& [k, at] : tiles) {
-            TileInput& in = at.input;
-            in.state.assign(in.vertex_id.size(), static_cast<std::uint8_t>(VertexState::fixed));
-            for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
-                const Chain& piece = in.map.chains[p];
-                const Chain& whole = chains[in.chain_id[p]];
-                for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
-                    const std::uint32_t id = in.vertex_id[v];
-                    if (at.cut_end[v] || id == whole.first || id == whole.last) continue;
-                    // (v is inside: the piece has the vertices before and after it)
-                    if (at.frozen[p] || improper(id, at.improper[v] != 0) || improper(id - 1, at.improper[v - 1] != 0)) {
-                        ++stats.pinned_by_crossing;
-                        continue;
-                    }
-                    in.state[v] = static_cast<std::uint8_t>(VertexState::queued);
-                    if (marks) {
-                        const Point* q = in.map.vertices.data();
-                        at.keys.push_back(std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], options.ranking)));
-                        at.key_ids.push_back(id);
-                        ++queued;
-                    }
-                }
-            }
-        }
-        stats.control_points = control_points.size();
-        stats.levels = plan.levels;
-        // The round's budget: the `missing` smallest (area, id) of the queued vertices, selected
-        // digit by digit from the tiles' histograms (a reduction: no keys gathered).
-        so_far.bound_key = marks ? 0 : target == Target::max ? std::numeric_limits<double>::infinity() : options.stop.value;
-        so_far.bound_id = kNone;
-        so_far.work = static_cast<double>(vertices);
-        if (marks) {
-            so_far.goal = removal_goal(options.stop, vertices);
-            stats.removal_goal = so_far.goal;
-            so_far.work = static_cast<double>(so_far.goal);
-            if (so_far.goal == 0 || queued == 0) return 0;
-            const std::uint64_t wanted = std::min<std::uint64_t>(so_far.goal, queued);
-            std::vector<Tile*> parts;
-            for (auto& [k, at] : tiles) parts.push_back(&at);
-            const parallel::KeyedSelection bound = parallel::select_kth_by_digits(
-                parts.size(), wanted,
-                [&](std::size_t part, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) {
-                    for (const std::uint64_t key : parts[part]->keys) {
-                        if (shift == 48 || key >> (shift + 16) == high) ++counts[key >> shift & 0xffff];
-                    }
-                },
-                [&](std::size_t part, std::uint64_t key, std::vector<std::uint32_t>& ids) {
-                    const Tile& at = *parts[part];
-                    for (std::size_t i = 0; i < at.keys.size(); ++i) {
-                        if (at.keys[i] == key) ids.push_back(at.key_ids[i]);
-                    }
-                });
-            so_far.bound_key = std::bit_cast<double>(bound.key);
-            so_far.bound_id = bound.id;
-            so_far.round_budget = wanted;
-            so_far.stats.rounds = 1;
-            const std::pair last{bound.key, bound.id};
-            for (auto& [k, at] : tiles) {
-                TileInput& in = at.input;
-                in.marked.assign(in.vertex_id.size(), 0);
-                std::size_t i = 0;  // (the tile's queued vertices in order: its keys)
-                for (std::uint32_t v = 0; v < in.vertex_id.size(); ++v) {
-                    if (in.state[v] != static_cast<std::uint8_t>(VertexState::queued)) continue;
-                    if (std::pair{at.keys[i], at.key_ids[i]} <= last) {
-                        in.marked[v] = 1;
-                        at.busy = true;
-                    }
-                    ++i;
-                }
-                std::vector<std::uint64_t>().swap(at.keys);
-                std::vector<std::uint32_t>().swap(at.key_ids);
-            }
-        } else {
-            for (auto& [k, at] : tiles) at.busy = true;
-        }
-        so_far.rounds_started = 1;
-        for (auto& [k, at] : tiles) {
-            at.input.marks = marks;
-            at.input.bound_key = so_far.bound_key;
-            at.input.bound_id = so_far.bound_id;
-        }
-        // Control points to their tiles (those holding vertices).
-        for (std::uint32_t j = 0; j < control_points.size(); ++j) {
-            const auto at = tiles.find(tile_of(control_points[j]));
-            if (at != tiles.end() && !at->second.input.vertex_id.empty()) at->second.points.push_back(j);
-        }
-        // Groups: tiles joined by the split rings their cut ends do not settle, in the order of their
-        // first tiles; those without a marked vertex sit the round out.
-        std::vector<std::uint32_t> numbers;
-        for (const auto& [k, at] : tiles) {
-            if (!at.input.vertex_id.empty()) numbers.push_back(k);
-        }
-        std::vector<std::uint32_t> parent(numbers.size());
-        for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-        const auto root = [&](std::uint32_t i) {
-            while (parent[i] != i) i = parent[i] = parent[parent[i]];
-            return i;
-        };
-        std::unordered_map<std::uint32_t, std::uint32_t> holder;
-        for (std::uint32_t i = 0; i < numbers.size(); ++i) {
-            const TileInput& in = tiles.at(numbers[i]).input;
-            for (std::size_t p = 0; p < in.chain_id.size(); ++p) {
-                const std::uint32_t c = in.chain_id[p];
-                const bool open = whole_level[c] != kOpen && whole_level[c] > t && !in.settled[p];
-                if (!open) continue;
-                const auto [at, fresh] = holder.emplace(c, i);
-                if (!fresh) parent[root(i)] = root(at->second);
-            }
-        }
-        std::vector<std::uint32_t> group_of(numbers.size(), kNone);
-        std::vector<std::vector<std::uint32_t>> all;
-        for (std::uint32_t i = 0; i < numbers.size(); ++i) {
-            std::uint32_t& g = group_of[root(i)];
-            if (g == kNone) {
-                g = static_cast<std::uint32_t>(all.size());
-                all.emplace_back();
-            }
-            all[g].push_back(numbers[i]);
-        }
-        for (std::vector<std::uint32_t>& group : all) {
-            if (std::any_of(group.begin(), group.end(), [&](std::uint32_t k) { return tiles.at(k).busy; })) groups.push_back(std::move(group));
-        }
-        return groups.size();
-    }
-
-    std::uint64_t group_points(std::size_t k) const {
-        std::uint64_t points = 0;
-        for (const std::uint32_t number : groups.at(k)) {
-            const Tile& at = tiles.at(number);
-            points += at.input.vertex_id.size() + at.points.size();
-        }
-        return points;
-    }
-
-    std::vector<TileInput> group(std::size_t k) const {
-        std::vector<TileInput> out;
-        for (const std::uint32_t number : groups.at(k)) {
-            const Tile& at = tiles.at(number);
-            TileInput in = at.input;
-            for (const std::uint32_t j : at.points) in.map.control_points.push_back(control_points[j]);
-            out.push_back(std::move(in));
-        }
-        return out;
-    }
-
-    std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below) {
-        // The live vertices: every tile's own (not its cut ends), with their states now.
-        struct Live {
-            std::uint32_t id;
-            Point point;
-            std::uint8_t state, marked;
-        };
-        // (The states the tiles changed, by id: the tiles' vertices are then read once, the
-        // removed ones left out, each tile freed as it is read.)
-        std::vector<std::pair<std::uint32_t, std::uint8_t>> changed;
-        for (const TileOutcome& outcome : outcomes) {
-            for (std::size_t k = 0; k < outcome.ids.size(); ++k) changed.emplace_back(outcome.ids[k], outcome.states[k]);
-        }
-        std::sort(changed.begin(), changed.end());
-        std::vector<Live> live;
-        for (auto& [k, at] : tiles) {
-            TileInput& in = at.input;
-            for (std::size_t v = 0; v < in.vertex_id.size(); ++v) {
-                if (at.cut_end[v]) continue;
-                std::uint8_t state = in.state[v];
-                const auto now = std::lower_bound(changed.begin(), changed.end(), std::pair{in.vertex_id[v], std::uint8_t{0}});
-                if (now != changed.end() && now->first == in.vertex_id[v]) state = now->second;
-                if (state == static_cast<std::uint8_t>(VertexState::removed)) continue;
-                live.push_back({in.vertex_id[v], in.map.vertices[v], state, marks ? in.marked[v] : std::uint8_t{0}});
-            }
-            at = Tile();
-        }
-        tiles.clear();
-        std::vector<std::pair<std::uint32_t, std::uint8_t>>().swap(changed);
-        std::sort(live.begin(), live.end(), [](const Live& a, const Live& b) { return a.id < b.id; });
-        SimplifyStats& stats = so_far.stats;
-        for (const TileOutcome& outcome : outcomes) {
-            for (const auto& [chain, lost] : outcome.locations_lost) distinct[chain] -= lost;
-            for (std::size_t k = 0; k < outcome.oriented.size(); ++k) orientation[outcome.oriented[k]] = outcome.orientations[k];
-            stats.removed += outcome.stats.removed;
-            stats.blocked_by_point += outcome.stats.blocked_by_point;
-            stats.blocked_by_ring += outcome.stats.blocked_by_ring;
-            stats.blocked_by_coincidence += outcome.stats.blocked_by_coincidence;
-            stats.predicates += outcome.stats.predicates;
-        }
-        TileInput top;
-        top.level = plan.levels;
-        top.first_level = t;
-        top.map.vertices.reserve(live.size());
-        top.vertex_id.reserve(live.size());
-        top.state.reserve(live.size());
-        for (const Live& v : live) {
-            top.map.vertices.push_back(v.point);
-            top.vertex_id.push_back(v.id);
-            top.state.push_back(v.state);
-            if (marks) top.marked.push_back(v.marked);
-        }
-        std::vector<Live>().swap(live);
-        const auto local = [&](std::uint32_t id) {
-            return static_cast<std::uint32_t>(std::lower_bound(top.vertex_id.begin(), top.vertex_id.end(), id) - top.vertex_id.begin());
-        };
-        for (std::uint32_t c = 0; c < chains.size(); ++c) {
-            top.map.chains.push_back({local(chains[c].first), local(chains[c].last)});  // (chain ends never go)
-            top.chain_id.push_back(c);
-            top.whole_level.push_back(whole_level[c] == kOpen ? kOpenChain : whole_level[c]);
-            top.settled.push_back(0);
-            top.distinct.push_back(distinct[c]);
-            top.orientation.push_back(orientation[c]);
-        }
-        top.map.control_points = std::move(control_points);
-        top.later.assign(plan.levels - t, {});
-        for (const TileOutcome& outcome : outcomes) {
-            for (const auto& [waiter, blocker] : outcome.waits) top.waits.emplace_back(local(waiter), local(blocker));
-            for (std::size_t k = 0; k < outcome.later.size() && t + k < plan.levels; ++k) {
-                for (const std::uint32_t v : outcome.later[k]) top.later[k].push_back(local(v));
-            }
-        }
-        std::sort(top.waits.begin(), top.waits.end());
-        top.marks = marks;
-        top.bound_key = so_far.bound_key;
-        top.bound_id = so_far.bound_id;
-        return std::unique_ptr<MapInParts>(new MapInParts(std::move(top), vertices, plan, options, t, here_below, so_far));
-    }
 };
 
+template <class T>
+void append(std::vector<T>& to, std::vector<T>&& from) {
+    if (to.empty()) {
+        to = std::move(from);
+    } else {
+        to.insert(to.end(), from.begin(), from.end());
+    }
+}
+
+}  // namespace
+
+CutPart cut_part(const MapData& part, std::uint32_t first_vertex, std::uint32_t first_chain, const GridPlan& plan, unsigned tile_level,
+                 const SimplifyOptions& options) {
+    Cutter cutter{plan, std::min(tile_level, plan.levels), options, {}, {}};
+    for (std::uint32_t c = 0; c < part.chains.size(); ++c) {
+        const Chain& chain = part.chains[c];
+        cutter.add_chain(std::span<const Point>(part.vertices.data() + chain.first, chain.last - chain.first + 1), first_chain + c,
+                         first_vertex + chain.first, part.is_frozen(c));
+    }
+    for (auto& [k, tile] : cutter.tiles) cutter.out.tiles.push_back(std::move(tile));
+    return std::move(cutter.out);
+}
+
+void FirstTile::add(FirstTile&& part) {
+    TileInput& in = input;
+    const auto offset = static_cast<std::uint32_t>(in.vertex_id.size());
+    for (const Chain& chain : part.input.map.chains) in.map.chains.push_back({chain.first + offset, chain.last + offset});
+    append(in.map.vertices, std::move(part.input.map.vertices));
+    append(in.vertex_id, std::move(part.input.vertex_id));
+    append(in.chain_id, std::move(part.input.chain_id));
+    append(in.whole_level, std::move(part.input.whole_level));
+    append(in.settled, std::move(part.input.settled));
+    append(in.distinct, std::move(part.input.distinct));
+    append(in.orientation, std::move(part.input.orientation));
+    append(cut_end, std::move(part.cut_end));
+    append(frozen, std::move(part.frozen));
+    append(passing, std::move(part.passing));
+    append(passing_id, std::move(part.passing_id));
+}
+
+std::vector<std::uint32_t> FirstTile::search(exact::Arithmetic arithmetic, exact::PredicateStats& predicates) {
+    MapData search;
+    search.vertices = input.map.vertices;
+    search.chains = input.map.chains;
+    const auto own = static_cast<std::uint32_t>(search.vertices.size());
+    for (std::size_t j = 0; j < passing_id.size(); ++j) search.add_chain(std::span<const Point>(passing.data() + 2 * j, 2));
+    const std::vector<std::uint8_t> flags = find_improper_segments(search, arithmetic, predicates, 1);
+    improper.assign(flags.begin(), flags.begin() + own);
+    std::vector<std::uint32_t> found;
+    for (const Chain& chain : input.map.chains) {
+        for (std::uint32_t v = chain.first; v < chain.last; ++v) {
+            if (flags[v] && (cut_end[v] || cut_end[v + 1])) found.push_back(input.vertex_id[v]);
+        }
+    }
+    for (std::size_t j = 0; j < passing_id.size(); ++j) {
+        if (flags[own + 2 * j]) found.push_back(passing_id[j]);
+    }
+    std::vector<Point>().swap(passing);
+    std::vector<std::uint32_t>().swap(passing_id);
+    std::sort(found.begin(), found.end());
+    found.erase(std::unique(found.begin(), found.end()), found.end());
+    return found;
+}
+
+std::uint64_t FirstTile::queue(std::span<const std::uint32_t> border, bool marks, const Ranking& ranking) {
+    const auto improper_segment = [&](std::uint32_t s, bool local) { return local || std::binary_search(border.begin(), border.end(), s); };
+    TileInput& in = input;
+    in.state.assign(in.vertex_id.size(), static_cast<std::uint8_t>(VertexState::fixed));
+    keys.clear();
+    std::uint64_t pinned = 0;
+    for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
+        const Chain& piece = in.map.chains[p];
+        // (A piece's ends are its chain's ends or cut ends: fixed. Inside, v has the vertices before and after it.)
+        for (std::uint32_t v = piece.first + 1; v < piece.last; ++v) {
+            const std::uint32_t id = in.vertex_id[v];
+            if (frozen[p] || improper_segment(id, improper[v] != 0) || improper_segment(id - 1, improper[v - 1] != 0)) {
+                ++pinned;
+                continue;
+            }
+            in.state[v] = static_cast<std::uint8_t>(VertexState::queued);
+            if (marks) {
+                const Point* q = in.map.vertices.data();
+                keys.push_back(std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], ranking)));
+            }
+        }
+    }
+    return pinned;
+}
+
+namespace {
+
+// A count target's tile: f(v, key) for each of its queued vertices in order (none if it has no
+// keys: a tile queued without marks).
+template <class F>
+void for_each_keyed(const FirstTile& tile, F&& f) {
+    if (tile.keys.empty()) return;
+    const TileInput& in = tile.input;
+    std::size_t k = 0;
+    for (std::uint32_t v = 0; v < in.state.size(); ++v) {
+        if (in.state[v] == static_cast<std::uint8_t>(VertexState::queued)) f(v, tile.keys[k++]);
+    }
+}
+
+}  // namespace
+
+void FirstTile::histogram(int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) const {
+    for (const std::uint64_t key : keys) {
+        if (shift == 48 || key >> (shift + 16) == high) ++counts[key >> shift & 0xffff];
+    }
+}
+
+void FirstTile::ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const {
+    for_each_keyed(*this, [&](std::uint32_t v, std::uint64_t area) {
+        if (area == key) ids.push_back(input.vertex_id[v]);
+    });
+}
+
+bool FirstTile::busy(double bound_key, std::uint32_t bound_id) const {
+    const std::pair last{std::bit_cast<std::uint64_t>(bound_key), bound_id};
+    bool any = false;
+    for_each_keyed(*this, [&](std::uint32_t v, std::uint64_t area) { any = any || std::pair{area, input.vertex_id[v]} <= last; });
+    return any;
+}
+
+std::pair<std::uint64_t, std::uint32_t> FirstTile::smallest() const {
+    std::pair<std::uint64_t, std::uint32_t> least{~std::uint64_t{0}, kNone};
+    if (keys.empty()) return least;
+    for_each_keyed(*this, [&](std::uint32_t v, std::uint64_t area) { least = std::min(least, std::pair{area, input.vertex_id[v]}); });
+    return least;
+}
+
+void FirstTile::pairs_in(int shift, std::uint64_t prefix, std::vector<std::uint64_t>& keys_found, std::vector<std::uint32_t>& ids) const {
+    if (keys.empty()) return;
+    for_each_keyed(*this, [&](std::uint32_t v, std::uint64_t area) {
+        if (area >> shift == prefix) {
+            keys_found.push_back(area);
+            ids.push_back(input.vertex_id[v]);
+        }
+    });
+}
+
+std::vector<std::uint32_t> FirstTile::open_chains() const {
+    std::vector<std::uint32_t> open;
+    for (std::size_t p = 0; p < input.chain_id.size(); ++p) {
+        if (input.whole_level[p] != kOpenChain && input.whole_level[p] > input.level && !input.settled[p]) open.push_back(input.chain_id[p]);
+    }
+    return open;
+}
+
+TileInput FirstTile::run_input(bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const {
+    TileInput in = input;
+    in.map.control_points = std::move(points);
+    in.marks = marks;
+    in.bound_key = bound_key;
+    in.bound_id = bound_id;
+    if (marks) {
+        const std::pair last{std::bit_cast<std::uint64_t>(bound_key), bound_id};
+        in.marked.assign(in.vertex_id.size(), 0);
+        for_each_keyed(*this, [&](std::uint32_t v, std::uint64_t area) {
+            if (std::pair{area, input.vertex_id[v]} <= last) in.marked[v] = 1;
+        });
+    }
+    return in;
+}
+
+std::vector<std::pair<std::uint32_t, std::uint8_t>> changed_states(std::span<const TileOutcome> outcomes) {
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> changed;
+    for (const TileOutcome& outcome : outcomes) {
+        for (std::size_t k = 0; k < outcome.ids.size(); ++k) changed.emplace_back(outcome.ids[k], outcome.states[k]);
+    }
+    std::sort(changed.begin(), changed.end());
+    return changed;
+}
+
+LiveVertices live_vertices(const FirstTile& tile, std::span<const std::pair<std::uint32_t, std::uint8_t>> changed, bool marks,
+                           double bound_key, std::uint32_t bound_id) {
+    const TileInput& in = tile.input;
+    std::vector<std::uint8_t> marked;
+    if (marks) {
+        const std::pair last{std::bit_cast<std::uint64_t>(bound_key), bound_id};
+        marked.assign(in.vertex_id.size(), 0);
+        for_each_keyed(tile, [&](std::uint32_t v, std::uint64_t area) {
+            if (std::pair{area, in.vertex_id[v]} <= last) marked[v] = 1;
+        });
+    }
+    // The tile's own vertices, by id (its pieces are in the map's order but a ring's piece may
+    // hold its chain's last vertex before others).
+    std::vector<std::uint32_t> order;
+    for (std::uint32_t v = 0; v < in.vertex_id.size(); ++v) {
+        if (!tile.cut_end[v]) order.push_back(v);
+    }
+    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return in.vertex_id[a] < in.vertex_id[b]; });
+    LiveVertices live;
+    for (const std::uint32_t v : order) {
+        std::uint8_t state = in.state[v];
+        const auto now = std::lower_bound(changed.begin(), changed.end(), std::pair{in.vertex_id[v], std::uint8_t{0}});
+        if (now != changed.end() && now->first == in.vertex_id[v]) state = now->second;
+        if (state == static_cast<std::uint8_t>(VertexState::removed)) continue;
+        live.ids.push_back(in.vertex_id[v]);
+        live.points.push_back(in.map.vertices[v]);
+        live.states.push_back(state);
+        if (marks) live.marked.push_back(marked[v]);
+    }
+    return live;
+}
+
+FirstRoundLead::FirstRoundLead(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices)
+    : plan_(plan), t_(std::min(tile_level, plan.levels)), options_(options), vertices_(vertices) {
+    const Target target = options.stop.target;
+    marks_ = target != Target::max && target != Target::max_area;
+}
+
+FirstRoundLead::~FirstRoundLead() = default;
+
+void FirstRoundLead::add_facts(const ChainFacts& facts, std::uint32_t first_chain) {
+    if (first_chain != chains_.size()) throw std::invalid_argument("FirstRound: the parts' chains are not in order");
+    chains_.insert(chains_.end(), facts.chains.begin(), facts.chains.end());
+    whole_level_.insert(whole_level_.end(), facts.whole_level.begin(), facts.whole_level.end());
+    distinct_.insert(distinct_.end(), facts.distinct.begin(), facts.distinct.end());
+    orientation_.insert(orientation_.end(), facts.orientation.begin(), facts.orientation.end());
+}
+
+void FirstRoundLead::add_control_points(std::span<const Point> points) {
+    control_points_.insert(control_points_.end(), points.begin(), points.end());
+}
+
+void FirstRoundLead::found(std::span<const std::uint32_t> border, const exact::PredicateStats& predicates) {
+    border_.insert(border_.end(), border.begin(), border.end());
+    border_sorted_ = false;
+    so_far_.stats.predicates += predicates;
+}
+
+const std::vector<std::uint32_t>& FirstRoundLead::border() {
+    if (!border_sorted_) {
+        std::sort(border_.begin(), border_.end());
+        border_.erase(std::unique(border_.begin(), border_.end()), border_.end());
+        border_sorted_ = true;
+    }
+    return border_;
+}
+
+void FirstRoundLead::queued(std::uint64_t pinned, std::uint64_t keys) {
+    so_far_.stats.pinned_by_crossing += pinned;
+    queued_ += keys;
+}
+
+std::uint64_t FirstRoundLead::wanted() {
+    SimplifyStats& stats = so_far_.stats;
+    stats.control_points = control_points_.size();
+    stats.levels = plan_.levels;
+    const Target target = options_.stop.target;
+    so_far_.bound_key = marks_ ? 0 : target == Target::max ? std::numeric_limits<double>::infinity() : options_.stop.value;
+    so_far_.bound_id = kNone;
+    so_far_.work = static_cast<double>(vertices_);
+    so_far_.rounds_started = 1;
+    if (!marks_) return 0;
+    so_far_.goal = removal_goal(options_.stop, vertices_);
+    stats.removal_goal = so_far_.goal;
+    so_far_.work = static_cast<double>(so_far_.goal);
+    if (so_far_.goal == 0 || queued_ == 0) return 0;
+    so_far_.round_budget = std::min<std::uint64_t>(so_far_.goal, queued_);
+    return so_far_.round_budget;
+}
+
+void FirstRoundLead::bound(parallel::KeyedSelection selection) {
+    so_far_.bound_key = std::bit_cast<double>(selection.key);
+    so_far_.bound_id = selection.id;
+    so_far_.stats.rounds = 1;
+}
+
+const std::vector<std::vector<std::uint32_t>>& FirstRoundLead::groups(std::vector<TileFacts> tiles) {
+    // Tiles joined by the split rings their cut ends do not settle, in the order of their first
+    // tiles; those without a busy tile sit the round out.
+    std::sort(tiles.begin(), tiles.end(), [](const TileFacts& a, const TileFacts& b) { return a.number < b.number; });
+    std::vector<std::uint32_t> parent(tiles.size());
+    for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
+    const auto root = [&](std::uint32_t i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    std::unordered_map<std::uint32_t, std::uint32_t> holder;
+    for (std::uint32_t i = 0; i < tiles.size(); ++i) {
+        for (const std::uint32_t c : tiles[i].open_chains) {
+            const auto [at, fresh] = holder.emplace(c, i);
+            if (!fresh) parent[root(i)] = root(at->second);
+        }
+    }
+    std::vector<std::uint32_t> group_of(tiles.size(), kNone);
+    std::vector<std::vector<std::uint32_t>> all;
+    std::vector<std::uint8_t> busy;
+    for (std::uint32_t i = 0; i < tiles.size(); ++i) {
+        std::uint32_t& g = group_of[root(i)];
+        if (g == kNone) {
+            g = static_cast<std::uint32_t>(all.size());
+            all.emplace_back();
+            busy.push_back(0);
+        }
+        all[g].push_back(tiles[i].number);
+        if (!marks_ || tiles[i].busy) busy[g] = 1;
+    }
+    groups_.clear();
+    for (std::size_t g = 0; g < all.size(); ++g) {
+        if (busy[g]) groups_.push_back(std::move(all[g]));
+    }
+    // Control points to their tiles (those holding vertices).
+    const auto columns = ((plan_.grid.base_columns - 1) >> (plan_.shift + t_)) + 1;
+    std::vector<std::uint32_t> numbers;
+    for (const TileFacts& tile : tiles) numbers.push_back(tile.number);
+    point_tiles_.clear();
+    for (std::uint32_t j = 0; j < control_points_.size(); ++j) {
+        const Point p = control_points_[j];
+        const std::uint32_t k = plan_.block_row(p, t_) * columns + plan_.block_column(p, t_);
+        if (std::binary_search(numbers.begin(), numbers.end(), k)) point_tiles_.emplace_back(k, j);
+    }
+    std::sort(point_tiles_.begin(), point_tiles_.end());
+    return groups_;
+}
+
+std::vector<Point> FirstRoundLead::points(std::uint32_t tile) const {
+    std::vector<Point> out;
+    auto at = std::lower_bound(point_tiles_.begin(), point_tiles_.end(), std::pair{tile, std::uint32_t{0}});
+    for (; at != point_tiles_.end() && at->first == tile; ++at) out.push_back(control_points_[at->second]);
+    return out;
+}
+
+std::uint64_t FirstRoundLead::points_in(std::uint32_t tile) const {
+    const auto from = std::lower_bound(point_tiles_.begin(), point_tiles_.end(), std::pair{tile, std::uint32_t{0}});
+    const auto to = std::lower_bound(from, point_tiles_.end(), std::pair{tile + 1, std::uint32_t{0}});
+    return static_cast<std::uint64_t>(to - from);
+}
+
+std::unique_ptr<MapInParts> FirstRoundLead::finish(std::vector<LiveVertices> live, std::span<const TileOutcome> outcomes,
+                                                   std::uint64_t here_below) {
+    SimplifyStats& stats = so_far_.stats;
+    for (const TileOutcome& outcome : outcomes) {
+        for (const auto& [chain, lost] : outcome.locations_lost) distinct_[chain] -= lost;
+        for (std::size_t k = 0; k < outcome.oriented.size(); ++k) orientation_[outcome.oriented[k]] = outcome.orientations[k];
+        stats.removed += outcome.stats.removed;
+        stats.blocked_by_point += outcome.stats.blocked_by_point;
+        stats.blocked_by_ring += outcome.stats.blocked_by_ring;
+        stats.blocked_by_coincidence += outcome.stats.blocked_by_coincidence;
+        stats.predicates += outcome.stats.predicates;
+    }
+    // The tiles' live vertices merged by id (each tile's ascending, the tiles' disjoint).
+    std::size_t count = 0;
+    for (const LiveVertices& tile : live) count += tile.ids.size();
+    if (count + stats.removed != vertices_) throw std::invalid_argument("the tiles' live vertices and removals do not add up to the map's");
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> order;  // (id, tile)
+    order.reserve(count);
+    for (std::uint32_t k = 0; k < live.size(); ++k) {
+        for (const std::uint32_t id : live[k].ids) order.emplace_back(id, k);
+    }
+    std::sort(order.begin(), order.end());
+    TileInput top;
+    top.level = plan_.levels;
+    top.first_level = t_;
+    top.map.vertices.reserve(count);
+    top.vertex_id.reserve(count);
+    top.state.reserve(count);
+    if (marks_) top.marked.reserve(count);
+    std::vector<std::size_t> next(live.size(), 0);
+    for (const auto& [id, k] : order) {
+        const LiveVertices& from = live[k];
+        const std::size_t i = next[k]++;
+        top.map.vertices.push_back(from.points[i]);
+        top.vertex_id.push_back(id);
+        top.state.push_back(from.states[i]);
+        if (marks_) top.marked.push_back(from.marked[i]);
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>>().swap(order);
+    std::vector<LiveVertices>().swap(live);
+    // (Every id the tiles name must be a live vertex's, and the chains' ends must be live: chain
+    // ends never go. A tile's live vertices missing, or an outcome of another map, is refused.)
+    const auto local = [&](std::uint32_t id) {
+        const auto at = std::lower_bound(top.vertex_id.begin(), top.vertex_id.end(), id);
+        if (at == top.vertex_id.end() || *at != id) throw std::invalid_argument("the tiles' outcomes and live vertices do not agree");
+        return static_cast<std::uint32_t>(at - top.vertex_id.begin());
+    };
+    for (std::size_t i = 1; i < top.vertex_id.size(); ++i) {
+        if (top.vertex_id[i] == top.vertex_id[i - 1]) throw std::invalid_argument("a live vertex comes from two tiles");
+    }
+    for (std::uint32_t c = 0; c < chains_.size(); ++c) {
+        top.map.chains.push_back({local(chains_[c].first), local(chains_[c].last)});  // (chain ends never go)
+        if (top.map.chains.back().first != (c == 0 ? 0 : top.map.chains[c - 1].last + 1)) {
+            throw std::invalid_argument("the tiles' live vertices do not cover the map's chains");
+        }
+        top.chain_id.push_back(c);
+        top.whole_level.push_back(whole_level_[c]);
+        top.settled.push_back(0);
+        top.distinct.push_back(distinct_[c]);
+        top.orientation.push_back(orientation_[c]);
+    }
+    if (top.vertex_id.size() != (chains_.empty() ? 0 : top.map.chains.back().last + 1)) {
+        throw std::invalid_argument("the tiles' live vertices do not cover the map's chains");
+    }
+    top.map.control_points = std::move(control_points_);
+    top.later.assign(plan_.levels - t_, {});
+    for (const TileOutcome& outcome : outcomes) {
+        for (const auto& [waiter, blocker] : outcome.waits) top.waits.emplace_back(local(waiter), local(blocker));
+        for (std::size_t k = 0; k < outcome.later.size() && t_ + k < plan_.levels; ++k) {
+            for (const std::uint32_t v : outcome.later[k]) top.later[k].push_back(local(v));
+        }
+    }
+    std::sort(top.waits.begin(), top.waits.end());
+    top.marks = marks_;
+    top.bound_key = so_far_.bound_key;
+    top.bound_id = so_far_.bound_id;
+    return std::unique_ptr<MapInParts>(new MapInParts(std::move(top), vertices_, plan_, options_, t_, here_below, so_far_));
+}
+
 FirstRound::FirstRound(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices)
-    : impl_(std::make_unique<Impl>(plan, tile_level, options, vertices)) {}
+    : lead_(plan, tile_level, options, vertices) {}
 
 FirstRound::~FirstRound() = default;
 
 void FirstRound::add_chains(const MapData& part, std::uint32_t first_vertex, std::uint32_t first_chain) {
-    if (first_chain != impl_->chains.size()) throw std::invalid_argument("FirstRound: the parts' chains are not in order");
-    for (std::uint32_t c = 0; c < part.chains.size(); ++c) {
-        const Chain& chain = part.chains[c];
-        impl_->add_chain(std::span<const Point>(part.vertices.data() + chain.first, chain.last - chain.first + 1), first_vertex + chain.first,
-                         part.is_frozen(c));
+    CutPart cut = cut_part(part, first_vertex, first_chain, lead_.plan(), lead_.tile_level(), lead_.options());
+    lead_.add_facts(cut.facts, first_chain);
+    for (FirstTile& tile : cut.tiles) {
+        const auto [at, fresh] = tiles_.try_emplace(tile.number);
+        if (fresh) {
+            at->second = std::move(tile);
+        } else {
+            at->second.add(std::move(tile));
+        }
     }
 }
 
-void FirstRound::add_control_points(std::span<const Point> points) {
-    impl_->control_points.insert(impl_->control_points.end(), points.begin(), points.end());
+void FirstRound::add_control_points(std::span<const Point> points) { lead_.add_control_points(points); }
+
+std::size_t FirstRound::split() {
+    const SimplifyOptions& options = lead_.options();
+    // The crossing search, tile by tile (on all threads, a tile each).
+    std::vector<FirstTile*> all;
+    for (auto& [k, tile] : tiles_) all.push_back(&tile);
+    const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
+    const auto count = static_cast<std::ptrdiff_t>(all.size());
+    std::vector<std::vector<std::uint32_t>> found(all.size());
+    std::vector<exact::PredicateStats> predicates(all.size());
+#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
+    for (std::ptrdiff_t i = 0; i < count; ++i) {
+        const auto k = static_cast<std::size_t>(i);
+        found[k] = all[k]->search(options.arithmetic, predicates[k]);
+    }
+    for (std::size_t k = 0; k < all.size(); ++k) lead_.found(found[k], predicates[k]);
+    const std::vector<std::uint32_t>& border = lead_.border();
+    for (FirstTile* tile : all) {
+        const std::uint64_t pinned = tile->queue(border, lead_.marks(), options.ranking);
+        lead_.queued(pinned, tile->queued());
+    }
+    // The first budget, selected digit by digit from the tiles' histograms (no keys gathered).
+    if (const std::uint64_t wanted = lead_.wanted(); wanted > 0) {
+        lead_.bound(parallel::select_kth_by_digits(
+            all.size(), wanted,
+            [&](std::size_t part, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { all[part]->histogram(shift, high, counts); },
+            [&](std::size_t part, std::uint64_t key, std::vector<std::uint32_t>& ids) { all[part]->ids_at(key, ids); }));
+    } else if (lead_.marks()) {
+        return 0;  // nothing to go
+    }
+    std::vector<FirstRoundLead::TileFacts> facts;
+    for (const FirstTile* tile : all) {
+        if (tile->input.vertex_id.empty()) continue;
+        facts.push_back({tile->number, lead_.marks() && tile->busy(lead_.bound_key(), lead_.bound_id()), tile->open_chains()});
+    }
+    return lead_.groups(std::move(facts)).size();
 }
 
-std::size_t FirstRound::split() { return impl_->split(); }
+std::vector<TileInput> FirstRound::group(std::size_t k) const {
+    std::vector<TileInput> out;
+    for (const std::uint32_t number : lead_.groups().at(k)) {
+        out.push_back(tiles_.at(number).run_input(lead_.marks(), lead_.bound_key(), lead_.bound_id(), lead_.points(number)));
+    }
+    return out;
+}
 
-std::vector<TileInput> FirstRound::group(std::size_t k) const { return impl_->group(k); }
+std::size_t FirstRound::group_size(std::size_t k) const { return lead_.groups().at(k).size(); }
 
-std::size_t FirstRound::group_size(std::size_t k) const { return impl_->groups.at(k).size(); }
-
-std::uint64_t FirstRound::group_points(std::size_t k) const { return impl_->group_points(k); }
+std::uint64_t FirstRound::group_points(std::size_t k) const {
+    std::uint64_t points = 0;
+    for (const std::uint32_t number : lead_.groups().at(k)) points += tiles_.at(number).input.vertex_id.size() + lead_.points_in(number);
+    return points;
+}
 
 std::unique_ptr<MapInParts> FirstRound::finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below) {
-    return impl_->finish(outcomes, here_below);
+    // The tiles' vertices are read once, the removed ones left out, each tile freed as it is read.
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> changed = changed_states(outcomes);
+    std::vector<LiveVertices> live;
+    for (auto& [k, tile] : tiles_) {
+        live.push_back(live_vertices(tile, changed, lead_.marks(), lead_.bound_key(), lead_.bound_id()));
+        tile = FirstTile();
+    }
+    tiles_.clear();
+    std::vector<std::pair<std::uint32_t, std::uint8_t>>().swap(changed);
+    return lead_.finish(std::move(live), outcomes, here_below);
 }
 
 }  // namespace toposimp::map

@@ -31,7 +31,10 @@
 #include "core/map/point_grid.hpp"
 #include "core/map/simplify.hpp"
 
+#include "core/parallel/select.hpp"
+
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <span>
 #include <utility>
@@ -213,7 +216,7 @@ public:
     SimplifyResult result();
 
 private:
-    friend class FirstRound;
+    friend class FirstRoundLead;
     // Over `live` (the live vertices and every control point, as keep_live_only makes them) of a
     // map of `input_vertices`, in a round whose tiles are done.
     MapInParts(TileInput live, std::size_t input_vertices, const GridPlan& plan, const SimplifyOptions& options,
@@ -228,17 +231,162 @@ private:
 };
 
 // The first round of a run in parts built from the map a part at a time, by no engine over the
-// whole map (the start of a run that never holds the whole map: docs/distributed.md):
-// - each chain goes to the tiles holding its vertices, cut into pieces with their cut ends as
-//   MapInParts cuts it, and every segment that leaves a tile also to the tiles its box meets;
-// - the crossing search runs tile by tile over those segments: a segment inside a tile meets
-//   only segments that reach the tile, and the flags of the segments that leave a tile are
-//   or-ed over the tiles, so every vertex is pinned as the whole map's search pins it;
-// - a count target's first budget is selected over the tiles' queued vertices (area, then id);
-// - the tiles that share a ring their cut ends do not settle form a group, as in split_round.
-// The outcomes and the tiles then give the live vertices, over which a MapInParts goes on
-// (keep_live_only's). The result is simplify()'s, stats included but the predicates the crossing
-// search counts (a pair of segments met in several tiles is decided in each).
+// whole map (the start of a run that never holds the whole map: docs/distributed.md), in stages
+// that a distributed run spreads over its processes:
+// 1. cut_part, a part of the map's chains at a time (in order): each chain's facts for the lead,
+//    and its pieces by tile. Each chain goes to the tiles holding its vertices, cut into pieces
+//    with their cut ends as MapInParts cuts it, and every segment that leaves a tile also to the
+//    tiles its box meets.
+// 2. FirstTile: a tile's pieces from every part (add, in the parts' order), then search(): the
+//    crossing search over them. A segment inside a tile meets only segments that reach the tile;
+//    the segments that leave a tile found to meet another go to the lead (found), which or-es them
+//    over the tiles (border), so that every vertex is pinned as the whole map's search pins it.
+// 3. Each tile's queue(border): its vertices' states, and a count target's keys.
+// 4. The lead's wanted(): a count target's first budget, selected over the tiles' keys (area,
+//    then id) by a DigitSelector asking every tile's histogram() and ids_at(); bound().
+// 5. The lead's groups from every tile's busy() and open_chains(): the tiles that share a ring
+//    their cut ends do not settle run together, as in split_round.
+// 6. Each group runs (run_tile_group over the tiles' input(), with the lead's points()); every
+//    tile's live() vertices and the outcomes go to the lead's finish: a MapInParts over the live
+//    vertices goes on (keep_live_only's). The result is simplify()'s, stats included but the
+//    predicates the crossing search counts (a pair of segments met in several tiles is decided
+//    in each).
+
+// Per chain of a part of the map: what the first round keeps of it.
+struct ChainFacts {
+    std::vector<Chain> chains;               // its whole-map vertex ids (first, last)
+    std::vector<std::uint8_t> whole_level;   // kOpenChain if not closed
+    std::vector<std::uint32_t> distinct;     // a ring's distinct locations (0 for an open chain)
+    std::vector<std::int8_t> orientation;    // a ring's input orientation (as know_orientation keeps it), else 2
+    std::vector<std::uint8_t> frozen;
+};
+
+// A tile of the first round: its chains' pieces (from one part, or from every part once added)
+// without states, then what the stages add.
+struct FirstTile {
+    std::uint32_t number = 0;           // row-major among the blocks of level T
+    TileInput input;                    // states (and marks) only after queue()
+    std::vector<std::uint8_t> cut_end;  // per vertex of input.map
+    std::vector<std::uint8_t> frozen;   // per chain of input.map
+    std::vector<Point> passing;         // segments (pairs of points) of other tiles' chains whose boxes meet the tile
+    std::vector<std::uint32_t> passing_id;  // and their first vertices' whole-map ids (until search)
+    std::vector<std::uint8_t> improper;  // per vertex: its segment to the next meets another, by this tile's search
+    std::vector<std::uint64_t> keys;     // a count target's: its queued vertices' area keys, in order (after queue)
+
+    // The next part's pieces of this tile.
+    void add(FirstTile&& part);
+    // The crossing search: the segments that leave the tile found to meet another (their first
+    // vertices' whole-map ids, sorted). Drops the passing segments.
+    std::vector<std::uint32_t> search(exact::Arithmetic arithmetic, exact::PredicateStats& predicates);
+    // The states, with `border` the lead's border() (sorted): chain ends, cut ends, frozen chains
+    // and the ends of segments meeting another fixed, the rest queued; with `marks`, the queued
+    // vertices' keys. Returns how many were pinned (by a crossing or frozen).
+    std::uint64_t queue(std::span<const std::uint32_t> border, bool marks, const Ranking& ranking);
+    std::uint64_t queued() const { return keys.size(); }
+    // For the lead's DigitSelector (select_kth_by_digits's histogram and ids_at).
+    void histogram(int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) const;
+    void ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const;
+    // A count target's: whether one of its vertices is in the round's budget.
+    bool busy(double bound_key, std::uint32_t bound_id) const;
+    // A count target's: its smallest (key, id) pair (all bits set if it has none): busy iff it is at
+    // most the bound.
+    std::pair<std::uint64_t, std::uint32_t> smallest() const;
+    // The (key, id) pairs whose keys' bits from `shift` up equal `prefix` (the bucket a
+    // DigitSelector pass ended in, gathered when small).
+    void pairs_in(int shift, std::uint64_t prefix, std::vector<std::uint64_t>& keys_found, std::vector<std::uint32_t>& ids) const;
+    // The whole-map rings it holds pieces of that their cut ends do not settle.
+    std::vector<std::uint32_t> open_chains() const;
+    // The tile to run: marked up to the bound (count targets), with its control points.
+    TileInput run_input(bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const;
+};
+
+// A part's chains: their facts, and their pieces by tile (ascending numbers).
+struct CutPart {
+    ChainFacts facts;
+    std::vector<FirstTile> tiles;
+};
+// Vertex v and chain c of `part` are the whole map's first_vertex + v and first_chain + c.
+CutPart cut_part(const MapData& part, std::uint32_t first_vertex, std::uint32_t first_chain, const GridPlan& plan, unsigned tile_level,
+                 const SimplifyOptions& options);
+
+// A tile's live vertices after its group ran: its own (not its cut ends), not removed, with their
+// states and marks.
+struct LiveVertices {
+    std::vector<std::uint32_t> ids;  // ascending
+    std::vector<Point> points;
+    std::vector<std::uint8_t> states;
+    std::vector<std::uint8_t> marked;  // count targets only
+};
+// The states that outcomes changed, by id: those of a tile's group (or more) for live_vertices.
+std::vector<std::pair<std::uint32_t, std::uint8_t>> changed_states(std::span<const TileOutcome> outcomes);
+// `changed`: as changed_states gives it (empty if the tile's group sat the round out).
+LiveVertices live_vertices(const FirstTile& tile, std::span<const std::pair<std::uint32_t, std::uint8_t>> changed, bool marks,
+                           double bound_key, std::uint32_t bound_id);
+
+// The whole map's side of the first round (stages 2 to 6 above): what it holds is per chain and
+// per control point, never per vertex but the live ones at the end.
+class FirstRoundLead {
+public:
+    // `vertices`: the whole map's. `options` outlives this and the MapInParts it makes.
+    FirstRoundLead(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices);
+    ~FirstRoundLead();
+    const GridPlan& plan() const { return plan_; }
+    unsigned tile_level() const { return t_; }
+    const SimplifyOptions& options() const { return options_; }
+    std::uint32_t chains() const { return static_cast<std::uint32_t>(chains_.size()); }
+    // The parts' facts, in order (first_chain checked).
+    void add_facts(const ChainFacts& facts, std::uint32_t first_chain);
+    void add_control_points(std::span<const Point> points);
+    // A tile's search: what it found and what its predicates cost.
+    void found(std::span<const std::uint32_t> border, const exact::PredicateStats& predicates);
+    // The segments leaving a tile that meet another, over every tile (sorted; after every found).
+    const std::vector<std::uint32_t>& border();
+    bool marks() const { return marks_; }
+    // The tiles' queue(): what each pinned and queued.
+    void queued(std::uint64_t pinned, std::uint64_t keys);
+    // How many of the smallest keys the first budget takes: 0 when no selection is to be made
+    // (--max, --max-area; a count target with nothing to go).
+    std::uint64_t wanted();
+    void bound(parallel::KeyedSelection selection);
+    double bound_key() const { return so_far_.bound_key; }
+    std::uint32_t bound_id() const { return so_far_.bound_id; }
+    // Every tile holding vertices: its number, whether busy, its open chains (open_chains());
+    // the groups that run, each its tiles' numbers (in split_round's order).
+    struct TileFacts {
+        std::uint32_t number;
+        bool busy;
+        std::vector<std::uint32_t> open_chains;
+    };
+    const std::vector<std::vector<std::uint32_t>>& groups(std::vector<TileFacts> tiles);
+    const std::vector<std::vector<std::uint32_t>>& groups() const { return groups_; }
+    // A tile's control points (after groups).
+    std::vector<Point> points(std::uint32_t tile) const;
+    std::uint64_t points_in(std::uint32_t tile) const;
+    // Every tile's live vertices and the groups' outcomes (each tile's once, in any order): the
+    // run over the live vertices, its first round's levels from the tile level up next.
+    std::unique_ptr<MapInParts> finish(std::vector<LiveVertices> live, std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
+
+private:
+    GridPlan plan_;
+    unsigned t_;
+    const SimplifyOptions& options_;
+    std::uint64_t vertices_;
+    std::vector<Chain> chains_;  // the whole map's vertex ranges, and per chain its facts
+    std::vector<std::uint8_t> whole_level_;
+    std::vector<std::uint32_t> distinct_;
+    std::vector<std::int8_t> orientation_;
+    std::vector<Point> control_points_;
+    std::vector<std::uint32_t> border_;
+    bool border_sorted_ = false;
+    std::uint64_t queued_ = 0;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> point_tiles_;  // (tile, control point), sorted
+    std::vector<std::vector<std::uint32_t>> groups_;
+    PartsSoFar so_far_;
+    bool marks_ = false;
+};
+
+// The stages in one process: the first round built from parts of the map, its groups run by the
+// caller.
 //
 //     FirstRound first(plan, tile_level, options, vertices);
 //     for (each part of the chains, in order) first.add_chains(part, first_vertex, first_chain);
@@ -266,8 +414,8 @@ public:
     std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
 
 private:
-    struct Impl;
-    std::unique_ptr<Impl> impl_;
+    FirstRoundLead lead_;
+    std::map<std::uint32_t, FirstTile> tiles_;  // by number
 };
 
 // simplify() run in parts in this process, every group of tiles in turn (rounds with a budget

@@ -98,26 +98,52 @@ struct KeyedSelection {
     std::uint32_t id = 0;
 };
 
+// select_kth_by_digits a step at a time, for parts asked by messages: while counting(), sum
+// every part's histogram(shift(), high()) and give it to counted(); then choose() among every
+// part's ids_at(key()).
+class DigitSelector {
+public:
+    explicit DigitSelector(std::uint64_t k) : k_(k) {}
+    bool counting() const { return shift_ >= 0; }
+    int shift() const { return shift_; }
+    std::uint64_t high() const { return high_; }
+    // The pass's histogram, summed over the parts (65 536 counts).
+    void counted(const std::vector<std::uint64_t>& total) {
+        std::uint64_t digit = 0;
+        while (digit + 1 < total.size() && total[digit] < k_) k_ -= total[digit++];
+        high_ = high_ << 16 | digit;
+        shift_ -= 16;
+    }
+    std::uint64_t key() const { return high_; }
+    std::uint64_t rank() const { return k_; }  // among the ids at key(), once counting is over
+    KeyedSelection choose(std::vector<std::uint32_t> ids) const {
+        const auto at = ids.begin() + static_cast<std::ptrdiff_t>(k_ - 1);
+        std::nth_element(ids.begin(), at, ids.end());
+        return {high_, *at};
+    }
+
+private:
+    std::uint64_t k_;
+    int shift_ = 48;
+    std::uint64_t high_ = 0;  // the digits fixed so far
+};
+
 template <class Histogram, class IdsAt>
 KeyedSelection select_kth_by_digits(std::size_t parts, std::uint64_t k, Histogram&& histogram, IdsAt&& ids_at) {
-    std::uint64_t high = 0;  // the digits fixed so far
+    DigitSelector selector(k);
     std::vector<std::uint64_t> total(std::size_t{1} << 16), counts(total.size());
-    for (int shift = 48; shift >= 0; shift -= 16) {
+    while (selector.counting()) {
         std::fill(total.begin(), total.end(), 0);
         for (std::size_t part = 0; part < parts; ++part) {
             std::fill(counts.begin(), counts.end(), 0);
-            histogram(part, shift, high, counts);
+            histogram(part, selector.shift(), selector.high(), counts);
             for (std::size_t d = 0; d < total.size(); ++d) total[d] += counts[d];
         }
-        std::uint64_t digit = 0;
-        while (digit + 1 < total.size() && total[digit] < k) k -= total[digit++];
-        high = high << 16 | digit;
+        selector.counted(total);
     }
     std::vector<std::uint32_t> ids;
-    for (std::size_t part = 0; part < parts; ++part) ids_at(part, high, ids);
-    const auto at = ids.begin() + static_cast<std::ptrdiff_t>(k - 1);
-    std::nth_element(ids.begin(), at, ids.end());
-    return {high, *at};
+    for (std::size_t part = 0; part < parts; ++part) ids_at(part, selector.key(), ids);
+    return selector.choose(std::move(ids));
 }
 
 }  // namespace toposimp::parallel
