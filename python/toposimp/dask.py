@@ -269,43 +269,65 @@ def _item(value, k):
     return value[k]
 
 
-def _first_piece(cut, i):
-    return cut[1][i]
+def _first_pieces(cut, indices):
+    """A part's pieces of a batch's tiles."""
+    return [cut[1][i] for i in indices]
 
 
-def _first_search(pieces, options):
+def _first_search(parts, options):
+    """A batch of tiles, from their pieces (per part, in the parts' order) → (the tiles searched,
+    their answers), by tile number."""
     from toposimp import _toposimp as engine
-    return engine.first_search(pieces, options)
+    pieces = {}
+    for part in parts:
+        for piece in part:
+            pieces.setdefault(piece.number, []).append(piece)
+    tiles, answers = [], []
+    for number in sorted(pieces):
+        tile, answer = engine.first_search(pieces[number], options)
+        tiles.append(tile)
+        answers.append(answer)
+    return tiles, answers
 
 
 def _first_queue(searched, border, marks, options):
     from toposimp import _toposimp as engine
-    return engine.first_queue(searched[0], border, marks, options)
+    tiles, answers = [], []
+    for tile in searched[0]:
+        tile, answer = engine.first_queue(tile, border, marks, options)
+        tiles.append(tile)
+        answers.append(answer)
+    return tiles, answers
 
 
 def _first_histogram(queued, shift, high):
     from toposimp import _toposimp as engine
-    return engine.first_histogram([q[0] for q in queued], shift, high)
-
-
-def _first_ids_at(queued, key):
-    from toposimp import _toposimp as engine
-    return engine.first_ids_at([q[0] for q in queued], key)
+    return engine.first_histogram(queued[0], shift, high)
 
 
 def _first_pairs_in(queued, shift, prefix):
     from toposimp import _toposimp as engine
-    return engine.first_pairs_in([q[0] for q in queued], shift, prefix)
+    return engine.first_pairs_in(queued[0], shift, prefix)
 
 
-def _first_run(queued, points, marks, bound, plan, options):
+def _first_ids_at(queued, key):
     from toposimp import _toposimp as engine
-    return engine.first_run([q[0] for q in queued], points, marks, bound, plan, options)
+    return engine.first_ids_at(queued[0], key)
 
 
-def _first_live(queued, marks, bound):
+def _first_run(queued, groups, points, marks, bound, plan, options):
+    """A batch's busy groups run (each a list of its tiles' places in the batch, with their control
+    points), its other tiles' live vertices → (outcomes, live vertices)."""
     from toposimp import _toposimp as engine
-    return engine.first_live(queued[0], marks, bound)
+    tiles = queued[0]
+    outcomes, live, running = [], [], set()
+    for group, inside in zip(groups, points):
+        done, lives = engine.first_run([tiles[i] for i in group], inside, marks, bound, plan, options)
+        outcomes.extend(done)
+        live.extend(lives)
+        running.update(group)
+    live.extend(engine.first_live(tile, marks, bound) for i, tile in enumerate(tiles) if i not in running and tile.vertices > 0)
+    return outcomes, live
 
 
 class _Tasks:
@@ -340,8 +362,9 @@ class _Tasks:
         if self.progress is not None:
             self.progress.stage(what, done, total)
 
-    def _gather(self, client, futures, what, on_progress=None):
-        """The futures' results in order, with progress."""
+    def _gather(self, client, futures, what, on_progress=None, each=None):
+        """The futures' results in order, with progress; or, with `each`, each(result) as they come,
+        none kept."""
         from distributed import as_completed
         from toposimp import UsageError
 
@@ -350,7 +373,11 @@ class _Tasks:
         self._stage(what, 0, len(futures))
         try:
             for done, (future, result) in enumerate(as_completed(futures, with_results=True), 1):
-                results[place[future.key]] = result
+                if each is None:
+                    results[place[future.key]] = result
+                else:
+                    each(result)
+                future.release()
                 self._stage(what, done, len(futures))
                 if on_progress is not None:
                     on_progress(done, len(futures))
@@ -366,41 +393,67 @@ class _Tasks:
             return self._first(steps, plan, options)
 
     def _first(self, steps, plan, options):
-        """The first round: the map's parts cut into tiles on the workers, each tile searched for
-        crossings, queued, its budget selected over all tiles by reductions, its groups run; the
-        live vertices back to `steps` (FirstSteps), which goes on here."""
+        """The first round: the map's parts cut into tiles on the workers; the tiles, in batches of
+        whole groups, searched for crossings, queued, their budget selected by reductions, their
+        groups run; the live vertices back to `steps` (FirstSteps), which goes on here."""
+        import numpy
+
         if self.progress is not None:
             self.progress.round, self.progress.tile_level = 1, plan.get("tile_level", 0)
         options = dict(options, threads=self.task_threads)
         client = self._client()
-        submit = client.submit
+        workers = max(1, len(client.scheduler_info()["workers"]))
+
+        def submit(*arguments):
+            return client.submit(*arguments, pure=False)
+
         # Cut: each part's facts here, its tiles' pieces stay on the workers.
-        cuts = [submit(_first_cut, steps.part(k), plan, options, pure=False) for k in range(len(steps))]
-        facts = self._gather(client, [submit(_item, cut, 0, pure=False) for cut in cuts], "cutting the map into tiles")
-        pieces = {}  # tile number -> its pieces' futures, in the parts' order
-        for cut, part in zip(cuts, facts):
+        cuts = [submit(_first_cut, steps.part(k), plan, options) for k in range(len(steps))]
+        facts = self._gather(client, [submit(_item, cut, 0) for cut in cuts], "cutting the map into tiles")
+        sizes, opens, where = {}, {}, {}  # per tile: its vertices, its open rings, its (part, place) pieces
+        for k, part in enumerate(facts):
             steps.add_facts(part)
-            for i, number in enumerate(part["tiles"].tolist()):
-                pieces.setdefault(number, []).append(submit(_first_piece, cut, i, pure=False))
-        del cuts
-        numbers = sorted(pieces)
-        # Search: each tile's crossings; the segments leaving tiles or-ed here.
-        searched = [submit(_first_search, pieces[number], options, pure=False) for number in numbers]
-        del pieces
-        for answer in self._gather(client, [submit(_item, s, 1, pure=False) for s in searched], "searching the tiles for crossings"):
-            steps.found(answer)
+            for i, (number, count, open_rings) in enumerate(zip(part["tiles"].tolist(), part["tile_vertices"].tolist(), part["tile_open"])):
+                sizes[number] = sizes.get(number, 0) + count
+                opens.setdefault(number, []).append(open_rings)
+                where.setdefault(number, []).append((k, i))
+        # Batches of whole groups (tiles sharing a ring their cut ends do not settle), the biggest
+        # first, as the rounds' tasks are cut (_batches); the tiles without vertices of their own
+        # (segments passing through) go along to be searched.
+        holding = [number for number in sorted(sizes) if sizes[number] > 0]
+        everyone = steps.groups([(number, True, numpy.concatenate(opens[number])) for number in holding])
+        batches = [[number for g in batch for number in everyone[g]]
+                   for batch in _batches([sum(sizes[number] for number in group) for group in everyone], workers)]
+        if not batches:
+            batches = [[]]
+        for j, number in enumerate(number for number in sorted(sizes) if sizes[number] == 0):
+            batches[j % len(batches)].append(number)
+        batches = [sorted(batch) for batch in batches]
+        del facts, opens
+        # Search: each batch's tiles from their pieces; the segments leaving tiles or-ed here.
+        searched = []
+        for batch in batches:
+            parts = {}
+            for number in batch:
+                for k, i in where[number]:
+                    parts.setdefault(k, []).append(i)
+            searched.append(submit(_first_search, [submit(_first_pieces, cuts[k], parts[k]) for k in sorted(parts)], options))
+        del cuts, where
+        for answers in self._gather(client, [submit(_item, s, 1) for s in searched], "searching the tiles for crossings"):
+            for answer in answers:
+                steps.found(answer)
         border = steps.border()
         marks = steps.marks
-        queued = [submit(_first_queue, s, border, marks, options, pure=False) for s in searched]
+        queued = [submit(_first_queue, s, border, marks, options) for s in searched]
         del searched
-        answers = self._gather(client, [submit(_item, q, 1, pure=False) for q in queued], "queueing the tiles' vertices")
-        for answer in answers:
-            steps.queued(answer["pinned"], answer["queued"])
+        answers = self._gather(client, [submit(_item, q, 1) for q in queued], "queueing the tiles' vertices")
+        for batch in answers:
+            for answer in batch:
+                steps.queued(answer["pinned"], answer["queued"])
         # The budget: the wanted-th smallest (key, id) over all tiles, a 16-bit digit of the keys a
         # pass (the first pass came with the answers above), until the bucket it falls in is small
         # enough to be gathered here.
         wanted = steps.wanted()
-        import numpy
 
         def dense(histograms):
             total = numpy.zeros(1 << 16, dtype=numpy.uint64)
@@ -410,45 +463,38 @@ class _Tasks:
 
         if wanted > 0:
             selector = _toposimp.DigitSelector(wanted)
-            total = dense(answer["histogram"] for answer in answers)
+            total = dense(answer["histogram"] for batch in answers for answer in batch)
             selector.counted(total)
             while selector.counting and int(total[selector.high & 0xffff]) > PAIRS_GATHERED:
-                total = dense(self._gather(client, [submit(_first_histogram, [q], selector.shift, selector.high, pure=False)
-                                                    for q in queued], "selecting the round's budget"))
+                total = dense(self._gather(client, [submit(_first_histogram, q, selector.shift, selector.high) for q in queued],
+                                           "selecting the round's budget"))
                 selector.counted(total)
             if selector.counting:
-                pairs = self._gather(client, [submit(_first_pairs_in, [q], selector.shift + 16, selector.high, pure=False) for q in queued],
+                pairs = self._gather(client, [submit(_first_pairs_in, q, selector.shift + 16, selector.high) for q in queued],
                                      "selecting the round's budget")
                 bound = selector.choose_among(numpy.concatenate([p["keys"] for p in pairs]), numpy.concatenate([p["ids"] for p in pairs]))
             else:
-                ids = self._gather(client, [submit(_first_ids_at, [q], selector.key, pure=False) for q in queued],
-                                   "selecting the round's budget")
+                ids = self._gather(client, [submit(_first_ids_at, q, selector.key) for q in queued], "selecting the round's budget")
                 bound = selector.choose(numpy.concatenate(ids))
             steps.bound(*bound)
-        at = {number: k for k, number in enumerate(numbers)}
-        holding = [answer for answer in answers if answer["vertices"] > 0]
+        groups = []
         if wanted > 0 or not marks:
-            groups = steps.groups([(a["number"], marks and tuple(a["smallest"]) <= tuple(bound), a["open"]) for a in holding])
-        else:
-            groups = []  # (a count target with nothing to go)
+            groups = steps.groups([(a["number"], marks and tuple(a["smallest"]) <= tuple(bound), a["open"])
+                                   for batch in answers for a in batch if a["vertices"] > 0])
+        del answers
         bound = steps.bound_now
-        # Run: each group's tiles, the tiles of no group only their live vertices.
-        running = set()
-        runs = []
+        # Run: each batch's busy groups where its tiles are, and its other tiles' live vertices.
+        place = {number: (b, i) for b, batch in enumerate(batches) for i, number in enumerate(batch)}
+        busy = [[] for _ in batches]
         for group in groups:
-            runs.append(submit(_first_run, [queued[at[n]] for n in group], [steps.points(n) for n in group], marks, bound, plan, options,
-                               pure=False))
-            running.update(group)
-        lives = [submit(_first_live, queued[at[a["number"]]], marks, bound, pure=False) for a in holding if a["number"] not in running]
+            busy[place[group[0]][0]].append(group)
+        runs = [submit(_first_run, q, [[place[number][1] for number in group] for group in mine],
+                       [[steps.points(number) for number in group] for group in mine], marks, bound, plan, options)
+                for q, mine in zip(queued, busy)]
         del queued
-        results = self._gather(client, runs + lives, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress)
-        live, outcomes = [], []
-        for result in results[:len(runs)]:
-            outcomes.extend(result[0])
-            live.extend(result[1])
-        live.extend(results[len(runs):])
-        del results
-        steps.finish(live, outcomes)
+        self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
+                     each=lambda result: steps.add(result[1], result[0]))
+        steps.finish()
 
     def _run_round(self, groups, plan, options, round_number):
         from distributed import as_completed

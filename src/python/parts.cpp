@@ -388,9 +388,18 @@ py::dict facts_dict(const map::CutPart& cut, std::uint32_t first_chain) {
     dict["whole_level"] = array_of(facts.whole_level);
     dict["distinct"] = array_of(facts.distinct);
     dict["orientation"] = array_of(facts.orientation);
+    // Its tiles: their numbers, vertices (with cut ends) and open rings (for the tasks' batches).
     std::vector<std::uint32_t> tiles;
-    for (const map::FirstTile& tile : cut.tiles) tiles.push_back(tile.number);
+    std::vector<std::uint64_t> vertices;
+    py::list open;
+    for (const map::FirstTile& tile : cut.tiles) {
+        tiles.push_back(tile.number);
+        vertices.push_back(tile.input.vertex_id.size());
+        open.append(array_of(tile.open_chains()));
+    }
     dict["tiles"] = array_of(tiles);
+    dict["tile_vertices"] = array_of(vertices);
+    dict["tile_open"] = open;
     return dict;
 }
 
@@ -607,20 +616,23 @@ py::list FirstSteps::groups(const py::list& tiles) {
 
 py::array_t<double> FirstSteps::points(std::uint32_t tile) const { return points_array(lead().points(tile)); }
 
-void FirstSteps::finish(const py::list& live_list, const py::list& outcome_list) {
+void FirstSteps::add(const py::list& live_list, const py::list& outcome_list) {
+    const map::FirstRoundLead& first = lead();
+    for (const py::handle one : live_list) live_.push_back(live_of(one.cast<py::dict>(), map_.vertices.size(), first.marks()));
+    for (const py::handle one : outcome_list) outcomes_.push_back(outcome_of(one.cast<py::dict>(), map_));
+}
+
+void FirstSteps::finish() {
     map::FirstRoundLead& first = lead();
-    std::vector<map::LiveVertices> live;
-    for (const py::handle one : live_list) live.push_back(live_of(one.cast<py::dict>(), map_.vertices.size(), first.marks()));
-    std::vector<map::TileOutcome> outcomes;
-    for (const py::handle one : outcome_list) outcomes.push_back(outcome_of(one.cast<py::dict>(), map_));
     {
         py::gil_scoped_release release;
         try {
-            parts_ = first.finish(std::move(live), outcomes, here_below_);
+            parts_ = first.finish(std::move(live_), outcomes_, here_below_);
         } catch (const std::invalid_argument& error) {
             py::gil_scoped_acquire gil;
             malformed(error.what());
         }
+        std::vector<map::TileOutcome>().swap(outcomes_);
     }
     lead_.reset();
 }
@@ -830,7 +842,8 @@ void bind_parts(py::module_& module) {
         .def("groups", &FirstSteps::groups, py::arg("tiles"))
         .def("points", &FirstSteps::points, py::arg("tile"))
         .def("points_in", &FirstSteps::points_in, py::arg("tile"))
-        .def("finish", &FirstSteps::finish, py::arg("live"), py::arg("outcomes"));
+        .def("add", &FirstSteps::add, py::arg("live"), py::arg("outcomes"))
+        .def("finish", &FirstSteps::finish);
     py::class_<parallel::DigitSelector>(module, "DigitSelector", "The k-th smallest (key, id) by a histogram of 16-bit digits a pass")
         .def(py::init<std::uint64_t>(), py::arg("k"))
         .def_property_readonly("counting", &parallel::DigitSelector::counting)

@@ -16,7 +16,7 @@ namespace py = pybind11;
 
 // The tile and outcome dicts' format: a worker whose engine has another cannot run this one's
 // tiles (python/toposimp/dask.py checks before the first round). Raise it when they change.
-inline constexpr int kPartsProtocol = 2;  // 2: orientations known but not yet counted (3 to 5, 7 to 9)
+inline constexpr int kPartsProtocol = 3;  // 2: orientations known but not yet counted (3 to 5, 7 to 9); 3: the first round's tasks
 
 // A round's tile groups as run_groups sees them: a sequence whose item k is group k's tiles (a
 // list of dicts), built when asked for, so that the round's tiles never all exist at once (ask
@@ -57,8 +57,10 @@ public:
     py::list groups(const py::list& tiles);  // each tile holding vertices: (number, busy, open chains)
     py::array_t<double> points(std::uint32_t tile) const;
     std::uint64_t points_in(std::uint32_t tile) const { return lead().points_in(tile); }
-    // Every tile's live vertices (dicts) and every group's outcomes (dicts).
-    void finish(const py::list& live, const py::list& outcomes);
+    // Tiles' live vertices (dicts) and their groups' outcomes (dicts), as they come (each tile's
+    // and each outcome once); then finish, once every tile's came.
+    void add(const py::list& live, const py::list& outcomes);
+    void finish();
     std::unique_ptr<map::MapInParts> take();  // (after close)
     void close() { open_ = false; }
 
@@ -71,6 +73,8 @@ private:
     std::vector<std::uint32_t> part_chain_;  // part k: chains [part_chain_[k], part_chain_[k + 1])
     std::uint32_t next_chain_ = 0;
     std::uint64_t here_below_ = 0;
+    std::vector<map::LiveVertices> live_;
+    std::vector<map::TileOutcome> outcomes_;
     std::unique_ptr<map::MapInParts> parts_;
     bool open_ = true;
     friend map::SimplifyResult run_in_parts(const map::MapData&, const map::SimplifyOptions&, const py::object&, int, const py::object&,

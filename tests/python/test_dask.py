@@ -76,7 +76,7 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path, fir
         # A worker with tasks under way, so that they are lost with it and run again elsewhere.
         for address, keys in client.processing().items():
             if keys and pids.get(address) in [w.pid for w in workers]:
-                killed["address"], killed["tasks"] = address, len(keys)
+                killed["address"], killed["tasks"], killed["keys"] = address, len(keys), [str(key) for key in keys]
                 os.kill(pids[address], signal.SIGKILL)
                 return
 
@@ -86,6 +86,8 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path, fir
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
     assert killed["tasks"] > 0
+    if first_round == "workers":  # (killed in the first round: its tiles, held by the worker, are built again)
+        assert any(key.startswith("_first_run") for key in killed["keys"]), killed["keys"]
     assert killed["address"] not in client.scheduler_info()["workers"]
     assert output.read_bytes() == reference.read_bytes()
 

@@ -178,7 +178,10 @@ class FirstRoundHere:
             live.extend(lives)
             running.update(group)
         live.extend(_toposimp.first_live(queued[a["number"]], steps.marks, now) for a in holding if a["number"] not in running)
-        steps.finish(self.damage("live", live), outcomes)
+        live = self.damage("live", live)
+        steps.add(live[:2], [])  # (in pieces, as they come)
+        steps.add(live[2:], outcomes)
+        steps.finish()
         self.steps = steps
 
 
