@@ -244,11 +244,11 @@ private:
 // 3. Each tile's queue(border): its vertices' states, and a count target's keys.
 // 4. The lead's wanted(): a count target's first budget, selected over the tiles' keys (area,
 //    then id) by a DigitSelector asking every tile's histogram() and ids_at(); bound().
-// 5. The lead's groups from every tile's busy() and open_chains(): the tiles that share a ring
-//    their cut ends do not settle run together, as in split_round.
-// 6. Each group runs (run_tile_group over the tiles' input(), with the lead's points()); every
-//    tile's live() vertices and the outcomes go to the lead's finish: a MapInParts over the live
-//    vertices goes on (keep_live_only's). The result is simplify()'s, stats included but the
+// 5. The lead's groups from every tile's busy() (or smallest()) and open_chains(): the tiles that
+//    share a ring their cut ends do not settle run together, as in split_round.
+// 6. Each group runs (run_tile_group over its tiles' run_input(), with the lead's points());
+//    every tile's live_vertices() and the outcomes go to the lead's finish: a MapInParts over the
+//    live vertices goes on (keep_live_only's). The result is simplify()'s, stats included but the
 //    predicates the crossing search counts (a pair of segments met in several tiles is decided
 //    in each).
 
@@ -258,7 +258,7 @@ struct ChainFacts {
     std::vector<std::uint8_t> whole_level;   // kOpenChain if not closed
     std::vector<std::uint32_t> distinct;     // a ring's distinct locations (0 for an open chain)
     std::vector<std::int8_t> orientation;    // a ring's input orientation (as know_orientation keeps it), else 2
-    std::vector<std::uint8_t> frozen;
+    std::vector<std::uint8_t> frozen;        // (for the cut itself: the lead keeps the rest)
 };
 
 // A tile of the first round: its chains' pieces (from one part, or from every part once added)
@@ -282,7 +282,7 @@ struct FirstTile {
     // and the ends of segments meeting another fixed, the rest queued; with `marks`, the queued
     // vertices' keys. Returns how many were pinned (by a crossing or frozen).
     std::uint64_t queue(std::span<const std::uint32_t> border, bool marks, const Ranking& ranking);
-    std::uint64_t queued() const { return keys.size(); }
+    std::uint64_t queued() const { return keys.size(); }  // (a count target's: its keys)
     // For the lead's DigitSelector (select_kth_by_digits's histogram and ids_at).
     void histogram(int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) const;
     void ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const;
