@@ -200,13 +200,18 @@ def test_command_line(generated, binary, tmp_path):
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     output = tmp_path / "dask.gpkg"
     done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "2",
-                           "--tile-level", "2", "--local-budget", "0", "--json"], capture_output=True, text=True, timeout=300)
+                           "--tile-level", "2", "--local-budget", "0", "--json", "--first-round", "workers"],
+                          capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     assert '"command":"map"' in done.stdout
     assert "round 2, tiles of level 2:" in done.stderr and "tasks done" in done.stderr
+    assert "searching the tiles for crossings:" in done.stderr  # (the first round's stages on the workers)
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
-    assert usage.returncode == 0 and "--scheduler" in usage.stdout
+    assert usage.returncode == 0 and "--scheduler" in usage.stdout and "--first-round" in usage.stdout
+    wrong = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--first-round",
+                            "nowhere"], capture_output=True, text=True)
+    assert wrong.returncode == 2 and "--first-round" in wrong.stderr and not (tmp_path / "no.gpkg").exists()
 
 
 def test_quiet_run_with_big_tiles_prints_nothing(cluster, binary, tmp_path):
@@ -263,11 +268,16 @@ def test_python_api_with_a_client(cluster, generated):
 
     alone = toposimp.simplify(layers, keep="40%", points=points)
     before = tasks_run()
-    parts = toposimp.simplify(layers, keep="40%", points=points, client=Tiles(client, tile_level=2, local_budget=0))
-    assert tasks_run() > before, "the tiles ran as tasks"
-    assert toposimp.summary(parts["cells"])["vertices_out"] == toposimp.summary(alone["cells"])["vertices_out"]
-    for name in layers:
-        assert list(parts[name].geometry.to_wkb()) == list(alone[name].geometry.to_wkb()), name
+    for first_round in ("here", "workers"):
+        tiles = Tiles(client, tile_level=2, local_budget=0, first_round=first_round)
+        parts = toposimp.simplify(layers, keep="40%", points=points, client=tiles)
+        assert tasks_run() > before, "the tiles ran as tasks"
+        before = tasks_run()
+        assert toposimp.summary(parts["cells"])["vertices_out"] == toposimp.summary(alone["cells"])["vertices_out"]
+        for name in layers:
+            assert list(parts[name].geometry.to_wkb()) == list(alone[name].geometry.to_wkb()), (name, first_round)
+    with pytest.raises(ValueError, match="first_round must be"):
+        Tiles(client, first_round="elsewhere")
 
 
 def test_tiles_fit_the_workers_memory_limit():
