@@ -228,6 +228,29 @@ def fitting_tile_points(client, wanted, timeout=120):
     return min(wanted, fits)
 
 
+# What the first round on the workers holds there per vertex of the map, over all workers, between
+# its stages (every tile's pieces, states, keys and flags, and a stage's copy of a batch: 31 to 54
+# bytes measured on the 45 M-vertex map and on GSHHG; taken with room to spare).
+FIRST_ROUND_BYTES_PER_VERTEX = 64
+
+
+def check_first_round_fits(client, vertices):
+    """Raises UsageError unless the workers' memory limits (where set) hold the first round's tiles
+    of a map of `vertices` in half of them, beside what each worker holds anyway: past 80 % of its
+    limit a Dask worker stops taking tasks, and the run would stall."""
+    from toposimp import UsageError
+
+    limits = [worker.get("memory_limit") or 0 for worker in client.scheduler_info()["workers"].values()]
+    if not limits or any(limit <= 0 for limit in limits):
+        return
+    room = sum(max(0, 0.5 * limit - WORKER_BASE) for limit in limits)
+    needed = vertices * FIRST_ROUND_BYTES_PER_VERTEX
+    if needed > room:
+        raise UsageError(f"--first-round workers keeps the whole map's tiles on the workers (about {needed / 2**20:.0f} MiB for its "
+                         f"{vertices} vertices); the {len(limits)} workers' memory limits leave room for {room / 2**20:.0f} MiB: "
+                         f"add workers, raise their limits, or use --first-round here")
+
+
 _INSTALL_HINT = "make this toposimp package importable on every worker (PYTHONPATH, or install it there)"
 
 
@@ -403,6 +426,7 @@ class _Tasks:
         options = dict(options, threads=self.task_threads)
         client = self._client()
         workers = max(1, len(client.scheduler_info()["workers"]))
+        check_first_round_fits(client, sum(steps.part_vertices(k) for k in range(len(steps))))
 
         def submit(*arguments):
             return client.submit(*arguments, pure=False)

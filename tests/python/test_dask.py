@@ -302,3 +302,25 @@ def test_tiles_fit_the_workers_memory_limit():
     assert fits * BYTES_PER_POINT + WORKER_BASE <= 256 * 2**20
     with pytest.raises(UsageError, match="memory limit"):
         fitting_tile_points(Workers(200 * 2**20), 1_000_000)
+
+
+def test_first_round_on_the_workers_must_fit_their_memory():
+    """--first-round workers keeps every tile on the workers between its stages: a map whose tiles
+    the workers' limits cannot hold in half of them is refused before any task, with the way out."""
+    from toposimp import UsageError
+    from toposimp.dask import FIRST_ROUND_BYTES_PER_VERTEX, WORKER_BASE, check_first_round_fits
+
+    class Workers:
+        def __init__(self, *limits):
+            self.limits = limits
+
+        def scheduler_info(self):
+            return {"workers": {f"tcp://w{k}": {"memory_limit": limit} for k, limit in enumerate(self.limits)}}
+
+    check_first_round_fits(Workers(0, 0), 10**9)  # no limits: nothing to check
+    room = 2 * (0.5 * 2**30 - WORKER_BASE)
+    fits = int(room // FIRST_ROUND_BYTES_PER_VERTEX)
+    check_first_round_fits(Workers(2**30, 2**30), fits)
+    with pytest.raises(UsageError, match="add workers, raise their limits, or use --first-round here"):
+        check_first_round_fits(Workers(2**30, 2**30), fits + 1)
+    check_first_round_fits(Workers(2**30, 0), 10**9)  # (a worker without a limit: Dask does not stop it)
