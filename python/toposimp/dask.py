@@ -277,12 +277,13 @@ def check_workers(client):
         raise UsageError(f"the Dask worker {address} cannot run the tiles: {why}; {_INSTALL_HINT}")
 
 
-# The first round's tasks (src/python/parts.cpp: first_cut and the rest), each importing the
-# engine where it runs.
-
 # A budget's selection gathers the (key, id) pairs of the bucket it falls in once that holds at
 # most this many (12 bytes each), instead of a pass more over every tile.
 PAIRS_GATHERED = 2_000_000
+
+
+# The first round's tasks (src/python/parts.cpp: first_cut and the rest), each importing the
+# engine where it runs.
 def _first_cut(part, plan, options):
     from toposimp import _toposimp as engine
     return engine.first_cut(part, plan, plan["tile_level"], options)
