@@ -108,6 +108,22 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
             assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}, first round {first_round}"
 
 
+def test_budget_selected_pass_by_pass_on_the_workers(cluster, generated, binary, tmp_path, monkeypatch):
+    """--first-round workers with no bucket small enough to gather: the bound found by every
+    pass over the tiles' keys and the ids at the key, the same bytes."""
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "15%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    monkeypatch.setattr(toposimp_dask, "PAIRS_GATHERED", 0)
+    output = tmp_path / "dask.gpkg"
+    assert toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=2, quiet=True, first_round="workers") == 0
+    assert output.read_bytes() == reference.read_bytes()
+
+
 def test_bad_input_stops_with_the_command_line_message(cluster, tmp_path, capsys):
     from toposimp import dask as toposimp_dask
 
