@@ -82,6 +82,45 @@ std::uint32_t count_locations(std::span<const Point> open_ring) {
     return static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
 }
 
+// The groups of a round's tiles (indices 0 to tiles − 1, row-major): tiles joined by the split
+// rings their cut ends do not settle (union-find over `open(i, join)`, which calls join(c) for
+// each such chain c of tile i), in the order of their first tiles, each in index order; groups
+// without a busy tile (busy(i)) have nothing to do in the round and are left out.
+template <class Open, class Busy>
+std::vector<std::vector<std::uint32_t>> group_tiles(std::uint32_t tiles, Open&& open, Busy&& busy) {
+    std::vector<std::uint32_t> parent(tiles);
+    for (std::uint32_t i = 0; i < tiles; ++i) parent[i] = i;
+    const auto root = [&](std::uint32_t i) {
+        while (parent[i] != i) i = parent[i] = parent[parent[i]];
+        return i;
+    };
+    std::unordered_map<std::uint32_t, std::uint32_t> holder;  // an open chain → a tile holding a piece of it
+    for (std::uint32_t i = 0; i < tiles; ++i) {
+        open(i, [&](std::uint32_t c) {
+            const auto [at, fresh] = holder.emplace(c, i);
+            if (!fresh) parent[root(i)] = root(at->second);
+        });
+    }
+    std::vector<std::uint32_t> group_of(tiles, kNone);  // root → group
+    std::vector<std::vector<std::uint32_t>> groups;
+    std::vector<std::uint8_t> any_busy;
+    for (std::uint32_t i = 0; i < tiles; ++i) {
+        std::uint32_t& group = group_of[root(i)];
+        if (group == kNone) {
+            group = static_cast<std::uint32_t>(groups.size());
+            groups.emplace_back();
+            any_busy.push_back(0);
+        }
+        groups[group].push_back(i);
+        if (busy(i)) any_busy[group] = 1;
+    }
+    std::vector<std::vector<std::uint32_t>> running;
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        if (any_busy[g]) running.push_back(std::move(groups[g]));
+    }
+    return running;
+}
+
 
 // What a vertex is doing. Only `queued` vertices are candidates for removal.
 enum class State : std::uint8_t {
@@ -621,41 +660,19 @@ public:
             }
             for (std::uint32_t i = 0; i < tiles; ++i) split.wait_start[i + 1] += split.wait_start[i];
         }
-        // The groups: union-find over the tiles, joined by the chains of their unsettled split
-        // pieces; in the order of their first tiles (row-major), each in row-major order.
-        std::vector<std::uint32_t> parent(tiles);
-        for (std::uint32_t i = 0; i < tiles; ++i) parent[i] = i;
-        const auto root = [&](std::uint32_t i) {
-            while (parent[i] != i) i = parent[i] = parent[parent[i]];
-            return i;
-        };
-        std::unordered_map<std::uint32_t, std::uint32_t> holder;  // unsettled split chain → a tile holding a piece
-        for (std::uint32_t i = 0; i < tiles; ++i) {
-            for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) {
-                const TilePiece& piece = split.pieces[j];
-                const bool open = piece.kind == TilePiece::run && whole_level_[piece.chain] != kOpen && !piece.settled;
-                if (!open) continue;
-                const auto [at, fresh] = holder.emplace(piece.chain, i);
-                if (!fresh) parent[root(i)] = root(at->second);
-            }
-        }
+        // The groups: tiles joined by the chains of their unsettled split pieces; in a round of a
+        // count target only marked vertices go, so a group without any has nothing to do.
         std::sort(busy_tiles.begin(), busy_tiles.end());
         std::vector<std::uint8_t> busy(tiles, use_marks_ ? 0 : 1);
         for (const std::uint32_t k : busy_tiles) busy[index_of(k)] = 1;
-        std::vector<std::uint32_t> group_of(tiles, kNone);  // root → group
-        std::vector<std::vector<std::uint32_t>> groups;
-        for (std::uint32_t i = 0; i < tiles; ++i) {
-            std::uint32_t& group = group_of[root(i)];
-            if (group == kNone) {
-                group = static_cast<std::uint32_t>(groups.size());
-                groups.emplace_back();
+        const auto open = [&](std::uint32_t i, auto&& join) {
+            for (std::uint32_t j = split.piece_start[i]; j < split.piece_start[i + 1]; ++j) {
+                const TilePiece& piece = split.pieces[j];
+                if (piece.kind == TilePiece::run && whole_level_[piece.chain] != kOpen && !piece.settled) join(piece.chain);
             }
-            groups[group].push_back(i);
-        }
-        // In a round of a count target only marked vertices go: a group without any has nothing to do.
+        };
         std::vector<std::uint32_t> running;
-        for (std::vector<std::uint32_t>& group : groups) {
-            if (std::none_of(group.begin(), group.end(), [&](std::uint32_t i) { return busy[i] != 0; })) continue;
+        for (std::vector<std::uint32_t>& group : group_tiles(tiles, open, [&](std::uint32_t i) { return busy[i] != 0; })) {
             std::uint64_t points = 0;
             for (const std::uint32_t i : group) {
                 running.push_back(split.tiles[i]);
@@ -2313,15 +2330,10 @@ LiveVertices live_vertices(const FirstTile& tile, std::span<const std::pair<std:
             if (std::pair{area, in.vertex_id[v]} <= last) marked[v] = 1;
         });
     }
-    // The tile's own vertices, by id (its pieces are in the map's order but a ring's piece may
-    // hold its chain's last vertex before others).
-    std::vector<std::uint32_t> order;
-    for (std::uint32_t v = 0; v < in.vertex_id.size(); ++v) {
-        if (!tile.cut_end[v]) order.push_back(v);
-    }
-    std::sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return in.vertex_id[a] < in.vertex_id[b]; });
+    // The tile's own vertices, ascending: its pieces come in the map's order, each in its chain's.
     LiveVertices live;
-    for (const std::uint32_t v : order) {
+    for (std::uint32_t v = 0; v < in.vertex_id.size(); ++v) {
+        if (tile.cut_end[v]) continue;
         std::uint8_t state = in.state[v];
         const auto now = std::lower_bound(changed.begin(), changed.end(), std::pair{in.vertex_id[v], std::uint8_t{0}});
         if (now != changed.end() && now->first == in.vertex_id[v]) state = now->second;
@@ -2402,35 +2414,12 @@ const std::vector<std::vector<std::uint32_t>>& FirstRoundLead::groups(std::vecto
     // Tiles joined by the split rings their cut ends do not settle, in the order of their first
     // tiles; those without a busy tile sit the round out.
     std::sort(tiles.begin(), tiles.end(), [](const TileFacts& a, const TileFacts& b) { return a.number < b.number; });
-    std::vector<std::uint32_t> parent(tiles.size());
-    for (std::uint32_t i = 0; i < parent.size(); ++i) parent[i] = i;
-    const auto root = [&](std::uint32_t i) {
-        while (parent[i] != i) i = parent[i] = parent[parent[i]];
-        return i;
+    const auto open = [&](std::uint32_t i, auto&& join) {
+        for (const std::uint32_t c : tiles[i].open_chains) join(c);
     };
-    std::unordered_map<std::uint32_t, std::uint32_t> holder;
-    for (std::uint32_t i = 0; i < tiles.size(); ++i) {
-        for (const std::uint32_t c : tiles[i].open_chains) {
-            const auto [at, fresh] = holder.emplace(c, i);
-            if (!fresh) parent[root(i)] = root(at->second);
-        }
-    }
-    std::vector<std::uint32_t> group_of(tiles.size(), kNone);
-    std::vector<std::vector<std::uint32_t>> all;
-    std::vector<std::uint8_t> busy;
-    for (std::uint32_t i = 0; i < tiles.size(); ++i) {
-        std::uint32_t& g = group_of[root(i)];
-        if (g == kNone) {
-            g = static_cast<std::uint32_t>(all.size());
-            all.emplace_back();
-            busy.push_back(0);
-        }
-        all[g].push_back(tiles[i].number);
-        if (!marks_ || tiles[i].busy) busy[g] = 1;
-    }
-    groups_.clear();
-    for (std::size_t g = 0; g < all.size(); ++g) {
-        if (busy[g]) groups_.push_back(std::move(all[g]));
+    groups_ = group_tiles(static_cast<std::uint32_t>(tiles.size()), open, [&](std::uint32_t i) { return !marks_ || tiles[i].busy; });
+    for (std::vector<std::uint32_t>& group : groups_) {
+        for (std::uint32_t& i : group) i = tiles[i].number;
     }
     // Control points to their tiles (those holding vertices).
     const auto columns = ((plan_.grid.base_columns - 1) >> (plan_.shift + t_)) + 1;
