@@ -32,6 +32,7 @@ from toposimp import _toposimp
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
                                    [--task-threads N] [--local-budget N] [--first-round WHERE]
+                                   [--send-input]
 
 toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
 
@@ -49,8 +50,13 @@ Dask options:
   --first-round WHERE  where the first round's tiles are built: 'here' (default: by the whole
                        map's engine in this process) or 'workers' (the map cut into tiles,
                        searched for crossings, queued and its budget selected on the workers;
-                       this process never holds an engine over the whole map, but still reads
-                       the whole map: on one machine slower, and no smaller, than 'here')
+                       this process never holds an engine over the whole map). With 'workers',
+                       a plain PolyLine Shapefile written to a Shapefile (at one target, without
+                       --decimals, --precision or --levels) is read by parts on the workers:
+                       this process then never holds its vertices, and the .shp must be at the
+                       same absolute path, unchanged, on every worker. Other inputs are read here
+  --send-input         with --first-round workers: read the input here and send the workers its
+                       parts (for workers that cannot see the input)
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
@@ -122,6 +128,7 @@ def _split_arguments(argv):
     parser.add_argument("--task-threads", type=int, default=1)
     parser.add_argument("--local-budget", type=int, default=LOCAL_BUDGET)
     parser.add_argument("--first-round", choices=("workers", "here"), default="here")
+    parser.add_argument("--send-input", action="store_true")
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
@@ -135,7 +142,7 @@ def _split_arguments(argv):
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
-        local_budget=None, client=None, quiet=False, on_progress=None, first_round="here"):
+        local_budget=None, client=None, quiet=False, on_progress=None, first_round="here", send_input=False):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
@@ -143,7 +150,11 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices (default LOCAL_BUDGET) runs here, whole. `on_progress(done,
     total)`: called as the tile tasks finish. `first_round`: where the first round's tiles are
-    built, "workers" or "here" (the whole map's engine here)."""
+    built, "workers" or "here" (the whole map's engine here). With "workers", the first round's
+    tasks read their parts of the input themselves where its format allows (a plain PolyLine
+    Shapefile written to a Shapefile: the input must then be at the same absolute path, unchanged,
+    on every worker), and this process never holds the input's vertices; `send_input` sends
+    them the parts from here instead."""
     if local_budget is None:
         local_budget = LOCAL_BUDGET
     progress = _Progress(quiet)
@@ -174,7 +185,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
                                                  lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
-                                                 sys.stderr.isatty(), _main_thread())
+                                                 sys.stderr.isatty(), _main_thread(),
+                                                 input_on_workers=first_round == "workers" and not send_input)
     finally:
         if "client" in own:
             own["client"].close()
@@ -625,7 +637,7 @@ def main(argv=None):
     try:
         return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
                    tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
-                   first_round=options.first_round,
+                   first_round=options.first_round, send_input=options.send_input,
                    quiet=quiet)
     except KeyboardInterrupt:
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")

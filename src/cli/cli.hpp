@@ -13,6 +13,10 @@ struct SimplifyOptions;
 struct SimplifyResult;
 }  // namespace toposimp::map
 
+namespace toposimp::io {
+struct VerticesInFile;
+}  // namespace toposimp::io
+
 namespace toposimp::cli {
 
 // Exit statuses (DESIGN.md): 0 ok, 1 topology or validation failure, 2 usage or input error.
@@ -29,6 +33,11 @@ struct Context {
     // In-process callers that run the map engine elsewhere (python3 -m toposimp.dask): called in
     // place of map::simplify, and must give what it gives. Empty: the engine runs here.
     std::function<map::SimplifyResult(const map::MapData&, const map::SimplifyOptions&)> map_engine{};
+    // And where set, for a map whose vertices the engine reads from the input itself: a plain
+    // PolyLine Shapefile written to a Shapefile, at one target, published as simplified (no
+    // --decimals, --precision or --levels). The map then holds its chains and control points,
+    // and no vertex (io::VerticesInFile says where they are); this process never reads them all.
+    std::function<map::SimplifyResult(const map::MapData&, const map::SimplifyOptions&, const io::VerticesInFile&)> map_engine_in_file{};
 };
 
 // Runs `toposimp ARGS...` (args excludes the program name) and returns the exit status.

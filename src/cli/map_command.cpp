@@ -234,7 +234,7 @@ void log_input(spdlog::logger& log, const std::string& input, const io::DatasetS
 }
 
 // The layers through OGR, and the control points file on a second thread meanwhile.
-MapInput read_layers(const MapOptions& options, spdlog::logger& log, const MapMemory* memory) {
+MapInput read_layers(const MapOptions& options, spdlog::logger& log, const MapMemory* memory, bool vertices_in_file) {
     MapInput input;
     if (memory) {
         input.dataset.emplace(io::OgrDataset::read(*memory->input, input.map));
@@ -259,7 +259,7 @@ MapInput read_layers(const MapOptions& options, spdlog::logger& log, const MapMe
         // of them) as it is, without parsing the CRS.
         const std::string extension = std::filesystem::path(options.output).extension().string();
         const bool prj_as_file = (extension == ".shp" || extension == ".SHP") && io::is_shapefile_output(options.output, options.format);
-        input.dataset.emplace(io::OgrDataset::read(options.input, options.layers, input.map, prj_as_file));
+        input.dataset.emplace(io::OgrDataset::read(options.input, options.layers, input.map, prj_as_file, vertices_in_file));
         input.written_points = input.map.control_points.size();
     } catch (...) {
         if (points.valid()) points.wait();
@@ -575,6 +575,12 @@ void check_spherical(const MapOptions& options, const MapInput& input) {
 map::Levels simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
                          const std::vector<Level>& levels, const std::optional<map::GridStep>& decimal_grid, const Context& context) {
     const bool rounds = decimal_grid || options.quantize > 0;
+    if (const io::VerticesInFile* in_file = input.dataset ? input.dataset->vertices_in_file() : nullptr) {
+        if (!context.map_engine_in_file || !options.levels.empty() || rounds) throw std::logic_error("a map's vertices left in its file");
+        map::Levels one;
+        one.results.push_back(context.map_engine_in_file(input.map, simplify_options, *in_file));
+        return one;
+    }
     if (context.map_engine && options.levels.empty()) {
         map::Levels one;
         one.results.push_back(context.map_engine(input.map, simplify_options));
@@ -735,11 +741,15 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     if (!memory) check_outputs(options, levels);
 
     progress.phase("reading " + options.input);
-    MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory);
+    // (An engine that reads the vertices itself gets them left in the file where it can.)
+    const bool vertices_in_file =
+        context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() && !publishing.decimal_grid && options.quantize == 0;
+    MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory, vertices_in_file);
     time.read = seconds_since(start);
     check_spherical(options, input);
-    log.debug("{} chains, {} vertices, {} control points", input.map.chains.size(), input.map.vertices.size(),
-              input.map.control_points.size());
+    const io::VerticesInFile* in_file = input.dataset ? input.dataset->vertices_in_file() : nullptr;
+    log.debug("{} chains, {} vertices{}, {} control points", input.map.chains.size(), in_file ? in_file->vertices : input.map.vertices.size(),
+              in_file ? " (left in the file)" : "", input.map.control_points.size());
 
     // The engine builds chains, indexes and ranks inside simplify().
     progress.phase("simplifying");

@@ -544,14 +544,22 @@ std::vector<std::string> write_mesh_file(const std::string& path, const py::obje
 }
 
 // `toposimp ARGS...` in this process, the map engine run in parts through `run_groups` (see
-// python/parts.hpp). Returns (exit status, standard output, standard error).
+// python/parts.hpp). `input_on_workers` (run_groups has first_round): where the input allows it,
+// its vertices are read by the first round's tasks, not here (cli::Context::map_engine_in_file).
+// Returns (exit status, standard output, standard error).
 py::tuple run_command(const std::vector<std::string>& args, const py::object& run_groups, int tile_level, const py::object& tile_points,
-                      std::uint64_t local_budget, const py::object& progress, bool err_is_terminal, bool interruptible) {
+                      std::uint64_t local_budget, const py::object& progress, bool err_is_terminal, bool interruptible,
+                      bool input_on_workers) {
     Run run(progress, interruptible);
     run.context.err_is_terminal = err_is_terminal;
     run.context.map_engine = [&](const map::MapData& map, const map::SimplifyOptions& options) {
         return python::run_in_parts(map, options, run_groups, tile_level, tile_points, local_budget);
     };
+    if (input_on_workers) {
+        run.context.map_engine_in_file = [&](const map::MapData& map, const map::SimplifyOptions& options, const io::VerticesInFile& in_file) {
+            return python::run_in_parts(map, options, run_groups, tile_level, tile_points, local_budget, &in_file);
+        };
+    }
     int status = 0;
     run([&] { status = cli::run(args, run.context); });
     return py::make_tuple(status, run.out.str(), run.err.str());
@@ -578,7 +586,8 @@ PYBIND11_MODULE(_toposimp, module) {
     module.def("write_mesh_file", &write_mesh_file, py::arg("path"), py::arg("vertices"), py::arg("faces"),
                py::arg("vertex_columns"), py::arg("face_columns"), py::arg("format"), py::arg("ascii"), py::arg("overwrite"));
     module.def("run_command", &run_command, py::arg("args"), py::arg("run_groups"), py::arg("tile_level"), py::arg("tile_points"),
-               py::arg("local_budget"), py::arg("progress"), py::arg("err_is_terminal"), py::arg("interruptible"));
+               py::arg("local_budget"), py::arg("progress"), py::arg("err_is_terminal"), py::arg("interruptible"),
+               py::arg("input_on_workers") = false);
     python::bind_parts(module);
     module.attr("version") = TOPOSIMP_VERSION;
     module.attr("parts_protocol") = python::kPartsProtocol;

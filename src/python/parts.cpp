@@ -7,9 +7,14 @@
 #include <malloc.h>
 #endif
 
+#include "io/common/errors.hpp"
+#include "io/map/shapefile.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cstring>
+#include <filesystem>
+#include <optional>
 #include <limits>
 #include <map>
 #include <string>
@@ -264,11 +269,11 @@ py::dict outcome_dict(const map::TileOutcome& outcome) {
     return dict;
 }
 
-// An outcome dict back, its ids checked against the map's vertices and chains.
-map::TileOutcome outcome_of(const py::dict& dict, const map::MapData& map) {
+std::uint32_t chains_of(const map::MapData& map) { return static_cast<std::uint32_t>(map.chains.size()); }
+
+// An outcome dict back, its ids checked against a map of `n` vertices and `c` chains.
+map::TileOutcome outcome_of(const py::dict& dict, std::uint32_t n, std::uint32_t c) {
     map::TileOutcome outcome;
-    const auto n = static_cast<std::uint32_t>(map.vertices.size());
-    const auto c = static_cast<std::uint32_t>(map.chains.size());
     auto ids = [&](std::vector<std::uint32_t> list) {
         if (std::any_of(list.begin(), list.end(), [&](std::uint32_t v) { return v >= n; })) malformed("an outcome names a vertex the map has not");
         return list;
@@ -313,7 +318,9 @@ map::TileOutcome outcome_of(const py::dict& dict, const map::MapData& map) {
 // control points (0 if none does: every level-0 block a tile). Counted in a dense array at the
 // finest level whose blocks number at most 2^22, and summed up from there: tiles are never finer
 // than that level (a map of more than 2^22 level-0 blocks has tiles of a few blocks at least).
-unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std::uint64_t budget) {
+// `for_each(add)` calls add(p) for every vertex and control point of the map.
+template <class ForEach>
+unsigned tile_level_for(const map::GridPlan& plan, std::uint64_t budget, ForEach for_each) {
     const auto blocks_at = [&](unsigned level) {
         return std::pair{((plan.grid.base_columns - 1) >> (plan.shift + level)) + 1, ((plan.grid.base_rows - 1) >> (plan.shift + level)) + 1};
     };
@@ -326,9 +333,7 @@ unsigned tile_level_for(const map::MapData& map, const map::GridPlan& plan, std:
     std::vector<std::uint64_t> count;
     auto [columns, rows] = blocks_at(dense);
     count.assign(std::size_t{columns} * rows, 0);
-    for (const auto* points : {&map.vertices, &map.control_points}) {
-        for (const Point p : *points) ++count[std::size_t{plan.block_row(p, dense)} * columns + plan.block_column(p, dense)];
-    }
+    for_each([&](Point p) { ++count[std::size_t{plan.block_row(p, dense)} * columns + plan.block_column(p, dense)]; });
     unsigned best = 0;
     for (unsigned level = dense; level + 1 < plan.levels; ++level) {
         if (level > dense) {  // (the counts one level up)
@@ -370,7 +375,55 @@ py::dict part_dict(const map::MapData& map, std::uint32_t c0, std::uint32_t c1) 
     return dict;
 }
 
+// Records [r0, r1) of the file a map's vertices are in as a part: where they are, and what the
+// map made of them (checked by the part's reader, first_cut).
+py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, std::uint64_t r0, std::uint64_t r1) {
+    py::dict dict;
+    dict["shp"] = in_file.shp;
+    dict["layer"] = in_file.layer;
+    dict["shp_size"] = std::uint64_t{in_file.shp_size};
+    dict["shp_time"] = in_file.shp_time;
+    dict["records"] = py::make_tuple(r0, r1);
+    const std::uint32_t c0 = in_file.record_chain[r0], c1 = in_file.record_chain[r1];
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
+    for (std::uint32_t c = c0; c < c1; ++c) {
+        chains.emplace_back(map.chains[c].first - in_file.record_vertex[r0], map.chains[c].last - in_file.record_vertex[r0]);
+    }
+    dict["chains"] = pairs_array(chains);
+    dict["first_vertex"] = in_file.record_vertex[r0];
+    dict["vertices"] = in_file.record_vertex[r1] - in_file.record_vertex[r0];
+    dict["first_chain"] = c0;
+    return dict;
+}
+
+// A part read from its file (file_part_dict): the same chains, or InputError.
+map::MapData file_part_of(const py::dict& dict) {
+    const auto shp = item(dict, "shp").cast<std::string>();
+    const auto [r0, r1] = item(dict, "records").cast<std::pair<std::uint64_t, std::uint64_t>>();
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(shp, error);
+    if (error || size != item(dict, "shp_size").cast<std::uint64_t>() || io::modified_ns(shp) != item(dict, "shp_time").cast<std::int64_t>()) {
+        throw io::InputError("'" + shp + "' cannot be read here as it was when the map was read" +
+                             (error ? " (" + error.message() + ")" : std::string(" (another size or modification time)")) +
+                             ": every worker reads the input at the same path, unchanged");
+    }
+    map::MapData part;
+    {
+        py::gil_scoped_release release;
+        part = io::read_shapefile_lines(shp, item(dict, "layer").cast<std::string>(), r0, r1);
+    }
+    const std::vector<map::Chain> chains = consecutive_chains(dict, "chains", item(dict, "vertices").cast<std::uint64_t>());
+    if (part.vertices.size() != item(dict, "vertices").cast<std::uint64_t>() || part.chains.size() != chains.size() ||
+        !std::equal(chains.begin(), chains.end(), part.chains.begin(),
+                    [](const map::Chain& a, const map::Chain& b) { return a.first == b.first && a.last == b.last; })) {
+        throw io::InputError("'" + shp + "': records " + std::to_string(r0) + " to " + std::to_string(r1) +
+                             " are not the lines they were when the map was read");
+    }
+    return part;
+}
+
 map::MapData part_of(const py::dict& dict) {
+    if (dict.contains("shp")) return file_part_of(dict);
     map::MapData part;
     part.vertices = points_of(dict, "vertices");
     if (part.vertices.size() >= std::numeric_limits<std::uint32_t>::max()) malformed("too many vertices");
@@ -523,12 +576,37 @@ py::list RoundGroups::get(std::ptrdiff_t k) const {
     return tiles;
 }
 
-FirstSteps::FirstSteps(const map::MapData& map, const map::SimplifyOptions& options, const map::GridPlan& plan, unsigned tile_level,
-                       std::uint64_t part_vertices)
-    : map_(map), lead_(std::make_unique<map::FirstRoundLead>(plan, tile_level, options, map.vertices.size())) {
+FirstSteps::FirstSteps(const map::MapData& map, const io::VerticesInFile* in_file, const map::SimplifyOptions& options,
+                       const map::GridPlan& plan, unsigned tile_level, std::uint64_t part_vertices)
+    : map_(map),
+      in_file_(in_file),
+      vertices_(static_cast<std::uint32_t>(in_file ? in_file->vertices : map.vertices.size())),
+      lead_(std::make_unique<map::FirstRoundLead>(plan, tile_level, options, vertices_)) {
     lead_->add_control_points(map.control_points);
     const auto chains = static_cast<std::uint32_t>(map.chains.size());
     part_chain_.push_back(0);
+    if (in_file) {
+        // Parts of whole records, each with a chain (the records after the last chain go to the
+        // part before).
+        if (!map.frozen.empty() || in_file->record_chain.empty() || in_file->record_chain.back() != chains) {
+            throw std::logic_error("a map's vertices in a file, not its chains");
+        }
+        const std::vector<std::uint64_t>& first = in_file->record_vertex;
+        const std::uint64_t records = first.size() - 1;
+        part_record_.push_back(0);
+        for (std::uint64_t r = 0; r < records;) {
+            const std::uint64_t r0 = r;
+            while (r < records && (first[r] == first[r0] || first[r] - first[r0] < part_vertices)) ++r;
+            if (in_file->record_chain[r] == in_file->record_chain[r0] && part_record_.size() > 1) {
+                part_record_.back() = r;
+                part_chain_.back() = in_file->record_chain[r];
+            } else {
+                part_record_.push_back(r);
+                part_chain_.push_back(in_file->record_chain[r]);
+            }
+        }
+        return;
+    }
     for (std::uint32_t c = 0; c < chains;) {
         const std::uint32_t first = map.chains[c].first;
         while (c < chains && (c == part_chain_.back() || map.chains[c].last - first < part_vertices)) ++c;
@@ -550,19 +628,22 @@ py::dict FirstSteps::part(std::ptrdiff_t k) const {
     lead();
     if (k < 0) k += static_cast<std::ptrdiff_t>(size());
     if (k < 0 || static_cast<std::size_t>(k) >= size()) throw py::index_error("no such part of the map");
-    return part_dict(map_, part_chain_[static_cast<std::size_t>(k)], part_chain_[static_cast<std::size_t>(k) + 1]);
+    const auto at = static_cast<std::size_t>(k);
+    if (in_file_) return file_part_dict(map_, *in_file_, part_record_[at], part_record_[at + 1]);
+    return part_dict(map_, part_chain_[at], part_chain_[at + 1]);
 }
 
 std::uint64_t FirstSteps::part_vertices(std::ptrdiff_t k) const {
     lead();
     if (k < 0 || static_cast<std::size_t>(k) >= size()) throw py::index_error("no such part of the map");
     const auto at = static_cast<std::size_t>(k);
+    if (in_file_) return in_file_->record_vertex[part_record_[at + 1]] - in_file_->record_vertex[part_record_[at]];
     return map_.chains[part_chain_[at + 1] - 1].last + 1 - map_.chains[part_chain_[at]].first;
 }
 
 void FirstSteps::add_facts(const py::dict& dict) {
     map::FirstRoundLead& first = lead();
-    const map::ChainFacts facts = facts_of(dict, map_.vertices.size());
+    const map::ChainFacts facts = facts_of(dict, vertices_);
     if (item(dict, "first_chain").cast<std::uint32_t>() != next_chain_) malformed("a part's facts are not the next part's");
     // (The chains must be this map's: the part was cut from it.)
     for (std::size_t i = 0; i < facts.chains.size(); ++i) {
@@ -577,7 +658,7 @@ void FirstSteps::add_facts(const py::dict& dict) {
 
 void FirstSteps::found(const py::dict& answer) {
     const std::vector<std::uint32_t> border = flat<std::uint32_t>(answer, "border");
-    if (std::any_of(border.begin(), border.end(), [&](std::uint32_t v) { return v >= map_.vertices.size(); })) {
+    if (std::any_of(border.begin(), border.end(), [&](std::uint32_t v) { return v >= vertices_; })) {
         malformed("a tile's search names a segment the map has not");
     }
     lead().found(border, predicates_of(item(answer, "predicates")));
@@ -594,7 +675,7 @@ void FirstSteps::queued(std::uint64_t pinned, std::uint64_t keys) { lead().queue
 std::uint64_t FirstSteps::wanted() { return lead().wanted(); }
 
 void FirstSteps::bound(std::uint64_t key, std::uint32_t id) {
-    if (id >= map_.vertices.size()) malformed("the bound names a vertex the map has not");
+    if (id >= vertices_) malformed("the bound names a vertex the map has not");
     lead().bound({key, id});
 }
 
@@ -618,8 +699,8 @@ py::array_t<double> FirstSteps::points(std::uint32_t tile) const { return points
 
 void FirstSteps::add(const py::list& live_list, const py::list& outcome_list) {
     const map::FirstRoundLead& first = lead();
-    for (const py::handle one : live_list) live_.push_back(live_of(one.cast<py::dict>(), map_.vertices.size(), first.marks()));
-    for (const py::handle one : outcome_list) outcomes_.push_back(outcome_of(one.cast<py::dict>(), map_));
+    for (const py::handle one : live_list) live_.push_back(live_of(one.cast<py::dict>(), vertices_, first.marks()));
+    for (const py::handle one : outcome_list) outcomes_.push_back(outcome_of(one.cast<py::dict>(), vertices_, chains_of(map_)));
 }
 
 void FirstSteps::finish() {
@@ -908,7 +989,7 @@ void bind_parts(py::module_& module) {
 }
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
-                                 int tile_level, const py::object& tile_points, std::uint64_t here_below) {
+                                 int tile_level, const py::object& tile_points, std::uint64_t here_below, const io::VerticesInFile* in_file) {
     using Clock = std::chrono::steady_clock;
     auto seconds = [](Clock::time_point from) { return std::chrono::duration<double>(Clock::now() - from).count(); };
     const auto start = Clock::now();
@@ -922,12 +1003,43 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
             budget = tile_points.cast<std::uint64_t>();
         }
     }
-    if (tile_level < 0) level = tile_level_for(map, map::plan_grid(map), budget);
+    const auto vertices = static_cast<std::uint32_t>(in_file ? in_file->vertices : map.vertices.size());
+    // The plan: the single process's, from the vertices' and control points' extent.
+    map::GridPlan grid;
+    if (in_file) {
+        Box box = in_file->extent;
+        for (const Point p : map.control_points) {
+            box = {std::min(box.min_x, p.x), std::min(box.min_y, p.y), std::max(box.max_x, p.x), std::max(box.max_y, p.y)};
+        }
+        grid = map::plan_grid(box.min_x, box.min_y, box.max_x, box.max_y, std::size_t{vertices} + map.control_points.size());
+    } else {
+        grid = map::plan_grid(map);
+    }
+    if (tile_level < 0) {
+        level = tile_level_for(grid, budget, [&](auto&& add) {
+            if (in_file) {
+                // (The file once more, a record at a time.)
+                std::optional<io::ShapeReader> reader = io::ShapeReader::open(in_file->shp);
+                std::uint64_t read = 0;
+                while (const io::ShapeRecord* record = reader ? reader->next() : nullptr) {
+                    for (const Point p : record->xy) add(p);
+                    read += record->xy.size();
+                }
+                if (!reader || reader->failed() || read != in_file->vertices) {
+                    throw io::InputError("'" + in_file->shp + "' changed while toposimp ran; nothing written");
+                }
+            } else {
+                for (const Point p : map.vertices) add(p);
+            }
+            for (const Point p : map.control_points) add(p);
+        });
+    }
     bool first_here = true;  // the first round's tiles built here (or on the workers: run_groups.first_round)
     {
         py::gil_scoped_acquire gil;
         first_here = !py::hasattr(run_groups, "first_round");
     }
+    if (in_file && first_here) throw std::logic_error("a map's vertices left in its file, and its first round here");
     std::unique_ptr<map::MapInParts> parts;
     unsigned round = 1;
     if (first_here) {
@@ -935,9 +1047,8 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     } else {
         // The map is cut into parts on the workers, and the first round's tiles are built, searched
         // and run there; this process holds only what FirstRoundLead holds, then the live map.
-        const map::GridPlan grid = map::plan_grid(map);
         // (Held by Python too, which may keep it past the run: closed then, every call refused.)
-        const auto steps = std::make_shared<FirstSteps>(map, options, grid, level, std::max<std::uint64_t>(budget, 1));
+        const auto steps = std::make_shared<FirstSteps>(map, in_file, options, grid, level, std::max<std::uint64_t>(budget, 1));
         steps->here_below_ = here_below;
         {
             py::gil_scoped_acquire gil;
@@ -979,7 +1090,7 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
             for (std::size_t k = 0; k < count; ++k) {
                 const auto group = results[k].cast<py::list>();
                 if (group.size() != parts->group_size(k)) malformed("not one outcome per tile");
-                for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), map));
+                for (const py::handle one : group) outcomes.push_back(outcome_of(one.cast<py::dict>(), vertices, chains_of(map)));
             }
         }
         if (!parts->finish_tiles(outcomes)) continue;

@@ -4,6 +4,7 @@
 
 #include "core/map/simplify.hpp"
 #include "core/map/tiles.hpp"
+#include "io/ogr/ogr_dataset.hpp"
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -41,8 +42,10 @@ private:
 // the lead's side of every stage, each answer checked. Usable while the run's first_round runs.
 class FirstSteps {
 public:
-    FirstSteps(const map::MapData& map, const map::SimplifyOptions& options, const map::GridPlan& plan, unsigned tile_level,
-               std::uint64_t part_vertices);
+    // `in_file`: where the map's vertices are (the map then holds none): parts of whole records,
+    // each read by its task.
+    FirstSteps(const map::MapData& map, const io::VerticesInFile* in_file, const map::SimplifyOptions& options, const map::GridPlan& plan,
+               unsigned tile_level, std::uint64_t part_vertices);
     std::size_t size() const { return part_chain_.size() - 1; }  // the parts
     py::dict part(std::ptrdiff_t k) const;                         // part k's chains (a dict), built when asked for
     std::uint64_t part_vertices(std::ptrdiff_t k) const;
@@ -69,8 +72,11 @@ private:
     map::FirstRoundLead& lead();
 
     const map::MapData& map_;
+    const io::VerticesInFile* in_file_;
+    std::uint32_t vertices_;  // the map's
     std::unique_ptr<map::FirstRoundLead> lead_;
     std::vector<std::uint32_t> part_chain_;  // part k: chains [part_chain_[k], part_chain_[k + 1])
+    std::vector<std::uint64_t> part_record_;  // with in_file_: part k is records [part_record_[k], part_record_[k + 1])
     std::uint32_t next_chain_ = 0;
     std::uint64_t here_below_ = 0;
     std::vector<map::LiveVertices> live_;
@@ -78,7 +84,7 @@ private:
     std::unique_ptr<map::MapInParts> parts_;
     bool open_ = true;
     friend map::SimplifyResult run_in_parts(const map::MapData&, const map::SimplifyOptions&, const py::object&, int, const py::object&,
-                                            std::uint64_t);
+                                            std::uint64_t, const io::VerticesInFile*);
 };
 
 // RoundGroups, FirstSteps, map::FirstTile and the first round's tasks for Python.
@@ -93,9 +99,13 @@ void bind_parts(py::module_& module);
 // biggest tile holds at most `tile_points` vertices and control points (a number, or a callable
 // giving it: called once the map is read, and only if the level is to be chosen; 1 000 000
 // otherwise). A count target's round whose budget is under `here_below` vertices runs here, whole.
+// `in_file`: the map holds no vertex, they are in that file (io::OgrDataset::read's
+// vertices_in_file), read here a record at a time to choose the tile level, and by the first
+// round's tasks (run_groups must have first_round).
 // Called with the GIL released; takes it to call run_groups.
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
-                                 int tile_level, const py::object& tile_points, std::uint64_t here_below);
+                                 int tile_level, const py::object& tile_points, std::uint64_t here_below,
+                                 const io::VerticesInFile* in_file = nullptr);
 
 // A task: one group of tile dicts → their outcome dicts (the engine runs without the GIL).
 py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options);

@@ -1,7 +1,7 @@
 // Fuzz target: the Shapefile record readers (.shp, .shx and .dbf decoded past OGR). The input is
 // split into the three files at two 16-bit lengths it starts with; the readers may refuse the
 // files (std::nullopt, or InputError for a non-finite point), never crash or allocate more than
-// the files hold.
+// the files hold. The same for a range of records (ShapeReader, read_shapefile_lines).
 #include "io/common/errors.hpp"
 #include "io/map/shapefile.hpp"
 
@@ -40,5 +40,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     io::read_shapefile_shapes(stem + ".shp");
     io::for_each_shape(stem + ".shp", [](std::uint64_t, const io::ShapeRecord&) { return true; });
+    // A range of records, its first found through the .shx (a part read by a worker).
+    if (std::optional<io::ShapeReader> reader = io::ShapeReader::open(stem + ".shp", 1, 4)) {
+        while (reader->next() != nullptr) {
+        }
+    }
+    try {
+        io::read_shapefile_lines(stem + ".shp", "fuzz", 1, 4);
+    } catch (const io::InputError&) {
+    }
     return 0;
 }

@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <optional>
 #include <span>
 
 namespace toposimp::io {
@@ -64,6 +66,15 @@ public:
             offset_ += n;
             count -= n;
         }
+        return true;
+    }
+
+    // The next byte read is at `offset` from the file's start.
+    bool seek(std::uint64_t offset) {
+        in_.clear();
+        if (!in_.seekg(static_cast<std::streamoff>(offset))) return false;
+        filled_ = at_ = 0;
+        offset_ = offset;
         return true;
     }
 
@@ -126,60 +137,110 @@ bool is_point_type(std::uint32_t type) { return type == 1 || type == 11 || type 
 bool is_multipoint_type(std::uint32_t type) { return type == 8 || type == 18 || type == 28; }
 bool is_poly_type(std::uint32_t type) { return type == 3 || type == 5 || type == 13 || type == 15 || type == 23 || type == 25; }
 
-// Calls visit(fid, deleted, content) for every record of the .shp at `path` whose file shape
-// type passes `accepts`, `content` being the record after its 8-byte header (at least the
-// 4-byte shape type, which is 0 or the file's unless the record is deleted), valid during the
-// call. False when a sibling file is missing, the files disagree, or visit returns false.
-template <class Accepts, class Visit>
-bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
-    const std::filesystem::path shp_path(path);
-    SequentialFile shp(shp_path);
-    const std::filesystem::path shx_path = sibling(shp_path, ".shx", ".SHX");
-    SequentialFile shx(shx_path);
-    SequentialFile dbf(sibling(shp_path, ".dbf", ".DBF"));
-    if (!shp.is_open() || !shx.is_open() || !dbf.is_open()) return false;
+// The records of a .shp (with its .shx and .dbf) one at a time, from a given record on: each
+// record's FID, its deletion flag, and its content after the 8-byte header (at least the 4-byte
+// shape type, which is 0 or the file's unless the record is deleted).
+class RecordFiles {
+public:
+    enum class Next { record, end, failed };
 
-    const std::optional<std::uint32_t> file_type = shape_header(shp);
-    if (!file_type || shape_header(shx) != file_type) return false;
-    if (*file_type != 0 && !accepts(*file_type)) return false;
-    std::error_code error;
-    const std::uintmax_t shx_size = std::filesystem::file_size(shx_path, error);
-    if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return false;
-    const std::uint64_t records = (shx_size - 100) / 8;
-    const std::uintmax_t shp_size = std::filesystem::file_size(shp_path, error);
-    if (error) return false;
+    // False when a sibling file is missing, the files disagree or the file's shape type does not
+    // pass `accepts`.
+    template <class Accepts>
+    bool open(const std::string& path, Accepts accepts) {
+        const std::filesystem::path shp_path(path);
+        const std::filesystem::path shx_path = sibling(shp_path, ".shx", ".SHX");
+        shp_.emplace(shp_path);
+        shx_.emplace(shx_path);
+        dbf_.emplace(sibling(shp_path, ".dbf", ".DBF"));
+        if (!shp_->is_open() || !shx_->is_open() || !dbf_->is_open()) return false;
 
-    // dBASE header: record count, header length and record length; each record starts with
-    // its deletion flag ('*' deleted, ' ' not).
-    std::array<unsigned char, 12> dbf_header{};
-    if (!dbf.take(dbf_header.data(), dbf_header.size())) return false;
-    const std::uint32_t dbf_records = little_u32(&dbf_header[4]);
-    const unsigned dbf_header_length = dbf_header[8] | unsigned{dbf_header[9]} << 8;
-    const unsigned dbf_record_length = dbf_header[10] | unsigned{dbf_header[11]} << 8;
-    if (dbf_records != records || dbf_record_length == 0 || dbf_header_length < 12 || !dbf.skip(dbf_header_length - 12)) {
-        return false;
+        const std::optional<std::uint32_t> file_type = shape_header(*shp_);
+        if (!file_type || shape_header(*shx_) != file_type) return false;
+        if (*file_type != 0 && !accepts(*file_type)) return false;
+        file_type_ = *file_type;
+        std::error_code error;
+        const std::uintmax_t shx_size = std::filesystem::file_size(shx_path, error);
+        if (error || shx_size < 100 || (shx_size - 100) % 8 != 0) return false;
+        records_ = (shx_size - 100) / 8;
+        shp_size_ = std::filesystem::file_size(shp_path, error);
+        if (error) return false;
+
+        // dBASE header: record count, header length and record length; each record starts with
+        // its deletion flag ('*' deleted, ' ' not).
+        std::array<unsigned char, 12> dbf_header{};
+        if (!dbf_->take(dbf_header.data(), dbf_header.size())) return false;
+        const std::uint32_t dbf_records = little_u32(&dbf_header[4]);
+        dbf_header_length_ = dbf_header[8] | unsigned{dbf_header[9]} << 8;
+        dbf_record_length_ = dbf_header[10] | unsigned{dbf_header[11]} << 8;
+        return dbf_records == records_ && dbf_record_length_ != 0 && dbf_header_length_ >= 12 && dbf_->skip(dbf_header_length_ - 12);
     }
 
-    std::vector<unsigned char> scratch;  // a record the read buffer does not hold whole
-    for (std::uint64_t fid = 0; fid < records; ++fid) {
+    std::uint64_t records() const { return records_; }
+    std::uintmax_t shp_size() const { return shp_size_; }
+
+    // The next record read is `first` (at most records()): its .shx entry says where it is.
+    bool seek(std::uint64_t first) {
+        if (first > records_) return false;
+        fid_ = first;
+        if (first == records_) return true;
+        unsigned char index[8];
+        if (!shx_->seek(100 + 8 * first) || !shx_->take(index, 8) || !shx_->seek(100 + 8 * first)) return false;
+        return shp_->seek(std::uint64_t{big_u32(index)} * 2) && dbf_->seek(dbf_header_length_ + first * dbf_record_length_);
+    }
+
+    Next next(std::uint64_t& fid, bool& deleted, std::span<const unsigned char>& content) {
+        if (fid_ == records_) return Next::end;
         unsigned char index[8], record_header[8], deletion = 0;
-        if (!shx.take(index, 8) || !dbf.take(&deletion, 1) || !dbf.skip(dbf_record_length - 1)) return false;
+        if (!shx_->take(index, 8) || !dbf_->take(&deletion, 1) || !dbf_->skip(dbf_record_length_ - 1)) return Next::failed;
         // The .shx locates every record (as OGR reads them); here they must follow one another.
         const std::uint64_t offset = std::uint64_t{big_u32(index)} * 2, length = std::uint64_t{big_u32(index + 4)} * 2;
-        if (offset != shp.offset() || !shp.take(record_header, 8) || std::uint64_t{big_u32(record_header + 4)} * 2 != length) {
-            return false;
+        if (offset != shp_->offset() || !shp_->take(record_header, 8) || std::uint64_t{big_u32(record_header + 4)} * 2 != length) {
+            return Next::failed;
         }
         // A length is held against the file before anything is allocated for it (issue 29: a
         // 10 KB file claiming a 2 GB record).
-        if (length < 4 || length > shp_size - std::min<std::uint64_t>(shp_size, shp.offset())) return false;
-        const unsigned char* bytes = shp.view(static_cast<std::size_t>(length), scratch);
-        if (bytes == nullptr) return false;
-        if (deletion != '*' && deletion != ' ') return false;
+        if (length < 4 || length > shp_size_ - std::min<std::uint64_t>(shp_size_, shp_->offset())) return Next::failed;
+        const unsigned char* bytes = shp_->view(static_cast<std::size_t>(length), scratch_);
+        if (bytes == nullptr) return Next::failed;
+        if (deletion != '*' && deletion != ' ') return Next::failed;
         const std::uint32_t type = little_u32(bytes);
-        if (deletion == ' ' && type != 0 && type != *file_type) return false;
-        if (!visit(fid, deletion == '*', std::span<const unsigned char>(bytes, static_cast<std::size_t>(length)))) return false;
+        if (deletion == ' ' && type != 0 && type != file_type_) return Next::failed;
+        fid = fid_++;
+        deleted = deletion == '*';
+        content = std::span<const unsigned char>(bytes, static_cast<std::size_t>(length));
+        return Next::record;
     }
-    return true;
+
+private:
+    std::optional<SequentialFile> shp_, shx_, dbf_;
+    std::uint32_t file_type_ = 0;
+    std::uint64_t records_ = 0;
+    std::uintmax_t shp_size_ = 0;
+    unsigned dbf_header_length_ = 0, dbf_record_length_ = 0;
+    std::uint64_t fid_ = 0;
+    std::vector<unsigned char> scratch_;  // a record the read buffer does not hold whole
+};
+
+// Calls visit(fid, deleted, content) for every record of the .shp at `path` whose file shape
+// type passes `accepts` (RecordFiles::next's record, valid during the call). False when a
+// sibling file is missing, the files disagree, or visit returns false.
+template <class Accepts, class Visit>
+bool for_each_record(const std::string& path, Accepts accepts, Visit visit) {
+    RecordFiles files;
+    if (!files.open(path, accepts)) return false;
+    for (;;) {
+        std::uint64_t fid = 0;
+        bool deleted = false;
+        std::span<const unsigned char> content;
+        switch (files.next(fid, deleted, content)) {
+            case RecordFiles::Next::end: return true;
+            case RecordFiles::Next::failed: return false;
+            case RecordFiles::Next::record:
+                if (!visit(fid, deleted, content)) return false;
+                break;
+        }
+    }
 }
 
 }  // namespace
@@ -298,6 +359,99 @@ bool for_each_shape(const std::string& path, const std::function<bool(std::uint6
         if (type != 0 && !append_shape(content, type, has_z, xy, z, part_starts)) return false;
         return visit(fid, ShapeRecord{xy, z, part_starts});
     });
+}
+
+struct ShapeReader::State {
+    RecordFiles files;
+    std::uint64_t end = 0;
+    std::uint64_t next = 0;  // the next record's FID
+    std::uint64_t fid = 0;   // the record last given
+    bool failed = false;
+    std::optional<bool> has_z;
+    std::vector<Point> xy;
+    std::vector<double> z;
+    std::vector<std::uint32_t> part_starts;
+    ShapeRecord record;
+};
+
+std::optional<ShapeReader> ShapeReader::open(const std::string& path, std::uint64_t first, std::uint64_t end) {
+    auto state = std::make_unique<State>();
+    if (!state->files.open(path, is_poly_type)) return std::nullopt;
+    end = std::min(end, state->files.records());
+    if (first > end || !state->files.seek(first)) return std::nullopt;
+    state->end = end;
+    state->next = first;
+    return ShapeReader(std::move(state));
+}
+
+ShapeReader::ShapeReader(std::unique_ptr<State> state) : state_(std::move(state)) {}
+ShapeReader::ShapeReader(ShapeReader&&) noexcept = default;
+ShapeReader& ShapeReader::operator=(ShapeReader&&) noexcept = default;
+ShapeReader::~ShapeReader() = default;
+
+std::uint64_t ShapeReader::records() const { return state_->files.records(); }
+std::uintmax_t ShapeReader::shp_size() const { return state_->files.shp_size(); }
+std::uint64_t ShapeReader::fid() const { return state_->fid; }
+bool ShapeReader::failed() const { return state_->failed; }
+
+const ShapeRecord* ShapeReader::next() {
+    State& s = *state_;
+    if (s.failed || s.next == s.end) return nullptr;
+    std::uint64_t fid = 0;
+    bool deleted = false;
+    std::span<const unsigned char> content;
+    if (s.files.next(fid, deleted, content) != RecordFiles::Next::record || deleted) {
+        s.failed = true;
+        return nullptr;
+    }
+    s.fid = fid;
+    s.next = fid + 1;
+    s.xy.clear();
+    s.z.clear();
+    s.part_starts.clear();
+    const std::uint32_t type = little_u32(content.data());
+    if (type != 0 && !append_shape(content, type, s.has_z, s.xy, s.z, s.part_starts)) {
+        s.failed = true;
+        return nullptr;
+    }
+    s.record = ShapeRecord{s.xy, s.z, s.part_starts};
+    return &s.record;
+}
+
+std::int64_t modified_ns(const std::string& path) {
+    std::error_code error;
+    const auto time = std::filesystem::last_write_time(path, error);
+    if (error) return -1;
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(time.time_since_epoch()).count();
+}
+
+map::MapData read_shapefile_lines(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end) {
+    std::optional<ShapeReader> reader = ShapeReader::open(path, first, end);
+    auto unreadable = [&] {
+        return InputError("'" + path + "': records " + std::to_string(first) + " to " + std::to_string(end) +
+                          " are not the plain PolyLine records they were when the map was read");
+    };
+    if (!reader || end > reader->records()) throw unreadable();
+    map::MapData part;
+    while (const ShapeRecord* record = reader->next()) {
+        if (!record->z.empty()) throw unreadable();
+        const std::span<const std::uint32_t> parts = record->part_starts;
+        for (std::size_t k = 0; k < parts.size(); ++k) {
+            const std::size_t part_first = parts[k], part_end = k + 1 < parts.size() ? parts[k + 1] : record->xy.size();
+            for (std::size_t v = part_first; v < part_end; ++v) {
+                const Point p = record->xy[v];
+                if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+                    throw InputError("'" + path + "', layer '" + layer + "', feature " + std::to_string(reader->fid()) + ": vertex " +
+                                     std::to_string(v - part_first) + " has a non-finite coordinate (" + std::to_string(p.x) + ", " +
+                                     std::to_string(p.y) + ")");
+                }
+            }
+            if (part.vertices.size() + (part_end - part_first) >= std::numeric_limits<std::uint32_t>::max() / 2) throw unreadable();
+            part.add_chain(record->xy.subspan(part_first, part_end - part_first));
+        }
+    }
+    if (reader->failed()) throw unreadable();
+    return part;
 }
 
 }  // namespace toposimp::io

@@ -10,9 +10,12 @@
 #pragma once
 
 #include "core/geometry.hpp"
+#include "core/map/map_data.hpp"
 
 #include <cstdint>
 #include <functional>
+#include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <string>
@@ -59,5 +62,40 @@ std::optional<ShapeTable> read_shapefile_shapes(const std::string& path);
 // record valid during the call) until visit returns false. False where read_shapefile_shapes
 // gives std::nullopt (after the records before the one it stops at) or visit returned false.
 bool for_each_shape(const std::string& path, const std::function<bool(std::uint64_t, const ShapeRecord&)>& visit);
+
+// Records [first, end) of a PolyLine or Polygon .shp one at a time, none kept, the first found
+// through the .shx (a part of a file read by a process of its own: toposimp.dask).
+class ShapeReader {
+public:
+    // std::nullopt where read_shapefile_shapes gives it before any record, or if first is past
+    // the file's records; `end` beyond them is the file's end.
+    static std::optional<ShapeReader> open(const std::string& path, std::uint64_t first = 0,
+                                           std::uint64_t end = std::numeric_limits<std::uint64_t>::max());
+    ShapeReader(ShapeReader&&) noexcept;
+    ShapeReader& operator=(ShapeReader&&) noexcept;
+    ~ShapeReader();
+
+    std::uint64_t records() const;    // the file's
+    std::uintmax_t shp_size() const;  // the .shp's bytes
+    // The next record (valid until the next call; its FID then fid()), or nullptr at the end of
+    // the range, or where read_shapefile_shapes would give std::nullopt (failed() then).
+    const ShapeRecord* next();
+    std::uint64_t fid() const;
+    bool failed() const;
+
+private:
+    struct State;
+    explicit ShapeReader(std::unique_ptr<State> state);
+    std::unique_ptr<State> state_;
+};
+
+// When the file at `path` was last modified (the file system's clock, in nanoseconds), or -1.
+std::int64_t modified_ns(const std::string& path);
+
+// Records [first, end) of the plain PolyLine .shp at `path` as a map of their own, as the map
+// reader makes them (io::VerticesInFile): each record's parts its chains, in order. InputError
+// naming the feature ("'<path>', layer '<layer>', feature <fid>") for a non-finite coordinate,
+// and naming the file if it is not a PolyLine file ShapeReader decodes to its end.
+map::MapData read_shapefile_lines(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end);
 
 }  // namespace toposimp::io

@@ -49,6 +49,14 @@ std::uint64_t DatasetSummary::sum(std::uint64_t LayerSummary::*field) const {
 
 std::uint64_t DatasetSummary::features() const { return sum(&LayerSummary::features); }
 
+// Where vertex v of the map is for build_geometry: data[v - first] (the map's own vertices, or
+// one record of a map whose vertices are in a file).
+struct VertexView {
+    const Point* data;
+    std::size_t first = 0;
+    Point operator[](std::size_t v) const { return data[v - first]; }
+};
+
 struct OgrDataset::Data {
     struct Layer {
         // What a feature's geometry became: chains (lines), coverage rings (polygons), or an
@@ -88,6 +96,7 @@ struct OgrDataset::Data {
     bool points_moved = false;           // move_points() put the point features elsewhere
     std::vector<double> z, m;            // per map vertex, when carries_zm
     std::vector<double> ring_z, ring_m;  // per coverage ring point, until the coverage is built
+    std::optional<VerticesInFile> in_file;  // the map's vertices left in the .shp (then its only layer)
 
     void start_carrying_zm(const map::MapData& map) {
         if (carries_zm) return;
@@ -98,7 +107,7 @@ struct OgrDataset::Data {
         ring_m.assign(coverage.point_count(), 0.0);
     }
 
-    void read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file);
+    void read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file, bool leave_in_file);
     void read_memory_layer(const std::string& source, const MemoryLayer& given, map::MapData& map);
     void add_geometry(Layer& layer, Layer::Shape& shape, LayerSummary& summary_of_layer, const OGRGeometry& geometry,
                       const std::string& label, map::MapData& map);
@@ -106,6 +115,10 @@ struct OgrDataset::Data {
 
     // `arc_order`: rings start where their first arc does (as a TopoJSON reader rebuilds them).
     std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
+                                                const std::vector<std::uint8_t>& kept, bool arc_order = false) const {
+        return build_geometry(layer, index, map, VertexView{map.vertices.data()}, kept, arc_order);
+    }
+    std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map, VertexView vertices,
                                                 const std::vector<std::uint8_t>& kept, bool arc_order = false) const;
 
     // The geometry as TopoJSON arc references: arc i is map chain i.
@@ -304,7 +317,7 @@ void OgrDataset::Data::add_geometry(Layer& layer, Layer::Shape& shape, LayerSumm
     if (shape.kind != Layer::Kind::untouched) shape.count = static_cast<std::uint32_t>(layer.items.size()) - shape.first;
 }
 
-void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file) {
+void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map::MapData& map, bool prj_as_file, bool leave_in_file) {
     auto layer = std::make_unique<Layer>();
     LayerSummary summary_of_layer;
     summary_of_layer.layer = source.GetName();
@@ -322,7 +335,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // only, and the .prj file goes to the output as it is. A .shp this reader does not take is
     // read again through OGR, geometries and all. (Decoding on a thread of its own beside OGR saved
     // 0.03 s on GSHHG but raised the peak of a run with 10 M control points by 30 MB: the thread's
-    // malloc arena stays.)
+    // malloc arena stays.) With `leave_in_file`, the records are streamed and their vertices left
+    // in the file (VerticesInFile).
     const bool decode = prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
                         is_local_shp(path) &&
                         source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) == OGRERR_NONE;
@@ -333,39 +347,37 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto read_error = [&] {
         return InputError("error reading '" + path + "', layer '" + layer->name + "'" + last_gdal_error());
     };
-    // A Shapefile record's lines (as shape_geometry gives them) as chains of the map, whose
-    // vertices the records' are from first_vertex on: no OGR geometry, no copy.
-    std::size_t first_vertex = 0;
-    auto add_record_lines = [&](const ShapeTable& records, std::size_t r, Layer::Shape& shape, auto&& label) {
-        const std::size_t first = first_vertex + records.record_first[r], end = first_vertex + records.record_first[r + 1];
-        const std::span<const std::uint32_t> parts(records.part_starts.data() + records.record_parts[r],
-                                                   records.record_parts[r + 1] - records.record_parts[r]);
+    // A Shapefile record's lines (as shape_geometry gives them) as chains of the map, its
+    // vertices the map's from `first` on: no OGR geometry, no copy.
+    auto add_record_lines = [&](const ShapeRecord& record, std::size_t first, Layer::Shape& shape, auto&& label) {
+        const std::span<const std::uint32_t> parts = record.part_starts;
         if (parts.empty()) return;
         for (std::size_t k = 0; k < parts.size(); ++k) {
-            const std::size_t part_first = first + parts[k], part_end = k + 1 < parts.size() ? first + parts[k + 1] : end;
+            const std::size_t part_first = parts[k], part_end = k + 1 < parts.size() ? parts[k + 1] : record.xy.size();
             for (std::size_t v = part_first; v < part_end; ++v) {
-                const Point p = map.vertices[v];
+                const Point p = record.xy[v];
                 if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
                     throw InputError(label() + ": vertex " + std::to_string(v - part_first) + " has a non-finite coordinate (" +
                                      std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
                 }
             }
-            map.chains.push_back({static_cast<std::uint32_t>(part_first), static_cast<std::uint32_t>(part_end - 1)});
+            map.chains.push_back({static_cast<std::uint32_t>(first + part_first), static_cast<std::uint32_t>(first + part_end - 1)});
             layer->items.push_back(static_cast<std::uint32_t>(map.chains.size() - 1));
         }
-        const bool has_z = !records.z.empty();
+        const bool has_z = !record.z.empty();
         shape.type = parts.size() == 1 ? (has_z ? wkbLineString25D : wkbLineString) : (has_z ? wkbMultiLineString25D : wkbMultiLineString);
         shape.kind = Layer::Kind::lines;
         shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
     };
-    // Each feature in turn, with its record's shape if `records`, else with OGR's geometry. A
-    // feature GDAL could not read is an error at once (a later read may clear GDAL's last error).
-    auto add_feature = [&](OGRFeatureUniquePtr feature, const ShapeTable* records) {
+    // Each feature in turn, with its record's shape (its vertices the map's from `first` on) if
+    // `record`, else with OGR's geometry. A feature GDAL could not read is an error at once (a
+    // later read may clear GDAL's last error).
+    auto add_feature = [&](OGRFeatureUniquePtr feature, const ShapeRecord* record, std::size_t first) {
         Layer::Shape shape;
         shape.first = static_cast<std::uint32_t>(layer->items.size());
         bool empty = true;
-        if (records) {
-            add_record_lines(*records, static_cast<std::size_t>(feature->GetFID()), shape, [&] { return feature_label(path, source, feature->GetFID()); });
+        if (record) {
+            add_record_lines(*record, first, shape, [&] { return feature_label(path, source, feature->GetFID()); });
             empty = shape.kind != Layer::Kind::lines;
         } else if (const OGRGeometry* geometry = feature->GetGeometryRef()) {
             empty = geometry->IsEmpty();
@@ -376,8 +388,65 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         layer->shapes.push_back(shape);
         layer->features.push_back(std::move(feature));
     };
+    auto find_prj = [&] {
+        for (const char* extension : {".prj", ".PRJ"}) {
+            std::error_code error;
+            if (std::filesystem::exists(std::filesystem::path(path).replace_extension(extension), error)) {
+                layer->prj = std::filesystem::path(path).replace_extension(extension);
+                break;
+            }
+        }
+    };
+    // The records streamed, the vertices left in the file (VerticesInFile): true, or false with
+    // nothing added if the file is not what ShapeReader decodes, in the features' order.
+    auto plan_in_file = [&](std::vector<OGRFeatureUniquePtr>& features) {
+        std::optional<ShapeReader> reader = ShapeReader::open(path);
+        bool in_order = reader && reader->records() == features.size() && map.vertices.empty() && map.chains.empty() && !carries_zm;
+        for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
+        if (!in_order) return false;
+        VerticesInFile planned;
+        planned.shp = path;
+        planned.layer = layer->name;
+        planned.shp_size = reader->shp_size();
+        planned.shp_time = modified_ns(path);
+        planned.record_vertex.reserve(features.size() + 1);
+        planned.record_chain.reserve(features.size() + 1);
+        Box& extent = planned.extent;
+        std::uint64_t vertices = 0;
+        layer->shapes.reserve(features.size());
+        layer->features.reserve(features.size());
+        for (std::size_t i = 0; i < features.size(); ++i) {
+            const ShapeRecord* record = reader->next();
+            if (record == nullptr || !record->z.empty()) break;
+            planned.record_vertex.push_back(vertices);
+            planned.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
+            if (vertices + record->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
+                throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
+            }
+            add_feature(std::move(features[i]), record, static_cast<std::size_t>(vertices));
+            vertices += record->xy.size();
+            for (const Point p : record->xy) {
+                extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
+            }
+        }
+        if (layer->features.size() != features.size()) {
+            // (A record this reader does not decode: OGR reads the layer again from its start.)
+            map.chains.clear();
+            layer->items.clear();
+            layer->shapes.clear();
+            layer->features.clear();
+            summary_of_layer.empty_geometries = summary_of_layer.line_features = 0;
+            return false;
+        }
+        planned.record_vertex.push_back(vertices);
+        planned.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
+        planned.vertices = vertices;
+        in_file = std::move(planned);
+        find_prj();
+        return true;
+    };
     source.ResetReading();
-    std::optional<ShapeTable> records;
+    bool decoded = false;
     if (decode) {
         std::vector<OGRFeatureUniquePtr> features;
         for (;;) {
@@ -386,58 +455,65 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             if (!feature) break;
             features.push_back(std::move(feature));
         }
-        records = read_shapefile_shapes(path);
-        // (The records' vertices go to the map in record order: the features must come in it.)
-        bool in_order = records && records->size() == features.size();
-        for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
-        if (in_order) {
-            // The records' vertices become the map's (moved, when this is its first layer).
-            first_vertex = map.vertices.size();
-            if (first_vertex + records->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
-                throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
-            }
-            if (!records->z.empty()) {
-                summary_of_layer.has_z = true;
-                start_carrying_zm(map);
-            }
-            if (carries_zm) {
-                if (records->z.empty()) {
-                    z.resize(z.size() + records->xy.size(), 0.0);
+        if (leave_in_file) {
+            decoded = plan_in_file(features);
+        } else if (std::optional<ShapeTable> records = read_shapefile_shapes(path)) {
+            // (The records' vertices go to the map in record order: the features must come in it.)
+            bool in_order = records->size() == features.size();
+            for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
+            if (in_order) {
+                // The records' vertices become the map's (moved, when this is its first layer).
+                const std::size_t first_vertex = map.vertices.size();
+                if (first_vertex + records->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
+                    throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
+                }
+                if (!records->z.empty()) {
+                    summary_of_layer.has_z = true;
+                    start_carrying_zm(map);
+                }
+                if (carries_zm) {
+                    if (records->z.empty()) {
+                        z.resize(z.size() + records->xy.size(), 0.0);
+                    } else {
+                        z.insert(z.end(), records->z.begin(), records->z.end());
+                    }
+                    m.resize(m.size() + records->xy.size(), 0.0);
+                }
+                if (first_vertex == 0) {
+                    map.vertices = std::move(records->xy);
                 } else {
-                    z.insert(z.end(), records->z.begin(), records->z.end());
+                    map.vertices.insert(map.vertices.end(), records->xy.begin(), records->xy.end());
+                    std::vector<Point>().swap(records->xy);
                 }
-                m.resize(m.size() + records->xy.size(), 0.0);
-            }
-            if (first_vertex == 0) {
-                map.vertices = std::move(records->xy);
-            } else {
-                map.vertices.insert(map.vertices.end(), records->xy.begin(), records->xy.end());
-                std::vector<Point>().swap(records->xy);
-            }
-            map.chains.reserve(map.chains.size() + records->part_starts.size());
-            for (const char* extension : {".prj", ".PRJ"}) {
-                std::error_code error;
-                if (std::filesystem::exists(std::filesystem::path(path).replace_extension(extension), error)) {
-                    layer->prj = std::filesystem::path(path).replace_extension(extension);
-                    break;
+                map.chains.reserve(map.chains.size() + records->part_starts.size());
+                find_prj();
+                layer->shapes.reserve(features.size());
+                layer->features.reserve(features.size());
+                for (std::size_t r = 0; r < features.size(); ++r) {
+                    // (A view of the record on the map's vertices, where its own went.)
+                    const std::size_t first = first_vertex + records->record_first[r], end = first_vertex + records->record_first[r + 1];
+                    const ShapeRecord record{{map.vertices.data() + first, end - first},
+                                             records->z.empty() ? std::span<const double>()
+                                                                : std::span<const double>(records->z.data() + (first - first_vertex), end - first),
+                                             {records->part_starts.data() + records->record_parts[r],
+                                              records->record_parts[r + 1] - records->record_parts[r]}};
+                    add_feature(std::move(features[r]), &record, first);
                 }
+                decoded = true;
             }
-            layer->shapes.reserve(features.size());
-            layer->features.reserve(features.size());
-            for (OGRFeatureUniquePtr& feature : features) add_feature(std::move(feature), &*records);
-        } else {
-            records.reset();
+        }
+        if (!decoded) {
             if (source.SetIgnoredFields(nullptr) != OGRERR_NONE) throw read_error();
             source.ResetReading();
         }
     }
-    if (!records) {
+    if (!decoded) {
         if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
         for (;;) {
             OGRFeatureUniquePtr feature{source.GetNextFeature()};
             if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
             if (!feature) break;
-            add_feature(std::move(feature), nullptr);
+            add_feature(std::move(feature), nullptr, 0);
         }
     }
     {
@@ -496,6 +572,8 @@ OgrDataset::OgrDataset(OgrDataset&&) noexcept = default;
 OgrDataset::~OgrDataset() = default;
 
 const DatasetSummary& OgrDataset::summary() const { return data_->summary; }
+
+const VerticesInFile* OgrDataset::vertices_in_file() const { return data_->in_file ? &*data_->in_file : nullptr; }
 
 namespace {
 
@@ -575,15 +653,19 @@ void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
 }
 
 OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map,
-                            bool prj_as_file) {
+                            bool prj_as_file, bool vertices_in_file) {
     DatasetPtr dataset = open_vector(path);
     auto data = std::make_unique<Data>();
     data->summary.driver = dataset->GetDriver() ? dataset->GetDriver()->GetDescription() : "";
     if (dataset->GetLayerCount() == 0) throw InputError("'" + path + "' has no vector layer");
     if (layer_names_wanted.empty()) {
-        for (int i = 0; i < dataset->GetLayerCount(); ++i) data->read_layer(path, *dataset->GetLayer(i), map, prj_as_file);
+        for (int i = 0; i < dataset->GetLayerCount(); ++i) {
+            data->read_layer(path, *dataset->GetLayer(i), map, prj_as_file, vertices_in_file && dataset->GetLayerCount() == 1);
+        }
     } else {
-        for (const std::string& name : layer_names_wanted) data->read_layer(path, pick_layer(*dataset, path, name), map, prj_as_file);
+        for (const std::string& name : layer_names_wanted) {
+            data->read_layer(path, pick_layer(*dataset, path, name), map, prj_as_file, vertices_in_file && layer_names_wanted.size() == 1);
+        }
     }
     data->finish(path, map);
     return OgrDataset(std::move(data));
@@ -621,7 +703,8 @@ MemoryLayers OgrDataset::to_memory(const map::MapData& map, const std::vector<st
 }
 
 std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
-                                                              const std::vector<std::uint8_t>& kept, bool arc_order) const {
+                                                              VertexView at, const std::vector<std::uint8_t>& kept,
+                                                              bool arc_order) const {
     using Kind = Layer::Kind;
     const Layer::Shape& shape = layer.shapes[index];
     const std::vector<std::uint32_t>& items = layer.items;
@@ -634,7 +717,7 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
         curve.setNumPoints(static_cast<int>(vertices.size()), FALSE);
         for (std::size_t i = 0; i < vertices.size(); ++i) {
             const std::uint32_t v = vertices[i];
-            set_point(curve, static_cast<int>(i), map.vertices[v], with_z, with_m, with_z ? z[v] : 0.0, with_m ? m[v] : 0.0);
+            set_point(curve, static_cast<int>(i), at[v], with_z, with_m, with_z ? z[v] : 0.0, with_m ? m[v] : 0.0);
         }
     };
     switch (shape.kind) {
@@ -717,7 +800,7 @@ void collect_parts(const OGRGeometry* geometry, std::vector<const OGRSimpleCurve
 // part and in order? The common case of the check after writing, decided without an OGR geometry
 // on either side (on GSHHG at 50 %, 0.22 s of a 0.75 s write went to building them). False for
 // anything else, which same_coordinates then decides (and explains).
-bool record_holds_lines(const OgrDataset::Data::Layer& layer, std::size_t index, const map::MapData& map,
+bool record_holds_lines(const OgrDataset::Data::Layer& layer, std::size_t index, const map::MapData& map, VertexView vertices,
                         const std::vector<std::uint8_t>& kept, const ShapeRecord& record) {
     const OgrDataset::Data::Layer::Shape& shape = layer.shapes[index];
     if (shape.kind != OgrDataset::Data::Layer::Kind::lines || OGR_GT_HasZ(shape.type) || OGR_GT_HasM(shape.type) ||
@@ -731,13 +814,47 @@ bool record_holds_lines(const OgrDataset::Data::Layer& layer, std::size_t index,
         const std::size_t end = k + 1 < shape.count ? record.part_starts[k + 1] : record.xy.size();
         for (std::uint32_t v = map.chains[chain].first; v <= map.chains[chain].last; ++v) {
             if (!kept[v]) continue;
-            if (at == end || !(record.xy[at].x == map.vertices[v].x) || !(record.xy[at].y == map.vertices[v].y)) return false;
+            if (at == end || !(record.xy[at].x == vertices[v].x) || !(record.xy[at].y == vertices[v].y)) return false;
             ++at;
         }
         if (at != end) return false;
     }
     return true;
 }
+
+// The vertices of a layer's features, feature after feature: the map's, or those of the records
+// of the Shapefile a map's vertices were left in (VerticesInFile), read again one at a time.
+class VertexCursor {
+public:
+    VertexCursor(const map::MapData& map, const VerticesInFile* in_file) : map_(map), in_file_(in_file) {}
+
+    // Feature i's (features asked in order read the file once).
+    VertexView at(std::size_t i) {
+        if (in_file_ == nullptr) return {map_.vertices.data()};
+        if (i + 1 >= in_file_->record_vertex.size()) throw std::logic_error("a feature beyond the records read");
+        if (!reader_ || i != next_) {
+            reader_ = ShapeReader::open(in_file_->shp, i);
+            if (!reader_ || reader_->shp_size() != in_file_->shp_size || modified_ns(in_file_->shp) != in_file_->shp_time) changed(i);
+        }
+        const ShapeRecord* record = reader_->next();
+        next_ = i + 1;
+        if (record == nullptr || !record->z.empty() || record->xy.size() != in_file_->record_vertex[i + 1] - in_file_->record_vertex[i]) {
+            changed(i);
+        }
+        return {record->xy.data(), static_cast<std::size_t>(in_file_->record_vertex[i])};
+    }
+
+private:
+    [[noreturn]] void changed(std::size_t record) const {
+        throw InputError("'" + in_file_->shp + "' changed while toposimp ran: record " + std::to_string(record) +
+                         " is not what it was when it was read; nothing written");
+    }
+
+    const map::MapData& map_;
+    const VerticesInFile* in_file_;
+    std::optional<ShapeReader> reader_;
+    std::size_t next_ = 0;
+};
 
 // Do two geometries hold the same coordinates, bit for bit? A LineString equals a one-part
 // MultiLineString, and a ring may come back reversed (Shapefile writes rings in its own
@@ -984,11 +1101,12 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             for (std::size_t i = 0; i < field_map.size(); ++i) field_map[i] = static_cast<int>(i);
             const bool keep_fids = !layer.fid_column.empty();
             const bool transaction = dataset->StartTransaction() == OGRERR_NONE;
+            VertexCursor vertices(map, data.in_file ? &*data.in_file : nullptr);
             for (std::size_t i = 0; i < layer.features.size(); ++i) {
                 OGRFeature feature(target->GetLayerDefn());
                 feature.SetFrom(layer.features[i].get(), field_map.data(), TRUE);
                 if (keep_fids) feature.SetFID(layer.features[i]->GetFID());
-                feature.SetGeometryDirectly(data.build_geometry(layer, i, map, kept).release());
+                feature.SetGeometryDirectly(data.build_geometry(layer, i, map, vertices.at(i), kept).release());
                 if (target->CreateFeature(&feature) != OGRERR_NONE) {
                     throw OutputError("cannot write feature " + std::to_string(layer.features[i]->GetFID()) + " of layer '" +
                                       name + "' to '" + options.path + "'" + last_gdal_error());
@@ -1018,9 +1136,10 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     // GDAL 3.6's reader drops arcs with a third coordinate. Its x and y are printed by the same
     // code as the TopoJSON that is read back.)
     if (!(topology && options.vertex_ranks)) {
-        auto check_geometry = [&](const Data::Layer& layer, std::size_t i, const OGRGeometry* actual) {
+        VertexCursor vertices(map, data.in_file ? &*data.in_file : nullptr);
+        auto check_geometry = [&](const Data::Layer& layer, std::size_t i, const OGRGeometry* actual, VertexView at) {
             std::string difference;
-            const auto expected = data.build_geometry(layer, i, map, kept, topology);
+            const auto expected = data.build_geometry(layer, i, map, at, kept, topology);
             if (!same_coordinates(expected.get(), actual, difference)) {
                 throw OutputError("the " + driver_name + " driver changed coordinates while writing '" + options.path +
                                   "' (layer '" + output_name(layer) + "', feature " + std::to_string(layer.features[i]->GetFID()) +
@@ -1042,8 +1161,10 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             std::size_t count = 0;
             decoded = for_each_shape(output.staging_path(), [&](std::uint64_t fid, const ShapeRecord& shape) {
                 ++count;
-                if (fid < layer.features.size() && !record_holds_lines(layer, fid, map, kept, shape)) {
-                    check_geometry(layer, fid, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get());
+                if (fid >= layer.features.size()) return true;
+                const VertexView at = vertices.at(fid);
+                if (!record_holds_lines(layer, fid, map, at, kept, shape)) {
+                    check_geometry(layer, fid, shape.part_starts.empty() ? nullptr : shape_geometry(shape).get(), at);
                 }
                 return true;
             });
@@ -1076,7 +1197,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                         }
                         at = found->second;
                     }
-                    if (at < layer.features.size()) check_geometry(layer, at, feature->GetGeometryRef());
+                    if (at < layer.features.size()) check_geometry(layer, at, feature->GetGeometryRef(), vertices.at(at));
                 }
                 check_count(layer, i);
             }

@@ -7,6 +7,7 @@
 #include "core/map/map_data.hpp"
 #include "io/ogr/topo_transform.hpp"
 
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <iosfwd>
@@ -69,14 +70,31 @@ struct MemoryLayers {
     std::vector<MemoryLayer> layers;
 };
 
+// Where the vertices of a map read with OgrDataset::read's `vertices_in_file` are: the records of
+// a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes them, in record order from
+// vertex 0 (each record's parts its chains, in order). The map holds the chains, and no vertex.
+struct VerticesInFile {
+    std::string shp;                          // the .shp
+    std::string layer;                        // its layer's name (for messages)
+    std::uintmax_t shp_size = 0;              // its size and modification time (ns) when it was read
+    std::int64_t shp_time = 0;
+    std::uint64_t vertices = 0;               // the map's
+    Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};  // theirs
+    std::vector<std::uint64_t> record_vertex;  // per record and one more: its first vertex
+    std::vector<std::uint32_t> record_chain;   // per record and one more: its first chain
+};
+
 class OgrDataset {
 public:
     // Reads the named layers of `path` (none named: every layer) into `map`. Throws InputError
     // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
-    // (see read_layer).
+    // (see read_layer). `vertices_in_file` (with prj_as_file): if the input is one plain PolyLine
+    // Shapefile layer that the Shapefile reader decodes, its vertices are left in the file
+    // (vertices_in_file() says where; the map gets its chains only), for an engine that reads them
+    // by parts; else read as without it.
     static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
-                           bool prj_as_file = false);
+                           bool prj_as_file = false, bool vertices_in_file = false);
 
     // The same from layers in memory (every one of them).
     static OgrDataset read(const MemoryLayers& layers, map::MapData& map);
@@ -85,6 +103,7 @@ public:
     ~OgrDataset();
 
     const DatasetSummary& summary() const;
+    const VerticesInFile* vertices_in_file() const;  // nullptr: the map holds its vertices
 
     // Writes the layers with only the kept vertices. The written file is read back and its
     // coordinates compared bit for bit before it is moved into place (OutputError otherwise).

@@ -9,8 +9,10 @@
 #include "support/temp_path.hpp"
 #include "unit/io/ogr_points_reference.hpp"
 
+#include <cpl_conv.h>
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -305,6 +307,186 @@ TEST(ShapefileShapes, MapReadFallsBackToOgrWhereTheDecoderDeclines) {
                 EXPECT_EQ(chains[c][i].y, expected[c][i].y);
             }
         }
+    }
+}
+
+
+// Any range of records, read by ShapeReader from its first record on (found through the .shx),
+// is those records as the whole file's reading gives them; a range past the records is refused,
+// and a record cut short stops the reading (failed()).
+TEST(ShapefileShapes, ReaderGivesAnyRangeOfRecords) {
+    const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "", "MULTILINESTRING ((2 2,3 3),(4 4,5 5,6 6))",
+                                            "LINESTRING (7 7,8 8,9 7)", "", "LINESTRING (1e300 -1e-300,5 6)"};
+    const ShapeFile file("ranges", wkbLineString, lines);
+    const std::optional<ShapeTable> whole = read_shapefile_shapes(file.path());
+    ASSERT_TRUE(whole.has_value());
+    const std::size_t n = lines.size();
+    for (std::size_t first = 0; first <= n; ++first) {
+        for (std::size_t end = first; end <= n + 1; ++end) {
+            SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
+            std::optional<ShapeReader> reader = ShapeReader::open(file.path(), first, end);
+            ASSERT_TRUE(reader.has_value());
+            EXPECT_EQ(reader->records(), n);
+            EXPECT_EQ(reader->shp_size(), std::filesystem::file_size(file.path()));
+            std::size_t fid = first;
+            while (const ShapeRecord* record = reader->next()) {
+                ASSERT_LT(fid, std::min(end, n));
+                EXPECT_EQ(reader->fid(), fid);
+                const ShapeRecord expected = (*whole)[fid];
+                expect_same_record(*record, {std::vector<Point>(expected.xy.begin(), expected.xy.end()), {},
+                                             std::vector<std::uint32_t>(expected.part_starts.begin(), expected.part_starts.end())},
+                                   fid);
+                ++fid;
+            }
+            EXPECT_EQ(fid, std::min(end, n));
+            EXPECT_FALSE(reader->failed());
+        }
+    }
+    EXPECT_FALSE(ShapeReader::open(file.path(), n + 1).has_value());
+
+    const ShapeFile truncated("cutrange", wkbLineString, {"LINESTRING (0 0,1 1)", "LINESTRING (0 0,1 1,2 2)"});
+    std::filesystem::resize_file(truncated.path(), std::filesystem::file_size(truncated.path()) - 8);
+    std::optional<ShapeReader> reader = ShapeReader::open(truncated.path());
+    ASSERT_TRUE(reader.has_value());
+    EXPECT_NE(reader->next(), nullptr);
+    EXPECT_EQ(reader->next(), nullptr);
+    EXPECT_TRUE(reader->failed());
+    reader = ShapeReader::open(truncated.path(), 1);
+    ASSERT_TRUE(reader.has_value());
+    EXPECT_EQ(reader->next(), nullptr);
+    EXPECT_TRUE(reader->failed());
+}
+
+std::vector<std::vector<Point>> chains_of(const map::MapData& map) {
+    std::vector<std::vector<Point>> chains;
+    for (const map::Chain& chain : map.chains) chains.emplace_back(map.vertices.begin() + chain.first, map.vertices.begin() + chain.last + 1);
+    return chains;
+}
+
+void expect_same_points(const std::vector<std::vector<Point>>& a, const std::vector<std::vector<Point>>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t c = 0; c < a.size(); ++c) {
+        ASSERT_EQ(a[c].size(), b[c].size()) << "chain " << c;
+        for (std::size_t i = 0; i < a[c].size(); ++i) EXPECT_EQ(std::memcmp(&a[c][i], &b[c][i], sizeof(Point)), 0) << "chain " << c;
+    }
+}
+
+// A map read with its vertices left in the file: the same chains as the map read whole, no
+// vertex held; where they are (each record's first vertex and chain, their extent); any range of
+// records read back as the same chains; written, the same bytes as the map read whole. Only a
+// file the decoder takes is left: a deleted record makes it read whole.
+TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
+    const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "", "MULTILINESTRING ((2 2,3 3),(4 4,5 5,6 6))",
+                                            "LINESTRING (7 7,8 -8,9 7)", "", ""};
+    const ShapeFile file("infile", wkbLineString, lines);
+    map::MapData whole, planned;
+    const OgrDataset read_whole = OgrDataset::read(file.path(), {}, whole, true);
+    const OgrDataset read_planned = OgrDataset::read(file.path(), {}, planned, true, true);
+    EXPECT_EQ(read_whole.vertices_in_file(), nullptr);
+    const VerticesInFile* in_file = read_planned.vertices_in_file();
+    ASSERT_NE(in_file, nullptr);
+    EXPECT_TRUE(planned.vertices.empty());
+    ASSERT_EQ(planned.chains.size(), whole.chains.size());
+    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
+        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
+        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
+    }
+    EXPECT_EQ(in_file->shp, file.path());
+    EXPECT_EQ(in_file->layer, "infile");
+    EXPECT_EQ(in_file->vertices, whole.vertices.size());
+    EXPECT_EQ(in_file->record_vertex, (std::vector<std::uint64_t>{0, 2, 2, 7, 10, 10, 10}));
+    EXPECT_EQ(in_file->record_chain, (std::vector<std::uint32_t>{0, 1, 1, 3, 4, 4, 4}));
+    EXPECT_EQ(in_file->extent.min_x, 0);
+    EXPECT_EQ(in_file->extent.min_y, -8);
+    EXPECT_EQ(in_file->extent.max_x, 9);
+    EXPECT_EQ(in_file->extent.max_y, 7);
+    EXPECT_EQ(read_planned.summary().features(), read_whole.summary().features());
+    EXPECT_EQ(read_planned.summary().sum(&LayerSummary::line_features), 3u);
+    EXPECT_EQ(read_planned.summary().sum(&LayerSummary::empty_geometries), 3u);
+
+    for (std::uint64_t first = 0; first <= lines.size(); ++first) {
+        for (std::uint64_t end = first; end <= lines.size(); ++end) {
+            SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
+            const map::MapData part = read_shapefile_lines(file.path(), "infile", first, end);
+            map::MapData expected;
+            for (std::uint32_t c = in_file->record_chain[first]; c < in_file->record_chain[end]; ++c) {
+                expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
+                                                          whole.chains[c].last - whole.chains[c].first + 1));
+            }
+            expect_same_points(chains_of(part), chains_of(expected));
+            EXPECT_EQ(part.vertices.size(), in_file->record_vertex[end] - in_file->record_vertex[first]);
+        }
+    }
+    EXPECT_THROW((void)read_shapefile_lines(file.path(), "infile", 7, 7), InputError);
+
+    // Written (every other vertex kept), the same bytes; and refused, nothing written, once the
+    // file has changed.
+    std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+    kept[1] = kept[4] = kept[8] = 0;
+    const std::filesystem::path out = std::filesystem::path(file.path()).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    auto write = [&](const OgrDataset& dataset, const map::MapData& map, const std::string& name) {
+        WriteOptions options;
+        options.path = (out / name).string();
+        return dataset.write(options, map, kept);
+    };
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    write(read_whole, whole, "whole.shp");
+    write(read_planned, planned, "planned.shp");
+    for (const char* extension : {".shp", ".shx", ".dbf", ".prj"}) {
+        auto bytes = [&](const char* stem) {
+            std::ifstream in(out / (std::string(stem) + extension), std::ios::binary);
+            return std::string(std::istreambuf_iterator<char>(in), {});
+        };
+        EXPECT_FALSE(bytes("whole").empty()) << extension;
+        EXPECT_EQ(bytes("whole"), bytes("planned")) << extension;
+    }
+    std::filesystem::last_write_time(file.path(), std::filesystem::last_write_time(file.path()) + std::chrono::seconds(2));
+    try {
+        write(read_planned, planned, "changed.shp");
+        FAIL() << "no error";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("'" + file.path() + "' changed while toposimp ran: record 0"), std::string::npos)
+            << error.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(out / "changed.shp"));
+
+    const ShapeFile deleted("infiledeleted", wkbLineString, lines, {2});
+    map::MapData with_deleted;
+    const OgrDataset read_deleted = OgrDataset::read(deleted.path(), {}, with_deleted, true, true);
+    EXPECT_EQ(read_deleted.vertices_in_file(), nullptr);
+    EXPECT_EQ(with_deleted.vertices.size(), 5u);
+}
+
+// A non-finite vertex: the map left in the file names it as the map read whole does, and so does
+// a part of the file read alone.
+TEST(ShapefileShapes, NonFiniteVertexLeftInTheFileNamesTheFeature) {
+    const ShapeFile file("nonfiniteline", wkbLineString, {"LINESTRING (0 0,1 1)", "LINESTRING (2 2,3 3,4 4)"});
+    {
+        // The second record's second x: header 100, record 0 of 8 + 80 bytes, then 8 + 48 to
+        // its points.
+        std::fstream shp(file.path(), std::ios::in | std::ios::out | std::ios::binary);
+        shp.seekp(100 + 88 + 8 + 48 + 16);
+        const double infinity = std::numeric_limits<double>::infinity();
+        shp.write(reinterpret_cast<const char*>(&infinity), 8);
+    }
+    auto message = [&](bool in_file) {
+        map::MapData map;
+        try {
+            (void)OgrDataset::read(file.path(), {}, map, true, in_file);
+        } catch (const InputError& error) {
+            return std::string(error.what());
+        }
+        return std::string("no error");
+    };
+    const std::string expected = "'" + file.path() + "', layer 'nonfiniteline', feature 1: vertex 1 has a non-finite coordinate (inf, 3.000000)";
+    EXPECT_EQ(message(false), expected);
+    EXPECT_EQ(message(true), expected);
+    try {
+        (void)read_shapefile_lines(file.path(), "nonfiniteline", 1, 2);
+        FAIL() << "no error";
+    } catch (const InputError& error) {
+        EXPECT_EQ(std::string(error.what()), expected);
     }
 }
 
