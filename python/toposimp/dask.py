@@ -643,10 +643,11 @@ def main(argv=None):
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")
         return 128 + (ended_by[0] if ended_by else signal.SIGINT)
     except Exception as error:
-        from toposimp import UsageError
-        if not isinstance(error, UsageError):
+        from toposimp import InputError, UsageError
+        # (An input error met by a task: its part of the input, read on a worker.)
+        if not isinstance(error, (UsageError, InputError)):
             raise
-        sys.stderr.write(f"toposimp.dask: error: {error}\n")
+        sys.stderr.write(f"toposimp.dask: error: {error}; no output written\n")
         return 2
 
 

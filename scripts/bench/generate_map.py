@@ -110,6 +110,10 @@ class ShapefileWriter:
         self.offset += 4 + words
         self.dbf.write(b" " + f"{self.count - 1:>12d}".encode())
 
+    def add_null(self):
+        """One record without a shape."""
+        self._record(struct.pack("<i", 0))
+
     def add(self, parts):
         """One record: a point (x, y), or a list of arrays of points (lines, rings)."""
         if self.kind == self.POINT:

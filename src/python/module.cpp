@@ -577,6 +577,14 @@ PYBIND11_MODULE(_toposimp, module) {
     usage_error = make("UsageError", value_error.ptr());
     output_error = make("OutputError", py::make_tuple(py::handle(PyExc_OSError)).ptr());
     topology_error = make("TopologyError", nullptr);
+    // (The tasks' functions, outside a Run: an input a task reads itself, e.g. its part of a file.)
+    py::register_exception_translator([](std::exception_ptr thrown) {
+        try {
+            if (thrown) std::rethrow_exception(thrown);
+        } catch (const io::InputError& error) {
+            PyErr_SetString(input_error, error.what());
+        }
+    });
     module.def("same_geos", &same_geos, py::arg("geos_version_address"));
     module.def("simplify_layers", &simplify_layers, py::arg("source"), py::arg("layers"), py::arg("points"), py::arg("options"),
                py::arg("progress"), py::arg("interruptible"), py::arg("shapely_geos"), py::arg("parts") = py::none());

@@ -22,7 +22,8 @@ SAME_DATE = ["--config", "OGR_CURRENT_DATE", "2000-01-01T00:00:00Z"]
 
 @pytest.fixture(scope="module")
 def cluster(tmp_path_factory):
-    """A scheduler and three workers (no nanny: a killed worker stays dead), and a client."""
+    """A scheduler and three workers (no nanny: a killed worker stays dead, and the test that
+    killed it starts another: cluster[1].append(start())), and a client."""
     folder = tmp_path_factory.mktemp("dask")
     address_file = folder / "scheduler.json"
     env = dict(os.environ)
@@ -34,15 +35,18 @@ def cluster(tmp_path_factory):
     while not address_file.exists() and time.monotonic() < deadline:
         time.sleep(0.1)
     assert address_file.exists(), "the scheduler did not start"
-    workers = []
-    for k in range(3):
+
+    def start():
         worker = subprocess.Popen([sys.executable, "-m", "distributed.cli.dask_worker", "--scheduler-file", str(address_file),
-                                   "--nthreads", "1", "--no-nanny", "--local-directory", str(folder / f"w{k}"), *common],
+                                   "--nthreads", "1", "--no-nanny", "--local-directory", str(folder / f"w{len(processes)}"), *common],
                                   env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         processes.append(worker)
-        workers.append(worker)
+        return worker
+
+    workers = [start() for _ in range(3)]
     client = distributed.Client(scheduler_file=str(address_file))
     client.wait_for_workers(3, timeout=60)
+    client.start_worker = start
     yield client, workers
     client.close()
     for process in processes:
@@ -56,14 +60,26 @@ def generated(tmp_path_factory):
     return generate_map.generate(folder, cells=24, edge_vertices=30, rivers=40, river_steps=400, roads=6, points=8000, seed=3)
 
 
-@pytest.mark.parametrize("first_round", ["here", "workers"])
-def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path, first_round):
+@pytest.fixture(scope="module")
+def generated_shapefiles(tmp_path_factory):
+    """Rivers that cross each other and themselves as a plain PolyLine Shapefile, and places."""
+    folder = tmp_path_factory.mktemp("shapefiles")
+    generate_map.generate_shapefiles(folder, cells=24, edge_vertices=4, rivers=200, river_steps=400, roads=2, points=8000, seed=4)
+    return folder / "rivers.shp", folder / "places.shp"
+
+
+@pytest.mark.parametrize("first_round, input_kind", [("here", "gpkg"), ("workers", "gpkg"), ("workers", "shapefile")])
+def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles, binary, tmp_path, capsys, first_round, input_kind):
+    """A worker killed while it runs tasks: the same bytes. With a Shapefile and the first round
+    on the workers, the tasks read their parts of the input themselves (those of the killed worker
+    again, from their lineage)."""
     from toposimp import dask as toposimp_dask
 
     client, workers = cluster
-    polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "10%", *SAME_DATE]
-    reference = tmp_path / "reference.gpkg"
+    lines, places = generated if input_kind == "gpkg" else generated_shapefiles
+    suffix = ".gpkg" if input_kind == "gpkg" else ".shp"
+    arguments = [str(lines), "-p", str(places), "--keep", "10%", *SAME_DATE]
+    reference = tmp_path / ("reference" + suffix)
     done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
 
@@ -71,17 +87,21 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path, fir
     killed = {}
 
     def kill_one(done, total):
-        if killed or done < 2:
+        if killed or done < (2 if first_round == "here" else 1):
             return
-        # A worker with tasks under way, so that they are lost with it and run again elsewhere.
+        # A worker with tasks under way, so that they are lost with it and run again elsewhere
+        # (with the first round on the workers, tasks of its last stage).
         for address, keys in client.processing().items():
+            if first_round == "workers" and not any(str(key).startswith("_first_run") for key in keys):
+                continue
             if keys and pids.get(address) in [w.pid for w in workers]:
                 killed["address"], killed["tasks"], killed["keys"] = address, len(keys), [str(key) for key in keys]
                 os.kill(pids[address], signal.SIGKILL)
                 return
 
-    output = tmp_path / "dask.gpkg"
-    status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, local_budget=0, quiet=True,
+    output = tmp_path / ("dask" + suffix)
+    capsys.readouterr()
+    status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, quiet=True,
                                on_progress=kill_one, first_round=first_round)
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
@@ -89,7 +109,11 @@ def test_killed_worker_changes_nothing(cluster, generated, binary, tmp_path, fir
     if first_round == "workers":  # (killed in the first round: its tiles, held by the worker, are built again)
         assert any(key.startswith("_first_run") for key in killed["keys"]), killed["keys"]
     assert killed["address"] not in client.scheduler_info()["workers"]
-    assert output.read_bytes() == reference.read_bytes()
+    workers.append(client.start_worker())  # (three again for the tests after)
+    client.wait_for_workers(3, timeout=60)
+    assert ("vertices (left in the file)" in capsys.readouterr().err) == (input_kind == "shapefile")
+    for extension in (".gpkg",) if input_kind == "gpkg" else (".shp", ".shx", ".dbf"):
+        assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension
 
 
 def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp_path):

@@ -1,6 +1,8 @@
 """The engine in parts without Dask: run_command with tile groups run in this process. Each
 round's groups come as a sequence that builds group k when it is asked for (the round's tiles
 never all exist at once); the output is toposimp map's byte for byte."""
+import pathlib
+
 import numpy
 import pytest
 
@@ -122,8 +124,11 @@ class FirstRoundHere:
     def first_round(self, steps, plan, options):
         level = plan["tile_level"]
         pieces = {}
+        self.parts = []
         for k in range(len(steps)):
-            facts, tiles = _toposimp.first_cut(steps.part(k), plan, level, options)
+            part = self.damage("part", steps.part(k))
+            self.parts.append(part)
+            facts, tiles = _toposimp.first_cut(part, plan, level, options)
             steps.add_facts(self.damage("facts", facts))
             assert [tile.number for tile in tiles] == facts["tiles"].tolist()
             for tile in tiles:
@@ -219,6 +224,118 @@ def test_first_round_by_stages_gives_the_same_bytes(binary, tmp_path, crossing_m
         assert first.stages == ["pairs" if gather_after < 3 else "ids"]
     with pytest.raises(RuntimeError, match="the first round is over"):
         first.steps.border()
+
+
+@pytest.fixture(scope="module")
+def line_shapefile(tmp_path_factory):
+    """A plain PolyLine Shapefile of self-crossing walks that cross each other, one- and two-part
+    records and null ones (the last two too), and a Shapefile of places."""
+    import sys
+
+    sys.path.insert(0, str(DATA.parent / "scripts" / "bench"))
+    import generate_map
+
+    out = tmp_path_factory.mktemp("lines")
+    rng = numpy.random.default_rng(7)
+    writer = generate_map.ShapefileWriter(out / "lines", generate_map.ShapefileWriter.POLYLINE)
+    for k in range(32):
+        if k % 7 == 3 or k >= 30:
+            writer.add_null()
+        elif k % 5 == 1:
+            writer.add([generate_map.random_walk(rng, 4, 60), generate_map.random_walk(rng, 4, 45)])
+        else:
+            writer.add([generate_map.random_walk(rng, 4, 120)])
+    writer.close()
+    places = generate_map.ShapefileWriter(out / "places", generate_map.ShapefileWriter.POINT)
+    for x, y in rng.uniform(0, 4, size=(300, 2)):
+        places.add((float(x), float(y)))
+    places.close()
+    return out / "lines.shp", out / "places.shp"
+
+
+def _same_shapefiles(a, b):
+    for extension in (".shp", ".shx", ".dbf"):
+        assert a.with_suffix(extension).read_bytes() == b.with_suffix(extension).read_bytes(), extension
+
+
+@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"], ["--keep-points", "900"]])
+@pytest.mark.parametrize("level", [0, 2])
+def test_first_round_reads_a_shapefile_by_parts(binary, tmp_path, line_shapefile, target, level):
+    """A PolyLine Shapefile to a Shapefile, its first round's tasks reading their own records: no
+    vertex in the parts handed out (nor in this process: the map is left in the file), the output
+    toposimp map's byte for byte."""
+    import subprocess
+
+    lines, places = line_shapefile
+    arguments = [str(lines), "-p", str(places), *target, *SAME_DATE]
+    reference = tmp_path / "reference.shp"
+    done = subprocess.run([binary, "map", *arguments, "-o", str(reference), "--json"], check=True, capture_output=True, text=True)
+    assert '"pinned_by_crossing":0' not in done.stdout  # (crossings to find)
+    first = FirstRoundHere()
+    output = tmp_path / "parts.shp"
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, level, 400, 0, None, False, False,
+                                             input_on_workers=True)
+    assert status == 0, err
+    assert "vertices (left in the file)" in err
+    _same_shapefiles(output, reference)
+    assert len(first.parts) > 2
+    records = [part["records"] for part in first.parts]
+    assert records[0][0] == 0 and records[-1][1] == 32
+    assert all(one[1] == other[0] for one, other in zip(records, records[1:]))
+    assert all(part["shp"] == str(lines.resolve()) and isinstance(part["vertices"], int) for part in first.parts)
+
+
+def test_a_shapefile_left_on_workers_but_sent_without_the_flag(binary, tmp_path, line_shapefile):
+    """Without input_on_workers the parts carry their vertices, as for any input."""
+    lines, places = line_shapefile
+    first = FirstRoundHere()
+    status, out, err = _toposimp.run_command(["map", str(lines), "--keep", "10%", "-o", str(tmp_path / "sent.shp")], first, 2, 400, 0,
+                                             None, False, False)
+    assert status == 0, err
+    assert all("shp" not in part and len(part["vertices"]) > 0 for part in first.parts)
+
+
+def _touched(path):
+    import os
+
+    stat = path.stat()
+    os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda part: _touched(pathlib.Path(part["shp"])) or part, "cannot be read here as it was when the map was read"),
+    (lambda part: dict(part, records=(part["records"][0], part["records"][1] + 1)), "are not the lines they were"),
+    (lambda part: dict(part, shp=part["shp"] + ".gone"), "cannot be read here as it was when the map was read"),
+])
+def test_a_part_read_from_a_changed_input_stops_the_run(tmp_path, line_shapefile, damage, message):
+    """A task that reads its part from an input that is not the one read here stops the run with
+    the reason; nothing is written."""
+    import shutil
+
+    for extension in (".shp", ".shx", ".dbf"):
+        shutil.copy(line_shapefile[0].with_suffix(extension), tmp_path / ("lines" + extension))
+    first = FirstRoundHere(damage=lambda at, value: damage(value) if at == "part" else value)
+    output = tmp_path / "out.shp"
+    with pytest.raises(ValueError, match=message):
+        _toposimp.run_command(["map", str(tmp_path / "lines.shp"), "--keep", "10%", "-o", str(output)], first, 2, 400, 0, None, False,
+                              False, input_on_workers=True)
+    assert not output.exists()
+
+
+def test_an_input_changed_before_writing_leaves_no_output(tmp_path, line_shapefile):
+    """The input read again to write the output, changed since the map was read: refused."""
+    import shutil
+
+    for extension in (".shp", ".shx", ".dbf"):
+        shutil.copy(line_shapefile[0].with_suffix(extension), tmp_path / ("lines" + extension))
+    lines = tmp_path / "lines.shp"
+    first = FirstRoundHere(damage=lambda at, value: (_touched(lines), value)[1] if at == "live" else value)
+    output = tmp_path / "out.shp"
+    status, out, err = _toposimp.run_command(["map", str(lines), "--keep", "10%", "-o", str(output)], first, 2, 400, 0, None, False, False,
+                                             input_on_workers=True)
+    assert status == 2
+    assert f"'{lines.resolve()}' changed while toposimp ran" in err
+    assert not output.exists()
 
 
 def _drop_a_live_vertex(live):

@@ -405,7 +405,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
         if (!in_order) return false;
         VerticesInFile planned;
-        planned.shp = path;
+        planned.shp = std::filesystem::absolute(path).string();  // (read by other processes, elsewhere)
         planned.layer = layer->name;
         planned.shp_size = reader->shp_size();
         planned.shp_time = modified_ns(path);

@@ -74,7 +74,7 @@ struct MemoryLayers {
 // a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes them, in record order from
 // vertex 0 (each record's parts its chains, in order). The map holds the chains, and no vertex.
 struct VerticesInFile {
-    std::string shp;                          // the .shp
+    std::string shp;                          // the .shp (an absolute path)
     std::string layer;                        // its layer's name (for messages)
     std::uintmax_t shp_size = 0;              // its size and modification time (ns) when it was read
     std::int64_t shp_time = 0;
