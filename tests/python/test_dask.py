@@ -116,6 +116,36 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
         assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension
 
 
+def test_input_changed_under_the_workers_stops_the_run(cluster, generated_shapefiles, tmp_path, monkeypatch, capsys):
+    """The input changed after the command read it, before the workers read their parts: the run
+    stops with the reason (exit 2, the command line's message), nothing written."""
+    import shutil
+
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    for extension in (".shp", ".shx", ".dbf"):
+        shutil.copy(generated_shapefiles[0].with_suffix(extension), tmp_path / ("lines" + extension))
+    lines = tmp_path / "lines.shp"
+    first_round = toposimp_dask._Tasks._first_round
+
+    def touched_first(self, steps, plan, options):
+        stat = lines.stat()
+        os.utime(lines, ns=(stat.st_atime_ns, stat.st_mtime_ns + 10**9))
+        return first_round(self, steps, plan, options)
+
+    monkeypatch.setattr(toposimp_dask._Tasks, "_first_round", touched_first)
+    output = tmp_path / "out.shp"
+    capsys.readouterr()
+    status = toposimp_dask.main(["map", str(lines), "--keep", "10%", "-o", str(output), "--first-round", "workers", "-q",
+                                 "--scheduler", client.scheduler.address])
+    err = capsys.readouterr().err
+    assert status == 2, err
+    assert f"toposimp.dask: error: '{lines}' cannot be read here as it was when the map was read" in err
+    assert "no output written" in err and "Traceback" not in err
+    assert not output.exists()
+
+
 def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp_path):
     from toposimp import dask as toposimp_dask
 
