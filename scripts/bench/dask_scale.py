@@ -7,10 +7,12 @@ for byte, and toposimp check on it.
     scripts/bench/dask_scale.py BUILD_DIR [--cells 250] [--edge-vertices 40] [--rivers 2000]
                                 [--river-steps 2000] [--points 2000000] [--workers 2]
                                 [--memory-limit 1GiB] [--target "--keep 10%"] [--data DIR]
-                                [--dask-options "--first-round here"]
+                                [--dask-options "--first-round here"] [--lines-only]
 
 The map (generate_map.py --shapefiles) is written to --data (default build/bench-data/scale-N)
-once. Prints a Markdown table.
+once. --lines-only: the rivers alone (a plain PolyLine Shapefile, written to a Shapefile: the
+input that --first-round workers reads by parts) with the control points. Prints a Markdown
+table.
 """
 import argparse
 import os
@@ -38,6 +40,7 @@ def main():
     parser.add_argument("--target", default="--keep 10%")
     parser.add_argument("--data")
     parser.add_argument("--dask-options", default="", help="more python3 -m toposimp.dask options")
+    parser.add_argument("--lines-only", action="store_true", help="the rivers alone, Shapefile to Shapefile")
     a = parser.parse_args()
     build = pathlib.Path(a.build).resolve()
     data = pathlib.Path(a.data or f"build/bench-data/scale-{a.cells}").resolve()
@@ -45,9 +48,14 @@ def main():
         generate_map.generate_shapefiles(data, a.cells, a.edge_vertices, a.rivers, a.river_steps, 6, a.points, 1)
     # (cells' rings: 4 borders of K + 1 vertices and the closing one; rivers; roads of 3)
     vertices = a.cells ** 2 * (4 * (a.edge_vertices + 1) + 1) + a.rivers * a.river_steps + 6 * 3
-    map_arguments = [str(data), "-l", "cells", "-l", "rivers", "-l", "roads", "-p", str(data / "places.shp"),
-                     *shlex.split(a.target), "-q", "--overwrite", *SAME_DATE]
+    layers = ["-l", "cells", "-l", "rivers", "-l", "roads"]
     single_out, dask_out = data / "single.gpkg", data / "dask.gpkg"
+    source = str(data)
+    if a.lines_only:
+        vertices = a.rivers * a.river_steps
+        layers, source = [], str(data / "rivers.shp")
+        single_out, dask_out = data / "single.shp", data / "dask.shp"
+    map_arguments = [source, *layers, "-p", str(data / "places.shp"), *shlex.split(a.target), "-q", "--overwrite", *SAME_DATE]
     single = dask_bench.timed([str(build / "toposimp"), "map", *map_arguments, "-o", str(single_out)])
 
     env = dict(dask_bench.CLEAN_ENV, PYTHONPATH=str(build / "python"))
@@ -62,13 +70,14 @@ def main():
     peaks = dask_bench.worker_peaks(client)
     client.close()
     cluster.close()
-    identical = dask_out.read_bytes() == single_out.read_bytes()
-    check = dask_bench.timed([str(build / "toposimp"), "check", str(data), str(dask_out), "-l", "cells", "-l", "rivers",
-                              "-l", "roads", "-p", str(data / "places.shp")])
-    sizes = {name: (data / f"{name}.shp").stat().st_size for name in ("cells", "rivers", "roads", "places")}
+    extensions = (".shp", ".shx", ".dbf") if a.lines_only else (".gpkg",)
+    identical = all(dask_out.with_suffix(e).read_bytes() == single_out.with_suffix(e).read_bytes() for e in extensions)
+    check = dask_bench.timed([str(build / "toposimp"), "check", source, str(dask_out), *layers, "-p", str(data / "places.shp")])
+    names = ("rivers", "places") if a.lines_only else ("cells", "rivers", "roads", "places")
+    sizes = {name: (data / f"{name}.shp").stat().st_size for name in names}
     print(f"map: {data}: {vertices / 1e6:.1f} M vertices and {a.points / 1e6:.1f} M control points "
           f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each"
-          + (f", toposimp.dask {a.dask_options}" if a.dask_options else ""))
+          + (f", toposimp.dask {a.dask_options}" if a.dask_options else "") + (", the rivers alone" if a.lines_only else ""))
     print()
     print("| run | seconds | command peak MiB | worker peaks MiB | output identical |")
     print("|---|---|---|---|---|")
