@@ -141,16 +141,18 @@ class ShapefileWriter:
         self.dbf.close()
 
 
-def generate_shapefiles(out_dir, cells, edge_vertices, rivers, river_steps, roads, points, seed):
-    """The same map as generate(), as Shapefiles written as they are made (any size)."""
+def generate_shapefiles(out_dir, cells, edge_vertices, rivers, river_steps, roads, points, seed, with_cells=True):
+    """The same map as generate(), as Shapefiles written as they are made (any size); without
+    the cells' coverage if not `with_cells` (the other layers as with it)."""
     rng = numpy.random.default_rng(seed)
     out = pathlib.Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     horizontal, vertical = borders(rng, cells, edge_vertices)
-    writer = ShapefileWriter(out / "cells", ShapefileWriter.POLYGON)
-    for _, _, ring in cell_rings(horizontal, vertical, cells):
-        writer.add([ring[::-1]])  # (outer rings clockwise)
-    writer.close()
+    if with_cells:
+        writer = ShapefileWriter(out / "cells", ShapefileWriter.POLYGON)
+        for _, _, ring in cell_rings(horizontal, vertical, cells):
+            writer.add([ring[::-1]])  # (outer rings clockwise)
+        writer.close()
     del horizontal, vertical
     writer = ShapefileWriter(out / "rivers", ShapefileWriter.POLYLINE)
     for _ in range(rivers):

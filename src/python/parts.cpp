@@ -14,9 +14,9 @@
 #include <chrono>
 #include <cstring>
 #include <filesystem>
-#include <optional>
 #include <limits>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -405,7 +405,8 @@ map::MapData file_part_of(const py::dict& dict) {
     if (error || size != item(dict, "shp_size").cast<std::uint64_t>() || io::modified_ns(shp) != item(dict, "shp_time").cast<std::int64_t>()) {
         throw io::InputError("'" + shp + "' cannot be read here as it was when the map was read" +
                              (error ? " (" + error.message() + ")" : std::string(" (another size or modification time)")) +
-                             ": every worker reads the input at the same path, unchanged");
+                             ": every worker reads the input at the same absolute path, unchanged (or use --send-input: the "
+                             "parts are then sent from the command)");
     }
     map::MapData part;
     {
