@@ -418,6 +418,20 @@ const ShapeRecord* ShapeReader::next() {
     return &s.record;
 }
 
+void refuse_non_finite(const ShapeRecord& record, const std::function<std::string()>& label) {
+    const std::span<const std::uint32_t> parts = record.part_starts;
+    for (std::size_t k = 0; k < parts.size(); ++k) {
+        const std::size_t part_first = parts[k], part_end = k + 1 < parts.size() ? parts[k + 1] : record.xy.size();
+        for (std::size_t v = part_first; v < part_end; ++v) {
+            const Point p = record.xy[v];
+            if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
+                throw InputError(label() + ": vertex " + std::to_string(v - part_first) + " has a non-finite coordinate (" +
+                                 std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
+            }
+        }
+    }
+}
+
 std::int64_t modified_ns(const std::string& path) {
     std::error_code error;
     const auto time = std::filesystem::last_write_time(path, error);
@@ -435,17 +449,10 @@ map::MapData read_shapefile_lines(const std::string& path, const std::string& la
     map::MapData part;
     while (const ShapeRecord* record = reader->next()) {
         if (!record->z.empty()) throw unreadable();
+        refuse_non_finite(*record, [&] { return "'" + path + "', layer '" + layer + "', feature " + std::to_string(reader->fid()); });
         const std::span<const std::uint32_t> parts = record->part_starts;
         for (std::size_t k = 0; k < parts.size(); ++k) {
             const std::size_t part_first = parts[k], part_end = k + 1 < parts.size() ? parts[k + 1] : record->xy.size();
-            for (std::size_t v = part_first; v < part_end; ++v) {
-                const Point p = record->xy[v];
-                if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
-                    throw InputError("'" + path + "', layer '" + layer + "', feature " + std::to_string(reader->fid()) + ": vertex " +
-                                     std::to_string(v - part_first) + " has a non-finite coordinate (" + std::to_string(p.x) + ", " +
-                                     std::to_string(p.y) + ")");
-                }
-            }
             if (part.vertices.size() + (part_end - part_first) >= std::numeric_limits<std::uint32_t>::max() / 2) throw unreadable();
             part.add_chain(record->xy.subspan(part_first, part_end - part_first));
         }

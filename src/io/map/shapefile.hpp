@@ -89,6 +89,10 @@ private:
     std::unique_ptr<State> state_;
 };
 
+// InputError "<label()>: vertex i has a non-finite coordinate (x, y)" for a record's first
+// non-finite vertex (i counted from its part's first), as the map's readers word it.
+void refuse_non_finite(const ShapeRecord& record, const std::function<std::string()>& label);
+
 // When the file at `path` was last modified (the file system's clock, in nanoseconds), or -1.
 std::int64_t modified_ns(const std::string& path);
 

@@ -352,15 +352,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto add_record_lines = [&](const ShapeRecord& record, std::size_t first, Layer::Shape& shape, auto&& label) {
         const std::span<const std::uint32_t> parts = record.part_starts;
         if (parts.empty()) return;
+        refuse_non_finite(record, label);
         for (std::size_t k = 0; k < parts.size(); ++k) {
             const std::size_t part_first = parts[k], part_end = k + 1 < parts.size() ? parts[k + 1] : record.xy.size();
-            for (std::size_t v = part_first; v < part_end; ++v) {
-                const Point p = record.xy[v];
-                if (!std::isfinite(p.x) || !std::isfinite(p.y)) {
-                    throw InputError(label() + ": vertex " + std::to_string(v - part_first) + " has a non-finite coordinate (" +
-                                     std::to_string(p.x) + ", " + std::to_string(p.y) + ")");
-                }
-            }
             map.chains.push_back({static_cast<std::uint32_t>(first + part_first), static_cast<std::uint32_t>(first + part_end - 1)});
             layer->items.push_back(static_cast<std::uint32_t>(map.chains.size() - 1));
         }
