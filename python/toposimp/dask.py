@@ -444,9 +444,16 @@ class _Tasks:
         def submit(*arguments):
             return client.submit(*arguments, pure=False)
 
-        # Cut: each part's facts here, its tiles' pieces stay on the workers.
-        cuts = [submit(_first_cut, steps.part(k), plan, options) for k in range(len(steps))]
-        facts = self._gather(client, [submit(_item, cut, 0) for cut in cuts], "cutting the map into tiles")
+        # Cut: each part's facts here, its tiles' pieces stay on the workers (a part of an input
+        # read by parts is read there too).
+        cuts, by_parts, part = [], False, None
+        for k in range(len(steps)):
+            part = steps.part(k)
+            by_parts = by_parts or "shp" in part
+            cuts.append(submit(_first_cut, part, plan, options))
+        del part
+        facts = self._gather(client, [submit(_item, cut, 0) for cut in cuts],
+                             "reading the input by parts and cutting it into tiles" if by_parts else "cutting the map into tiles")
         sizes, opens, where = {}, {}, {}  # per tile: its vertices, its open rings, its (part, place) pieces
         for k, part in enumerate(facts):
             steps.add_facts(part)

@@ -69,7 +69,8 @@ def generated_shapefiles(tmp_path_factory):
 
 
 @pytest.mark.parametrize("first_round, input_kind", [("here", "gpkg"), ("workers", "gpkg"), ("workers", "shapefile")])
-def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles, binary, tmp_path, capsys, first_round, input_kind):
+def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles, binary, tmp_path, capsys, monkeypatch, first_round,
+                                       input_kind):
     """A worker killed while it runs tasks: the same bytes. With a Shapefile and the first round
     on the workers, the tasks read their parts of the input themselves (those of the killed worker
     again, from their lineage)."""
@@ -86,9 +87,7 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     pids = client.run(os.getpid)  # worker address → its process id
     killed = {}
 
-    def kill_one(done, total):
-        if killed or done < (2 if first_round == "here" else 1):
-            return
+    def try_kill():
         # A worker with tasks under way, so that they are lost with it and run again elsewhere
         # (with the first round on the workers, tasks of its last stage).
         for address, keys in client.processing().items():
@@ -99,10 +98,26 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
                 os.kill(pids[address], signal.SIGKILL)
                 return
 
+    def kill_one(done, total):
+        if not killed and done >= 2 and first_round == "here":
+            try_kill()
+
+    if first_round == "workers":
+        # (As soon as the first round's last stage is under way: its tasks are short.)
+        gather = toposimp_dask._Tasks._gather
+
+        def gather_killing(self, client_, futures, what, on_progress=None, each=None):
+            deadline = time.monotonic() + 30
+            while what.startswith("round 1") and not killed and time.monotonic() < deadline and not all(f.done() for f in futures):
+                try_kill()
+            return gather(self, client_, futures, what, on_progress, each)
+
+        monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_killing)
+
     output = tmp_path / ("dask" + suffix)
     capsys.readouterr()
-    status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, quiet=True,
-                               on_progress=kill_one, first_round=first_round)
+    status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0,
+                               quiet=input_kind != "shapefile", on_progress=kill_one, first_round=first_round)
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
     assert killed["tasks"] > 0
@@ -111,7 +126,10 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     assert killed["address"] not in client.scheduler_info()["workers"]
     workers.append(client.start_worker())  # (three again for the tests after)
     client.wait_for_workers(3, timeout=60)
-    assert ("vertices (left in the file)" in capsys.readouterr().err) == (input_kind == "shapefile")
+    err = capsys.readouterr().err
+    assert ("vertices (left in the file)" in err) == (input_kind == "shapefile")
+    if input_kind == "shapefile":
+        assert "reading the input by parts and cutting it into tiles:" in err
     for extension in (".gpkg",) if input_kind == "gpkg" else (".shp", ".shx", ".dbf"):
         assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension
 
