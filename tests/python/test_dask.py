@@ -128,6 +128,7 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     client.wait_for_workers(3, timeout=60)
     err = capsys.readouterr().err
     assert ("vertices (left in the file)" in err) == (input_kind == "shapefile")
+    assert ("the input is read here, whole" in err) == (first_round == "workers" and input_kind == "gpkg")
     if input_kind == "shapefile":
         assert "reading the input by parts and cutting it into tiles:" in err
     for extension in (".gpkg",) if input_kind == "gpkg" else (".shp", ".shx", ".dbf"):
