@@ -54,7 +54,7 @@ Dask options:
                        a plain PolyLine Shapefile written to a Shapefile (at one target, without
                        --decimals, --precision or --levels) is read by parts on the workers:
                        this process then never holds its vertices, and the .shp must be at the
-                       same absolute path, unchanged, on every worker. Other inputs are read here
+                       same absolute path, unchanged, on every worker. Other inputs are read here.
   --send-input         with --first-round workers: read the input here and send the workers its
                        parts (for workers that cannot see the input)
 

@@ -297,7 +297,7 @@ def test_command_line(generated, binary, tmp_path):
     assert "searching the tiles for crossings:" in done.stderr  # (the first round's stages on the workers)
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
-    assert usage.returncode == 0 and "--scheduler" in usage.stdout and "--first-round" in usage.stdout
+    assert usage.returncode == 0 and all(option in usage.stdout for option in ("--scheduler", "--first-round", "--send-input"))
     wrong = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--first-round",
                             "nowhere"], capture_output=True, text=True)
     assert wrong.returncode == 2 and "--first-round" in wrong.stderr and not (tmp_path / "no.gpkg").exists()
