@@ -345,22 +345,6 @@ std::optional<ShapeTable> read_shapefile_shapes(const std::string& path) {
     return table;
 }
 
-bool for_each_shape(const std::string& path, const std::function<bool(std::uint64_t, const ShapeRecord&)>& visit) {
-    std::vector<Point> xy;
-    std::vector<double> z;
-    std::vector<std::uint32_t> part_starts;
-    std::optional<bool> has_z;
-    return for_each_record(path, is_poly_type, [&](std::uint64_t fid, bool deleted, std::span<const unsigned char> content) {
-        if (deleted) return false;
-        const std::uint32_t type = little_u32(content.data());
-        xy.clear();
-        z.clear();
-        part_starts.clear();
-        if (type != 0 && !append_shape(content, type, has_z, xy, z, part_starts)) return false;
-        return visit(fid, ShapeRecord{xy, z, part_starts});
-    });
-}
-
 struct ShapeReader::State {
     RecordFiles files;
     std::uint64_t end = 0;
@@ -388,6 +372,15 @@ ShapeReader::ShapeReader(std::unique_ptr<State> state) : state_(std::move(state)
 ShapeReader::ShapeReader(ShapeReader&&) noexcept = default;
 ShapeReader& ShapeReader::operator=(ShapeReader&&) noexcept = default;
 ShapeReader::~ShapeReader() = default;
+
+bool for_each_shape(const std::string& path, const std::function<bool(std::uint64_t, const ShapeRecord&)>& visit) {
+    std::optional<ShapeReader> reader = ShapeReader::open(path);
+    if (!reader) return false;
+    while (const ShapeRecord* record = reader->next()) {
+        if (!visit(reader->fid(), *record)) return false;
+    }
+    return !reader->failed();
+}
 
 std::uint64_t ShapeReader::records() const { return state_->files.records(); }
 std::uintmax_t ShapeReader::shp_size() const { return state_->files.shp_size(); }
