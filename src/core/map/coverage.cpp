@@ -4,6 +4,9 @@
 #include "core/map/location_key.hpp"
 
 #include <algorithm>
+#include <limits>
+#include <optional>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace toposimp::map {
@@ -21,6 +24,34 @@ struct ArcKeyHash {
     std::size_t operator()(const ArcKey& k) const { return hash_words({k.first.x, k.first.y, k.second.x, k.second.y}); }
 };
 
+// The arcs made so far, by the lesser of their two keys (the first two locations read forward,
+// or backward), with the chain each became and its forward key. With the nodes fixed, an arc is
+// its first two locations (from there every location has a single way on, to the next node), so
+// an arc whose key is found is that chain, read backward unless its forward key is the chain's.
+class ArcTable {
+public:
+    // key(k): the arc's k-th location; `size` locations.
+    template <class Key>
+    std::optional<Coverage::ArcUse> find(Key&& key, std::size_t size) const {
+        const ArcKey forward{key(0), key(1)};
+        const auto found = arcs_.find(std::min(forward, ArcKey{key(size - 1), key(size - 2)}));
+        if (found == arcs_.end()) return std::nullopt;
+        return Coverage::ArcUse{found->second.chain, !(found->second.forward == forward)};
+    }
+    template <class Key>
+    void add(Key&& key, std::size_t size, std::uint32_t chain) {
+        const ArcKey forward{key(0), key(1)};
+        arcs_.emplace(std::min(forward, ArcKey{key(size - 1), key(size - 2)}), Made{chain, forward});
+    }
+
+private:
+    struct Made {
+        std::uint32_t chain;
+        ArcKey forward;
+    };
+    std::unordered_map<ArcKey, Made, ArcKeyHash> arcs_;
+};
+
 // Are all points on one line (or fewer than three distinct)? Exact.
 bool collinear(std::span<const Point> points, const std::vector<std::uint32_t>& positions) {
     const Point u = points[positions.front()];
@@ -35,6 +66,57 @@ bool collinear(std::span<const Point> points, const std::vector<std::uint32_t>& 
     return true;
 }
 
+// A ring's clean sequence: positions into `ring` without the closing vertex and without
+// consecutive duplicates (the first of each run stays). False if the ring is degenerate: fewer
+// than three distinct locations, or all on one line (exactly).
+bool clean_ring(std::span<const Point> ring, std::vector<std::uint32_t>& sequence) {
+    sequence.clear();
+    auto end = static_cast<std::uint32_t>(ring.size());
+    if (end >= 2 && same_location(ring[0], ring[end - 1])) --end;
+    for (std::uint32_t p = 0; p < end; ++p) {
+        if (sequence.empty() || !same_location(ring[p], ring[sequence.back()])) sequence.push_back(p);
+    }
+    while (sequence.size() > 1 && same_location(ring[sequence.back()], ring[sequence.front()])) sequence.pop_back();
+    return sequence.size() >= 3 && !collinear(ring, sequence);
+}
+
+// A clean ring cut at its nodes (node(i): is its i-th clean occurrence one?): arc(positions)
+// for each arc in ring order, from the first node on, each ending at the next node (the last
+// back at the first; emit(positions, false)). Without a node, the whole ring is one closed arc from
+// its first position (emit(positions, true)).
+// Returns the first node's index (the ring's size if none).
+template <class Node, class Arc>
+std::uint32_t cut_at_nodes(std::span<const std::uint32_t> clean, Node&& node, std::vector<std::uint32_t>& arc, Arc&& emit) {
+    const auto size = static_cast<std::uint32_t>(clean.size());
+    std::uint32_t start = 0;
+    while (start < size && !node(start)) ++start;
+    if (start == size) {
+        arc.assign(clean.begin(), clean.end());
+        arc.push_back(clean[0]);
+        emit(std::span<const std::uint32_t>(arc), true);
+        return size;
+    }
+    arc.assign(1, clean[start]);
+    for (std::uint32_t step = 1; step <= size; ++step) {
+        const std::uint32_t i = (start + step) % size;
+        arc.push_back(clean[i]);
+        if (node(i)) {
+            emit(std::span<const std::uint32_t>(arc), false);
+            arc.assign(1, clean[i]);
+        }
+    }
+    return start;
+}
+
+// An occurrence's neighbours in its clean ring, as an unordered pair of locations.
+using Neighbours = std::pair<LocationKey, LocationKey>;
+Neighbours neighbours_at(std::span<const Point> ring, std::span<const std::uint32_t> clean, std::size_t i) {
+    const std::size_t size = clean.size();
+    LocationKey before(ring[clean[(i + size - 1) % size]]), after(ring[clean[(i + 1) % size]]);
+    if (after < before) std::swap(before, after);
+    return {before, after};
+}
+
 }  // namespace
 
 std::uint32_t Coverage::add_ring(std::span<const Point> ring) {
@@ -47,31 +129,27 @@ std::uint32_t Coverage::add_ring(std::span<const Point> ring) {
 void Coverage::build(MapData& map) {
     map_ = &map;
     first_vertex_ = static_cast<std::uint32_t>(map.vertices.size());
+    first_chain_ = static_cast<std::uint32_t>(map.chains.size());
     const std::uint32_t rings = ring_count();
     const std::span<const Point> points(points_);
+    auto ring_points = [&](std::uint32_t r) { return points.subspan(ring_start_[r], ring_size_[r]); };
 
     // 1. Each ring as a cyclic sequence of positions into points_, without the closing vertex
     //    and without consecutive duplicates. Degenerate rings are set aside.
-    std::vector<std::uint32_t> clean, clean_start(rings + 1, 0);
+    std::vector<std::uint32_t> clean;
+    clean_start_.assign(rings + 1, 0);
     std::vector<std::uint8_t> degenerate(rings, 0);
     std::vector<std::uint32_t> sequence;
     for (std::uint32_t r = 0; r < rings; ++r) {
-        clean_start[r] = static_cast<std::uint32_t>(clean.size());
-        sequence.clear();
-        const std::uint32_t begin = ring_start_[r];
-        std::uint32_t end = begin + ring_size_[r];
-        if (end - begin >= 2 && same_location(points_[begin], points_[end - 1])) --end;
-        for (std::uint32_t p = begin; p < end; ++p) {
-            if (sequence.empty() || !same_location(points_[p], points_[sequence.back()])) sequence.push_back(p);
-        }
-        while (sequence.size() > 1 && same_location(points_[sequence.back()], points_[sequence.front()])) sequence.pop_back();
-        if (sequence.size() < 3 || collinear(points, sequence)) {
+        clean_start_[r] = static_cast<std::uint32_t>(clean.size());
+        if (!clean_ring(ring_points(r), sequence)) {
             degenerate[r] = 1;
             continue;
         }
-        clean.insert(clean.end(), sequence.begin(), sequence.end());
+        for (const std::uint32_t p : sequence) clean.push_back(ring_start_[r] + p);
     }
-    clean_start[rings] = static_cast<std::uint32_t>(clean.size());
+    clean_start_[rings] = static_cast<std::uint32_t>(clean.size());
+    const std::vector<std::uint32_t>& clean_start = clean_start_;
     std::vector<std::uint32_t> ring_of(clean.size());
     for (std::uint32_t r = 0; r < rings; ++r) {
         for (std::uint32_t i = clean_start[r]; i < clean_start[r + 1]; ++i) ring_of[i] = r;
@@ -126,11 +204,12 @@ void Coverage::build(MapData& map) {
         }
     }
     std::vector<std::uint32_t>().swap(ring_of);  // (step 3 walks rings from clean_start)
+    node_bits_.assign((clean.size() + 63) / 64, 0);
+    for (std::size_t i = 0; i < clean.size(); ++i) node_bits_[i / 64] |= std::uint64_t{node[i]} << (i % 64);
 
     // 3. Cut each ring at its nodes; one chain per distinct arc.
-    std::unordered_map<ArcKey, std::uint32_t, ArcKeyHash> arcs;
-    std::vector<std::uint32_t> arc;
-    auto add_chain_from = [&](const std::vector<std::uint32_t>& positions) {
+    ArcTable arcs;
+    auto add_chain_from = [&](std::span<const std::uint32_t> positions) {
         std::vector<Point> chain_points;
         chain_points.reserve(positions.size());
         for (const std::uint32_t p : positions) {
@@ -140,37 +219,23 @@ void Coverage::build(MapData& map) {
         ++arcs_;
         return map.add_chain(chain_points);
     };
-    // Is chain `c` the arc `positions`, read forward or backward?
-    auto same_arc = [&](std::uint32_t c, bool reversed) {
-        const Chain chain = map.chains[c];
-        if (chain.last - chain.first + 1 != arc.size()) return false;
-        for (std::size_t k = 0; k < arc.size(); ++k) {
-            const std::uint32_t v = reversed ? chain.last - static_cast<std::uint32_t>(k) : chain.first + static_cast<std::uint32_t>(k);
-            if (!same_location(map.vertices[v], points_[arc[k]])) return false;
+    // Is chain `c` the arc `positions`, read forward or backward? (Always, when their keys say
+    // so: see ArcTable. Checked here, where the vertices are at hand.)
+    auto same_arc = [&](std::span<const std::uint32_t> positions, ArcUse use) {
+        const Chain chain = map.chains[use.chain];
+        if (chain.last - chain.first + 1 != positions.size()) return false;
+        for (std::size_t k = 0; k < positions.size(); ++k) {
+            const std::uint32_t v = use.reversed ? chain.last - static_cast<std::uint32_t>(k) : chain.first + static_cast<std::uint32_t>(k);
+            if (!same_location(map.vertices[v], points_[positions[k]])) return false;
         }
         return true;
     };
-    auto emit_arc = [&]() {
-        const ArcKey forward{LocationKey(points_[arc[0]]), LocationKey(points_[arc[1]])};
-        const ArcKey backward{LocationKey(points_[arc.back()]), LocationKey(points_[arc[arc.size() - 2]])};
-        const ArcKey canonical = std::min(forward, backward);
-        if (const auto found = arcs.find(canonical); found != arcs.end()) {
-            for (const bool reversed : {false, true}) {
-                if (same_arc(found->second, reversed)) {
-                    uses_.push_back({found->second, reversed});
-                    ++shared_arcs_;
-                    return;
-                }
-            }
-        }
-        const std::uint32_t chain = add_chain_from(arc);
-        arcs.emplace(canonical, chain);
-        uses_.push_back({chain, false});
-    };
-
+    std::vector<std::uint32_t> arc;
     start_offset_.assign(rings, 0);
+    new_chains_before_.assign(rings + 1, 0);
     for (std::uint32_t r = 0; r < rings; ++r) {
         uses_start_.push_back(static_cast<std::uint32_t>(uses_.size()));
+        new_chains_before_[r] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
         if (degenerate[r]) {
             std::vector<std::uint32_t> raw(ring_size_[r]);
             for (std::uint32_t k = 0; k < raw.size(); ++k) raw[k] = ring_start_[r] + k;
@@ -180,30 +245,206 @@ void Coverage::build(MapData& map) {
             ++degenerate_rings_;
             continue;
         }
-        const std::uint32_t first = clean_start[r], size = clean_start[r + 1] - first;
-        std::uint32_t start = 0;
-        while (start < size && !node[first + start]) ++start;
-        if (start == size) {
-            // No node: one closed arc, starting where the ring starts.
-            arc.assign(clean.begin() + first, clean.begin() + first + size);
-            arc.push_back(clean[first]);
-            uses_.push_back({add_chain_from(arc), false});
-            continue;
-        }
-        start_offset_[r] = (size - start) % size;
-        arc.assign(1, clean[first + start]);
-        for (std::uint32_t step = 1; step <= size; ++step) {
-            const std::uint32_t i = first + (start + step) % size;
-            arc.push_back(clean[i]);
-            if (node[i]) {
-                emit_arc();
-                arc.assign(1, clean[i]);
-            }
-        }
+        const std::span<const std::uint32_t> ring(clean.data() + clean_start[r], clean_start[r + 1] - clean_start[r]);
+        const auto size = static_cast<std::uint32_t>(ring.size());
+        const std::uint32_t start = cut_at_nodes(
+            ring, [&](std::uint32_t i) { return node[clean_start[r] + i] != 0; }, arc,
+            [&](std::span<const std::uint32_t> positions, bool whole_ring) {
+                const auto key = [&](std::size_t k) { return LocationKey(points_[positions[k]]); };
+                if (!whole_ring) {
+                    if (const std::optional<ArcUse> found = arcs.find(key, positions.size())) {
+                        if (!same_arc(positions, *found)) throw std::logic_error("two arcs with the same ends and first steps");
+                        uses_.push_back(*found);
+                        ++shared_arcs_;
+                        return;
+                    }
+                }
+                const std::uint32_t chain = add_chain_from(positions);
+                if (!whole_ring) arcs.add(key, positions.size(), chain);
+                uses_.push_back({chain, false});
+            });
+        start_offset_[r] = start == size ? 0 : (size - start) % size;
     }
     uses_start_.push_back(static_cast<std::uint32_t>(uses_.size()));
+    new_chains_before_[rings] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
     degenerate_.swap(degenerate);
     std::vector<Point>().swap(points_);  // (the arcs hold them now: as much as the map's vertices again, or more)
+}
+
+void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_bytes) {
+    if (!ring_start_.empty()) throw std::logic_error("Coverage::plan on a coverage given rings");
+    map_ = &map;
+    first_chain_ = static_cast<std::uint32_t>(map.chains.size());
+    first_vertex_ = map.chains.empty() ? 0 : map.chains.back().last + 1;
+    std::vector<std::uint32_t> sequence, arc;
+    auto changed = [] { return std::invalid_argument("the rings are not those of the first pass"); };
+
+    // 1. The rings' sizes, which are degenerate, and each one's clean occurrences.
+    clean_start_.assign(1, 0);
+    std::uint32_t point_count = 0;
+    rings([&](std::span<const Point> ring) {
+        ring_start_.push_back(point_count);
+        ring_size_.push_back(static_cast<std::uint32_t>(ring.size()));
+        point_count += static_cast<std::uint32_t>(ring.size());
+        const bool clean = clean_ring(ring, sequence);
+        degenerate_.push_back(clean ? 0 : 1);
+        clean_start_.push_back(clean_start_.back() + (clean ? static_cast<std::uint32_t>(sequence.size()) : 0));
+    });
+    const std::uint32_t ring_total = ring_count();
+
+    // 2. Nodes, as build() finds them, in passes over the rings: pass k groups the occurrences
+    // whose location hashes to k (of `passes`), at most about pass_bytes of them at a time.
+    struct Occurrence {
+        LocationKey key;
+        Neighbours around;
+        std::uint32_t index;  // among the clean occurrences
+    };
+    const std::uint64_t total = clean_start_.back();
+    const std::uint64_t per_pass = std::max<std::uint64_t>(1, pass_bytes / sizeof(Occurrence));
+    const std::uint64_t passes = std::max<std::uint64_t>(1, (total + per_pass - 1) / per_pass);
+    node_bits_.assign((total + 63) / 64, 0);
+    std::vector<Occurrence> found;
+    for (std::uint64_t pass = 0; pass < passes; ++pass) {
+        found.clear();
+        std::uint32_t r = 0;
+        rings([&](std::span<const Point> ring) {
+            if (r >= ring_total || ring.size() != ring_size_[r]) throw changed();
+            if (!degenerate_[r]) {
+                if (!clean_ring(ring, sequence) || sequence.size() != clean_start_[r + 1] - clean_start_[r]) throw changed();
+                for (std::size_t i = 0; i < sequence.size(); ++i) {
+                    const LocationKey key(ring[sequence[i]]);
+                    if (passes > 1 && hash_words({key.x, key.y}) % passes != pass) continue;
+                    found.push_back({key, neighbours_at(ring, sequence, i), clean_start_[r] + static_cast<std::uint32_t>(i)});
+                }
+            }
+            ++r;
+        });
+        if (r != ring_total) throw changed();
+        std::sort(found.begin(), found.end(), [](const Occurrence& a, const Occurrence& b) {
+            return a.key < b.key || (a.key == b.key && a.index < b.index);
+        });
+        for (std::size_t g = 0; g < found.size();) {
+            std::size_t h = g + 1;
+            bool differ = false;
+            for (; h < found.size() && found[h].key == found[g].key; ++h) differ = differ || found[h].around != found[g].around;
+            for (std::size_t k = g; k < h && differ; ++k) node_bits_[found[k].index / 64] |= std::uint64_t{1} << (found[k].index % 64);
+            g = h;
+        }
+    }
+    std::vector<Occurrence>().swap(found);
+
+    // 3. The arcs, as build() makes them, their vertices left where the rings are.
+    ArcTable arcs;
+    std::uint64_t next_vertex = first_vertex_;
+    auto add_chain_of = [&](std::size_t count) {
+        if (next_vertex + count > std::numeric_limits<std::uint32_t>::max() / 2) throw std::length_error("more than 2 billion vertices in one map");
+        map.chains.push_back({static_cast<std::uint32_t>(next_vertex), static_cast<std::uint32_t>(next_vertex + count - 1)});
+        next_vertex += count;
+        ++arcs_;
+        return static_cast<std::uint32_t>(map.chains.size() - 1);
+    };
+    start_offset_.assign(ring_total, 0);
+    new_chains_before_.assign(ring_total + 1, 0);
+    std::uint32_t r = 0;
+    rings([&](std::span<const Point> ring) {
+        if (r >= ring_total || ring.size() != ring_size_[r]) throw changed();
+        uses_start_.push_back(static_cast<std::uint32_t>(uses_.size()));
+        new_chains_before_[r] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
+        if (degenerate_[r]) {
+            const std::uint32_t chain = add_chain_of(ring.size());
+            map.freeze(chain);
+            uses_.push_back({chain, false});
+            ++degenerate_rings_;
+            ++r;
+            return;
+        }
+        if (!clean_ring(ring, sequence) || sequence.size() != clean_start_[r + 1] - clean_start_[r]) throw changed();
+        const std::uint32_t base = clean_start_[r];
+        const auto size = static_cast<std::uint32_t>(sequence.size());
+        const std::uint32_t start = cut_at_nodes(
+            sequence, [&](std::uint32_t i) { return ((node_bits_[(base + i) / 64] >> ((base + i) % 64)) & 1) != 0; }, arc,
+            [&](std::span<const std::uint32_t> positions, bool whole_ring) {
+                const auto key = [&](std::size_t k) { return LocationKey(ring[positions[k]]); };
+                if (!whole_ring) {
+                    if (const std::optional<ArcUse> use = arcs.find(key, positions.size())) {
+                        uses_.push_back(*use);
+                        ++shared_arcs_;
+                        return;
+                    }
+                }
+                const std::uint32_t chain = add_chain_of(positions.size());
+                if (!whole_ring) arcs.add(key, positions.size(), chain);
+                uses_.push_back({chain, false});
+            });
+        start_offset_[r] = start == size ? 0 : (size - start) % size;
+        ++r;
+    });
+    if (r != ring_total) throw changed();
+    uses_start_.push_back(static_cast<std::uint32_t>(uses_.size()));
+    new_chains_before_[ring_total] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
+}
+
+CoverageSlice Coverage::slice(std::uint32_t first_ring, std::uint32_t end_ring) const {
+    if (first_ring > end_ring || end_ring > ring_count()) throw std::out_of_range("Coverage::slice: rings out of range");
+    CoverageSlice slice;
+    slice.first_ring = first_ring;
+    slice.degenerate.assign(degenerate_.begin() + first_ring, degenerate_.begin() + end_ring);
+    const std::uint32_t first_bit = clean_start_[first_ring];
+    slice.clean_count = clean_start_[end_ring] - first_bit;
+    slice.node.assign((slice.clean_count + 63) / 64, 0);
+    for (std::uint32_t i = 0; i < slice.clean_count; ++i) {
+        const std::uint32_t bit = first_bit + i;
+        if ((node_bits_[bit / 64] >> (bit % 64)) & 1) slice.node[i / 64] |= std::uint64_t{1} << (i % 64);
+    }
+    for (std::uint32_t r = first_ring; r <= end_ring; ++r) slice.uses_start.push_back(uses_start_[r] - uses_start_[first_ring]);
+    slice.uses.assign(uses_.begin() + uses_start_[first_ring], uses_.begin() + uses_start_[end_ring]);
+    slice.first_chain = first_chain_ + new_chains_before_[first_ring];
+    slice.end_chain = first_chain_ + new_chains_before_[end_ring];
+    for (std::uint32_t c = slice.first_chain; c < slice.end_chain; ++c) slice.chain_size.push_back(map_->chains[c].last - map_->chains[c].first + 1);
+    return slice;
+}
+
+MapData arcs_of(const CoverageSlice& slice, const RingSource& rings) {
+    MapData part;
+    std::vector<std::uint32_t> sequence, arc, all;
+    std::vector<Point> points;
+    std::uint32_t next = slice.first_chain;
+    std::size_t r = 0;
+    std::uint32_t bit = 0;
+    auto changed = [] { return std::invalid_argument("the rings are not those the coverage was planned from"); };
+    rings([&](std::span<const Point> ring) {
+        if (r >= slice.degenerate.size()) throw changed();
+        std::uint32_t u = slice.uses_start[r];
+        // The ring's next arc: made here if this is where it is first used (ids go in that order).
+        auto take = [&](std::span<const std::uint32_t> positions, bool frozen) {
+            if (u >= slice.uses_start[r + 1]) throw changed();
+            if (slice.uses[u++].chain != next) return;  // (an arc an earlier ring made)
+            if (next >= slice.end_chain || positions.size() != slice.chain_size[next - slice.first_chain]) throw changed();
+            points.clear();
+            for (const std::uint32_t p : positions) points.push_back(ring[p]);
+            const std::uint32_t chain = part.add_chain(points);
+            if (frozen) part.freeze(chain);
+            ++next;
+        };
+        const bool clean = clean_ring(ring, sequence);
+        if (clean == (slice.degenerate[r] != 0)) throw changed();
+        if (!clean) {
+            all.resize(ring.size());
+            for (std::uint32_t k = 0; k < all.size(); ++k) all[k] = k;
+            take(all, true);
+        } else {
+            const std::uint32_t base = bit;
+            bit += static_cast<std::uint32_t>(sequence.size());
+            if (bit > slice.clean_count) throw changed();
+            cut_at_nodes(
+                sequence, [&](std::uint32_t i) { return ((slice.node[(base + i) / 64] >> ((base + i) % 64)) & 1) != 0; }, arc,
+                [&](std::span<const std::uint32_t> positions, bool) { take(positions, false); });
+        }
+        if (u != slice.uses_start[r + 1]) throw changed();
+        ++r;
+    });
+    if (r != slice.degenerate.size() || bit != slice.clean_count || next != slice.end_chain) throw changed();
+    return part;
 }
 
 std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order) const {

@@ -12,10 +12,17 @@
 #include "core/map/map_data.hpp"
 
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
 namespace toposimp::map {
+
+// Rings held elsewhere (a file): calls visit(ring) for every ring in order, each as add_ring
+// would be given it. Called once for each pass over them.
+using RingSource = std::function<void(const std::function<void(std::span<const Point>)>& visit)>;
+
+struct CoverageSlice;
 
 class Coverage {
 public:
@@ -25,6 +32,19 @@ public:
     // Splits every ring into arcs and appends one chain per distinct arc to `map` (frozen chains
     // for degenerate rings). Call once, after the last add_ring.
     void build(MapData& map);
+
+    // The same chains as build() would append for the rings `rings` streams, planned without
+    // holding the rings: each chain is appended as its vertex range only (the vertex ids as
+    // build() gives them, from one past the map's last chain's last vertex; map.vertices is not
+    // touched), frozen chains marked. The nodes are found in passes over the rings, each holding
+    // about `pass_bytes` of occurrences (56 bytes a ring point); then one more pass cuts the arcs.
+    // Throws std::invalid_argument if a pass streams other rings than the first did. Instead
+    // of add_ring and build; ring_vertices and ring_arcs answer as after build(); source_of does not.
+    void plan(const RingSource& rings, MapData& map, std::size_t pass_bytes);
+
+    // What the rings [first_ring, end_ring) need to make, on their own, the chains they are the
+    // first to use (arcs_of).
+    CoverageSlice slice(std::uint32_t first_ring, std::uint32_t end_ring) const;
 
     // The ring rebuilt from its arcs' kept vertices, as map vertex ids, closed (last = first).
     // Starts at the ring's first input vertex if it was kept (`arc_order` false), or where its
@@ -61,9 +81,30 @@ private:
     std::vector<std::uint32_t> start_offset_; // per ring: where its first input point is in ring order
     std::vector<std::uint8_t> degenerate_;    // per ring: frozen, returned as given
     std::vector<std::uint32_t> source_;
+    std::vector<std::uint32_t> clean_start_;       // per ring and one more: its first clean occurrence (degenerate: none)
+    std::vector<std::uint64_t> node_bits_;         // per clean occurrence: is it a node
+    std::vector<std::uint32_t> new_chains_before_; // per ring and one more: the chains the rings before it made
     const MapData* map_ = nullptr;
-    std::uint32_t first_vertex_ = 0;
+    std::uint32_t first_vertex_ = 0, first_chain_ = 0;
     std::uint64_t arcs_ = 0, shared_arcs_ = 0, degenerate_rings_ = 0;
 };
+
+// A run of rings of a coverage (Coverage::slice), as much of its plan as they need to make their
+// own chains: their nodes, their arcs' uses, and which chains they make.
+struct CoverageSlice {
+    std::uint32_t first_ring = 0;
+    std::vector<std::uint8_t> degenerate;      // per ring of the run
+    std::uint32_t clean_count = 0;             // the run's clean occurrences
+    std::vector<std::uint64_t> node;           // per clean occurrence, from the run's first: is it a node
+    std::vector<std::uint32_t> uses_start;     // per ring and one more, into uses
+    std::vector<Coverage::ArcUse> uses;        // the rings' arcs in order (whole-map chains)
+    std::uint32_t first_chain = 0, end_chain = 0;  // the chains the run makes: [first_chain, end_chain)
+    std::vector<std::uint32_t> chain_size;     // and their vertex counts
+};
+
+// The chains [slice.first_chain, slice.end_chain) with their vertices (as build() makes them),
+// from the slice's rings, streamed by `rings` once. Throws std::invalid_argument if they are not
+// the rings the slice was planned from.
+MapData arcs_of(const CoverageSlice& slice, const RingSource& rings);
 
 }  // namespace toposimp::map

@@ -7,7 +7,11 @@
 
 #include <gmpxx.h>
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <random>
 
@@ -228,6 +232,153 @@ TEST(Coverage, BigGridHasTheArcsOfItsBorders) {
         ASSERT_EQ(ring.size(), input[r].size()) << "ring " << r;
         for (std::size_t k = 0; k < ring.size(); ++k) ASSERT_TRUE(same_location(ring[k], input[r][k])) << "ring " << r << ", point " << k;
     }
+}
+
+// Rings streamed from where they are (a file, for a run in parts): the plan gives the chains
+// build() gives, with their ids, without holding the rings, in one pass or in many; and each run
+// of rings makes its own chains with their vertices from its rings alone (arcs_of).
+std::vector<std::vector<Point>> snapped_rings(std::uint64_t seed) {
+    // Rings through the points of a 5 × 5 lattice (and -0.0, and cells of a grid): locations
+    // meet everywhere, so there are nodes, shared arcs, spikes, rings through a location twice,
+    // repeated rings, duplicates in a row, and degenerate rings.
+    std::mt19937_64 rng(seed);
+    std::uniform_int_distribution<int> coordinate(0, 4), length(2, 9), coin(0, 5);
+    std::vector<std::vector<Point>> rings;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            rings.push_back({{2.0 * i, 2.0 * j}, {2.0 * i + 2, 2.0 * j}, {2.0 * i + 2, 2.0 * j + 2}, {2.0 * i, 2.0 * j + 2}, {2.0 * i, 2.0 * j}});
+        }
+    }
+    const int random_rings = 40;
+    for (int r = 0; r < random_rings; ++r) {
+        std::vector<Point> ring;
+        const int n = length(rng);
+        for (int k = 0; k < n; ++k) {
+            Point p{static_cast<double>(coordinate(rng)), static_cast<double>(coordinate(rng))};
+            if (p.x == 0 && coin(rng) == 0) p.x = -0.0;
+            ring.push_back(p);
+            if (coin(rng) == 0) ring.push_back(p);  // a duplicate in a row
+        }
+        if (coin(rng) < 3) ring.push_back(ring.front());  // closed, or not
+        rings.push_back(ring);
+        if (coin(rng) == 0) rings.push_back(ring);  // the same ring again
+        if (coin(rng) == 0) rings.push_back(std::vector<Point>(ring.rbegin(), ring.rend()));
+    }
+    std::shuffle(rings.begin(), rings.end(), rng);
+    return rings;
+}
+
+RingSource stream(const std::vector<std::vector<Point>>& rings, std::size_t first = 0, std::size_t end = SIZE_MAX) {
+    return [&rings, first, end](const std::function<void(std::span<const Point>)>& visit) {
+        for (std::size_t r = first; r < std::min(end, rings.size()); ++r) visit(rings[r]);
+    };
+}
+
+TEST(Coverage, PlannedFromStreamedRingsIsTheBuild) {
+    for (std::uint64_t seed = 0; seed < 60; ++seed) {
+        const std::vector<std::vector<Point>> rings = snapped_rings(seed);
+        MapData built;
+        built.add_chain(std::vector<Point>{{-5, -5}, {-4, -4}, {-3, -5}});  // a line first: the arcs' ids come after its
+        Coverage whole;
+        for (const auto& ring : rings) whole.add_ring(ring);
+        whole.build(built);
+        std::mt19937_64 rng(seed);
+        std::vector<std::uint8_t> kept(built.vertices.size());
+        for (auto& k : kept) k = static_cast<std::uint8_t>(rng() % 3 != 0);
+        for (const Chain& chain : built.chains) kept[chain.first] = 1;  // (every ring keeps a vertex, as the engine's do)
+        for (const std::size_t pass_bytes : {std::size_t{1} << 20, std::size_t{56 * 7}, std::size_t{1}}) {
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", pass_bytes " + std::to_string(pass_bytes));
+            MapData planned;
+            planned.chains.push_back(built.chains[0]);
+            Coverage streamed;
+            streamed.plan(stream(rings), planned, pass_bytes);
+            ASSERT_TRUE(planned.vertices.empty());
+            ASSERT_EQ(planned.chains.size(), built.chains.size());
+            for (std::size_t c = 0; c < built.chains.size(); ++c) {
+                ASSERT_EQ(planned.chains[c].first, built.chains[c].first) << "chain " << c;
+                ASSERT_EQ(planned.chains[c].last, built.chains[c].last) << "chain " << c;
+                ASSERT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), built.is_frozen(static_cast<std::uint32_t>(c))) << "chain " << c;
+            }
+            EXPECT_EQ(streamed.arc_count(), whole.arc_count());
+            EXPECT_EQ(streamed.shared_arc_count(), whole.shared_arc_count());
+            EXPECT_EQ(streamed.degenerate_ring_count(), whole.degenerate_ring_count());
+            EXPECT_EQ(streamed.point_count(), whole.point_count());
+            ASSERT_EQ(streamed.ring_count(), whole.ring_count());
+            for (std::uint32_t r = 0; r < whole.ring_count(); ++r) {
+                const auto a = whole.ring_arcs(r), b = streamed.ring_arcs(r);
+                ASSERT_EQ(a.size(), b.size()) << "ring " << r;
+                for (std::size_t k = 0; k < a.size(); ++k) {
+                    ASSERT_EQ(a[k].chain, b[k].chain) << "ring " << r;
+                    ASSERT_EQ(a[k].reversed, b[k].reversed) << "ring " << r;
+                }
+                for (const bool arc_order : {false, true}) {
+                    ASSERT_EQ(whole.ring_vertices(r, kept, arc_order), streamed.ring_vertices(r, kept, arc_order)) << "ring " << r;
+                }
+            }
+        }
+        EXPECT_GT(whole.shared_arc_count(), 0u);
+        EXPECT_GT(whole.degenerate_ring_count(), 0u);
+        // Any run of rings makes its chains, with the build's vertices, from its own rings.
+        for (int trial = 0; trial < 20; ++trial) {
+            std::uint32_t first = static_cast<std::uint32_t>(rng() % (rings.size() + 1));
+            std::uint32_t end = static_cast<std::uint32_t>(rng() % (rings.size() + 1));
+            if (first > end) std::swap(first, end);
+            const CoverageSlice slice = whole.slice(first, end);
+            const MapData part = arcs_of(slice, stream(rings, first, end));
+            ASSERT_EQ(part.chains.size(), slice.end_chain - slice.first_chain);
+            for (std::uint32_t c = 0; c < part.chains.size(); ++c) {
+                const Chain want = built.chains[slice.first_chain + c], got = part.chains[c];
+                ASSERT_EQ(got.last - got.first, want.last - want.first) << "rings " << first << "–" << end << ", chain " << c;
+                ASSERT_EQ(part.is_frozen(c), built.is_frozen(slice.first_chain + c));
+                for (std::uint32_t k = 0; k <= want.last - want.first; ++k) {
+                    const Point p = part.vertices[got.first + k], q = built.vertices[want.first + k];
+                    ASSERT_TRUE(std::bit_cast<std::uint64_t>(p.x) == std::bit_cast<std::uint64_t>(q.x) &&
+                                std::bit_cast<std::uint64_t>(p.y) == std::bit_cast<std::uint64_t>(q.y))
+                        << "rings " << first << "–" << end << ", chain " << c << ", vertex " << k;
+                }
+            }
+        }
+    }
+}
+
+// Rings that are not what they were: the plan's later passes, or a slice given other rings,
+// say so instead of planning or making other chains.
+TEST(Coverage, StreamedRingsThatChangeAreRefused) {
+    std::vector<std::vector<Point>> rings = snapped_rings(3);
+    int passes = 0;
+    const RingSource changing = [&](const std::function<void(std::span<const Point>)>& visit) {
+        ++passes;
+        for (std::size_t r = 0; r < rings.size(); ++r) {
+            if (passes > 1 && r == rings.size() / 2) {
+                std::vector<Point> other = rings[r];
+                other.push_back(other.back());
+                visit(other);
+            } else {
+                visit(rings[r]);
+            }
+        }
+    };
+    MapData map;
+    Coverage coverage;
+    EXPECT_THROW(coverage.plan(changing, map, 1 << 20), std::invalid_argument);
+
+    Coverage whole;
+    for (const auto& ring : rings) whole.add_ring(ring);
+    MapData built;
+    whole.build(built);
+    const CoverageSlice slice = whole.slice(0, static_cast<std::uint32_t>(rings.size()));
+    EXPECT_NO_THROW(arcs_of(slice, stream(rings)));
+    EXPECT_THROW(arcs_of(slice, stream(rings, 1)), std::invalid_argument);  // a ring short
+    std::vector<std::vector<Point>> one_longer = rings;
+    one_longer[1].insert(one_longer[1].begin() + 1, Point{0.5, 0.25});
+    EXPECT_THROW(arcs_of(slice, stream(one_longer)), std::invalid_argument);
+    std::vector<std::vector<Point>> degenerate_longer = rings;  // a frozen ring, one point longer
+    const auto frozen = std::find_if(built.frozen.begin(), built.frozen.end(), [](std::uint8_t f) { return f != 0; }) - built.frozen.begin();
+    ASSERT_LT(static_cast<std::size_t>(frozen), built.chains.size());
+    std::uint32_t frozen_ring = 0;
+    while (whole.ring_arcs(frozen_ring)[0].chain != frozen) ++frozen_ring;
+    degenerate_longer[frozen_ring].push_back(degenerate_longer[frozen_ring].back());
+    EXPECT_THROW(arcs_of(slice, stream(degenerate_longer)), std::invalid_argument);
 }
 
 }  // namespace
