@@ -816,6 +816,41 @@ bool record_holds_lines(const OgrDataset::Data::Layer& layer, std::size_t index,
     return true;
 }
 
+}  // namespace
+
+void for_each_polygon_ring(const std::string& path, const std::string& layer_name, std::uint64_t first, std::uint64_t end,
+                           const std::function<void(std::span<const Point>)>& visit) {
+    DatasetPtr dataset = open_vector(path);
+    OGRLayer& layer = pick_layer(*dataset, path, layer_name);
+    QuietGdal quiet;
+    layer.ResetReading();
+    if (first > 0 && layer.SetNextByIndex(static_cast<GIntBig>(first)) != OGRERR_NONE) {
+        throw InputError("'" + path + "', layer '" + layer.GetName() + "': no feature " + std::to_string(first) + last_gdal_error());
+    }
+    auto rings_of = [&](const OGRPolygon& polygon, const std::string& label) {
+        for (const OGRLinearRing* ring : polygon) {
+            if (!ring->IsEmpty()) visit(read_points(*ring, label));
+        }
+    };
+    for (std::uint64_t k = first; k < end; ++k) {
+        OGRFeatureUniquePtr feature{layer.GetNextFeature()};
+        if (CPLGetLastErrorType() >= CE_Failure || !feature) {
+            throw InputError("error reading '" + path + "', layer '" + layer.GetName() + "', feature " + std::to_string(k) +
+                             (feature ? last_gdal_error() : ": the layer ends before it"));
+        }
+        const OGRGeometry* geometry = feature->GetGeometryRef();
+        if (geometry == nullptr) continue;
+        const std::string label = feature_label(path, layer, feature->GetFID());
+        if (wkbFlatten(geometry->getGeometryType()) == wkbPolygon) {
+            rings_of(*geometry->toPolygon(), label);
+        } else if (wkbFlatten(geometry->getGeometryType()) == wkbMultiPolygon) {
+            for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) rings_of(*polygon, label);
+        }
+    }
+}
+
+namespace {
+
 // The vertices of a layer's features, feature after feature: the map's, or those of the records
 // of the Shapefile a map's vertices were left in (VerticesInFile), read again one at a time.
 class VertexCursor {

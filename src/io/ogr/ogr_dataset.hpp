@@ -84,6 +84,13 @@ struct VerticesInFile {
     std::vector<std::uint32_t> record_chain;   // per record and one more: its first chain
 };
 
+// The rings of features [first, end) of a polygon layer (in the order OGR reads the layer), as
+// OgrDataset::read gives them to its coverage: each polygon's non-empty rings, its exterior
+// first; features without polygons give none. For a coverage planned from the file
+// (map::Coverage::plan, map::arcs_of); the same refusals as read() (InputError).
+void for_each_polygon_ring(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end,
+                           const std::function<void(std::span<const Point>)>& visit);
+
 class OgrDataset {
 public:
     // Reads the named layers of `path` (none named: every layer) into `map`. Throws InputError

@@ -1,6 +1,7 @@
 // Shapefile records decoded from the .shp directly must be exactly what OGR reads: control
 // points from files written by OGR in every point shape type, and line and polygon shapes (what
 // a written output is checked with) in every such type, each against OGR's reading of the file.
+#include "core/map/coverage.hpp"
 #include "io/map/shapefile.hpp"
 
 #include "io/common/errors.hpp"
@@ -488,6 +489,74 @@ TEST(ShapefileShapes, NonFiniteVertexLeftInTheFileNamesTheFeature) {
     } catch (const InputError& error) {
         EXPECT_EQ(std::string(error.what()), expected);
     }
+}
+
+// A polygon layer's rings streamed from the file, as read() gives them to its coverage: a
+// coverage planned from them has read()'s chains, and any run of features makes its own chains
+// with read()'s vertices (issue 32: polygon coverages read by parts).
+TEST(ShapefileShapes, PolygonRingsStreamedPlanTheCoverageRead) {
+    std::vector<std::string> polygons;
+    for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) {
+            // Squares whose shared borders carry a middle point, some with a hole.
+            const double x = i, y = j;
+            std::string ring = "(" + std::to_string(x) + " " + std::to_string(y) + "," + std::to_string(x + 0.5) + " " +
+                               std::to_string(y) + "," + std::to_string(x + 1) + " " + std::to_string(y) + "," +
+                               std::to_string(x + 1) + " " + std::to_string(y + 0.5) + "," + std::to_string(x + 1) + " " +
+                               std::to_string(y + 1) + "," + std::to_string(x + 0.5) + " " + std::to_string(y + 1) + "," +
+                               std::to_string(x) + " " + std::to_string(y + 1) + "," + std::to_string(x) + " " +
+                               std::to_string(y + 0.5) + "," + std::to_string(x) + " " + std::to_string(y) + ")";
+            if ((i + j) % 3 == 0) {
+                ring += ",(" + std::to_string(x + 0.25) + " " + std::to_string(y + 0.25) + "," + std::to_string(x + 0.25) + " " +
+                        std::to_string(y + 0.75) + "," + std::to_string(x + 0.75) + " " + std::to_string(y + 0.75) + "," +
+                        std::to_string(x + 0.25) + " " + std::to_string(y + 0.25) + ")";
+            }
+            polygons.push_back("POLYGON (" + ring + ")");
+        }
+        polygons.push_back(i % 2 ? "" : "MULTIPOLYGON (((10 10,11 10,11 11,10 10)),((12 12,13 12,12 13,12 12)))");
+    }
+    polygons.push_back("POLYGON ((20 20,21 20,22 20,20 20))");  // flat: a frozen chain
+    const ShapeFile file("coverage", wkbPolygon, polygons);
+    map::MapData whole;
+    OgrDataset::read(file.path(), {}, whole);
+    auto rings_of = [&](std::uint64_t first, std::uint64_t end) {
+        return [&, first, end](const std::function<void(std::span<const Point>)>& visit) {
+            for_each_polygon_ring(file.path(), "coverage", first, end, visit);
+        };
+    };
+    map::MapData planned;
+    map::Coverage coverage;
+    coverage.plan(rings_of(0, polygons.size()), planned, 56 * 16);
+    ASSERT_EQ(planned.chains.size(), whole.chains.size());
+    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
+        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
+        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
+        EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
+    }
+    EXPECT_GT(coverage.shared_arc_count(), 0u);
+    EXPECT_EQ(coverage.degenerate_ring_count(), 1u);
+    // The rings before each feature: a feature range is a ring range.
+    std::vector<std::uint32_t> ring_before(polygons.size() + 1, 0);
+    for (std::size_t f = 0; f < polygons.size(); ++f) {
+        std::uint32_t count = 0;
+        for_each_polygon_ring(file.path(), "coverage", f, f + 1, [&](std::span<const Point>) { ++count; });
+        ring_before[f + 1] = ring_before[f] + count;
+    }
+    ASSERT_EQ(ring_before.back(), coverage.ring_count());
+    for (std::size_t first = 0; first <= polygons.size(); first += 3) {
+        for (std::size_t end = first; end <= polygons.size(); end += 5) {
+            SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
+            const map::CoverageSlice slice = coverage.slice(ring_before[first], ring_before[end]);
+            const map::MapData part = map::arcs_of(slice, rings_of(first, end));
+            map::MapData expected;
+            for (std::uint32_t c = slice.first_chain; c < slice.end_chain; ++c) {
+                expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
+                                                          whole.chains[c].last - whole.chains[c].first + 1));
+            }
+            expect_same_points(chains_of(part), chains_of(expected));
+        }
+    }
+    EXPECT_THROW(for_each_polygon_ring(file.path(), "coverage", 0, polygons.size() + 1, [](std::span<const Point>) {}), InputError);
 }
 
 }  // namespace
