@@ -283,6 +283,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     clean_start_.assign(1, 0);
     std::uint32_t point_count = 0;
     rings([&](std::span<const Point> ring) {
+        if (point_count + ring.size() > std::numeric_limits<std::uint32_t>::max() / 2) throw std::length_error("more than 2 billion vertices in one map");
         ring_start_.push_back(point_count);
         ring_size_.push_back(static_cast<std::uint32_t>(ring.size()));
         point_count += static_cast<std::uint32_t>(ring.size());
