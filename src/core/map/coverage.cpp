@@ -219,8 +219,8 @@ void Coverage::build(MapData& map) {
         ++arcs_;
         return map.add_chain(chain_points);
     };
-    // Is chain `c` the arc `positions`, read forward or backward? (Always, when their keys say
-    // so: see ArcTable. Checked here, where the vertices are at hand.)
+    // Is the arc `positions` the chain `use` names, read the way it says? (Always, when the arc
+    // table found it: see ArcTable. Checked here, where the vertices are at hand.)
     auto same_arc = [&](std::span<const std::uint32_t> positions, ArcUse use) {
         const Chain chain = map.chains[use.chain];
         if (chain.last - chain.first + 1 != positions.size()) return false;
