@@ -13,7 +13,7 @@ fail() { echo "FAIL: $*"; exit 1; }
 deb=$(ls "$tmp"/toposimp_*_*.deb)
 depends=$(dpkg-deb -f "$deb" Depends)
 for library in libgdal libgeos-c libgmp libgomp libspdlog libstdc++; do
-    echo "$depends" | grep -q "$library" || fail "Depends lacks $library: $depends"
+    grep -q "$library" <<<"$depends" || fail "Depends lacks $library: $depends"
 done
 contents=$(dpkg-deb -c "$deb" | awk '{print $6}')
 for path in ./usr/bin/toposimp ./usr/libexec/toposimp/toposimp-gdal ./usr/share/man/man1/toposimp.1 ./usr/share/man/man1/toposimp-map.1 \
@@ -21,13 +21,13 @@ for path in ./usr/bin/toposimp ./usr/libexec/toposimp/toposimp-gdal ./usr/share/
             ./usr/share/qgis/python/plugins/toposimp_processing/metadata.txt ./usr/share/qgis/python/plugins/toposimp_processing/algorithms.py \
             ./usr/lib/python3/dist-packages/toposimp/__init__.py ./usr/lib/python3/dist-packages/toposimp/mesh.py \
             ./usr/lib/python3/dist-packages/toposimp/dask.py; do
-    echo "$contents" | grep -qx "$path" || fail "$path not in the package"
+    grep -qx "$path" <<<"$contents" || fail "$path not in the package"
 done
 dpkg-deb -I "$deb" prerm >/dev/null || fail "no prerm script"
 # The package's own executable runs against this system's libraries.
 dpkg-deb -x "$deb" "$tmp/root"
 "$tmp/root/usr/bin/toposimp" --version | grep -q '^toposimp ' || fail "the packaged executable does not run"
-echo "$contents" | grep -q '^./usr/lib/python3/dist-packages/toposimp/_toposimp.*\.so$' || fail "the Python extension is not in the package"
+grep -q '^./usr/lib/python3/dist-packages/toposimp/_toposimp.*\.so$' || fail "the Python extension is not in the package"
 dpkg-deb -f "$deb" Recommends | grep -q python3-geopandas || fail "Recommends lacks python3-geopandas"
 dpkg-deb -f "$deb" Suggests | grep -q python3-distributed || fail "Suggests lacks python3-distributed (python3 -m toposimp.dask)"
 PYTHONPATH="$tmp/root/usr/lib/python3/dist-packages" /usr/bin/python3 -c "import toposimp, numpy; \
