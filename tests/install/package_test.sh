@@ -27,7 +27,7 @@ dpkg-deb -I "$deb" prerm >/dev/null || fail "no prerm script"
 # The package's own executable runs against this system's libraries.
 dpkg-deb -x "$deb" "$tmp/root"
 "$tmp/root/usr/bin/toposimp" --version | grep -q '^toposimp ' || fail "the packaged executable does not run"
-grep -q '^./usr/lib/python3/dist-packages/toposimp/_toposimp.*\.so$' || fail "the Python extension is not in the package"
+grep -q '^./usr/lib/python3/dist-packages/toposimp/_toposimp.*\.so$' <<<"$contents" || fail "the Python extension is not in the package"
 dpkg-deb -f "$deb" Recommends | grep -q python3-geopandas || fail "Recommends lacks python3-geopandas"
 dpkg-deb -f "$deb" Suggests | grep -q python3-distributed || fail "Suggests lacks python3-distributed (python3 -m toposimp.dask)"
 PYTHONPATH="$tmp/root/usr/lib/python3/dist-packages" /usr/bin/python3 -c "import toposimp, numpy; \
@@ -35,5 +35,5 @@ m = toposimp.read_mesh('$(dirname "$0")/../../testdata/mesh/torus.off'); \
 assert len(toposimp.simplify_mesh(m.vertices, m.faces, keep=0.1, measure=None).faces) == 480" \
     || fail "the packaged Python package does not run"
 simulation=$(apt-get install -s "$deb" 2>&1) || { echo "$simulation"; fail "apt-get cannot install the package"; }
-echo "$simulation" | grep -q '^Inst toposimp' || { echo "$simulation"; fail "apt-get would not install toposimp"; }
+grep -q '^Inst toposimp' <<<"$simulation" || { echo "$simulation"; fail "apt-get would not install toposimp"; }
 echo "package $(basename "$deb"): Depends: $depends"
