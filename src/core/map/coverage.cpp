@@ -108,6 +108,10 @@ std::uint32_t cut_at_nodes(std::span<const std::uint32_t> clean, Node&& node, st
     return start;
 }
 
+// Bit i of a bitmap of 64-bit words.
+bool bit_at(std::span<const std::uint64_t> bits, std::size_t i) { return ((bits[i / 64] >> (i % 64)) & 1) != 0; }
+void set_bit(std::vector<std::uint64_t>& bits, std::size_t i) { bits[i / 64] |= std::uint64_t{1} << (i % 64); }
+
 // An occurrence's neighbours in its clean ring, as an unordered pair of locations.
 using Neighbours = std::pair<LocationKey, LocationKey>;
 Neighbours neighbours_at(std::span<const Point> ring, std::span<const std::uint32_t> clean, std::size_t i) {
@@ -166,7 +170,7 @@ void Coverage::build(MapData& map) {
     // positions by their keys). A bucket at a time: the keys of all of them at once took 24
     // bytes a ring point, a GB on a 40 M-point coverage, on top of the map being read.
     auto key_of = [&](std::uint32_t i) { return LocationKey(points_[clean[i]]); };
-    std::vector<std::uint8_t> node(clean.size(), 0);
+    node_bits_.assign((clean.size() + 63) / 64, 0);
     auto neighbours = [&](std::uint32_t i) {
         LocationKey before = key_of(cyclic(i, -1)), after = key_of(cyclic(i, 1));
         if (after < before) std::swap(before, after);
@@ -198,14 +202,12 @@ void Coverage::build(MapData& map) {
                 while (h < order.size() && order[h].first == order[g].first) ++h;
                 bool differ = false;
                 for (std::size_t k = g + 1; k < h && !differ; ++k) differ = neighbours(order[k].second) != neighbours(order[g].second);
-                for (std::size_t k = g; k < h && differ; ++k) node[order[k].second] = 1;
+                for (std::size_t k = g; k < h && differ; ++k) set_bit(node_bits_, order[k].second);
                 g = h;
             }
         }
     }
     std::vector<std::uint32_t>().swap(ring_of);  // (step 3 walks rings from clean_start)
-    node_bits_.assign((clean.size() + 63) / 64, 0);
-    for (std::size_t i = 0; i < clean.size(); ++i) node_bits_[i / 64] |= std::uint64_t{node[i]} << (i % 64);
 
     // 3. Cut each ring at its nodes; one chain per distinct arc.
     ArcTable arcs;
@@ -248,7 +250,7 @@ void Coverage::build(MapData& map) {
         const std::span<const std::uint32_t> ring(clean.data() + clean_start[r], clean_start[r + 1] - clean_start[r]);
         const auto size = static_cast<std::uint32_t>(ring.size());
         const std::uint32_t start = cut_at_nodes(
-            ring, [&](std::uint32_t i) { return node[clean_start[r] + i] != 0; }, arc,
+            ring, [&](std::uint32_t i) { return bit_at(node_bits_, clean_start[r] + i); }, arc,
             [&](std::span<const std::uint32_t> positions, bool whole_ring) {
                 const auto key = [&](std::size_t k) { return LocationKey(points_[positions[k]]); };
                 if (!whole_ring) {
@@ -328,7 +330,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
             std::size_t h = g + 1;
             bool differ = false;
             for (; h < found.size() && found[h].key == found[g].key; ++h) differ = differ || found[h].around != found[g].around;
-            for (std::size_t k = g; k < h && differ; ++k) node_bits_[found[k].index / 64] |= std::uint64_t{1} << (found[k].index % 64);
+            for (std::size_t k = g; k < h && differ; ++k) set_bit(node_bits_, found[k].index);
             g = h;
         }
     }
@@ -363,7 +365,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
         const std::uint32_t base = clean_start_[r];
         const auto size = static_cast<std::uint32_t>(sequence.size());
         const std::uint32_t start = cut_at_nodes(
-            sequence, [&](std::uint32_t i) { return ((node_bits_[(base + i) / 64] >> ((base + i) % 64)) & 1) != 0; }, arc,
+            sequence, [&](std::uint32_t i) { return bit_at(node_bits_, base + i); }, arc,
             [&](std::span<const std::uint32_t> positions, bool whole_ring) {
                 const auto key = [&](std::size_t k) { return LocationKey(ring[positions[k]]); };
                 if (!whole_ring) {
@@ -394,8 +396,7 @@ CoverageSlice Coverage::slice(std::uint32_t first_ring, std::uint32_t end_ring) 
     slice.clean_count = clean_start_[end_ring] - first_bit;
     slice.node.assign((slice.clean_count + 63) / 64, 0);
     for (std::uint32_t i = 0; i < slice.clean_count; ++i) {
-        const std::uint32_t bit = first_bit + i;
-        if ((node_bits_[bit / 64] >> (bit % 64)) & 1) slice.node[i / 64] |= std::uint64_t{1} << (i % 64);
+        if (bit_at(node_bits_, first_bit + i)) set_bit(slice.node, i);
     }
     for (std::uint32_t r = first_ring; r <= end_ring; ++r) slice.uses_start.push_back(uses_start_[r] - uses_start_[first_ring]);
     slice.uses.assign(uses_.begin() + uses_start_[first_ring], uses_.begin() + uses_start_[end_ring]);
@@ -438,7 +439,7 @@ MapData arcs_of(const CoverageSlice& slice, const RingSource& rings) {
             bit += static_cast<std::uint32_t>(sequence.size());
             if (bit > slice.clean_count) throw changed();
             cut_at_nodes(
-                sequence, [&](std::uint32_t i) { return ((slice.node[(base + i) / 64] >> ((base + i) % 64)) & 1) != 0; }, arc,
+                sequence, [&](std::uint32_t i) { return bit_at(slice.node, base + i); }, arc,
                 [&](std::span<const std::uint32_t> positions, bool) { take(positions, false); });
         }
         if (u != slice.uses_start[r + 1]) throw changed();
