@@ -379,10 +379,10 @@ py::dict part_dict(const map::MapData& map, std::uint32_t c0, std::uint32_t c1) 
 // map made of them (checked by the part's reader, first_cut).
 py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, std::uint64_t r0, std::uint64_t r1) {
     py::dict dict;
-    dict["shp"] = in_file.shp;
+    dict["shp"] = in_file.path;
     dict["layer"] = in_file.layer;
-    dict["shp_size"] = std::uint64_t{in_file.shp_size};
-    dict["shp_time"] = in_file.shp_time;
+    dict["shp_size"] = std::uint64_t{in_file.size};
+    dict["shp_time"] = in_file.time;
     dict["records"] = py::make_tuple(r0, r1);
     const std::uint32_t c0 = in_file.record_chain[r0], c1 = in_file.record_chain[r1];
     std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
@@ -1020,14 +1020,14 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
         level = tile_level_for(grid, budget, [&](auto&& add) {
             if (in_file) {
                 // (The file once more, a record at a time.)
-                std::optional<io::ShapeReader> reader = io::ShapeReader::open(in_file->shp);
+                std::optional<io::ShapeReader> reader = io::ShapeReader::open(in_file->path);
                 std::uint64_t read = 0;
                 while (const io::ShapeRecord* record = reader ? reader->next() : nullptr) {
                     for (const Point p : record->xy) add(p);
                     read += record->xy.size();
                 }
                 if (!reader || reader->failed() || read != in_file->vertices) {
-                    throw io::InputError("'" + in_file->shp + "' changed while toposimp ran; nothing written");
+                    throw io::InputError("'" + in_file->path + "' changed while toposimp ran; nothing written");
                 }
             } else {
                 for (const Point p : map.vertices) add(p);

@@ -449,7 +449,10 @@ MapData arcs_of(const CoverageSlice& slice, const RingSource& rings) {
     return part;
 }
 
-std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order) const {
+// Ring `ring`'s vertices from its arcs, in arc order, without the closing one: all[i] is at its
+// clean occurrence (first + i) % size, `first` the one its first arc starts at (degenerate: every
+// point given, closing one included).
+std::vector<std::uint32_t> Coverage::arc_order_vertices(std::uint32_t ring) const {
     std::vector<std::uint32_t> all;
     for (std::uint32_t u = uses_start_[ring]; u < uses_start_[ring + 1]; ++u) {
         const Chain chain = map_->chains[uses_[u].chain];
@@ -459,12 +462,42 @@ std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std
             all.push_back(uses_[u].reversed ? chain.last - k : chain.first + k);
         }
     }
+    if (!degenerate_[ring]) all.pop_back();  // the closing vertex
+    return all;
+}
+
+std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order) const {
+    std::vector<std::uint32_t> all = arc_order_vertices(ring);
     if (degenerate_[ring]) return all;  // frozen: exactly as given
-    all.pop_back();  // the closing vertex; closed again below
     if (!arc_order) std::rotate(all.begin(), all.begin() + (kept[all[start_offset_[ring]]] ? start_offset_[ring] : 0), all.end());
     std::vector<std::uint32_t> ring_out;
     for (const std::uint32_t v : all) {
         if (kept[v]) ring_out.push_back(v);
+    }
+    ring_out.push_back(ring_out.front());
+    return ring_out;
+}
+
+std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
+                                       bool arc_order) const {
+    std::vector<std::uint32_t> all = arc_order_vertices(ring);
+    if (degenerate_[ring]) {
+        if (given.size() != all.size()) throw std::invalid_argument("a ring that is not the one the coverage was made of");
+        return {given.begin(), given.end()};
+    }
+    std::vector<std::uint32_t> sequence;
+    if (!clean_ring(given, sequence) || sequence.size() != all.size()) {
+        throw std::invalid_argument("a ring that is not the one the coverage was made of");
+    }
+    const auto size = static_cast<std::uint32_t>(all.size());
+    // all[i] is at clean occurrence (i - start_offset) mod size: ring_vertices' rotation, the
+    // points taken from the occurrences instead of the arcs.
+    const std::uint32_t offset = start_offset_[ring];
+    const std::uint32_t from = !arc_order && kept[all[offset]] ? offset : 0;
+    std::vector<Point> ring_out;
+    for (std::uint32_t step = 0; step < size; ++step) {
+        const std::uint32_t i = (from + step) % size;
+        if (kept[all[i]]) ring_out.push_back(given[sequence[(i + size - offset) % size]]);
     }
     ring_out.push_back(ring_out.front());
     return ring_out;

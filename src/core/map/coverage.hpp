@@ -51,6 +51,17 @@ public:
     // first arc starts (true: as a TopoJSON reader rebuilds it from the arcs).
     std::vector<std::uint32_t> ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order = false) const;
 
+    // The same ring's points, taken from `given` (the ring as add_ring was given it, or as plan's
+    // source streams it) instead of the map's vertices: where the coverage's equal locations are
+    // equal bit for bit (no -0.0 beside a 0.0), ring_vertices' vertices' points. For rings read
+    // again when they are written, the map's vertices being elsewhere. Throws
+    // std::invalid_argument if `given` is not that ring.
+    std::vector<Point> ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
+                                 bool arc_order = false) const;
+
+    // The chains the rings before `ring` made (of those the coverage made; ring_count() for all).
+    std::uint32_t chains_before(std::uint32_t ring) const { return new_chains_before_[ring]; }
+
     // A ring's arcs in order: the chain (its index in the map) and whether it runs backwards.
     struct ArcUse {
         std::uint32_t chain;
@@ -72,6 +83,7 @@ public:
     std::uint64_t degenerate_ring_count() const { return degenerate_rings_; }
 
 private:
+    std::vector<std::uint32_t> arc_order_vertices(std::uint32_t ring) const;
 
     std::vector<Point> points_;               // every ring point as given, until build()
     std::vector<std::uint32_t> ring_start_;   // into points_

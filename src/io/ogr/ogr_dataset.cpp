@@ -39,6 +39,14 @@ bool is_local_shp(const std::string& path) {
     return (extension == ".shp" || extension == ".SHP") && path.rfind("/vsi", 0) != 0;
 }
 
+// Memory for a coverage plan's node passes (map::Coverage::plan): an eighth of the machine's,
+// from 64 MiB to 2 GiB.
+std::size_t coverage_pass_bytes() {
+    const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
+    const std::uint64_t memory = pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
+    return static_cast<std::size_t>(std::clamp<std::uint64_t>(memory / 8, std::uint64_t{64} << 20, std::uint64_t{2} << 30));
+}
+
 }  // namespace
 
 std::uint64_t DatasetSummary::sum(std::uint64_t LayerSummary::*field) const {
@@ -55,6 +63,10 @@ struct VertexView {
     const Point* data;
     std::size_t first = 0;
     Point operator[](std::size_t v) const { return data[v - first]; }
+    // A feature's rings read again (a polygon layer left in its file): ring id r is
+    // (*rings)[r - first_ring]; the map's vertices are not there.
+    const std::vector<std::vector<Point>>* rings = nullptr;
+    std::uint32_t first_ring = 0;
 };
 
 struct OgrDataset::Data {
@@ -399,10 +411,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
         if (!in_order) return false;
         VerticesInFile planned;
-        planned.shp = std::filesystem::absolute(path).string();  // (read by other processes, elsewhere)
+        planned.path = std::filesystem::absolute(path).string();  // (read by other processes, elsewhere)
         planned.layer = layer->name;
-        planned.shp_size = reader->shp_size();
-        planned.shp_time = modified_ns(path);
+        planned.size = reader->shp_size();
+        planned.time = modified_ns(path);
         planned.record_vertex.reserve(features.size() + 1);
         planned.record_chain.reserve(features.size() + 1);
         Box& extent = planned.extent;
@@ -439,6 +451,109 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         find_prj();
         return true;
     };
+    // A 2D polygon layer left in its file (VerticesInFile with a coverage): the features are read
+    // with their attributes, their rings counted and checked but not kept; then the rings are
+    // planned as a coverage from the file, read again in passes. True, or false with nothing
+    // added if a feature is not a 2D polygon, or has a -0.0 coordinate (a ring written from its
+    // own points must have the bits of the arc it shares; -0.0 and 0.0 are one location).
+    auto plan_polygons_in_file = [&] {
+        VerticesInFile planned;
+        planned.path = std::filesystem::absolute(path).string();
+        planned.layer = layer->name;
+        std::error_code error;
+        planned.size = std::filesystem::file_size(path, error);
+        planned.time = modified_ns(path);
+        if (error) return false;
+        Box& extent = planned.extent;
+        std::uint32_t rings = 0;
+        // The rings of a polygon, counted: false if one is not what a plan from the file takes.
+        auto count_rings = [&](const OGRPolygon& polygon, const std::string& label) {
+            std::uint32_t count = 0;
+            for (const OGRLinearRing* ring : polygon) count += ring->IsEmpty() ? 0 : 1;
+            layer->items.push_back(count);
+            for (const OGRLinearRing* ring : polygon) {
+                if (ring->IsEmpty()) continue;
+                for (int i = 0; i < ring->getNumPoints(); ++i) {
+                    const Point p{ring->getX(i), ring->getY(i)};
+                    if (!std::isfinite(p.x) || !std::isfinite(p.y)) read_points(*ring, label);  // (its refusal)
+                    if ((p.x == 0 && std::signbit(p.x)) || (p.y == 0 && std::signbit(p.y))) return false;
+                    extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
+                }
+                layer->items.push_back(rings++);
+            }
+            return true;
+        };
+        auto add_polygons = [&](OGRFeatureUniquePtr feature) {
+            Layer::Shape shape;
+            shape.first = static_cast<std::uint32_t>(layer->items.size());
+            bool empty = true;
+            if (const OGRGeometry* geometry = feature->GetGeometryRef()) {
+                empty = geometry->IsEmpty();
+                shape.type = geometry->getGeometryType();
+                shape.kind = Layer::Kind::polygons;
+                const std::string label = feature_label(path, source, feature->GetFID());
+                if (shape.type == wkbPolygon) {
+                    if (!count_rings(*geometry->toPolygon(), label)) return false;
+                } else if (shape.type == wkbMultiPolygon) {
+                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) {
+                        if (!count_rings(*polygon, label)) return false;
+                    }
+                } else {
+                    return false;
+                }
+                shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
+            }
+            count_feature(summary_of_layer, shape, empty);
+            feature->SetGeometryDirectly(nullptr);
+            layer->shapes.push_back(shape);
+            layer->features.push_back(std::move(feature));
+            return true;
+        };
+        bool planned_here = map.vertices.empty() && map.chains.empty() && !carries_zm;
+        while (planned_here) {
+            OGRFeatureUniquePtr feature{source.GetNextFeature()};
+            if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
+            if (!feature) break;
+            planned.record_ring.push_back(rings);
+            planned_here = add_polygons(std::move(feature));
+        }
+        if (!planned_here || rings == 0) {
+            layer->items.clear();
+            layer->shapes.clear();
+            layer->features.clear();
+            summary_of_layer.empty_geometries = summary_of_layer.polygon_features = 0;
+            source.ResetReading();
+            return false;
+        }
+        planned.record_ring.push_back(rings);
+        const std::uint64_t features = layer->features.size();
+        try {
+            coverage.plan([&](const std::function<void(std::span<const Point>)>& visit) { for_each_polygon_ring(path, layer->name, 0, features, visit); },
+                          map, coverage_pass_bytes());
+        } catch (const std::invalid_argument&) {
+            throw InputError("'" + path + "', layer '" + layer->name + "' changed while toposimp read it");
+        } catch (const std::length_error&) {
+            throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
+        }
+        if (std::filesystem::file_size(path, error) != planned.size || error || modified_ns(path) != planned.time) {
+            throw InputError("'" + path + "', layer '" + layer->name + "' changed while toposimp read it");
+        }
+        const auto chains = static_cast<std::uint32_t>(map.chains.size());
+        planned.vertices = map.chains.empty() ? 0 : std::uint64_t{map.chains.back().last} + 1;
+        planned.record_chain.reserve(features + 1);
+        planned.record_vertex.reserve(features + 1);
+        for (const std::uint32_t ring : planned.record_ring) {
+            const std::uint32_t chain = coverage.chains_before(ring);
+            planned.record_chain.push_back(chain);
+            planned.record_vertex.push_back(chain < chains ? map.chains[chain].first : planned.vertices);
+        }
+        planned.coverage = &coverage;
+        in_file = std::move(planned);
+        return true;
+    };
+    const bool polygons_in_file = leave_in_file && prj_as_file && !decode && is_local_shp(path) && !summary_of_layer.has_z &&
+                                  !summary_of_layer.has_m &&
+                                  (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon);
     source.ResetReading();
     bool decoded = false;
     if (decode) {
@@ -503,6 +618,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     }
     if (!decoded) {
         if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
+        if (polygons_in_file) decoded = plan_polygons_in_file();
+    }
+    if (!decoded) {
         for (;;) {
             OGRFeatureUniquePtr feature{source.GetNextFeature()};
             if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
@@ -626,7 +744,7 @@ void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
     }
     // Polygon rings become arcs: one chain per border, shared by the polygons on both sides.
     const std::size_t before = map.vertices.size();
-    coverage.build(map);
+    if (!in_file || in_file->coverage == nullptr) coverage.build(map);  // (else planned from the file)
     if (carries_zm) {
         z.resize(map.vertices.size(), 0.0);
         m.resize(map.vertices.size(), 0.0);
@@ -707,6 +825,10 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
         if (with_z) geometry.set3D(TRUE);
         if (with_m) geometry.setMeasured(TRUE);
     };
+    auto fill_points = [&](OGRSimpleCurve& curve, const std::vector<Point>& points) {
+        curve.setNumPoints(static_cast<int>(points.size()), FALSE);
+        for (std::size_t i = 0; i < points.size(); ++i) curve.setPoint(static_cast<int>(i), points[i].x, points[i].y);
+    };
     auto fill = [&](OGRSimpleCurve& curve, const std::vector<std::uint32_t>& vertices) {
         curve.setNumPoints(static_cast<int>(vertices.size()), FALSE);
         for (std::size_t i = 0; i < vertices.size(); ++i) {
@@ -744,7 +866,18 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
                 for (std::uint32_t r = 0; r < rings; ++r) {
                     auto ring = std::make_unique<OGRLinearRing>();
                     zm_flags(*ring);
-                    fill(*ring, coverage.ring_vertices(items[k++], kept, arc_order));
+                    const std::uint32_t id = items[k++];
+                    if (at.rings == nullptr) {
+                        fill(*ring, coverage.ring_vertices(id, kept, arc_order));
+                    } else {
+                        // (Its own points: VertexCursor checked the feature has its rings.)
+                        try {
+                            fill_points(*ring, coverage.ring_from(id, (*at.rings).at(id - at.first_ring), kept, arc_order));
+                        } catch (const std::invalid_argument&) {
+                            throw InputError("'" + in_file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
+                                             " is not what it was when it was read; nothing written");
+                        }
+                    }
                     polygon->addRingDirectly(ring.release());
                 }
                 return polygon;
@@ -818,6 +951,28 @@ bool record_holds_lines(const OgrDataset::Data::Layer& layer, std::size_t index,
 
 }  // namespace
 
+namespace {
+
+// A feature's polygon rings as OgrDataset::read gives them to its coverage: each polygon's
+// non-empty rings, its exterior first (none for other geometries).
+void visit_rings(const OGRFeature& feature, const std::string& path, OGRLayer& layer, const std::function<void(std::span<const Point>)>& visit) {
+    const OGRGeometry* geometry = feature.GetGeometryRef();
+    if (geometry == nullptr) return;
+    const std::string label = feature_label(path, layer, feature.GetFID());
+    auto rings_of = [&](const OGRPolygon& polygon) {
+        for (const OGRLinearRing* ring : polygon) {
+            if (!ring->IsEmpty()) visit(read_points(*ring, label));
+        }
+    };
+    if (wkbFlatten(geometry->getGeometryType()) == wkbPolygon) {
+        rings_of(*geometry->toPolygon());
+    } else if (wkbFlatten(geometry->getGeometryType()) == wkbMultiPolygon) {
+        for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) rings_of(*polygon);
+    }
+}
+
+}  // namespace
+
 void for_each_polygon_ring(const std::string& path, const std::string& layer_name, std::uint64_t first, std::uint64_t end,
                            const std::function<void(std::span<const Point>)>& visit) {
     DatasetPtr dataset = open_vector(path);
@@ -827,25 +982,13 @@ void for_each_polygon_ring(const std::string& path, const std::string& layer_nam
     if (first > 0 && layer.SetNextByIndex(static_cast<GIntBig>(first)) != OGRERR_NONE) {
         throw InputError("'" + path + "', layer '" + layer.GetName() + "': no feature " + std::to_string(first) + last_gdal_error());
     }
-    auto rings_of = [&](const OGRPolygon& polygon, const std::string& label) {
-        for (const OGRLinearRing* ring : polygon) {
-            if (!ring->IsEmpty()) visit(read_points(*ring, label));
-        }
-    };
     for (std::uint64_t k = first; k < end; ++k) {
         OGRFeatureUniquePtr feature{layer.GetNextFeature()};
         if (CPLGetLastErrorType() >= CE_Failure || !feature) {
             throw InputError("error reading '" + path + "', layer '" + layer.GetName() + "', feature " + std::to_string(k) +
                              (feature ? last_gdal_error() : ": the layer ends before it"));
         }
-        const OGRGeometry* geometry = feature->GetGeometryRef();
-        if (geometry == nullptr) continue;
-        const std::string label = feature_label(path, layer, feature->GetFID());
-        if (wkbFlatten(geometry->getGeometryType()) == wkbPolygon) {
-            rings_of(*geometry->toPolygon(), label);
-        } else if (wkbFlatten(geometry->getGeometryType()) == wkbMultiPolygon) {
-            for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) rings_of(*polygon, label);
-        }
+        visit_rings(*feature, path, layer, visit);
     }
 }
 
@@ -860,10 +1003,11 @@ public:
     // Feature i's (features asked in order read the file once).
     VertexView at(std::size_t i) {
         if (in_file_ == nullptr) return {map_.vertices.data()};
+        if (in_file_->coverage != nullptr) return rings_at(i);
         if (i + 1 >= in_file_->record_vertex.size()) throw std::logic_error("a feature beyond the records read");
         if (!reader_ || i != next_) {
-            reader_ = ShapeReader::open(in_file_->shp, i);
-            if (!reader_ || reader_->shp_size() != in_file_->shp_size || modified_ns(in_file_->shp) != in_file_->shp_time) changed(i);
+            reader_ = ShapeReader::open(in_file_->path, i);
+            if (!reader_ || reader_->shp_size() != in_file_->size || modified_ns(in_file_->path) != in_file_->time) changed(i);
         }
         const ShapeRecord* record = reader_->next();
         next_ = i + 1;
@@ -875,13 +1019,43 @@ public:
 
 private:
     [[noreturn]] void changed(std::size_t record) const {
-        throw InputError("'" + in_file_->shp + "' changed while toposimp ran: record " + std::to_string(record) +
-                         " is not what it was when it was read; nothing written");
+        throw InputError("'" + in_file_->path + "' changed while toposimp ran: " + (in_file_->coverage ? "feature " : "record ") +
+                         std::to_string(record) + " is not what it was when it was read; nothing written");
+    }
+
+    // A polygon layer's feature i: its rings, read again through OGR.
+    VertexView rings_at(std::size_t i) {
+        if (i + 1 >= in_file_->record_ring.size()) throw std::logic_error("a feature beyond the features read");
+        if (!dataset_ || i != next_) {
+            std::error_code error;
+            dataset_ = open_vector(in_file_->path);
+            layer_ = &pick_layer(*dataset_, in_file_->path, in_file_->layer);
+            if (std::filesystem::file_size(in_file_->path, error) != in_file_->size || error ||
+                modified_ns(in_file_->path) != in_file_->time) {
+                changed(i);
+            }
+            layer_->ResetReading();
+            if (i > 0 && layer_->SetNextByIndex(static_cast<GIntBig>(i)) != OGRERR_NONE) changed(i);
+        }
+        QuietGdal quiet;
+        const OGRFeatureUniquePtr feature{layer_->GetNextFeature()};
+        next_ = i + 1;
+        if (!feature || CPLGetLastErrorType() >= CE_Failure) changed(i);
+        rings_.clear();
+        visit_rings(*feature, in_file_->path, *layer_, [&](std::span<const Point> ring) { rings_.emplace_back(ring.begin(), ring.end()); });
+        if (rings_.size() != in_file_->record_ring[i + 1] - in_file_->record_ring[i]) changed(i);
+        VertexView view{nullptr};
+        view.rings = &rings_;
+        view.first_ring = in_file_->record_ring[i];
+        return view;
     }
 
     const map::MapData& map_;
     const VerticesInFile* in_file_;
     std::optional<ShapeReader> reader_;
+    DatasetPtr dataset_;  // (polygons)
+    OGRLayer* layer_ = nullptr;
+    std::vector<std::vector<Point>> rings_;
     std::size_t next_ = 0;
 };
 

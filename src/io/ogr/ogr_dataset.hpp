@@ -17,6 +17,10 @@
 #include <string>
 #include <vector>
 
+namespace toposimp::map {
+class Coverage;
+}
+
 namespace toposimp::io {
 
 // What one input layer looked like; for logging and the JSON summary.
@@ -70,18 +74,28 @@ struct MemoryLayers {
     std::vector<MemoryLayer> layers;
 };
 
-// Where the vertices of a map read with OgrDataset::read's `vertices_in_file` are: the records of
-// a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes them, in record order from
-// vertex 0 (each record's parts its chains, in order). The map holds the chains, and no vertex.
+// Where the vertices of a map read with OgrDataset::read's `vertices_in_file` are: the features
+// of one layer of a file, read again by whoever needs them. Either
+// - lines (`coverage` null): the records of a plain PolyLine Shapefile, decoded as
+//   read_shapefile_shapes decodes them, in record order from vertex 0 (each record's parts its
+//   chains, in order); or
+// - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as a coverage
+//   (map::Coverage::plan): the map's chains are its arcs, in the order the features first use
+//   them; a run of features makes its own with map::arcs_of(coverage->slice(...)).
+// The map holds the chains, and no vertex.
 struct VerticesInFile {
-    std::string shp;                          // the .shp (an absolute path)
-    std::string layer;                        // its layer's name (for messages)
-    std::uintmax_t shp_size = 0;              // its size and modification time (ns) when it was read
-    std::int64_t shp_time = 0;
+    std::string path;                         // the file (an absolute path)
+    std::string layer;                        // its layer's name
+    std::uintmax_t size = 0;                  // its size and modification time (ns) when it was read
+    std::int64_t time = 0;
     std::uint64_t vertices = 0;               // the map's
     Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};  // theirs
-    std::vector<std::uint64_t> record_vertex;  // per record and one more: its first vertex
-    std::vector<std::uint32_t> record_chain;   // per record and one more: its first chain
+    std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
+    std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
+    // Polygons: the layer's rings planned (their ids, from 0, in the order the layer reads them),
+    // and per feature and one more its first ring.
+    const map::Coverage* coverage = nullptr;
+    std::vector<std::uint32_t> record_ring;
 };
 
 // The rings of features [first, end) of a polygon layer (in the order OGR reads the layer), as
@@ -97,9 +111,9 @@ public:
     // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file` (with prj_as_file): if the input is one plain PolyLine
-    // Shapefile layer that the Shapefile reader decodes, its vertices are left in the file
-    // (vertices_in_file() says where; the map gets its chains only), for an engine that reads them
-    // by parts; else read as without it.
+    // Shapefile layer that the Shapefile reader decodes, or one 2D polygon Shapefile layer without
+    // a -0.0 coordinate, its vertices are left in the file (vertices_in_file() says where; the
+    // map gets its chains only), for an engine that reads them by parts; else read as without it.
     static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
                            bool prj_as_file = false, bool vertices_in_file = false);
 

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <limits>
 
 namespace toposimp::io {
@@ -372,6 +373,41 @@ void expect_same_points(const std::vector<std::vector<Point>>& a, const std::vec
     }
 }
 
+// Writes the map read whole and the map left in the file (the same `kept`) and expects the same
+// bytes; then, the input touched, expects the map left in the file refused with `changed` (the
+// start of its message after the path), nothing written.
+void expect_written_alike(const std::string& input, const OgrDataset& read_whole, const map::MapData& whole,
+                          const OgrDataset& read_planned, const map::MapData& planned, const std::vector<std::uint8_t>& kept,
+                          const std::string& changed) {
+    const std::filesystem::path out = std::filesystem::path(input).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    auto write = [&](const OgrDataset& dataset, const map::MapData& map, const std::string& name) {
+        WriteOptions options;
+        options.path = (out / name).string();
+        return dataset.write(options, map, kept);
+    };
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    write(read_whole, whole, "whole.shp");
+    write(read_planned, planned, "planned.shp");
+    for (const char* extension : {".shp", ".shx", ".dbf", ".prj"}) {
+        auto bytes = [&](const char* stem) {
+            std::ifstream in(out / (std::string(stem) + extension), std::ios::binary);
+            return std::string(std::istreambuf_iterator<char>(in), {});
+        };
+        EXPECT_FALSE(bytes("whole").empty()) << extension;
+        EXPECT_EQ(bytes("whole"), bytes("planned")) << extension;
+    }
+    std::filesystem::last_write_time(input, std::filesystem::last_write_time(input) + std::chrono::seconds(2));
+    try {
+        write(read_planned, planned, "changed.shp");
+        FAIL() << "no error";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("'" + input + "' changed while toposimp ran: " + changed), std::string::npos)
+            << error.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(out / "changed.shp"));
+}
+
 // A map read with its vertices left in the file: the same chains as the map read whole, no
 // vertex held; where they are (each record's first vertex and chain, their extent); any range of
 // records read back as the same chains; written, the same bytes as the map read whole. Only a
@@ -392,7 +428,7 @@ TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
         EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
         EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
     }
-    EXPECT_EQ(in_file->shp, file.path());
+    EXPECT_EQ(in_file->path, file.path());
     EXPECT_EQ(in_file->layer, "infile");
     EXPECT_EQ(in_file->vertices, whole.vertices.size());
     EXPECT_EQ(in_file->record_vertex, (std::vector<std::uint64_t>{0, 2, 2, 7, 10, 10, 10}));
@@ -424,33 +460,7 @@ TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
     // file has changed.
     std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
     kept[1] = kept[4] = kept[8] = 0;
-    const std::filesystem::path out = std::filesystem::path(file.path()).parent_path() / "out";
-    std::filesystem::create_directories(out);
-    auto write = [&](const OgrDataset& dataset, const map::MapData& map, const std::string& name) {
-        WriteOptions options;
-        options.path = (out / name).string();
-        return dataset.write(options, map, kept);
-    };
-    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
-    write(read_whole, whole, "whole.shp");
-    write(read_planned, planned, "planned.shp");
-    for (const char* extension : {".shp", ".shx", ".dbf", ".prj"}) {
-        auto bytes = [&](const char* stem) {
-            std::ifstream in(out / (std::string(stem) + extension), std::ios::binary);
-            return std::string(std::istreambuf_iterator<char>(in), {});
-        };
-        EXPECT_FALSE(bytes("whole").empty()) << extension;
-        EXPECT_EQ(bytes("whole"), bytes("planned")) << extension;
-    }
-    std::filesystem::last_write_time(file.path(), std::filesystem::last_write_time(file.path()) + std::chrono::seconds(2));
-    try {
-        write(read_planned, planned, "changed.shp");
-        FAIL() << "no error";
-    } catch (const InputError& error) {
-        EXPECT_NE(std::string(error.what()).find("'" + file.path() + "' changed while toposimp ran: record 0"), std::string::npos)
-            << error.what();
-    }
-    EXPECT_FALSE(std::filesystem::exists(out / "changed.shp"));
+    expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "record 0");
 
     const ShapeFile deleted("infiledeleted", wkbLineString, lines, {2});
     map::MapData with_deleted;
@@ -491,31 +501,35 @@ TEST(ShapefileShapes, NonFiniteVertexLeftInTheFileNamesTheFeature) {
     }
 }
 
+// A coverage of squares whose shared borders carry a middle point, some with a hole, then
+// multipolygons, NULL geometries and a flat ring (a frozen chain).
+std::vector<std::string> grid_polygons() {
+    std::vector<std::string> polygons;
+    for (int i = 0; i < 4; ++i) {
+        for (int j = 0; j < 4; ++j) {
+            const double x = i, y = j;
+            std::ostringstream wkt;
+            wkt << "POLYGON ((" << x << " " << y << "," << x + 0.5 << " " << y << "," << x + 1 << " " << y << "," << x + 1 << " "
+                << y + 0.5 << "," << x + 1 << " " << y + 1 << "," << x + 0.5 << " " << y + 1 << "," << x << " " << y + 1 << ","
+                << x << " " << y + 0.5 << "," << x << " " << y << ")";
+            if ((i + j) % 3 == 0) {
+                wkt << ",(" << x + 0.25 << " " << y + 0.25 << "," << x + 0.25 << " " << y + 0.75 << "," << x + 0.75 << " "
+                    << y + 0.75 << "," << x + 0.25 << " " << y + 0.25 << ")";
+            }
+            wkt << ")";
+            polygons.push_back(wkt.str());
+        }
+        polygons.emplace_back(i % 2 ? "" : "MULTIPOLYGON (((10 10,11 10,11 11,10 10)),((12 12,13 12,12 13,12 12)))");
+    }
+    polygons.emplace_back("POLYGON ((20 20,21 20,22 20,20 20))");  // flat: a frozen chain
+    return polygons;
+}
+
 // A polygon layer's rings streamed from the file, as read() gives them to its coverage: a
 // coverage planned from them has read()'s chains, and any run of features makes its own chains
 // with read()'s vertices (issue 32: polygon coverages read by parts).
 TEST(ShapefileShapes, PolygonRingsStreamedPlanTheCoverageRead) {
-    std::vector<std::string> polygons;
-    for (int i = 0; i < 4; ++i) {
-        for (int j = 0; j < 4; ++j) {
-            // Squares whose shared borders carry a middle point, some with a hole.
-            const double x = i, y = j;
-            std::string ring = "(" + std::to_string(x) + " " + std::to_string(y) + "," + std::to_string(x + 0.5) + " " +
-                               std::to_string(y) + "," + std::to_string(x + 1) + " " + std::to_string(y) + "," +
-                               std::to_string(x + 1) + " " + std::to_string(y + 0.5) + "," + std::to_string(x + 1) + " " +
-                               std::to_string(y + 1) + "," + std::to_string(x + 0.5) + " " + std::to_string(y + 1) + "," +
-                               std::to_string(x) + " " + std::to_string(y + 1) + "," + std::to_string(x) + " " +
-                               std::to_string(y + 0.5) + "," + std::to_string(x) + " " + std::to_string(y) + ")";
-            if ((i + j) % 3 == 0) {
-                ring += ",(" + std::to_string(x + 0.25) + " " + std::to_string(y + 0.25) + "," + std::to_string(x + 0.25) + " " +
-                        std::to_string(y + 0.75) + "," + std::to_string(x + 0.75) + " " + std::to_string(y + 0.75) + "," +
-                        std::to_string(x + 0.25) + " " + std::to_string(y + 0.25) + ")";
-            }
-            polygons.push_back("POLYGON (" + ring + ")");
-        }
-        polygons.push_back(i % 2 ? "" : "MULTIPOLYGON (((10 10,11 10,11 11,10 10)),((12 12,13 12,12 13,12 12)))");
-    }
-    polygons.push_back("POLYGON ((20 20,21 20,22 20,20 20))");  // flat: a frozen chain
+    const std::vector<std::string> polygons = grid_polygons();
     const ShapeFile file("coverage", wkbPolygon, polygons);
     map::MapData whole;
     OgrDataset::read(file.path(), {}, whole);
@@ -557,6 +571,67 @@ TEST(ShapefileShapes, PolygonRingsStreamedPlanTheCoverageRead) {
         }
     }
     EXPECT_THROW(for_each_polygon_ring(file.path(), "coverage", 0, polygons.size() + 1, [](std::span<const Point>) {}), InputError);
+}
+
+// A polygon layer read with its vertices left in the file: the chains of the map read whole, no
+// vertex held, each feature's first ring, chain and vertex; written, the same bytes as the map
+// read whole, and refused, nothing written, once the file has changed. A -0.0 coordinate, or a
+// 3D ring, makes it read whole.
+TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
+    const std::vector<std::string> polygons = grid_polygons();
+    const ShapeFile file("polygonsinfile", wkbPolygon, polygons);
+    map::MapData whole, planned;
+    const OgrDataset read_whole = OgrDataset::read(file.path(), {}, whole, true);
+    const OgrDataset read_planned = OgrDataset::read(file.path(), {}, planned, true, true);
+    const VerticesInFile* in_file = read_planned.vertices_in_file();
+    ASSERT_NE(in_file, nullptr);
+    ASSERT_NE(in_file->coverage, nullptr);
+    EXPECT_TRUE(planned.vertices.empty());
+    ASSERT_EQ(planned.chains.size(), whole.chains.size());
+    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
+        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
+        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
+        EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
+    }
+    EXPECT_EQ(in_file->vertices, whole.vertices.size());
+    EXPECT_EQ(in_file->path, file.path());
+    EXPECT_EQ(in_file->extent.min_x, 0);
+    EXPECT_EQ(in_file->extent.max_x, 22);
+    EXPECT_EQ(in_file->extent.max_y, 20);
+    ASSERT_EQ(in_file->record_ring.size(), polygons.size() + 1);
+    EXPECT_EQ(in_file->record_ring.back(), in_file->coverage->ring_count());
+    for (std::size_t f = 0; f < polygons.size(); ++f) {
+        std::uint32_t count = 0;
+        for_each_polygon_ring(file.path(), "polygonsinfile", f, f + 1, [&](std::span<const Point>) { ++count; });
+        EXPECT_EQ(in_file->record_ring[f + 1] - in_file->record_ring[f], count) << "feature " << f;
+        const map::CoverageSlice slice = in_file->coverage->slice(in_file->record_ring[f], in_file->record_ring[f + 1]);
+        EXPECT_EQ(in_file->record_chain[f], slice.first_chain) << "feature " << f;
+        EXPECT_EQ(in_file->record_chain[f + 1], slice.end_chain) << "feature " << f;
+        EXPECT_EQ(in_file->record_vertex[f], slice.first_chain < whole.chains.size() ? whole.chains[slice.first_chain].first : whole.vertices.size());
+    }
+    EXPECT_EQ(read_planned.summary().sum(&LayerSummary::polygon_features), read_whole.summary().sum(&LayerSummary::polygon_features));
+    EXPECT_EQ(read_planned.summary().sum(&LayerSummary::empty_geometries), 2u);
+    EXPECT_EQ(read_planned.summary().arcs, read_whole.summary().arcs);
+    EXPECT_EQ(read_planned.summary().shared_arcs, read_whole.summary().shared_arcs);
+
+    // Every third vertex dropped but the arcs' ends (the engine keeps at least those of a ring).
+    std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+    for (const map::Chain chain : whole.chains) {
+        for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 3 != 0;
+    }
+    expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "feature 0");
+
+    const std::pair<const char*, OGRwkbGeometryType> odds[] = {{"POLYGON ((-0 0,1 0,1 1,-0 0))", wkbPolygon},
+                                                                {"POLYGON Z ((0 0 1,1 0 1,1 1 1,0 0 1))", wkbPolygon25D}};
+    for (const auto& [odd, type] : odds) {
+        std::vector<std::string> with_odd = polygons;
+        with_odd.emplace_back(odd);
+        const ShapeFile odd_file("polygonsodd", type, with_odd);
+        map::MapData map;
+        const OgrDataset read_odd = OgrDataset::read(odd_file.path(), {}, map, true, true);
+        EXPECT_EQ(read_odd.vertices_in_file(), nullptr) << odd;
+        EXPECT_FALSE(map.vertices.empty()) << odd;
+    }
 }
 
 }  // namespace

@@ -312,7 +312,16 @@ TEST(Coverage, PlannedFromStreamedRingsIsTheBuild) {
                     ASSERT_EQ(a[k].reversed, b[k].reversed) << "ring " << r;
                 }
                 for (const bool arc_order : {false, true}) {
-                    ASSERT_EQ(whole.ring_vertices(r, kept, arc_order), streamed.ring_vertices(r, kept, arc_order)) << "ring " << r;
+                    const std::vector<std::uint32_t> vertices = whole.ring_vertices(r, kept, arc_order);
+                    ASSERT_EQ(vertices, streamed.ring_vertices(r, kept, arc_order)) << "ring " << r;
+                    // The ring from its own points: the arcs' points, location for location
+                    // (equal doubles: only a -0.0 for a 0.0 may differ in its bits).
+                    const std::vector<Point> own = streamed.ring_from(r, rings[r], kept, arc_order);
+                    ASSERT_EQ(own.size(), vertices.size()) << "ring " << r;
+                    for (std::size_t k = 0; k < own.size(); ++k) {
+                        ASSERT_TRUE(own[k].x == built.vertices[vertices[k]].x && own[k].y == built.vertices[vertices[k]].y)
+                            << "ring " << r << ", point " << k;
+                    }
                 }
             }
         }
@@ -372,6 +381,9 @@ TEST(Coverage, StreamedRingsThatChangeAreRefused) {
     std::vector<std::vector<Point>> one_longer = rings;
     one_longer[1].insert(one_longer[1].begin() + 1, Point{0.5, 0.25});
     EXPECT_THROW(arcs_of(slice, stream(one_longer)), std::invalid_argument);
+    const std::vector<std::uint8_t> all_kept(built.vertices.size(), 1);
+    EXPECT_NO_THROW(whole.ring_from(1, rings[1], all_kept));
+    EXPECT_THROW(whole.ring_from(1, one_longer[1], all_kept), std::invalid_argument);
     std::vector<std::vector<Point>> degenerate_longer = rings;  // a frozen ring, one point longer
     const auto frozen = std::find_if(built.frozen.begin(), built.frozen.end(), [](std::uint8_t f) { return f != 0; }) - built.frozen.begin();
     ASSERT_LT(static_cast<std::size_t>(frozen), built.chains.size());
