@@ -449,7 +449,7 @@ class _Tasks:
         cuts, by_parts, part = [], False, None
         for k in range(len(steps)):
             part = steps.part(k)
-            by_parts = by_parts or "shp" in part
+            by_parts = by_parts or "shp" in part or "polygons_file" in part
             cuts.append(submit(_first_cut, part, plan, options))
         del part
         facts = self._gather(client, [submit(_item, cut, 0) for cut in cuts],

@@ -7,6 +7,7 @@
 #include <malloc.h>
 #endif
 
+#include "core/map/coverage.hpp"
 #include "io/common/errors.hpp"
 #include "io/map/shapefile.hpp"
 
@@ -375,9 +376,42 @@ py::dict part_dict(const map::MapData& map, std::uint32_t c0, std::uint32_t c1) 
     return dict;
 }
 
+// Features [r0, r1) of a polygon layer a map's vertices are in as a part: where they are, the
+// coverage's slice for their rings (map::arcs_of), and the chains they make.
+py::dict polygon_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, std::uint64_t r0, std::uint64_t r1) {
+    py::dict dict;
+    dict["polygons_file"] = in_file.path;
+    dict["layer"] = in_file.layer;
+    dict["size"] = std::uint64_t{in_file.size};
+    dict["time"] = in_file.time;
+    dict["features"] = py::make_tuple(r0, r1);
+    const map::CoverageSlice slice = in_file.coverage->slice(in_file.record_ring[r0], in_file.record_ring[r1]);
+    dict["first_ring"] = slice.first_ring;
+    dict["degenerate"] = array_of(slice.degenerate);
+    dict["clean_count"] = slice.clean_count;
+    dict["node"] = array_of(slice.node);
+    dict["uses_start"] = array_of(slice.uses_start);
+    std::vector<std::uint32_t> uses;
+    for (const map::Coverage::ArcUse use : slice.uses) uses.push_back(use.chain);
+    dict["uses"] = array_of(uses);  // (their chains: what arcs_of reads)
+    dict["chain_size"] = array_of(slice.chain_size);
+    const std::uint32_t c0 = in_file.record_chain[r0], c1 = in_file.record_chain[r1];
+    if (slice.first_chain != c0 || slice.end_chain != c1) throw std::logic_error("a polygon layer's features are not their rings' chains");
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
+    for (std::uint32_t c = c0; c < c1; ++c) {
+        chains.emplace_back(map.chains[c].first - in_file.record_vertex[r0], map.chains[c].last - in_file.record_vertex[r0]);
+    }
+    dict["chains"] = pairs_array(chains);
+    dict["first_vertex"] = in_file.record_vertex[r0];
+    dict["vertices"] = in_file.record_vertex[r1] - in_file.record_vertex[r0];
+    dict["first_chain"] = c0;
+    return dict;
+}
+
 // Records [r0, r1) of the file a map's vertices are in as a part: where they are, and what the
 // map made of them (checked by the part's reader, first_cut).
 py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, std::uint64_t r0, std::uint64_t r1) {
+    if (in_file.coverage != nullptr) return polygon_part_dict(map, in_file, r0, r1);
     py::dict dict;
     dict["shp"] = in_file.path;
     dict["layer"] = in_file.layer;
@@ -423,8 +457,59 @@ map::MapData file_part_of(const py::dict& dict) {
     return part;
 }
 
+// A part read from its polygon layer (polygon_part_dict): the same chains, or InputError.
+map::MapData polygon_part_of(const py::dict& dict) {
+    const auto path = item(dict, "polygons_file").cast<std::string>();
+    const auto layer = item(dict, "layer").cast<std::string>();
+    const auto [r0, r1] = item(dict, "features").cast<std::pair<std::uint64_t, std::uint64_t>>();
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(path, error);
+    if (error || size != item(dict, "size").cast<std::uint64_t>() || io::modified_ns(path) != item(dict, "time").cast<std::int64_t>()) {
+        throw io::InputError("'" + path + "' cannot be read here as it was when the map was read" +
+                             (error ? " (" + error.message() + ")" : std::string(" (another size or modification time)")) +
+                             ": every worker reads the input at the same absolute path, unchanged (or use --send-input: the "
+                             "parts are then sent from the command)");
+    }
+    map::CoverageSlice slice;
+    slice.first_ring = item(dict, "first_ring").cast<std::uint32_t>();
+    slice.degenerate = flat<std::uint8_t>(dict, "degenerate");
+    slice.clean_count = item(dict, "clean_count").cast<std::uint32_t>();
+    slice.node = flat<std::uint64_t>(dict, "node");
+    slice.uses_start = flat<std::uint32_t>(dict, "uses_start");
+    for (const std::uint32_t chain : flat<std::uint32_t>(dict, "uses")) slice.uses.push_back({chain, false});
+    slice.chain_size = flat<std::uint32_t>(dict, "chain_size");
+    slice.first_chain = item(dict, "first_chain").cast<std::uint32_t>();
+    slice.end_chain = slice.first_chain + static_cast<std::uint32_t>(slice.chain_size.size());
+    if (slice.uses_start.size() != slice.degenerate.size() + 1 || slice.node.size() != (std::uint64_t{slice.clean_count} + 63) / 64 ||
+        slice.uses_start.front() != 0 || slice.uses_start.back() != slice.uses.size() ||
+        !std::is_sorted(slice.uses_start.begin(), slice.uses_start.end()) || slice.end_chain < slice.first_chain) {
+        malformed("a polygon part's slice does not hold together");
+    }
+    map::MapData part;
+    {
+        py::gil_scoped_release release;
+        try {
+            part = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
+                io::for_each_polygon_ring(path, layer, r0, r1, visit);
+            });
+        } catch (const std::invalid_argument&) {
+            part.chains.clear();
+            part.vertices.clear();
+        }
+    }
+    const std::vector<map::Chain> chains = consecutive_chains(dict, "chains", item(dict, "vertices").cast<std::uint64_t>());
+    if (part.vertices.size() != item(dict, "vertices").cast<std::uint64_t>() || part.chains.size() != chains.size() ||
+        !std::equal(chains.begin(), chains.end(), part.chains.begin(),
+                    [](const map::Chain& a, const map::Chain& b) { return a.first == b.first && a.last == b.last; })) {
+        throw io::InputError("'" + path + "', layer '" + layer + "': features " + std::to_string(r0) + " to " + std::to_string(r1) +
+                             " are not the polygons they were when the map was read");
+    }
+    return part;
+}
+
 map::MapData part_of(const py::dict& dict) {
     if (dict.contains("shp")) return file_part_of(dict);
+    if (dict.contains("polygons_file")) return polygon_part_of(dict);
     map::MapData part;
     part.vertices = points_of(dict, "vertices");
     if (part.vertices.size() >= std::numeric_limits<std::uint32_t>::max()) malformed("too many vertices");
@@ -589,7 +674,7 @@ FirstSteps::FirstSteps(const map::MapData& map, const io::VerticesInFile* in_fil
     if (in_file) {
         // Parts of whole records, each with a chain (the records after the last chain go to the
         // part before).
-        if (!map.frozen.empty() || in_file->record_chain.empty() || in_file->record_chain.back() != chains) {
+        if ((!map.frozen.empty() && in_file->coverage == nullptr) || in_file->record_chain.empty() || in_file->record_chain.back() != chains) {
             throw std::logic_error("a map's vertices in a file, not its chains");
         }
         const std::vector<std::uint64_t>& first = in_file->record_vertex;
@@ -1018,7 +1103,24 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     }
     if (tile_level < 0) {
         level = tile_level_for(grid, budget, [&](auto&& add) {
-            if (in_file) {
+            if (in_file && in_file->coverage) {
+                // (The layer once more, its arcs made by runs of features.)
+                const std::vector<std::uint64_t>& first = in_file->record_vertex;
+                for (std::uint64_t r = 0; r + 1 < first.size();) {
+                    const std::uint64_t r0 = r;
+                    while (r + 1 < first.size() && (r == r0 || first[r] - first[r0] < budget)) ++r;
+                    const map::CoverageSlice slice = in_file->coverage->slice(in_file->record_ring[r0], in_file->record_ring[r]);
+                    map::MapData arcs;
+                    try {
+                        arcs = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
+                            io::for_each_polygon_ring(in_file->path, in_file->layer, r0, r, visit);
+                        });
+                    } catch (const std::invalid_argument&) {
+                        throw io::InputError("'" + in_file->path + "' changed while toposimp ran; nothing written");
+                    }
+                    for (const Point p : arcs.vertices) add(p);
+                }
+            } else if (in_file) {
                 // (The file once more, a record at a time.)
                 std::optional<io::ShapeReader> reader = io::ShapeReader::open(in_file->path);
                 std::uint64_t read = 0;

@@ -68,16 +68,25 @@ def generated_shapefiles(tmp_path_factory):
     return folder / "rivers.shp", folder / "places.shp"
 
 
-@pytest.mark.parametrize("first_round, input_kind", [("here", "gpkg"), ("workers", "gpkg"), ("workers", "shapefile")])
-def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles, binary, tmp_path, capsys, monkeypatch, first_round,
-                                       input_kind):
-    """A worker killed while it runs tasks: the same bytes. With a Shapefile and the first round
-    on the workers, the tasks read their parts of the input themselves (those of the killed worker
-    again, from their lineage)."""
+@pytest.fixture(scope="module")
+def generated_cells(tmp_path_factory):
+    """A coverage of 1 600 cells with wavy borders as a plain Polygon Shapefile, and places."""
+    folder = tmp_path_factory.mktemp("cells")
+    generate_map.generate_shapefiles(folder, cells=40, edge_vertices=40, rivers=0, river_steps=0, roads=0, points=8000, seed=5)
+    return folder / "cells.shp", folder / "places.shp"
+
+
+@pytest.mark.parametrize("first_round, input_kind",
+                         [("here", "gpkg"), ("workers", "gpkg"), ("workers", "shapefile"), ("workers", "polygon shapefile")])
+def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles, generated_cells, binary, tmp_path, capsys, monkeypatch,
+                                       first_round, input_kind):
+    """A worker killed while it runs tasks: the same bytes. With a Shapefile (lines, or a polygon
+    coverage) and the first round on the workers, the tasks read their parts of the input
+    themselves (those of the killed worker again, from their lineage)."""
     from toposimp import dask as toposimp_dask
 
     client, workers = cluster
-    lines, places = generated if input_kind == "gpkg" else generated_shapefiles
+    lines, places = {"gpkg": generated, "shapefile": generated_shapefiles, "polygon shapefile": generated_cells}[input_kind]
     suffix = ".gpkg" if input_kind == "gpkg" else ".shp"
     arguments = [str(lines), "-p", str(places), "--keep", "10%", *SAME_DATE]
     reference = tmp_path / ("reference" + suffix)
@@ -117,7 +126,7 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     output = tmp_path / ("dask" + suffix)
     capsys.readouterr()
     status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0,
-                               quiet=input_kind != "shapefile", on_progress=kill_one, first_round=first_round)
+                               quiet=input_kind == "gpkg", on_progress=kill_one, first_round=first_round)
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
     assert killed["tasks"] > 0
@@ -127,9 +136,9 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     workers.append(client.start_worker())  # (three again for the tests after)
     client.wait_for_workers(3, timeout=60)
     err = capsys.readouterr().err
-    assert ("vertices (left in the file)" in err) == (input_kind == "shapefile")
+    assert ("vertices (left in the file)" in err) == (input_kind != "gpkg")
     assert ("the input is read here, whole" in err) == (first_round == "workers" and input_kind == "gpkg")
-    if input_kind == "shapefile":
+    if input_kind != "gpkg":
         assert "reading the input by parts and cutting it into tiles:" in err
     for extension in (".gpkg",) if input_kind == "gpkg" else (".shp", ".shx", ".dbf"):
         assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension

@@ -285,6 +285,82 @@ def test_first_round_reads_a_shapefile_by_parts(binary, tmp_path, line_shapefile
     assert all(part["shp"] == str(lines.resolve()) and isinstance(part["vertices"], int) for part in first.parts)
 
 
+@pytest.fixture(scope="module")
+def polygon_shapefile(tmp_path_factory):
+    """A plain Polygon Shapefile: a coverage of cells with wavy shared borders, a null record, a
+    square with a hole and a flat ring apart; and places among them."""
+    import sys
+
+    sys.path.insert(0, str(DATA.parent / "scripts" / "bench"))
+    import generate_map
+
+    out = tmp_path_factory.mktemp("polygons")
+    rng = numpy.random.default_rng(11)
+    horizontal, vertical = generate_map.borders(rng, 5, 30)
+    writer = generate_map.ShapefileWriter(out / "cells", generate_map.ShapefileWriter.POLYGON)
+    for k, (_, _, ring) in enumerate(generate_map.cell_rings(horizontal, vertical, 5)):
+        writer.add([ring[::-1]])  # (outer rings clockwise)
+        if k == 7:
+            writer.add_null()
+    square = numpy.array([[6, 0], [6, 1], [7, 1], [7, 0], [6, 0]], dtype=float)
+    hole = numpy.array([[6.25, 0.25], [6.75, 0.25], [6.75, 0.75], [6.25, 0.75], [6.25, 0.25]])
+    writer.add([square, hole])
+    writer.add([numpy.array([[8, 0], [9, 0], [10, 0], [8, 0]], dtype=float)])
+    writer.close()
+    places = generate_map.ShapefileWriter(out / "places", generate_map.ShapefileWriter.POINT)
+    for x, y in rng.uniform(0, 5, size=(200, 2)):
+        places.add((float(x), float(y)))
+    places.close()
+    return out / "cells.shp", out / "places.shp"
+
+
+@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"], ["--remove-points", "500"]])
+@pytest.mark.parametrize("level", [0, 1])
+def test_first_round_reads_a_polygon_shapefile_by_parts(binary, tmp_path, polygon_shapefile, target, level):
+    """A polygon coverage Shapefile to a Shapefile, its first round's tasks making their own arcs
+    from their own features: no vertex in the parts handed out (nor in this process), the output
+    toposimp map's byte for byte."""
+    import subprocess
+
+    cells, places = polygon_shapefile
+    arguments = [str(cells), "-p", str(places), *target, *SAME_DATE]
+    reference = tmp_path / "reference.shp"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True, text=True)
+    first = FirstRoundHere()
+    output = tmp_path / "parts.shp"
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, level, 300, 0, None, False, False,
+                                             input_on_workers=True)
+    assert status == 0, err
+    assert "vertices (left in the file)" in err
+    _same_shapefiles(output, reference)
+    assert len(first.parts) > 2
+    features = [part["features"] for part in first.parts]
+    assert features[0][0] == 0 and features[-1][1] == 28
+    assert all(one[1] == other[0] for one, other in zip(features, features[1:]))
+    assert all(part["polygons_file"] == str(cells.resolve()) and isinstance(part["vertices"], int) for part in first.parts)
+    assert sum(len(part["chain_size"]) for part in first.parts) > 25  # (the cells' shared borders are arcs)
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda part: _touched(pathlib.Path(part["polygons_file"])) or part, "cannot be read here as it was when the map was read"),
+    (lambda part: dict(part, features=(part["features"][0], part["features"][1] + 1)), "are not the polygons they were"),
+    (lambda part: dict(part, node=part["node"] * 0), "are not the polygons they were"),
+])
+def test_a_polygon_part_read_from_a_changed_input_stops_the_run(tmp_path, polygon_shapefile, damage, message):
+    """A task that reads its features from an input that is not the one read here, or with
+    another plan, stops the run with the reason; nothing is written."""
+    import shutil
+
+    for extension in (".shp", ".shx", ".dbf"):
+        shutil.copy(polygon_shapefile[0].with_suffix(extension), tmp_path / ("cells" + extension))
+    first = FirstRoundHere(damage=lambda at, value: damage(value) if at == "part" else value)
+    output = tmp_path / "out.shp"
+    with pytest.raises(ValueError, match=message):
+        _toposimp.run_command(["map", str(tmp_path / "cells.shp"), "--keep", "10%", "-o", str(output)], first, 1, 300, 0, None, False,
+                              False, input_on_workers=True)
+    assert not output.exists()
+
+
 def test_a_shapefile_left_on_workers_but_sent_without_the_flag(binary, tmp_path, line_shapefile):
     """Without input_on_workers the parts carry their vertices, as for any input."""
     lines, places = line_shapefile
