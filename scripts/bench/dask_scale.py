@@ -10,10 +10,12 @@ for byte, and toposimp check on it.
                                 [--dask-options "--first-round here"] [--lines-only] [--no-check]
 
 The map (generate_map.py --shapefiles) is written to --data (default build/bench-data/scale-N)
-once. --lines-only: the rivers alone (a plain PolyLine Shapefile, written to a Shapefile: the
+once. --lines-only: the rivers alone (a plain PolyLine Shapefile, written to a Shapefile: an
 input that --first-round workers reads by parts) with the control points, no cells written (a
-bigger --cells then spreads them, and fewer cross). Prints a Markdown
-table.
+bigger --cells then spreads them, and fewer cross). --cells-only: the cells' coverage alone (a
+plain Polygon Shapefile, written to a Shapefile: read by parts too) with the control points.
+Vertices are counted as the input stores them (a border shared by two cells twice) and as the map
+holds them (once). Prints a Markdown table.
 """
 import argparse
 import os
@@ -42,6 +44,7 @@ def main():
     parser.add_argument("--data")
     parser.add_argument("--dask-options", default="", help="more python3 -m toposimp.dask options")
     parser.add_argument("--lines-only", action="store_true", help="the rivers alone, Shapefile to Shapefile")
+    parser.add_argument("--cells-only", action="store_true", help="the cells' coverage alone, Shapefile to Shapefile")
     parser.add_argument("--no-check", action="store_true", help="no toposimp check of the output (e.g. the same bytes checked before)")
     a = parser.parse_args()
     build = pathlib.Path(a.build).resolve()
@@ -49,14 +52,20 @@ def main():
     if not (data / "places.shp").exists():
         generate_map.generate_shapefiles(data, a.cells, a.edge_vertices, a.rivers, a.river_steps, 6, a.points, 1,
                                          with_cells=not a.lines_only)
-    # (cells' rings: 4 borders of K + 1 vertices and the closing one; rivers; roads of 3)
-    vertices = a.cells ** 2 * (4 * (a.edge_vertices + 1) + 1) + a.rivers * a.river_steps + 6 * 3
+    # As stored: the cells' rings (4 borders of K + 1 vertices and the closing one), the rivers,
+    # the roads of 3. As the map holds them: each border once (K vertices and the corners).
+    cell_points = a.cells ** 2 * (4 * (a.edge_vertices + 1) + 1)
+    cell_vertices = 2 * a.cells * (a.cells + 1) * a.edge_vertices + (a.cells + 1) ** 2
+    line_vertices = a.rivers * a.river_steps + 6 * 3
+    vertices, distinct = cell_points + line_vertices, cell_vertices + line_vertices
     layers = ["-l", "cells", "-l", "rivers", "-l", "roads"]
     single_out, dask_out = data / "single.gpkg", data / "dask.gpkg"
     source = str(data)
-    if a.lines_only:
-        vertices = a.rivers * a.river_steps
-        layers, source = [], str(data / "rivers.shp")
+    if a.lines_only or a.cells_only:
+        vertices = distinct = a.rivers * a.river_steps
+        if a.cells_only:
+            vertices, distinct = cell_points, cell_vertices
+        layers, source = [], str(data / ("cells.shp" if a.cells_only else "rivers.shp"))
         single_out, dask_out = data / "single.shp", data / "dask.shp"
     map_arguments = [source, *layers, "-p", str(data / "places.shp"), *shlex.split(a.target), "-q", "--overwrite", *SAME_DATE]
     single = dask_bench.timed([str(build / "toposimp"), "map", *map_arguments, "-o", str(single_out)])
@@ -73,16 +82,18 @@ def main():
     peaks = dask_bench.worker_peaks(client)
     client.close()
     cluster.close()
-    extensions = (".shp", ".shx", ".dbf") if a.lines_only else (".gpkg",)
+    extensions = (".shp", ".shx", ".dbf") if a.lines_only or a.cells_only else (".gpkg",)
     identical = all(dask_out.with_suffix(e).read_bytes() == single_out.with_suffix(e).read_bytes() for e in extensions)
     check = None
     if not a.no_check:
         check = dask_bench.timed([str(build / "toposimp"), "check", source, str(dask_out), *layers, "-p", str(data / "places.shp")])
-    names = ("rivers", "places") if a.lines_only else ("cells", "rivers", "roads", "places")
+    names = ("rivers", "places") if a.lines_only else ("cells", "places") if a.cells_only else ("cells", "rivers", "roads", "places")
     sizes = {name: (data / f"{name}.shp").stat().st_size for name in names}
-    print(f"map: {data}: {vertices / 1e6:.1f} M vertices and {a.points / 1e6:.1f} M control points "
+    print(f"map: {data}: {vertices / 1e6:.1f} M vertices as stored ({distinct / 1e6:.1f} M in the map, each shared border once) "
+          f"and {a.points / 1e6:.1f} M control points "
           f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each"
-          + (f", toposimp.dask {a.dask_options}" if a.dask_options else "") + (", the rivers alone" if a.lines_only else ""))
+          + (f", toposimp.dask {a.dask_options}" if a.dask_options else "") + (", the rivers alone" if a.lines_only else "")
+          + (", the cells alone" if a.cells_only else ""))
     print()
     print("| run | seconds | command peak MiB | worker peaks MiB | output identical |")
     print("|---|---|---|---|---|")

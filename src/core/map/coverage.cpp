@@ -281,7 +281,11 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     std::vector<std::uint32_t> sequence, arc;
     auto changed = [] { return std::invalid_argument("the rings are not those of the first pass"); };
 
-    // 1. The rings' sizes, which are degenerate, and each one's clean occurrences.
+    // 1. The rings' sizes, which are degenerate, and each one's clean occurrences, counted by
+    // their location's bucket (a hash) for the passes below.
+    constexpr std::uint32_t kBuckets = 4096;
+    auto bucket_of = [](const LocationKey& key) { return static_cast<std::uint32_t>(hash_words({key.x, key.y}) % kBuckets); };
+    std::vector<std::uint64_t> in_bucket(kBuckets, 0);
     clean_start_.assign(1, 0);
     std::uint32_t point_count = 0;
     rings([&](std::span<const Point> ring) {
@@ -292,11 +296,15 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
         const bool clean = clean_ring(ring, sequence);
         degenerate_.push_back(clean ? 0 : 1);
         clean_start_.push_back(clean_start_.back() + (clean ? static_cast<std::uint32_t>(sequence.size()) : 0));
+        if (clean) {
+            for (const std::uint32_t p : sequence) ++in_bucket[bucket_of(LocationKey(ring[p]))];
+        }
     });
     const std::uint32_t ring_total = ring_count();
 
-    // 2. Nodes, as build() finds them, in passes over the rings: pass k groups the occurrences
-    // whose location hashes to k (of `passes`), at most about pass_bytes of them at a time.
+    // 2. Nodes, as build() finds them, in passes over the rings: each pass groups the occurrences
+    // of a run of buckets, as many as fit in pass_bytes (or one bucket), every occurrence of a
+    // location in the same pass.
     struct Occurrence {
         LocationKey key;
         Neighbours around;
@@ -304,9 +312,17 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     };
     const std::uint64_t total = clean_start_.back();
     const std::uint64_t per_pass = std::max<std::uint64_t>(1, pass_bytes / sizeof(Occurrence));
-    const std::uint64_t passes = std::max<std::uint64_t>(1, (total + per_pass - 1) / per_pass);
+    std::vector<std::uint32_t> pass_of(kBuckets);
+    std::vector<std::uint64_t> pass_size(1, 0);
+    for (std::uint32_t b = 0; b < kBuckets; ++b) {
+        if (pass_size.back() > 0 && pass_size.back() + in_bucket[b] > per_pass) pass_size.push_back(0);
+        pass_of[b] = static_cast<std::uint32_t>(pass_size.size() - 1);
+        pass_size.back() += in_bucket[b];
+    }
+    const std::uint64_t passes = pass_size.size();
     node_bits_.assign((total + 63) / 64, 0);
     std::vector<Occurrence> found;
+    found.reserve(static_cast<std::size_t>(*std::max_element(pass_size.begin(), pass_size.end())));
     for (std::uint64_t pass = 0; pass < passes; ++pass) {
         found.clear();
         std::uint32_t r = 0;
@@ -316,13 +332,14 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
                 if (!clean_ring(ring, sequence) || sequence.size() != clean_start_[r + 1] - clean_start_[r]) throw changed();
                 for (std::size_t i = 0; i < sequence.size(); ++i) {
                     const LocationKey key(ring[sequence[i]]);
-                    if (passes > 1 && hash_words({key.x, key.y}) % passes != pass) continue;
+                    if (passes > 1 && pass_of[bucket_of(key)] != pass) continue;
+                    if (found.size() == pass_size[pass]) throw changed();
                     found.push_back({key, neighbours_at(ring, sequence, i), clean_start_[r] + static_cast<std::uint32_t>(i)});
                 }
             }
             ++r;
         });
-        if (r != ring_total) throw changed();
+        if (r != ring_total || found.size() != pass_size[pass]) throw changed();
         std::sort(found.begin(), found.end(), [](const Occurrence& a, const Occurrence& b) {
             return a.key < b.key || (a.key == b.key && a.index < b.index);
         });

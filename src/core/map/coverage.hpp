@@ -36,8 +36,10 @@ public:
     // The same chains as build() would append for the rings `rings` streams, planned without
     // holding the rings: each chain is appended as its vertex range only (the vertex ids as
     // build() gives them, from one past the map's last chain's last vertex; map.vertices is not
-    // touched), frozen chains marked. The nodes are found in passes over the rings, each holding
-    // about `pass_bytes` of occurrences (56 bytes a ring point); then one more pass cuts the arcs.
+    // touched), frozen chains marked. The first pass counts the ring points by a hash of their
+    // location; the nodes are then found in passes over the rings, each holding at most
+    // `pass_bytes` of them (56 bytes a ring point; at least a 4096th of the hash's range, all the
+    // occurrences of its locations); then one more pass cuts the arcs.
     // Throws std::invalid_argument if a pass streams other rings than the first did. Instead
     // of add_ring and build; ring_vertices and ring_arcs answer as after build(); source_of does not.
     void plan(const RingSource& rings, MapData& map, std::size_t pass_bytes);
