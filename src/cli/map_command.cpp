@@ -751,8 +751,8 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     log.debug("{} chains, {} vertices{}, {} control points", input.map.chains.size(), in_file ? in_file->vertices : input.map.vertices.size(),
               in_file ? " (left in the file)" : "", input.map.control_points.size());
     if (context.map_engine_in_file && !in_file && !options.giscup) {
-        log.debug("the input is read here, whole: only a plain PolyLine Shapefile written to a Shapefile, at one target without "
-                  "--decimals, --precision or --levels, is read by parts");
+        log.debug("the input is read here, whole: only a Shapefile of plain PolyLines, or of 2D polygons without a -0.0 "
+                  "coordinate, written to a Shapefile, at one target without --decimals, --precision or --levels, is read by parts");
     }
 
     // The engine builds chains, indexes and ranks inside simplify().
