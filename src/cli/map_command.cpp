@@ -742,8 +742,8 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
 
     progress.phase("reading " + options.input);
     // (An engine that reads the vertices itself gets them left in the file where it can.)
-    const bool vertices_in_file =
-        context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() && !publishing.decimal_grid && options.quantize == 0;
+    const bool vertices_in_file = context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() &&
+                                  !publishing.decimal_grid && options.quantize == 0 && io::is_ogr_written_output(options.output, options.format);
     MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory, vertices_in_file);
     time.read = seconds_since(start);
     check_spherical(options, input);
@@ -751,8 +751,9 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     log.debug("{} chains, {} vertices{}, {} control points", input.map.chains.size(), in_file ? in_file->vertices : input.map.vertices.size(),
               in_file ? " (left in the file)" : "", input.map.control_points.size());
     if (context.map_engine_in_file && !in_file && !options.giscup) {
-        log.debug("the input is read here, whole: only a Shapefile of plain PolyLines, or of 2D polygons without a -0.0 "
-                  "coordinate, written to a Shapefile, at one target without --decimals, --precision or --levels, is read by parts");
+        log.debug("the input is read here, whole: only Shapefiles (a file, or a folder of them) of plain PolyLines or of 2D "
+                  "polygons without a -0.0 coordinate, written through GDAL (not GeoJSON or TopoJSON), at one target without "
+                  "--decimals, --precision or --levels, are read by parts");
     }
 
     // The engine builds chains, indexes and ranks inside simplify().

@@ -376,16 +376,31 @@ py::dict part_dict(const map::MapData& map, std::uint32_t c0, std::uint32_t c1) 
     return dict;
 }
 
+// The chains records [r0, r1) of a layer left in its file make (its vertices from the first's
+// on), for the part's reader to check.
+void add_chains(py::dict& dict, const map::MapData& map, const io::LayerInFile& layer, std::uint64_t r0, std::uint64_t r1) {
+    const std::uint32_t c0 = layer.record_chain[r0], c1 = layer.record_chain[r1];
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
+    for (std::uint32_t c = c0; c < c1; ++c) {
+        chains.emplace_back(map.chains[c].first - layer.record_vertex[r0], map.chains[c].last - layer.record_vertex[r0]);
+    }
+    dict["chains"] = pairs_array(chains);
+    dict["first_vertex"] = layer.record_vertex[r0];
+    dict["vertices"] = layer.record_vertex[r1] - layer.record_vertex[r0];
+    dict["first_chain"] = c0;
+}
+
 // Features [r0, r1) of a polygon layer a map's vertices are in as a part: where they are, the
 // coverage's slice for their rings (map::arcs_of), and the chains they make.
-py::dict polygon_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, std::uint64_t r0, std::uint64_t r1) {
+py::dict polygon_part_dict(const map::MapData& map, const io::LayerInFile& layer, const map::Coverage& coverage, std::uint64_t r0,
+                           std::uint64_t r1) {
     py::dict dict;
-    dict["polygons_file"] = in_file.path;
-    dict["layer"] = in_file.layer;
-    dict["size"] = std::uint64_t{in_file.size};
-    dict["time"] = in_file.time;
+    dict["polygons_file"] = layer.path;
+    dict["layer"] = layer.layer;
+    dict["size"] = std::uint64_t{layer.size};
+    dict["time"] = layer.time;
     dict["features"] = py::make_tuple(r0, r1);
-    const map::CoverageSlice slice = in_file.coverage->slice(in_file.record_ring[r0], in_file.record_ring[r1]);
+    const map::CoverageSlice slice = coverage.slice(layer.record_ring[r0], layer.record_ring[r1]);
     dict["first_ring"] = slice.first_ring;
     dict["degenerate"] = array_of(slice.degenerate);
     dict["clean_count"] = slice.clean_count;
@@ -395,38 +410,25 @@ py::dict polygon_part_dict(const map::MapData& map, const io::VerticesInFile& in
     for (const map::Coverage::ArcUse use : slice.uses) uses.push_back(use.chain);
     dict["uses"] = array_of(uses);  // (their chains: what arcs_of reads)
     dict["chain_size"] = array_of(slice.chain_size);
-    const std::uint32_t c0 = in_file.record_chain[r0], c1 = in_file.record_chain[r1];
-    if (slice.first_chain != c0 || slice.end_chain != c1) throw std::logic_error("a polygon layer's features are not their rings' chains");
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
-    for (std::uint32_t c = c0; c < c1; ++c) {
-        chains.emplace_back(map.chains[c].first - in_file.record_vertex[r0], map.chains[c].last - in_file.record_vertex[r0]);
+    if (slice.first_chain != layer.record_chain[r0] || slice.end_chain != layer.record_chain[r1]) {
+        throw std::logic_error("a polygon layer's features are not their rings' chains");
     }
-    dict["chains"] = pairs_array(chains);
-    dict["first_vertex"] = in_file.record_vertex[r0];
-    dict["vertices"] = in_file.record_vertex[r1] - in_file.record_vertex[r0];
-    dict["first_chain"] = c0;
+    add_chains(dict, map, layer, r0, r1);
     return dict;
 }
 
-// Records [r0, r1) of the file a map's vertices are in as a part: where they are, and what the
-// map made of them (checked by the part's reader, first_cut).
-py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, std::uint64_t r0, std::uint64_t r1) {
-    if (in_file.coverage != nullptr) return polygon_part_dict(map, in_file, r0, r1);
+// Records [r0, r1) of a layer a map's vertices are in as a part: where they are, and what the map
+// made of them (checked by the part's reader, first_cut).
+py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_file, const io::LayerInFile& layer, std::uint64_t r0,
+                        std::uint64_t r1) {
+    if (layer.polygons) return polygon_part_dict(map, layer, *in_file.coverage, r0, r1);
     py::dict dict;
-    dict["shp"] = in_file.path;
-    dict["layer"] = in_file.layer;
-    dict["shp_size"] = std::uint64_t{in_file.size};
-    dict["shp_time"] = in_file.time;
+    dict["shp"] = layer.path;
+    dict["layer"] = layer.layer;
+    dict["shp_size"] = std::uint64_t{layer.size};
+    dict["shp_time"] = layer.time;
     dict["records"] = py::make_tuple(r0, r1);
-    const std::uint32_t c0 = in_file.record_chain[r0], c1 = in_file.record_chain[r1];
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> chains;
-    for (std::uint32_t c = c0; c < c1; ++c) {
-        chains.emplace_back(map.chains[c].first - in_file.record_vertex[r0], map.chains[c].last - in_file.record_vertex[r0]);
-    }
-    dict["chains"] = pairs_array(chains);
-    dict["first_vertex"] = in_file.record_vertex[r0];
-    dict["vertices"] = in_file.record_vertex[r1] - in_file.record_vertex[r0];
-    dict["first_chain"] = c0;
+    add_chains(dict, map, layer, r0, r1);
     return dict;
 }
 
@@ -672,25 +674,32 @@ FirstSteps::FirstSteps(const map::MapData& map, const io::VerticesInFile* in_fil
     const auto chains = static_cast<std::uint32_t>(map.chains.size());
     part_chain_.push_back(0);
     if (in_file) {
-        // Parts of whole records, each with a chain (the records after the last chain go to the
-        // part before).
-        if ((!map.frozen.empty() && in_file->coverage == nullptr) || in_file->record_chain.empty() || in_file->record_chain.back() != chains) {
-            throw std::logic_error("a map's vertices in a file, not its chains");
-        }
-        const std::vector<std::uint64_t>& first = in_file->record_vertex;
-        const std::uint64_t records = first.size() - 1;
-        part_record_.push_back(0);
-        for (std::uint64_t r = 0; r < records;) {
-            const std::uint64_t r0 = r;
-            while (r < records && (first[r] == first[r0] || first[r] - first[r0] < part_vertices)) ++r;
-            if (in_file->record_chain[r] == in_file->record_chain[r0] && part_record_.size() > 1) {
-                part_record_.back() = r;
-                part_chain_.back() = in_file->record_chain[r];
-            } else {
-                part_record_.push_back(r);
-                part_chain_.push_back(in_file->record_chain[r]);
+        // Parts of whole records of a layer, each with a chain (the records after a layer's last
+        // chain go to its part before; records without one before any are in none), in the
+        // order of their chains.
+        std::uint32_t next = 0;
+        for (const io::LayerInFile* layer : in_file->in_chain_order()) {
+            const std::vector<std::uint64_t>& first = layer->record_vertex;
+            const std::vector<std::uint32_t>& chain = layer->record_chain;
+            if (chain.empty() || chain.front() != next || (layer->polygons ? in_file->coverage == nullptr : false)) {
+                throw std::logic_error("a map's vertices in a file, not its chains");
             }
+            const std::uint64_t records = first.size() - 1;
+            bool here = false;  // a part of this layer made
+            for (std::uint64_t r = 0; r < records;) {
+                const std::uint64_t r0 = r;
+                while (r < records && (first[r] == first[r0] || first[r] - first[r0] < part_vertices)) ++r;
+                if (chain[r] == chain[r0]) {
+                    if (here) file_parts_.back().end = r;
+                } else {
+                    file_parts_.push_back({layer, r0, r});
+                    part_chain_.push_back(chain[r]);
+                    here = true;
+                }
+            }
+            next = chain.back();
         }
+        if (next != chains || (!map.frozen.empty() && in_file->coverage == nullptr)) throw std::logic_error("a map's vertices in a file, not its chains");
         return;
     }
     for (std::uint32_t c = 0; c < chains;) {
@@ -715,7 +724,7 @@ py::dict FirstSteps::part(std::ptrdiff_t k) const {
     if (k < 0) k += static_cast<std::ptrdiff_t>(size());
     if (k < 0 || static_cast<std::size_t>(k) >= size()) throw py::index_error("no such part of the map");
     const auto at = static_cast<std::size_t>(k);
-    if (in_file_) return file_part_dict(map_, *in_file_, part_record_[at], part_record_[at + 1]);
+    if (in_file_) return file_part_dict(map_, *in_file_, *file_parts_[at].layer, file_parts_[at].first, file_parts_[at].end);
     return part_dict(map_, part_chain_[at], part_chain_[at + 1]);
 }
 
@@ -723,7 +732,10 @@ std::uint64_t FirstSteps::part_vertices(std::ptrdiff_t k) const {
     lead();
     if (k < 0 || static_cast<std::size_t>(k) >= size()) throw py::index_error("no such part of the map");
     const auto at = static_cast<std::size_t>(k);
-    if (in_file_) return in_file_->record_vertex[part_record_[at + 1]] - in_file_->record_vertex[part_record_[at]];
+    if (in_file_) {
+        const FilePart& part = file_parts_[at];
+        return part.layer->record_vertex[part.end] - part.layer->record_vertex[part.first];
+    }
     return map_.chains[part_chain_[at + 1] - 1].last + 1 - map_.chains[part_chain_[at]].first;
 }
 
@@ -1103,34 +1115,42 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     }
     if (tile_level < 0) {
         level = tile_level_for(grid, budget, [&](auto&& add) {
-            if (in_file && in_file->coverage) {
-                // (The layer once more, its arcs made by runs of features.)
-                const std::vector<std::uint64_t>& first = in_file->record_vertex;
-                for (std::uint64_t r = 0; r + 1 < first.size();) {
-                    const std::uint64_t r0 = r;
-                    while (r + 1 < first.size() && (r == r0 || first[r] - first[r0] < budget)) ++r;
-                    const map::CoverageSlice slice = in_file->coverage->slice(in_file->record_ring[r0], in_file->record_ring[r]);
-                    map::MapData arcs;
-                    try {
-                        arcs = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
-                            io::for_each_polygon_ring(in_file->path, in_file->layer, r0, r, visit);
-                        });
-                    } catch (const std::invalid_argument&) {
-                        throw io::InputError("'" + in_file->path + "' changed while toposimp ran; nothing written");
-                    }
-                    for (const Point p : arcs.vertices) add(p);
-                }
-            } else if (in_file) {
-                // (The file once more, a record at a time.)
-                std::optional<io::ShapeReader> reader = io::ShapeReader::open(in_file->path);
+            if (in_file) {
+                // (The files once more: a lines layer a record at a time, a polygon layer's arcs
+                // made by runs of features.)
                 std::uint64_t read = 0;
-                while (const io::ShapeRecord* record = reader ? reader->next() : nullptr) {
-                    for (const Point p : record->xy) add(p);
-                    read += record->xy.size();
+                for (const io::LayerInFile* layer : in_file->in_chain_order()) {
+                    if (layer->polygons) {
+                        const std::vector<std::uint64_t>& first = layer->record_vertex;
+                        for (std::uint64_t r = 0; r + 1 < first.size();) {
+                            const std::uint64_t r0 = r;
+                            while (r + 1 < first.size() && (r == r0 || first[r] - first[r0] < budget)) ++r;
+                            const map::CoverageSlice slice = in_file->coverage->slice(layer->record_ring[r0], layer->record_ring[r]);
+                            map::MapData arcs;
+                            try {
+                                arcs = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
+                                    io::for_each_polygon_ring(layer->path, layer->layer, r0, r, visit);
+                                });
+                            } catch (const std::invalid_argument&) {
+                                throw io::InputError("'" + layer->path + "' changed while toposimp ran; nothing written");
+                            }
+                            for (const Point p : arcs.vertices) add(p);
+                            read += arcs.vertices.size();
+                        }
+                        continue;
+                    }
+                    std::optional<io::ShapeReader> reader = io::ShapeReader::open(layer->path);
+                    std::uint64_t in_layer = 0;
+                    while (const io::ShapeRecord* record = reader ? reader->next() : nullptr) {
+                        for (const Point p : record->xy) add(p);
+                        in_layer += record->xy.size();
+                    }
+                    if (!reader || reader->failed() || in_layer != layer->record_vertex.back() - layer->record_vertex.front()) {
+                        throw io::InputError("'" + layer->path + "' changed while toposimp ran; nothing written");
+                    }
+                    read += in_layer;
                 }
-                if (!reader || reader->failed() || read != in_file->vertices) {
-                    throw io::InputError("'" + in_file->path + "' changed while toposimp ran; nothing written");
-                }
+                if (read != in_file->vertices) throw std::logic_error("a map's vertices in its files, not all counted");
             } else {
                 for (const Point p : map.vertices) add(p);
             }

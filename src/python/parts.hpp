@@ -76,7 +76,11 @@ private:
     std::uint32_t vertices_;  // the map's
     std::unique_ptr<map::FirstRoundLead> lead_;
     std::vector<std::uint32_t> part_chain_;  // part k: chains [part_chain_[k], part_chain_[k + 1])
-    std::vector<std::uint64_t> part_record_;  // with in_file_: part k is records [part_record_[k], part_record_[k + 1])
+    struct FilePart {
+        const io::LayerInFile* layer;
+        std::uint64_t first, end;  // its records [first, end)
+    };
+    std::vector<FilePart> file_parts_;  // with in_file_: part k's
     std::uint32_t next_chain_ = 0;
     std::uint64_t here_below_ = 0;
     std::vector<map::LiveVertices> live_;

@@ -341,6 +341,59 @@ def test_first_round_reads_a_polygon_shapefile_by_parts(binary, tmp_path, polygo
     assert sum(len(part["chain_size"]) for part in first.parts) > 25  # (the cells' shared borders are arcs)
 
 
+@pytest.fixture(scope="module")
+def shapefile_folder(tmp_path_factory):
+    """A folder of Shapefiles: a coverage of cells, rivers crossing it and each other, roads, and
+    places (as the scale run's map, small)."""
+    import sys
+
+    sys.path.insert(0, str(DATA.parent / "scripts" / "bench"))
+    import generate_map
+
+    out = tmp_path_factory.mktemp("folder")
+    generate_map.generate_shapefiles(out, cells=6, edge_vertices=12, rivers=12, river_steps=120, roads=3, points=300, seed=9)
+    return out
+
+
+@pytest.mark.parametrize("output_suffix", [".gpkg", ".fgb"])
+def test_first_round_reads_a_folder_of_layers_by_parts(binary, tmp_path, shapefile_folder, output_suffix):
+    """Polygon and line layers of a folder of Shapefiles, written to one GeoPackage (or the
+    polygons to a FlatGeobuf): every layer left in its file, the parts of each layer read by
+    their tasks, the output toposimp map's byte for byte."""
+    import subprocess
+
+    arguments = [str(shapefile_folder), "-l", "rivers", "-l", "cells", "-l", "roads", "-p", str(shapefile_folder / "places.shp"),
+                 "--keep", "10%", *SAME_DATE]
+    if output_suffix == ".fgb":  # (one layer a file)
+        arguments = [str(shapefile_folder), "-l", "cells", "--keep", "10%", *SAME_DATE]
+    reference = tmp_path / ("reference" + output_suffix)
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True, text=True)
+    first = FirstRoundHere()
+    output = tmp_path / ("parts" + output_suffix)
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, 1, 300, 0, None, False, False,
+                                             input_on_workers=True)
+    assert status == 0, err
+    assert "vertices (left in the file)" in err
+    assert output.read_bytes() == reference.read_bytes()
+    kinds = [("polygons_file" in part, pathlib.Path(part.get("polygons_file", part.get("shp"))).name) for part in first.parts]
+    assert (True, "cells.shp") in kinds and ((False, "rivers.shp") in kinds) == (output_suffix == ".gpkg")
+    assert kinds == sorted(kinds, key=lambda kind: kind[0])  # (the lines' chains first, then the coverage's arcs)
+    assert first.parts[0]["first_chain"] == 0
+    assert all(one["first_chain"] + len(one["chains"]) == other["first_chain"] for one, other in zip(first.parts, first.parts[1:]))
+
+
+def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
+    """A point layer among the layers asked for: every layer is read whole, and the parts carry
+    their vertices."""
+    first = FirstRoundHere()
+    output = tmp_path / "whole.gpkg"
+    status, out, err = _toposimp.run_command(["map", str(shapefile_folder), "-l", "cells", "-l", "places", "--keep", "10%",
+                                              "-o", str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
+    assert status == 0, err
+    assert "(left in the file)" not in err and "the input is read here, whole" in err
+    assert all("shp" not in part and "polygons_file" not in part for part in first.parts)
+
+
 @pytest.mark.parametrize("damage, message", [
     (lambda part: _touched(pathlib.Path(part["polygons_file"])) or part, "cannot be read here as it was when the map was read"),
     (lambda part: dict(part, features=(part["features"][0], part["features"][1] + 1)), "are not the polygons they were"),

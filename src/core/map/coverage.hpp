@@ -61,8 +61,9 @@ public:
     std::vector<Point> ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
                                  bool arc_order = false) const;
 
-    // The chains the rings before `ring` made (of those the coverage made; ring_count() for all).
-    std::uint32_t chains_before(std::uint32_t ring) const { return new_chains_before_[ring]; }
+    // The map's first chain made by the rings from `ring` on (`ring` = ring_count(): one past the
+    // coverage's last chain).
+    std::uint32_t chains_before(std::uint32_t ring) const { return first_chain_ + new_chains_before_[ring]; }
 
     // A ring's arcs in order: the chain (its index in the map) and whether it runs backwards.
     struct ArcUse {

@@ -39,6 +39,34 @@ bool is_local_shp(const std::string& path) {
     return (extension == ".shp" || extension == ".SHP") && path.rfind("/vsi", 0) != 0;
 }
 
+// A layer that cannot be left in its file (OgrDataset::read's vertices_in_file): the dataset is
+// read again, whole.
+struct NotInFile {};
+
+// The .shp of layer `name` of the dataset at `path`: `path` itself if it is a local .shp, the
+// layer's file if `path` is a folder of them; "" otherwise.
+std::string layer_shp(const std::string& path, const std::string& name) {
+    if (is_local_shp(path)) return path;
+    std::error_code error;
+    if (path.rfind("/vsi", 0) == 0 || !std::filesystem::is_directory(path, error)) return {};
+    for (const char* extension : {".shp", ".SHP"}) {
+        const std::filesystem::path file = std::filesystem::path(path) / (name + extension);
+        if (std::filesystem::is_regular_file(file, error)) return file.string();
+    }
+    return {};
+}
+
+// A layer's file as VerticesInFile keeps it: where it is (absolute: other processes read it),
+// its size and modification time.
+LayerInFile layer_in_file(const std::string& shp, const std::string& layer, std::uintmax_t size) {
+    LayerInFile planned;
+    planned.path = std::filesystem::absolute(shp).string();
+    planned.layer = layer;
+    planned.size = size;
+    planned.time = modified_ns(shp);
+    return planned;
+}
+
 // Memory for a coverage plan's node passes (map::Coverage::plan, 56 bytes a ring point) over a
 // file of `file_bytes`: about as much as the file (a quarter of the ring points of a .shp, 16
 // bytes each, a pass: measured on a 1.9 M-vertex coverage, 4 passes cost no more time than one
@@ -70,7 +98,10 @@ struct VertexView {
     // (*rings)[r - first_ring]; the map's vertices are not there.
     const std::vector<std::vector<Point>>* rings = nullptr;
     std::uint32_t first_ring = 0;
+    const LayerInFile* file = nullptr;  // (with rings: where they are)
 };
+
+class VertexCursor;
 
 struct OgrDataset::Data {
     struct Layer {
@@ -111,7 +142,8 @@ struct OgrDataset::Data {
     bool points_moved = false;           // move_points() put the point features elsewhere
     std::vector<double> z, m;            // per map vertex, when carries_zm
     std::vector<double> ring_z, ring_m;  // per coverage ring point, until the coverage is built
-    std::optional<VerticesInFile> in_file;  // the map's vertices left in the .shp (then its only layer)
+    std::optional<VerticesInFile> in_file;  // the map's vertices left in the files (then every layer's)
+    std::uint32_t in_file_rings = 0;        // the polygon rings of the layers left in their files so far
 
     void start_carrying_zm(const map::MapData& map) {
         if (carries_zm) return;
@@ -127,6 +159,9 @@ struct OgrDataset::Data {
     void add_geometry(Layer& layer, Layer::Shape& shape, LayerSummary& summary_of_layer, const OGRGeometry& geometry,
                       const std::string& label, map::MapData& map);
     void finish(const std::string& path, map::MapData& map);
+    void plan_coverage_in_files(map::MapData& map);
+    // The vertices of `layer`'s features, feature after feature (VertexCursor).
+    VertexCursor vertex_cursor(const map::MapData& map, const Layer& layer) const;
 
     // `arc_order`: rings start where their first arc does (as a TopoJSON reader rebuilds them).
     std::unique_ptr<OGRGeometry> build_geometry(const Layer& layer, std::size_t index, const map::MapData& map,
@@ -352,8 +387,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // 0.03 s on GSHHG but raised the peak of a run with 10 M control points by 30 MB: the thread's
     // malloc arena stays.) With `leave_in_file`, the records are streamed and their vertices left
     // in the file (VerticesInFile).
-    const bool decode = prj_as_file && summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
-                        is_local_shp(path) &&
+    // With `leave_in_file` the layer's vertices stay in its .shp (`shp`: the input, or the layer's
+    // file in a folder), or NotInFile is thrown; the .prj goes to the output as it is only where
+    // it would without it.
+    const std::string shp = leave_in_file ? layer_shp(path, layer->name) : std::string();
+    const bool copy_prj = prj_as_file && is_local_shp(path);
+    const bool decode = summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
+                        (leave_in_file ? !shp.empty() : copy_prj) &&
                         source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) == OGRERR_NONE;
     layer->definition = source.GetLayerDefn();
     layer->definition->Reference();
@@ -406,27 +446,23 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             }
         }
     };
-    // The records streamed, the vertices left in the file (VerticesInFile): true, or false with
-    // nothing added if the file is not what ShapeReader decodes, in the features' order.
+    // The records streamed, the vertices left in the file (VerticesInFile), from the next vertex
+    // id on; NotInFile if the file is not what ShapeReader decodes, in the features' order.
     auto plan_in_file = [&](std::vector<OGRFeatureUniquePtr>& features) {
-        std::optional<ShapeReader> reader = ShapeReader::open(path);
-        bool in_order = reader && reader->records() == features.size() && map.vertices.empty() && map.chains.empty() && !carries_zm;
+        std::optional<ShapeReader> reader = ShapeReader::open(shp);
+        bool in_order = reader && reader->records() == features.size() && map.vertices.empty() && !carries_zm;
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
-        if (!in_order) return false;
-        VerticesInFile planned;
-        planned.path = std::filesystem::absolute(path).string();  // (read by other processes, elsewhere)
-        planned.layer = layer->name;
-        planned.size = reader->shp_size();
-        planned.time = modified_ns(path);
+        if (!in_order) throw NotInFile();
+        LayerInFile planned = layer_in_file(shp, layer->name, reader->shp_size());
         planned.record_vertex.reserve(features.size() + 1);
         planned.record_chain.reserve(features.size() + 1);
-        Box& extent = planned.extent;
-        std::uint64_t vertices = 0;
+        Box& extent = in_file->extent;
+        std::uint64_t& vertices = in_file->vertices;  // (the lines' so far)
         layer->shapes.reserve(features.size());
         layer->features.reserve(features.size());
         for (std::size_t i = 0; i < features.size(); ++i) {
             const ShapeRecord* record = reader->next();
-            if (record == nullptr || !record->z.empty()) break;
+            if (record == nullptr || !record->z.empty()) throw NotInFile();
             planned.record_vertex.push_back(vertices);
             planned.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
             if (vertices + record->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
@@ -438,38 +474,29 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
             }
         }
-        if (layer->features.size() != features.size()) {
-            // (A record this reader does not decode: OGR reads the layer again from its start.)
-            map.chains.clear();
-            layer->items.clear();
-            layer->shapes.clear();
-            layer->features.clear();
-            summary_of_layer.empty_geometries = summary_of_layer.line_features = 0;
-            return false;
-        }
         planned.record_vertex.push_back(vertices);
         planned.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
-        planned.vertices = vertices;
-        in_file = std::move(planned);
-        find_prj();
-        return true;
+        in_file->layers.push_back(std::move(planned));
+        if (copy_prj) {
+            find_prj();
+        } else if (const OGRSpatialReference* srs = source.GetSpatialRef()) {
+            layer->srs.reset(srs->Clone());
+        }
     };
     // A 2D polygon layer left in its file (VerticesInFile with a coverage): the features are read
-    // with their attributes, their rings counted and checked but not kept; then the rings are
-    // planned as a coverage from the file, read again in passes. True, or false with nothing
-    // added if a feature is not a 2D polygon, or has a -0.0 coordinate (a ring written from its
-    // own points must have the bits of the arc it shares; -0.0 and 0.0 are one location).
+    // with their attributes, their rings counted and checked but not kept (the rings of every
+    // such layer are planned as one coverage from the files at the end, in finish()). NotInFile if
+    // a feature is not a 2D polygon, or has a -0.0 coordinate (a ring written from its own points
+    // must have the bits of the arc it shares; -0.0 and 0.0 are one location).
     auto plan_polygons_in_file = [&] {
-        VerticesInFile planned;
-        planned.path = std::filesystem::absolute(path).string();
-        planned.layer = layer->name;
         std::error_code error;
-        planned.size = std::filesystem::file_size(path, error);
-        planned.time = modified_ns(path);
-        if (error) return false;
-        Box& extent = planned.extent;
-        std::uint32_t rings = 0;
-        // The rings of a polygon, counted: false if one is not what a plan from the file takes.
+        const std::uintmax_t size = std::filesystem::file_size(shp, error);
+        if (error || !map.vertices.empty() || carries_zm) throw NotInFile();
+        LayerInFile planned = layer_in_file(shp, layer->name, size);
+        planned.polygons = true;
+        Box& extent = in_file->extent;
+        std::uint32_t& rings = in_file_rings;
+        // The rings of a polygon, counted.
         auto count_rings = [&](const OGRPolygon& polygon, const std::string& label) {
             std::uint32_t count = 0;
             for (const OGRLinearRing* ring : polygon) count += ring->IsEmpty() ? 0 : 1;
@@ -479,14 +506,18 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 for (int i = 0; i < ring->getNumPoints(); ++i) {
                     const Point p{ring->getX(i), ring->getY(i)};
                     if (!std::isfinite(p.x) || !std::isfinite(p.y)) read_points(*ring, label);  // (its refusal)
-                    if ((p.x == 0 && std::signbit(p.x)) || (p.y == 0 && std::signbit(p.y))) return false;
+                    if ((p.x == 0 && std::signbit(p.x)) || (p.y == 0 && std::signbit(p.y))) throw NotInFile();
                     extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
                 }
+                if (rings == std::numeric_limits<std::uint32_t>::max()) throw NotInFile();
                 layer->items.push_back(rings++);
             }
-            return true;
         };
-        auto add_polygons = [&](OGRFeatureUniquePtr feature) {
+        for (;;) {
+            OGRFeatureUniquePtr feature{source.GetNextFeature()};
+            if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
+            if (!feature) break;
+            planned.record_ring.push_back(rings);
             Layer::Shape shape;
             shape.first = static_cast<std::uint32_t>(layer->items.size());
             bool empty = true;
@@ -496,13 +527,11 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 shape.kind = Layer::Kind::polygons;
                 const std::string label = feature_label(path, source, feature->GetFID());
                 if (shape.type == wkbPolygon) {
-                    if (!count_rings(*geometry->toPolygon(), label)) return false;
+                    count_rings(*geometry->toPolygon(), label);
                 } else if (shape.type == wkbMultiPolygon) {
-                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) {
-                        if (!count_rings(*polygon, label)) return false;
-                    }
+                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) count_rings(*polygon, label);
                 } else {
-                    return false;
+                    throw NotInFile();
                 }
                 shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
             }
@@ -510,53 +539,16 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             feature->SetGeometryDirectly(nullptr);
             layer->shapes.push_back(shape);
             layer->features.push_back(std::move(feature));
-            return true;
-        };
-        bool planned_here = map.vertices.empty() && map.chains.empty() && !carries_zm;
-        while (planned_here) {
-            OGRFeatureUniquePtr feature{source.GetNextFeature()};
-            if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
-            if (!feature) break;
-            planned.record_ring.push_back(rings);
-            planned_here = add_polygons(std::move(feature));
-        }
-        if (!planned_here || rings == 0) {
-            layer->items.clear();
-            layer->shapes.clear();
-            layer->features.clear();
-            summary_of_layer.empty_geometries = summary_of_layer.polygon_features = 0;
-            source.ResetReading();
-            return false;
         }
         planned.record_ring.push_back(rings);
-        const std::uint64_t features = layer->features.size();
-        try {
-            coverage.plan([&](const std::function<void(std::span<const Point>)>& visit) { for_each_polygon_ring(path, layer->name, 0, features, visit); },
-                          map, coverage_pass_bytes(planned.size));
-        } catch (const std::invalid_argument&) {
-            throw InputError("'" + path + "', layer '" + layer->name + "' changed while toposimp read it");
-        } catch (const std::length_error&) {
-            throw InputError("'" + path + "', layer '" + layer->name + "': more than 2 billion vertices in one map");
-        }
-        if (std::filesystem::file_size(path, error) != planned.size || error || modified_ns(path) != planned.time) {
-            throw InputError("'" + path + "', layer '" + layer->name + "' changed while toposimp read it");
-        }
-        const auto chains = static_cast<std::uint32_t>(map.chains.size());
-        planned.vertices = map.chains.empty() ? 0 : std::uint64_t{map.chains.back().last} + 1;
-        planned.record_chain.reserve(features + 1);
-        planned.record_vertex.reserve(features + 1);
-        for (const std::uint32_t ring : planned.record_ring) {
-            const std::uint32_t chain = coverage.chains_before(ring);
-            planned.record_chain.push_back(chain);
-            planned.record_vertex.push_back(chain < chains ? map.chains[chain].first : planned.vertices);
-        }
-        planned.coverage = &coverage;
-        in_file = std::move(planned);
-        return true;
+        in_file->layers.push_back(std::move(planned));
     };
-    const bool polygons_in_file = leave_in_file && prj_as_file && !decode && is_local_shp(path) && !summary_of_layer.has_z &&
-                                  !summary_of_layer.has_m &&
-                                  (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon);
+    if (leave_in_file) {
+        const bool polygon_layer = (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) &&
+                                   summary.driver == "ESRI Shapefile";
+        if (shp.empty() || (!decode && !polygon_layer)) throw NotInFile();
+        if (!in_file) in_file.emplace();
+    }
     source.ResetReading();
     bool decoded = false;
     if (decode) {
@@ -568,7 +560,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             features.push_back(std::move(feature));
         }
         if (leave_in_file) {
-            decoded = plan_in_file(features);
+            plan_in_file(features);
+            decoded = true;
         } else if (std::optional<ShapeTable> records = read_shapefile_shapes(path)) {
             // (The records' vertices go to the map in record order: the features must come in it.)
             bool in_order = records->size() == features.size();
@@ -621,7 +614,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     }
     if (!decoded) {
         if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
-        if (polygons_in_file) decoded = plan_polygons_in_file();
+        if (leave_in_file) {
+            plan_polygons_in_file();
+            decoded = true;
+        }
     }
     if (!decoded) {
         for (;;) {
@@ -747,7 +743,11 @@ void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
     }
     // Polygon rings become arcs: one chain per border, shared by the polygons on both sides.
     const std::size_t before = map.vertices.size();
-    if (!in_file || in_file->coverage == nullptr) coverage.build(map);  // (else planned from the file)
+    if (in_file) {
+        plan_coverage_in_files(map);
+    } else {
+        coverage.build(map);
+    }
     if (carries_zm) {
         z.resize(map.vertices.size(), 0.0);
         m.resize(map.vertices.size(), 0.0);
@@ -767,19 +767,94 @@ void OgrDataset::Data::finish(const std::string& path, map::MapData& map) {
     summary.degenerate_rings = coverage.degenerate_ring_count();
 }
 
+// The layers left in their files (read_layer): their polygon rings planned as one coverage, each
+// layer read again in passes (Coverage::plan), and every feature's first chain and vertex.
+void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
+    std::vector<LayerInFile*> polygons;
+    std::uintmax_t bytes = 0;
+    for (LayerInFile& layer : in_file->layers) {
+        if (!layer.polygons) continue;
+        polygons.push_back(&layer);
+        bytes += layer.size;
+    }
+    if (!polygons.empty()) {
+        auto changed = [&](const LayerInFile& layer) {
+            return InputError("'" + layer.path + "', layer '" + layer.layer + "' changed while toposimp read it");
+        };
+        const LayerInFile* reading = polygons.front();
+        try {
+            coverage.plan(
+                [&](const std::function<void(std::span<const Point>)>& visit) {
+                    for (const LayerInFile* layer : polygons) {
+                        reading = layer;
+                        for_each_polygon_ring(layer->path, layer->layer, 0, layer->record_ring.size() - 1, visit);
+                    }
+                },
+                map, coverage_pass_bytes(bytes));
+        } catch (const std::invalid_argument&) {
+            throw changed(*reading);
+        } catch (const std::length_error&) {
+            throw InputError("'" + reading->path + "', layer '" + reading->layer + "': more than 2 billion vertices in one map");
+        }
+        for (const LayerInFile* layer : polygons) {
+            std::error_code error;
+            if (std::filesystem::file_size(layer->path, error) != layer->size || error || modified_ns(layer->path) != layer->time) {
+                throw changed(*layer);
+            }
+        }
+        in_file->coverage = &coverage;
+    }
+    const auto chains = static_cast<std::uint32_t>(map.chains.size());
+    in_file->vertices = map.chains.empty() ? 0 : std::uint64_t{map.chains.back().last} + 1;
+    for (LayerInFile* layer : polygons) {
+        layer->record_chain.reserve(layer->record_ring.size());
+        layer->record_vertex.reserve(layer->record_ring.size());
+        for (const std::uint32_t ring : layer->record_ring) {
+            const std::uint32_t chain = coverage.chains_before(ring);
+            layer->record_chain.push_back(chain);
+            layer->record_vertex.push_back(chain < chains ? map.chains[chain].first : in_file->vertices);
+        }
+    }
+}
+
+std::vector<const LayerInFile*> VerticesInFile::in_chain_order() const {
+    std::vector<const LayerInFile*> ordered;
+    for (const bool polygons : {false, true}) {
+        for (const LayerInFile& layer : layers) {
+            if (layer.polygons == polygons) ordered.push_back(&layer);
+        }
+    }
+    return ordered;
+}
+
 OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map,
                             bool prj_as_file, bool vertices_in_file) {
+    if (vertices_in_file) {
+        // (Every layer left in its file, or none: a layer that cannot be has the dataset read
+        // whole.)
+        const map::MapData given = map;
+        try {
+            return read_dataset(path, layer_names_wanted, map, prj_as_file, true);
+        } catch (const NotInFile&) {
+            map = given;
+        }
+    }
+    return read_dataset(path, layer_names_wanted, map, prj_as_file, false);
+}
+
+OgrDataset OgrDataset::read_dataset(const std::string& path, const std::vector<std::string>& layer_names_wanted, map::MapData& map,
+                                    bool prj_as_file, bool vertices_in_file) {
     DatasetPtr dataset = open_vector(path);
     auto data = std::make_unique<Data>();
     data->summary.driver = dataset->GetDriver() ? dataset->GetDriver()->GetDescription() : "";
     if (dataset->GetLayerCount() == 0) throw InputError("'" + path + "' has no vector layer");
     if (layer_names_wanted.empty()) {
         for (int i = 0; i < dataset->GetLayerCount(); ++i) {
-            data->read_layer(path, *dataset->GetLayer(i), map, prj_as_file, vertices_in_file && dataset->GetLayerCount() == 1);
+            data->read_layer(path, *dataset->GetLayer(i), map, prj_as_file, vertices_in_file);
         }
     } else {
         for (const std::string& name : layer_names_wanted) {
-            data->read_layer(path, pick_layer(*dataset, path, name), map, prj_as_file, vertices_in_file && layer_names_wanted.size() == 1);
+            data->read_layer(path, pick_layer(*dataset, path, name), map, prj_as_file, vertices_in_file);
         }
     }
     data->finish(path, map);
@@ -877,7 +952,7 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
                         try {
                             fill_points(*ring, coverage.ring_from(id, (*at.rings).at(id - at.first_ring), kept, arc_order));
                         } catch (const std::invalid_argument&) {
-                            throw InputError("'" + in_file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
+                            throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
                                              " is not what it was when it was read; nothing written");
                         }
                     }
@@ -995,18 +1070,17 @@ void for_each_polygon_ring(const std::string& path, const std::string& layer_nam
     }
 }
 
-namespace {
-
-// The vertices of a layer's features, feature after feature: the map's, or those of the records
-// of the Shapefile a map's vertices were left in (VerticesInFile), read again one at a time.
+// The vertices of a layer's features, feature after feature: the map's, or, for a layer left in
+// its file (VerticesInFile), its records' (lines) or its features' rings (polygons), read again
+// one at a time.
 class VertexCursor {
 public:
-    VertexCursor(const map::MapData& map, const VerticesInFile* in_file) : map_(map), in_file_(in_file) {}
+    VertexCursor(const map::MapData& map, const LayerInFile* in_file) : map_(map), in_file_(in_file) {}
 
     // Feature i's (features asked in order read the file once).
     VertexView at(std::size_t i) {
         if (in_file_ == nullptr) return {map_.vertices.data()};
-        if (in_file_->coverage != nullptr) return rings_at(i);
+        if (in_file_->polygons) return rings_at(i);
         if (i + 1 >= in_file_->record_vertex.size()) throw std::logic_error("a feature beyond the records read");
         if (!reader_ || i != next_) {
             reader_ = ShapeReader::open(in_file_->path, i);
@@ -1022,7 +1096,7 @@ public:
 
 private:
     [[noreturn]] void changed(std::size_t record) const {
-        throw InputError("'" + in_file_->path + "' changed while toposimp ran: " + (in_file_->coverage ? "feature " : "record ") +
+        throw InputError("'" + in_file_->path + "' changed while toposimp ran: " + (in_file_->polygons ? "feature " : "record ") +
                          std::to_string(record) + " is not what it was when it was read; nothing written");
     }
 
@@ -1050,17 +1124,28 @@ private:
         VertexView view{nullptr};
         view.rings = &rings_;
         view.first_ring = in_file_->record_ring[i];
+        view.file = in_file_;
         return view;
     }
 
     const map::MapData& map_;
-    const VerticesInFile* in_file_;
+    const LayerInFile* in_file_;
     std::optional<ShapeReader> reader_;
     DatasetPtr dataset_;  // (polygons)
     OGRLayer* layer_ = nullptr;
     std::vector<std::vector<Point>> rings_;
     std::size_t next_ = 0;
 };
+
+VertexCursor OgrDataset::Data::vertex_cursor(const map::MapData& map, const Layer& layer) const {
+    if (!in_file) return VertexCursor(map, nullptr);
+    for (std::size_t k = 0; k < layers.size(); ++k) {
+        if (layers[k].get() == &layer) return VertexCursor(map, &in_file->layers.at(k));
+    }
+    throw std::logic_error("a layer that is not the dataset's");
+}
+
+namespace {
 
 // Do two geometries hold the same coordinates, bit for bit? A LineString equals a one-part
 // MultiLineString, and a ring may come back reversed (Shapefile writes rings in its own
@@ -1241,7 +1326,8 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     if (options.transform && !topology) throw OutputError("a quantized output (--quantize) is TopoJSON: name it .topojson or use -f TopoJSON");
     if (rules && rules->own_writer) {
         // GDAL 3.6's GeoJSON writer rounds coordinates, and GDAL cannot write TopoJSON: toposimp
-        // writes both itself.
+        // writes both itself (from the map's vertices: not from files read again).
+        if (data.in_file) throw std::logic_error("a map left in its files written as " + driver_name);
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
             warnings.push_back("-lco/-dsco are ignored for " + driver_name + ": toposimp writes it itself to keep coordinates exact");
         }
@@ -1307,7 +1393,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             for (std::size_t i = 0; i < field_map.size(); ++i) field_map[i] = static_cast<int>(i);
             const bool keep_fids = !layer.fid_column.empty();
             const bool transaction = dataset->StartTransaction() == OGRERR_NONE;
-            VertexCursor vertices(map, data.in_file ? &*data.in_file : nullptr);
+            VertexCursor vertices = data.vertex_cursor(map, layer);
             for (std::size_t i = 0; i < layer.features.size(); ++i) {
                 OGRFeature feature(target->GetLayerDefn());
                 feature.SetFrom(layer.features[i].get(), field_map.data(), TRUE);
@@ -1342,7 +1428,6 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     // GDAL 3.6's reader drops arcs with a third coordinate. Its x and y are printed by the same
     // code as the TopoJSON that is read back.)
     if (!(topology && options.vertex_ranks)) {
-        VertexCursor vertices(map, data.in_file ? &*data.in_file : nullptr);
         auto check_geometry = [&](const Data::Layer& layer, std::size_t i, const OGRGeometry* actual, VertexView at) {
             std::string difference;
             const auto expected = data.build_geometry(layer, i, map, at, kept, topology);
@@ -1364,6 +1449,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         bool decoded = false;
         if (driver_name == "ESRI Shapefile" && layer_count == 1) {
             const Data::Layer& layer = *data.layers.front();
+            VertexCursor vertices = data.vertex_cursor(map, layer);
             std::size_t count = 0;
             decoded = for_each_shape(output.staging_path(), [&](std::uint64_t fid, const ShapeRecord& shape) {
                 ++count;
@@ -1388,6 +1474,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 // Where the driver stored the input's FIDs, it may hand the features back in FID
                 // order, not in the order written: each is compared with the input feature of its
                 // FID (issue 29: a GeoJSON's "id"s out of order, written to GeoPackage).
+                VertexCursor vertices = data.vertex_cursor(map, layer);
                 std::unordered_map<GIntBig, std::size_t> by_fid;
                 if (rules && rules->keeps_fid_column && !layer.fid_column.empty()) {
                     for (std::size_t k = 0; k < layer.features.size(); ++k) by_fid.emplace(layer.features[k]->GetFID(), k);

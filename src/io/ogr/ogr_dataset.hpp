@@ -75,27 +75,33 @@ struct MemoryLayers {
 };
 
 // Where the vertices of a map read with OgrDataset::read's `vertices_in_file` are: the features
-// of one layer of a file, read again by whoever needs them. Either
-// - lines (`coverage` null): the records of a plain PolyLine Shapefile, decoded as
-//   read_shapefile_shapes decodes them, in record order from vertex 0 (each record's parts its
-//   chains, in order); or
-// - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as a coverage
-//   (map::Coverage::plan): the map's chains are its arcs, in the order the features first use
-//   them; a run of features makes its own with map::arcs_of(coverage->slice(...)).
+// of the layers of Shapefiles, read again by whoever needs them. Each layer holds either
+// - lines: the records of a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes
+//   them (each record's parts its chains, in order), their vertices the map's from the layer's
+//   first record's on; or
+// - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as one coverage
+//   with the other polygon layers' (map::Coverage::plan): the map's chains after the lines' are
+//   its arcs, in the order the features first use them; a run of features makes its own with
+//   map::arcs_of(coverage->slice(...)).
 // The map holds the chains, and no vertex.
-struct VerticesInFile {
-    std::string path;                         // the file (an absolute path)
-    std::string layer;                        // its layer's name
-    std::uintmax_t size = 0;                  // its size and modification time (ns) when it was read
+struct LayerInFile {
+    std::string path;                          // its .shp (an absolute path)
+    std::string layer;                         // its name
+    std::uintmax_t size = 0;                   // the .shp's size and modification time (ns) when it was read
     std::int64_t time = 0;
-    std::uint64_t vertices = 0;               // the map's
-    Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};  // theirs
+    bool polygons = false;
     std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
     std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
-    // Polygons: the layer's rings planned (their ids, from 0, in the order the layer reads them),
-    // and per feature and one more its first ring.
-    const map::Coverage* coverage = nullptr;
-    std::vector<std::uint32_t> record_ring;
+    std::vector<std::uint32_t> record_ring;    // polygons: per feature and one more, its first ring
+};
+struct VerticesInFile {
+    std::vector<LayerInFile> layers;           // the dataset's, in its order
+    std::uint64_t vertices = 0;                // the map's
+    Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};  // theirs
+    const map::Coverage* coverage = nullptr;   // the polygon layers' rings, planned (ids in layer order)
+
+    // The layers in the order of their chains: the lines' layers, then the polygons'.
+    std::vector<const LayerInFile*> in_chain_order() const;
 };
 
 // The rings of features [first, end) of a polygon layer (in the order OGR reads the layer), as
@@ -110,10 +116,12 @@ public:
     // Reads the named layers of `path` (none named: every layer) into `map`. Throws InputError
     // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
-    // (see read_layer). `vertices_in_file` (with prj_as_file): if the input is one plain PolyLine
-    // Shapefile layer that the Shapefile reader decodes, or one 2D polygon Shapefile layer without
-    // a -0.0 coordinate, its vertices are left in the file (vertices_in_file() says where; the
-    // map gets its chains only), for an engine that reads them by parts; else read as without it.
+    // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
+    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons
+    // without a -0.0 coordinate, their vertices are left in the files (vertices_in_file() says
+    // where; the map gets its chains only), for an engine that reads them by parts; else read as
+    // without it. (The output must then be written by write() through OGR, which reads them
+    // again: not as GeoJSON or TopoJSON.)
     static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
                            bool prj_as_file = false, bool vertices_in_file = false);
 
@@ -146,6 +154,8 @@ public:
 
 private:
     explicit OgrDataset(std::unique_ptr<Data> data);
+    static OgrDataset read_dataset(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
+                                   bool prj_as_file, bool vertices_in_file);
     std::unique_ptr<Data> data_;
 };
 

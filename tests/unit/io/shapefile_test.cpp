@@ -422,17 +422,19 @@ TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
     EXPECT_EQ(read_whole.vertices_in_file(), nullptr);
     const VerticesInFile* in_file = read_planned.vertices_in_file();
     ASSERT_NE(in_file, nullptr);
+    ASSERT_EQ(in_file->layers.size(), 1u);
+    const LayerInFile& file_layer = in_file->layers[0];
     EXPECT_TRUE(planned.vertices.empty());
     ASSERT_EQ(planned.chains.size(), whole.chains.size());
     for (std::size_t c = 0; c < whole.chains.size(); ++c) {
         EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
         EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
     }
-    EXPECT_EQ(in_file->path, file.path());
-    EXPECT_EQ(in_file->layer, "infile");
+    EXPECT_EQ(file_layer.path, file.path());
+    EXPECT_EQ(file_layer.layer, "infile");
     EXPECT_EQ(in_file->vertices, whole.vertices.size());
-    EXPECT_EQ(in_file->record_vertex, (std::vector<std::uint64_t>{0, 2, 2, 7, 10, 10, 10}));
-    EXPECT_EQ(in_file->record_chain, (std::vector<std::uint32_t>{0, 1, 1, 3, 4, 4, 4}));
+    EXPECT_EQ(file_layer.record_vertex, (std::vector<std::uint64_t>{0, 2, 2, 7, 10, 10, 10}));
+    EXPECT_EQ(file_layer.record_chain, (std::vector<std::uint32_t>{0, 1, 1, 3, 4, 4, 4}));
     EXPECT_EQ(in_file->extent.min_x, 0);
     EXPECT_EQ(in_file->extent.min_y, -8);
     EXPECT_EQ(in_file->extent.max_x, 9);
@@ -446,12 +448,12 @@ TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
             SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
             const map::MapData part = read_shapefile_lines(file.path(), "infile", first, end);
             map::MapData expected;
-            for (std::uint32_t c = in_file->record_chain[first]; c < in_file->record_chain[end]; ++c) {
+            for (std::uint32_t c = file_layer.record_chain[first]; c < file_layer.record_chain[end]; ++c) {
                 expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
                                                           whole.chains[c].last - whole.chains[c].first + 1));
             }
             expect_same_points(chains_of(part), chains_of(expected));
-            EXPECT_EQ(part.vertices.size(), in_file->record_vertex[end] - in_file->record_vertex[first]);
+            EXPECT_EQ(part.vertices.size(), file_layer.record_vertex[end] - file_layer.record_vertex[first]);
         }
     }
     EXPECT_THROW((void)read_shapefile_lines(file.path(), "infile", 7, 7), InputError);
@@ -585,6 +587,8 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     const OgrDataset read_planned = OgrDataset::read(file.path(), {}, planned, true, true);
     const VerticesInFile* in_file = read_planned.vertices_in_file();
     ASSERT_NE(in_file, nullptr);
+    ASSERT_EQ(in_file->layers.size(), 1u);
+    const LayerInFile& file_layer = in_file->layers[0];
     ASSERT_NE(in_file->coverage, nullptr);
     EXPECT_TRUE(planned.vertices.empty());
     ASSERT_EQ(planned.chains.size(), whole.chains.size());
@@ -594,20 +598,20 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
         EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
     }
     EXPECT_EQ(in_file->vertices, whole.vertices.size());
-    EXPECT_EQ(in_file->path, file.path());
+    EXPECT_EQ(file_layer.path, file.path());
     EXPECT_EQ(in_file->extent.min_x, 0);
     EXPECT_EQ(in_file->extent.max_x, 22);
     EXPECT_EQ(in_file->extent.max_y, 20);
-    ASSERT_EQ(in_file->record_ring.size(), polygons.size() + 1);
-    EXPECT_EQ(in_file->record_ring.back(), in_file->coverage->ring_count());
+    ASSERT_EQ(file_layer.record_ring.size(), polygons.size() + 1);
+    EXPECT_EQ(file_layer.record_ring.back(), in_file->coverage->ring_count());
     for (std::size_t f = 0; f < polygons.size(); ++f) {
         std::uint32_t count = 0;
         for_each_polygon_ring(file.path(), "polygonsinfile", f, f + 1, [&](std::span<const Point>) { ++count; });
-        EXPECT_EQ(in_file->record_ring[f + 1] - in_file->record_ring[f], count) << "feature " << f;
-        const map::CoverageSlice slice = in_file->coverage->slice(in_file->record_ring[f], in_file->record_ring[f + 1]);
-        EXPECT_EQ(in_file->record_chain[f], slice.first_chain) << "feature " << f;
-        EXPECT_EQ(in_file->record_chain[f + 1], slice.end_chain) << "feature " << f;
-        EXPECT_EQ(in_file->record_vertex[f], slice.first_chain < whole.chains.size() ? whole.chains[slice.first_chain].first : whole.vertices.size());
+        EXPECT_EQ(file_layer.record_ring[f + 1] - file_layer.record_ring[f], count) << "feature " << f;
+        const map::CoverageSlice slice = in_file->coverage->slice(file_layer.record_ring[f], file_layer.record_ring[f + 1]);
+        EXPECT_EQ(file_layer.record_chain[f], slice.first_chain) << "feature " << f;
+        EXPECT_EQ(file_layer.record_chain[f + 1], slice.end_chain) << "feature " << f;
+        EXPECT_EQ(file_layer.record_vertex[f], slice.first_chain < whole.chains.size() ? whole.chains[slice.first_chain].first : whole.vertices.size());
     }
     EXPECT_EQ(read_planned.summary().sum(&LayerSummary::polygon_features), read_whole.summary().sum(&LayerSummary::polygon_features));
     EXPECT_EQ(read_planned.summary().sum(&LayerSummary::empty_geometries), 2u);
