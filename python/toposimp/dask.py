@@ -51,11 +51,12 @@ Dask options:
                        map's engine in this process) or 'workers' (the map cut into tiles,
                        searched for crossings, queued and its budget selected on the workers;
                        this process never holds an engine over the whole map). With 'workers',
-                       a Shapefile of plain PolyLines, or of 2D polygons without a -0.0
-                       coordinate, written to a Shapefile (at one target, without --decimals,
-                       --precision or --levels) is read by parts on the workers: this process
-                       then never holds its vertices, and the .shp must be at the same absolute
-                       path, unchanged, on every worker. Other inputs are read here.
+                       Shapefiles (a .shp, or a folder of them) of plain PolyLines or of 2D
+                       polygons without a -0.0 coordinate, written through GDAL (any output but
+                       GeoJSON or TopoJSON; at one target, without --decimals, --precision or
+                       --levels) are read by parts on the workers: this process then never
+                       holds their vertices, and the .shp files must be at the same absolute
+                       paths, unchanged, on every worker. Other inputs are read here.
   --send-input         with --first-round workers: read the input here and send the workers its
                        parts (for workers that cannot see the input)
 
@@ -152,10 +153,10 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     than `local_budget` vertices (default LOCAL_BUDGET) runs here, whole. `on_progress(done,
     total)`: called as the tile tasks finish. `first_round`: where the first round's tiles are
     built, "workers" or "here" (the whole map's engine here). With "workers", the first round's
-    tasks read their parts of the input themselves where its format allows (a Shapefile of plain
-    PolyLines or 2D polygons written to a Shapefile: the input must then be at the same absolute
-    path, unchanged, on every worker), and this process never holds the input's vertices;
-    `send_input` sends them the parts from here instead."""
+    tasks read their parts of the input themselves where its format allows (Shapefiles of plain
+    PolyLines or 2D polygons, a file or a folder, written through GDAL: the input must then be at
+    the same absolute path, unchanged, on every worker), and this process never holds the input's
+    vertices; `send_input` sends them the parts from here instead."""
     if local_budget is None:
         local_budget = LOCAL_BUDGET
     progress = _Progress(quiet)
