@@ -144,6 +144,26 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
         assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension
 
 
+def test_a_folder_of_layers_read_by_parts_on_the_workers(cluster, generated_shapefiles, binary, tmp_path, capsys):
+    """Cells, rivers and roads of a folder of Shapefiles to a GeoPackage, read by parts on real
+    workers: the same bytes as toposimp map."""
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    rivers, places = generated_shapefiles
+    arguments = [str(rivers.parent), "-l", "cells", "-l", "rivers", "-l", "roads", "-p", str(places), "--keep", "10%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    output = tmp_path / "dask.gpkg"
+    capsys.readouterr()
+    status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, first_round="workers")
+    err = capsys.readouterr().err
+    assert status == 0, err
+    assert "vertices (left in the file)" in err and "reading the input by parts and cutting it into tiles:" in err
+    assert output.read_bytes() == reference.read_bytes()
+
+
 def test_input_changed_under_the_workers_stops_the_run(cluster, generated_shapefiles, tmp_path, monkeypatch, capsys):
     """The input changed after the command read it, before the workers read their parts: the run
     stops with the reason (exit 2, the command line's message), nothing written."""
