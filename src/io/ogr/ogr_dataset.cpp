@@ -517,6 +517,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             OGRFeatureUniquePtr feature{source.GetNextFeature()};
             if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
             if (!feature) break;
+            // (Parts are read from a feature's index on: the index must be the FID, no record
+            // deleted.)
+            if (feature->GetFID() != static_cast<GIntBig>(layer->features.size())) throw NotInFile();
             planned.record_ring.push_back(rings);
             Layer::Shape shape;
             shape.first = static_cast<std::uint32_t>(layer->items.size());
@@ -1066,6 +1069,10 @@ void for_each_polygon_ring(const std::string& path, const std::string& layer_nam
             throw InputError("error reading '" + path + "', layer '" + layer.GetName() + "', feature " + std::to_string(k) +
                              (feature ? last_gdal_error() : ": the layer ends before it"));
         }
+        if (feature->GetFID() != static_cast<GIntBig>(k)) {
+            throw InputError("'" + path + "', layer '" + layer.GetName() + "': feature " + std::to_string(k) + " has FID " +
+                             std::to_string(feature->GetFID()) + " (a deleted record?): its polygons cannot be read by index");
+        }
         visit_rings(*feature, path, layer, visit);
     }
 }
@@ -1117,7 +1124,7 @@ private:
         QuietGdal quiet;
         const OGRFeatureUniquePtr feature{layer_->GetNextFeature()};
         next_ = i + 1;
-        if (!feature || CPLGetLastErrorType() >= CE_Failure) changed(i);
+        if (!feature || CPLGetLastErrorType() >= CE_Failure || feature->GetFID() != static_cast<GIntBig>(i)) changed(i);
         rings_.clear();
         visit_rings(*feature, in_file_->path, *layer_, [&](std::span<const Point> ring) { rings_.emplace_back(ring.begin(), ring.end()); });
         if (rings_.size() != in_file_->record_ring[i + 1] - in_file_->record_ring[i]) changed(i);

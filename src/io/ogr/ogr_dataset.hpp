@@ -104,7 +104,8 @@ struct VerticesInFile {
     std::vector<const LayerInFile*> in_chain_order() const;
 };
 
-// The rings of features [first, end) of a polygon layer (in the order OGR reads the layer), as
+// The rings of features [first, end) of a polygon layer (in the order OGR reads the layer, each
+// feature's FID its index: a Shapefile without deleted records; InputError otherwise), as
 // OgrDataset::read gives them to its coverage: each polygon's non-empty rings, its exterior
 // first; features without polygons give none. For a coverage planned from the file
 // (map::Coverage::plan, map::arcs_of); the same refusals as read() (InputError).

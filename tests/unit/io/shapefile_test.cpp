@@ -577,8 +577,8 @@ TEST(ShapefileShapes, PolygonRingsStreamedPlanTheCoverageRead) {
 
 // A polygon layer read with its vertices left in the file: the chains of the map read whole, no
 // vertex held, each feature's first ring, chain and vertex; written, the same bytes as the map
-// read whole, and refused, nothing written, once the file has changed. A -0.0 coordinate, or a
-// 3D ring, makes it read whole.
+// read whole, and refused, nothing written, once the file has changed. A deleted record, a -0.0
+// coordinate or a 3D ring makes it read whole.
 TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     const std::vector<std::string> polygons = grid_polygons();
     const ShapeFile file("polygonsinfile", wkbPolygon, polygons);
@@ -624,6 +624,14 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
         for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 3 != 0;
     }
     expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "feature 0");
+
+    // A deleted record: parts are read from a feature's index, which is then not its FID.
+    const ShapeFile deleted("polygonsdeleted", wkbPolygon, polygons, {3});
+    map::MapData with_deleted;
+    const OgrDataset read_deleted = OgrDataset::read(deleted.path(), {}, with_deleted, true, true);
+    EXPECT_EQ(read_deleted.vertices_in_file(), nullptr);
+    EXPECT_FALSE(with_deleted.vertices.empty());
+    EXPECT_THROW(for_each_polygon_ring(deleted.path(), "polygonsdeleted", 0, 5, [](std::span<const Point>) {}), InputError);
 
     const std::pair<const char*, OGRwkbGeometryType> odds[] = {{"POLYGON ((-0 0,1 0,1 1,-0 0))", wkbPolygon},
                                                                 {"POLYGON Z ((0 0 1,1 0 1,1 1 1,0 0 1))", wkbPolygon25D}};
