@@ -52,7 +52,7 @@ Dask options:
                        searched for crossings, queued and its budget selected on the workers;
                        this process never holds an engine over the whole map). With 'workers',
                        Shapefiles (a .shp, or a folder of them) of plain PolyLines or of 2D
-                       polygons without a -0.0 coordinate, written through GDAL (any output but
+                       polygons (no record deleted), written through GDAL (any output but
                        GeoJSON or TopoJSON; at one target, without --decimals, --precision or
                        --levels) are read by parts on the workers: this process then never
                        holds their vertices, and the .shp files must be at the same absolute

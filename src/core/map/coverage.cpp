@@ -4,6 +4,7 @@
 #include "core/map/location_key.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <optional>
 #include <stdexcept>
@@ -278,7 +279,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     map_ = &map;
     first_chain_ = static_cast<std::uint32_t>(map.chains.size());
     first_vertex_ = map.chains.empty() ? 0 : map.chains.back().last + 1;
-    std::vector<std::uint32_t> sequence, arc;
+    std::vector<std::uint32_t> sequence, arc, all;
     auto changed = [] { return std::invalid_argument("the rings are not those of the first pass"); };
 
     // 1. The rings' sizes, which are degenerate, and each one's clean occurrences, counted by
@@ -373,6 +374,9 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
         if (degenerate_[r]) {
             const std::uint32_t chain = add_chain_of(ring.size());
             map.freeze(chain);
+            all.resize(ring.size());
+            for (std::uint32_t k = 0; k < all.size(); ++k) all[k] = k;
+            note_negative_zeros(ring, all, map.chains[chain].first);
             uses_.push_back({chain, false});
             ++degenerate_rings_;
             ++r;
@@ -395,6 +399,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
                 const std::uint32_t chain = add_chain_of(positions.size());
                 if (!whole_ring) arcs.add(key, positions.size(), chain);
                 uses_.push_back({chain, false});
+                note_negative_zeros(ring, positions, map.chains[chain].first);
             });
         start_offset_[r] = start == size ? 0 : (size - start) % size;
         ++r;
@@ -500,7 +505,7 @@ std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point
     std::vector<std::uint32_t> all = arc_order_vertices(ring);
     if (degenerate_[ring]) {
         if (given.size() != all.size()) throw std::invalid_argument("a ring that is not the one the coverage was made of");
-        return {given.begin(), given.end()};
+        return {given.begin(), given.end()};  // (its own chain: its own bits)
     }
     std::vector<std::uint32_t> sequence;
     if (!clean_ring(given, sequence) || sequence.size() != all.size()) {
@@ -514,10 +519,32 @@ std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point
     std::vector<Point> ring_out;
     for (std::uint32_t step = 0; step < size; ++step) {
         const std::uint32_t i = (from + step) % size;
-        if (kept[all[i]]) ring_out.push_back(given[sequence[(i + size - offset) % size]]);
+        if (kept[all[i]]) ring_out.push_back(owner_zeros(all[i], given[sequence[(i + size - offset) % size]]));
     }
     ring_out.push_back(ring_out.front());
     return ring_out;
+}
+
+void Coverage::note_negative_zeros(std::span<const Point> ring, std::span<const std::uint32_t> positions, std::uint32_t first_vertex) {
+    for (std::size_t k = 0; k < positions.size(); ++k) {
+        const Point p = ring[positions[k]];
+        const std::uint8_t signs = static_cast<std::uint8_t>((p.x == 0 && std::signbit(p.x) ? 1 : 0) | (p.y == 0 && std::signbit(p.y) ? 2 : 0));
+        if (signs != 0) negative_zeros_.emplace(first_vertex + static_cast<std::uint32_t>(k), signs);
+    }
+}
+
+Point Coverage::owner_zeros(std::uint32_t v, Point p) const {
+    if (p.x != 0 && p.y != 0) return p;
+    std::uint8_t signs = 0;
+    if (v < map_->vertices.size()) {  // (built: the vertex is there)
+        const Point q = map_->vertices[v];
+        signs = static_cast<std::uint8_t>((q.x == 0 && std::signbit(q.x) ? 1 : 0) | (q.y == 0 && std::signbit(q.y) ? 2 : 0));
+    } else if (const auto found = negative_zeros_.find(v); found != negative_zeros_.end()) {
+        signs = found->second;
+    }
+    if (p.x == 0) p.x = (signs & 1) != 0 ? -0.0 : 0.0;
+    if (p.y == 0) p.y = (signs & 2) != 0 ? -0.0 : 0.0;
+    return p;
 }
 
 }  // namespace toposimp::map

@@ -14,6 +14,7 @@
 #include <cstdint>
 #include <functional>
 #include <span>
+#include <unordered_map>
 #include <vector>
 
 namespace toposimp::map {
@@ -53,11 +54,12 @@ public:
     // first arc starts (true: as a TopoJSON reader rebuilds it from the arcs).
     std::vector<std::uint32_t> ring_vertices(std::uint32_t ring, const std::vector<std::uint8_t>& kept, bool arc_order = false) const;
 
-    // The same ring's points, taken from `given` (the ring as add_ring was given it, or as plan's
-    // source streams it) instead of the map's vertices: where the coverage's equal locations are
-    // equal bit for bit (no -0.0 beside a 0.0), ring_vertices' vertices' points. For rings read
-    // again when they are written, the map's vertices being elsewhere. Throws
-    // std::invalid_argument if `given` is not that ring.
+    // The same ring's points, taken from `given` (the ring as plan's source streamed it) instead
+    // of the map's vertices: ring_vertices' vertices' points, bit for bit (equal locations differ
+    // at most in the sign of a zero, and a zero gets the sign the arc's vertex has: plan() notes
+    // the -0.0s of the rings that make the arcs). For rings read again when they are written, the
+    // map's vertices being elsewhere. Throws std::invalid_argument if `given` is not that ring.
+    // (After build() too: the signs are then the map's vertices'.)
     std::vector<Point> ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
                                  bool arc_order = false) const;
 
@@ -87,6 +89,10 @@ public:
 
 private:
     std::vector<std::uint32_t> arc_order_vertices(std::uint32_t ring) const;
+    // plan(): the -0.0 coordinates of a chain made from `positions` of `ring`; p with the signs of
+    // vertex v's zeros.
+    void note_negative_zeros(std::span<const Point> ring, std::span<const std::uint32_t> positions, std::uint32_t first_vertex);
+    Point owner_zeros(std::uint32_t v, Point p) const;
 
     std::vector<Point> points_;               // every ring point as given, until build()
     std::vector<std::uint32_t> ring_start_;   // into points_
@@ -99,6 +105,7 @@ private:
     std::vector<std::uint32_t> clean_start_;       // per ring and one more: its first clean occurrence (degenerate: none)
     std::vector<std::uint64_t> node_bits_;         // per clean occurrence: is it a node
     std::vector<std::uint32_t> new_chains_before_; // per ring and one more: the chains the rings before it made
+    std::unordered_map<std::uint32_t, std::uint8_t> negative_zeros_;  // plan(): per vertex with a -0.0, which (1: x, 2: y)
     const MapData* map_ = nullptr;
     std::uint32_t first_vertex_ = 0, first_chain_ = 0;
     std::uint64_t arcs_ = 0, shared_arcs_ = 0, degenerate_rings_ = 0;

@@ -486,8 +486,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // A 2D polygon layer left in its file (VerticesInFile with a coverage): the features are read
     // with their attributes, their rings counted and checked but not kept (the rings of every
     // such layer are planned as one coverage from the files at the end, in finish()). NotInFile if
-    // a feature is not a 2D polygon, or has a -0.0 coordinate (a ring written from its own points
-    // must have the bits of the arc it shares; -0.0 and 0.0 are one location).
+    // a feature is not a 2D polygon, or its FID is not its index.
     auto plan_polygons_in_file = [&] {
         std::error_code error;
         const std::uintmax_t size = std::filesystem::file_size(shp, error);
@@ -506,7 +505,6 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 for (int i = 0; i < ring->getNumPoints(); ++i) {
                     const Point p{ring->getX(i), ring->getY(i)};
                     if (!std::isfinite(p.x) || !std::isfinite(p.y)) read_points(*ring, label);  // (its refusal)
-                    if ((p.x == 0 && std::signbit(p.x)) || (p.y == 0 && std::signbit(p.y))) throw NotInFile();
                     extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
                 }
                 if (rings == std::numeric_limits<std::uint32_t>::max()) throw NotInFile();

@@ -119,7 +119,7 @@ public:
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
     // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons
-    // without a -0.0 coordinate, their vertices are left in the files (vertices_in_file() says
+    // (no record deleted), their vertices are left in the files (vertices_in_file() says
     // where; the map gets its chains only), for an engine that reads them by parts; else read as
     // without it. (The output must then be written by write() through OGR, which reads them
     // again: not as GeoJSON or TopoJSON.)

@@ -577,8 +577,8 @@ TEST(ShapefileShapes, PolygonRingsStreamedPlanTheCoverageRead) {
 
 // A polygon layer read with its vertices left in the file: the chains of the map read whole, no
 // vertex held, each feature's first ring, chain and vertex; written, the same bytes as the map
-// read whole, and refused, nothing written, once the file has changed. A deleted record, a -0.0
-// coordinate or a 3D ring makes it read whole.
+// read whole, and refused, nothing written, once the file has changed. A deleted record or a 3D
+// ring makes it read whole.
 TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     const std::vector<std::string> polygons = grid_polygons();
     const ShapeFile file("polygonsinfile", wkbPolygon, polygons);
@@ -633,17 +633,32 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     EXPECT_FALSE(with_deleted.vertices.empty());
     EXPECT_THROW(for_each_polygon_ring(deleted.path(), "polygonsdeleted", 0, 5, [](std::span<const Point>) {}), InputError);
 
-    const std::pair<const char*, OGRwkbGeometryType> odds[] = {{"POLYGON ((-0 0,1 0,1 1,-0 0))", wkbPolygon},
-                                                                {"POLYGON Z ((0 0 1,1 0 1,1 1 1,0 0 1))", wkbPolygon25D}};
-    for (const auto& [odd, type] : odds) {
-        std::vector<std::string> with_odd = polygons;
-        with_odd.emplace_back(odd);
-        const ShapeFile odd_file("polygonsodd", type, with_odd);
-        map::MapData map;
-        const OgrDataset read_odd = OgrDataset::read(odd_file.path(), {}, map, true, true);
-        EXPECT_EQ(read_odd.vertices_in_file(), nullptr) << odd;
-        EXPECT_FALSE(map.vertices.empty()) << odd;
-    }
+    std::vector<std::string> with_z = polygons;
+    with_z.emplace_back("POLYGON Z ((0 0 1,1 0 1,1 1 1,0 0 1))");
+    const ShapeFile z_file("polygonsz", wkbPolygon25D, with_z);
+    map::MapData z_map;
+    const OgrDataset read_z = OgrDataset::read(z_file.path(), {}, z_map, true, true);
+    EXPECT_EQ(read_z.vertices_in_file(), nullptr);
+    EXPECT_FALSE(z_map.vertices.empty());
+}
+
+// Polygons that share a border where one has -0.0 and the other 0.0 (one location): left in the
+// file, each ring written from its own points still gets the bits of the shared arc's vertices
+// (those of the ring that made it), as the layer read whole writes them.
+TEST(ShapefileShapes, PolygonLayerLeftInTheFileKeepsTheArcsZeros) {
+    const std::vector<std::string> polygons = {
+        "POLYGON ((-0 -0,-0 1,-0 2,1 2,1 -0,-0 -0))",      // makes the x = 0 border with -0.0
+        "POLYGON ((0 0,-1 0,-1 2,0 2,0 1,0 0))",           // uses it with 0.0
+        "POLYGON ((1 -0,1 2,2 2,2 0,1 -0))",                // makes x = 1 with y -0.0 at its foot
+        "POLYGON ((3 0,3 1,4 1,4 0,3 0),(3.25 0.25,3.75 0.25,3.75 0.75,3.25 0.25))"};
+    const ShapeFile file("polygonszeros", wkbPolygon, polygons);
+    map::MapData whole, planned;
+    const OgrDataset read_whole = OgrDataset::read(file.path(), {}, whole, true);
+    const OgrDataset read_planned = OgrDataset::read(file.path(), {}, planned, true, true);
+    ASSERT_NE(read_planned.vertices_in_file(), nullptr);
+    ASSERT_EQ(planned.chains.size(), whole.chains.size());
+    const std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+    expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "feature 0");
 }
 
 }  // namespace

@@ -314,12 +314,14 @@ TEST(Coverage, PlannedFromStreamedRingsIsTheBuild) {
                 for (const bool arc_order : {false, true}) {
                     const std::vector<std::uint32_t> vertices = whole.ring_vertices(r, kept, arc_order);
                     ASSERT_EQ(vertices, streamed.ring_vertices(r, kept, arc_order)) << "ring " << r;
-                    // The ring from its own points: the arcs' points, location for location
-                    // (equal doubles: only a -0.0 for a 0.0 may differ in its bits).
+                    // The ring from its own points: the arcs' points bit for bit (a -0.0
+                    // where the arc's vertex has one, though the ring has 0.0, and the reverse).
                     const std::vector<Point> own = streamed.ring_from(r, rings[r], kept, arc_order);
                     ASSERT_EQ(own.size(), vertices.size()) << "ring " << r;
                     for (std::size_t k = 0; k < own.size(); ++k) {
-                        ASSERT_TRUE(own[k].x == built.vertices[vertices[k]].x && own[k].y == built.vertices[vertices[k]].y)
+                        const Point want = built.vertices[vertices[k]];
+                        ASSERT_TRUE(std::bit_cast<std::uint64_t>(own[k].x) == std::bit_cast<std::uint64_t>(want.x) &&
+                                    std::bit_cast<std::uint64_t>(own[k].y) == std::bit_cast<std::uint64_t>(want.y))
                             << "ring " << r << ", point " << k;
                     }
                 }
