@@ -67,10 +67,10 @@ LayerInFile layer_in_file(const std::string& shp, const std::string& layer, std:
     return planned;
 }
 
-// Memory for a coverage plan's node passes (map::Coverage::plan, 56 bytes a ring point) over a
-// file of `file_bytes`: about as much as the file (a quarter of the ring points of a .shp, 16
-// bytes each, a pass: measured on a 1.9 M-vertex coverage, 4 passes cost no more time than one
-// and the command's peak fell from 299 to 177 MiB), from 16 MiB to an eighth of the machine's.
+// Memory for a coverage plan's node passes (map::Coverage::plan, 56 bytes a ring point) over
+// files of `file_bytes`: about as much as the files (a quarter of the ring points of a .shp, 16
+// bytes each, a pass: on a 1.9 M-vertex coverage, 2 to 4 passes took no more time than one and
+// the command's peak fell from 299 to 177 MiB), from 16 MiB to an eighth of the machine's.
 std::size_t coverage_pass_bytes(std::uintmax_t file_bytes) {
     const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
     const std::uint64_t memory = pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
