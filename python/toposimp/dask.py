@@ -54,9 +54,10 @@ Dask options:
                        Shapefiles (a .shp, or a folder of them) of plain PolyLines or of 2D
                        polygons (no record deleted), written through GDAL (any output but
                        GeoJSON or TopoJSON; at one target, without --decimals, --precision or
-                       --levels) are read by parts on the workers: this process then never
-                       holds their vertices, and the .shp files must be at the same absolute
-                       paths, unchanged, on every worker. Other inputs are read here.
+                       --levels) are read by parts on the workers (2D point layers among them
+                       are read here, as control points): this process then never holds their
+                       vertices, and the .shp files must be at the same absolute paths,
+                       unchanged, on every worker. Other inputs are read here.
   --send-input         with --first-round workers: read the input here and send the workers its
                        parts (for workers that cannot see the input)
 

@@ -357,13 +357,12 @@ def shapefile_folder(tmp_path_factory):
 
 @pytest.mark.parametrize("output_suffix", [".gpkg", ".fgb"])
 def test_first_round_reads_a_folder_of_layers_by_parts(binary, tmp_path, shapefile_folder, output_suffix):
-    """Polygon and line layers of a folder of Shapefiles, written to one GeoPackage (or the
-    polygons to a FlatGeobuf): every layer left in its file, the parts of each layer read by
-    their tasks, the output toposimp map's byte for byte."""
+    """Polygon, line and point layers of a folder of Shapefiles, written to one GeoPackage (or the
+    polygons to a FlatGeobuf): every layer left in its file but the points (control points, read
+    here), the parts of each layer read by their tasks, the output toposimp map's byte for byte."""
     import subprocess
 
-    arguments = [str(shapefile_folder), "-l", "rivers", "-l", "cells", "-l", "roads", "-p", str(shapefile_folder / "places.shp"),
-                 "--keep", "10%", *SAME_DATE]
+    arguments = [str(shapefile_folder), "-l", "rivers", "-l", "places", "-l", "cells", "-l", "roads", "--keep", "10%", *SAME_DATE]
     if output_suffix == ".fgb":  # (one layer a file)
         arguments = [str(shapefile_folder), "-l", "cells", "--keep", "10%", *SAME_DATE]
     reference = tmp_path / ("reference" + output_suffix)
@@ -379,15 +378,26 @@ def test_first_round_reads_a_folder_of_layers_by_parts(binary, tmp_path, shapefi
     assert (True, "cells.shp") in kinds and ((False, "rivers.shp") in kinds) == (output_suffix == ".gpkg")
     assert kinds == sorted(kinds, key=lambda kind: kind[0])  # (the lines' chains first, then the coverage's arcs)
     assert first.parts[0]["first_chain"] == 0
+    assert ("300 control points" in err) == (output_suffix == ".gpkg")
     assert all(one["first_chain"] + len(one["chains"]) == other["first_chain"] for one, other in zip(first.parts, first.parts[1:]))
 
 
 def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
-    """A point layer among the layers asked for: every layer is read whole, and the parts carry
-    their vertices."""
+    """A PolyLineZ layer among the layers asked for: every layer is read whole, and the parts
+    carry their vertices."""
+    import shutil
+    import sys
+
+    sys.path.insert(0, str(DATA.parent / "scripts" / "bench"))
+    import generate_map
+
+    folder = tmp_path / "folder"
+    shutil.copytree(shapefile_folder, folder)
+    writer = generate_map.ShapefileWriter(folder / "heights", 13)  # (a PolyLineZ file, no record)
+    writer.close()
     first = FirstRoundHere()
     output = tmp_path / "whole.gpkg"
-    status, out, err = _toposimp.run_command(["map", str(shapefile_folder), "-l", "cells", "-l", "places", "--keep", "10%",
+    status, out, err = _toposimp.run_command(["map", str(folder), "-l", "cells", "-l", "heights", "--keep", "10%",
                                               "-o", str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
     assert status == 0, err
     assert "(left in the file)" not in err and "the input is read here, whole" in err

@@ -544,10 +544,14 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         planned.record_ring.push_back(rings);
         in_file->layers.push_back(std::move(planned));
     };
+    // A 2D point layer beside the layers left in their files is read as without them: its points
+    // are control points (the command holds those anyway), written back as they were.
+    const bool point_layer = leave_in_file && (layer->geometry_type == wkbPoint || layer->geometry_type == wkbMultiPoint);
+    const std::size_t chains_before = map.chains.size();
     if (leave_in_file) {
         const bool polygon_layer = (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) &&
                                    summary.driver == "ESRI Shapefile";
-        if (shp.empty() || (!decode && !polygon_layer)) throw NotInFile();
+        if (!point_layer && (shp.empty() || (!decode && !polygon_layer))) throw NotInFile();
         if (!in_file) in_file.emplace();
     }
     source.ResetReading();
@@ -615,7 +619,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     }
     if (!decoded) {
         if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
-        if (leave_in_file) {
+        if (leave_in_file && !point_layer) {
             plan_polygons_in_file();
             decoded = true;
         }
@@ -627,6 +631,14 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             if (!feature) break;
             add_feature(std::move(feature), nullptr, 0);
         }
+    }
+    if (point_layer) {
+        // (Points only: no vertex, no chain, nothing carried in Z or M.)
+        if (!map.vertices.empty() || map.chains.size() != chains_before || carries_zm) throw NotInFile();
+        LayerInFile points;
+        points.layer = layer->name;
+        points.points = true;
+        in_file->layers.push_back(std::move(points));
     }
     {
         const OGRSpatialReference* srs = layer->srs ? layer->srs.get() : source.GetSpatialRef();
@@ -822,7 +834,7 @@ std::vector<const LayerInFile*> VerticesInFile::in_chain_order() const {
     std::vector<const LayerInFile*> ordered;
     for (const bool polygons : {false, true}) {
         for (const LayerInFile& layer : layers) {
-            if (layer.polygons == polygons) ordered.push_back(&layer);
+            if (layer.polygons == polygons && !layer.points) ordered.push_back(&layer);
         }
     }
     return ordered;
@@ -1145,7 +1157,9 @@ private:
 VertexCursor OgrDataset::Data::vertex_cursor(const map::MapData& map, const Layer& layer) const {
     if (!in_file) return VertexCursor(map, nullptr);
     for (std::size_t k = 0; k < layers.size(); ++k) {
-        if (layers[k].get() == &layer) return VertexCursor(map, &in_file->layers.at(k));
+        if (layers[k].get() != &layer) continue;
+        const LayerInFile& file = in_file->layers.at(k);
+        return VertexCursor(map, file.points ? nullptr : &file);  // (points: written back as they were)
     }
     throw std::logic_error("a layer that is not the dataset's");
 }

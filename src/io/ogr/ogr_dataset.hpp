@@ -90,6 +90,7 @@ struct LayerInFile {
     std::uintmax_t size = 0;                   // the .shp's size and modification time (ns) when it was read
     std::int64_t time = 0;
     bool polygons = false;
+    bool points = false;                       // a 2D point layer, read whole (control points): no chain, nothing else here
     std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
     std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
     std::vector<std::uint32_t> record_ring;    // polygons: per feature and one more, its first ring
@@ -100,7 +101,7 @@ struct VerticesInFile {
     Box extent{INFINITY, INFINITY, -INFINITY, -INFINITY};  // theirs
     const map::Coverage* coverage = nullptr;   // the polygon layers' rings, planned (ids in layer order)
 
-    // The layers in the order of their chains: the lines' layers, then the polygons'.
+    // The layers with chains in the order of their chains: the lines' layers, then the polygons'.
     std::vector<const LayerInFile*> in_chain_order() const;
 };
 
@@ -119,7 +120,7 @@ public:
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
     // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons
-    // (no record deleted), their vertices are left in the files (vertices_in_file() says
+    // (no record deleted), or of 2D points (read whole), their vertices are left in the files (vertices_in_file() says
     // where; the map gets its chains only), for an engine that reads them by parts; else read as
     // without it. (The output must then be written by write() through OGR, which reads them
     // again: not as GeoJSON or TopoJSON.)
