@@ -432,27 +432,39 @@ py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_fi
     return dict;
 }
 
-// A part read from its file (file_part_dict): the same chains, or InputError.
-map::MapData file_part_of(const py::dict& dict) {
-    const auto shp = item(dict, "shp").cast<std::string>();
-    const auto [r0, r1] = item(dict, "records").cast<std::pair<std::uint64_t, std::uint64_t>>();
+// InputError unless the file at `path` has the size and modification time the part says (under
+// `size_key` and `time_key`): a worker reads the input the command read.
+void check_part_file(const py::dict& dict, const std::string& path, const char* size_key, const char* time_key) {
     std::error_code error;
-    const std::uintmax_t size = std::filesystem::file_size(shp, error);
-    if (error || size != item(dict, "shp_size").cast<std::uint64_t>() || io::modified_ns(shp) != item(dict, "shp_time").cast<std::int64_t>()) {
-        throw io::InputError("'" + shp + "' cannot be read here as it was when the map was read" +
+    const std::uintmax_t size = std::filesystem::file_size(path, error);
+    if (error || size != item(dict, size_key).cast<std::uint64_t>() || io::modified_ns(path) != item(dict, time_key).cast<std::int64_t>()) {
+        throw io::InputError("'" + path + "' cannot be read here as it was when the map was read" +
                              (error ? " (" + error.message() + ")" : std::string(" (another size or modification time)")) +
                              ": every worker reads the input at the same absolute path, unchanged (or use --send-input: the "
                              "parts are then sent from the command)");
     }
+}
+
+// Does `part`, read from its file, hold the chains the part says (file_part_dict's "chains" and
+// "vertices")?
+bool holds_part_chains(const map::MapData& part, const py::dict& dict) {
+    const std::vector<map::Chain> chains = consecutive_chains(dict, "chains", item(dict, "vertices").cast<std::uint64_t>());
+    return part.vertices.size() == item(dict, "vertices").cast<std::uint64_t>() && part.chains.size() == chains.size() &&
+           std::equal(chains.begin(), chains.end(), part.chains.begin(),
+                      [](const map::Chain& a, const map::Chain& b) { return a.first == b.first && a.last == b.last; });
+}
+
+// A part read from its file (file_part_dict): the same chains, or InputError.
+map::MapData file_part_of(const py::dict& dict) {
+    const auto shp = item(dict, "shp").cast<std::string>();
+    const auto [r0, r1] = item(dict, "records").cast<std::pair<std::uint64_t, std::uint64_t>>();
+    check_part_file(dict, shp, "shp_size", "shp_time");
     map::MapData part;
     {
         py::gil_scoped_release release;
         part = io::read_shapefile_lines(shp, item(dict, "layer").cast<std::string>(), r0, r1);
     }
-    const std::vector<map::Chain> chains = consecutive_chains(dict, "chains", item(dict, "vertices").cast<std::uint64_t>());
-    if (part.vertices.size() != item(dict, "vertices").cast<std::uint64_t>() || part.chains.size() != chains.size() ||
-        !std::equal(chains.begin(), chains.end(), part.chains.begin(),
-                    [](const map::Chain& a, const map::Chain& b) { return a.first == b.first && a.last == b.last; })) {
+    if (!holds_part_chains(part, dict)) {
         throw io::InputError("'" + shp + "': records " + std::to_string(r0) + " to " + std::to_string(r1) +
                              " are not the lines they were when the map was read");
     }
@@ -464,14 +476,7 @@ map::MapData polygon_part_of(const py::dict& dict) {
     const auto path = item(dict, "polygons_file").cast<std::string>();
     const auto layer = item(dict, "layer").cast<std::string>();
     const auto [r0, r1] = item(dict, "features").cast<std::pair<std::uint64_t, std::uint64_t>>();
-    std::error_code error;
-    const std::uintmax_t size = std::filesystem::file_size(path, error);
-    if (error || size != item(dict, "size").cast<std::uint64_t>() || io::modified_ns(path) != item(dict, "time").cast<std::int64_t>()) {
-        throw io::InputError("'" + path + "' cannot be read here as it was when the map was read" +
-                             (error ? " (" + error.message() + ")" : std::string(" (another size or modification time)")) +
-                             ": every worker reads the input at the same absolute path, unchanged (or use --send-input: the "
-                             "parts are then sent from the command)");
-    }
+    check_part_file(dict, path, "size", "time");
     map::CoverageSlice slice;
     slice.first_ring = item(dict, "first_ring").cast<std::uint32_t>();
     slice.degenerate = flat<std::uint8_t>(dict, "degenerate");
@@ -499,10 +504,7 @@ map::MapData polygon_part_of(const py::dict& dict) {
             part.vertices.clear();
         }
     }
-    const std::vector<map::Chain> chains = consecutive_chains(dict, "chains", item(dict, "vertices").cast<std::uint64_t>());
-    if (part.vertices.size() != item(dict, "vertices").cast<std::uint64_t>() || part.chains.size() != chains.size() ||
-        !std::equal(chains.begin(), chains.end(), part.chains.begin(),
-                    [](const map::Chain& a, const map::Chain& b) { return a.first == b.first && a.last == b.last; })) {
+    if (!holds_part_chains(part, dict)) {
         throw io::InputError("'" + path + "', layer '" + layer + "': features " + std::to_string(r0) + " to " + std::to_string(r1) +
                              " are not the polygons they were when the map was read");
     }

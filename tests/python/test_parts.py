@@ -258,25 +258,33 @@ def _same_shapefiles(a, b):
         assert a.with_suffix(extension).read_bytes() == b.with_suffix(extension).read_bytes(), extension
 
 
+def _by_parts_as_toposimp_map(binary, tmp_path, arguments, level, tile_points, suffix=".shp"):
+    """toposimp map ARGUMENTS, and the same with the input left in its files and read by the
+    first round's tasks (FirstRoundHere): (the parts' run, its stderr, its output, toposimp map's
+    output, toposimp map's --json report)."""
+    import subprocess
+
+    reference = tmp_path / ("reference" + suffix)
+    done = subprocess.run([binary, "map", *arguments, "-o", str(reference), "--json"], check=True, capture_output=True, text=True)
+    first = FirstRoundHere()
+    output = tmp_path / ("parts" + suffix)
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, level, tile_points, 0, None, False,
+                                             False, input_on_workers=True)
+    assert status == 0, err
+    assert "vertices (left in the file)" in err
+    return first, err, output, reference, done.stdout
+
+
 @pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"], ["--keep-points", "900"]])
 @pytest.mark.parametrize("level", [0, 2])
 def test_first_round_reads_a_shapefile_by_parts(binary, tmp_path, line_shapefile, target, level):
     """A PolyLine Shapefile to a Shapefile, its first round's tasks reading their own records: no
     vertex in the parts handed out (nor in this process: the map is left in the file), the output
     toposimp map's byte for byte."""
-    import subprocess
-
     lines, places = line_shapefile
     arguments = [str(lines), "-p", str(places), *target, *SAME_DATE]
-    reference = tmp_path / "reference.shp"
-    done = subprocess.run([binary, "map", *arguments, "-o", str(reference), "--json"], check=True, capture_output=True, text=True)
-    assert '"pinned_by_crossing":0' not in done.stdout  # (crossings to find)
-    first = FirstRoundHere()
-    output = tmp_path / "parts.shp"
-    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, level, 400, 0, None, False, False,
-                                             input_on_workers=True)
-    assert status == 0, err
-    assert "vertices (left in the file)" in err
+    first, err, output, reference, report = _by_parts_as_toposimp_map(binary, tmp_path, arguments, level, 400)
+    assert '"pinned_by_crossing":0' not in report  # (crossings to find)
     _same_shapefiles(output, reference)
     assert len(first.parts) > 2
     records = [part["records"] for part in first.parts]
@@ -320,18 +328,9 @@ def test_first_round_reads_a_polygon_shapefile_by_parts(binary, tmp_path, polygo
     """A polygon coverage Shapefile to a Shapefile, its first round's tasks making their own arcs
     from their own features: no vertex in the parts handed out (nor in this process), the output
     toposimp map's byte for byte."""
-    import subprocess
-
     cells, places = polygon_shapefile
-    arguments = [str(cells), "-p", str(places), *target, *SAME_DATE]
-    reference = tmp_path / "reference.shp"
-    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True, text=True)
-    first = FirstRoundHere()
-    output = tmp_path / "parts.shp"
-    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, level, 300, 0, None, False, False,
-                                             input_on_workers=True)
-    assert status == 0, err
-    assert "vertices (left in the file)" in err
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, [str(cells), "-p", str(places), *target, *SAME_DATE],
+                                                              level, 300)
     _same_shapefiles(output, reference)
     assert len(first.parts) > 2
     features = [part["features"] for part in first.parts]
@@ -360,19 +359,10 @@ def test_first_round_reads_a_folder_of_layers_by_parts(binary, tmp_path, shapefi
     """Polygon, line and point layers of a folder of Shapefiles, written to one GeoPackage (or the
     polygons to a FlatGeobuf): every layer left in its file but the points (control points, read
     here), the parts of each layer read by their tasks, the output toposimp map's byte for byte."""
-    import subprocess
-
     arguments = [str(shapefile_folder), "-l", "rivers", "-l", "places", "-l", "cells", "-l", "roads", "--keep", "10%", *SAME_DATE]
     if output_suffix == ".fgb":  # (one layer a file)
         arguments = [str(shapefile_folder), "-l", "cells", "--keep", "10%", *SAME_DATE]
-    reference = tmp_path / ("reference" + output_suffix)
-    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True, text=True)
-    first = FirstRoundHere()
-    output = tmp_path / ("parts" + output_suffix)
-    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output), "-v"], first, 1, 300, 0, None, False, False,
-                                             input_on_workers=True)
-    assert status == 0, err
-    assert "vertices (left in the file)" in err
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, output_suffix)
     assert output.read_bytes() == reference.read_bytes()
     kinds = [("polygons_file" in part, pathlib.Path(part.get("polygons_file", part.get("shp"))).name) for part in first.parts]
     assert (True, "cells.shp") in kinds and ((False, "rivers.shp") in kinds) == (output_suffix == ".gpkg")

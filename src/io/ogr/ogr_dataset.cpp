@@ -67,6 +67,13 @@ LayerInFile layer_in_file(const std::string& shp, const std::string& layer, std:
     return planned;
 }
 
+// Is a layer's file still what it was when it was read (its size and modification time)?
+bool unchanged(const LayerInFile& layer) {
+    std::error_code error;
+    const std::uintmax_t size = std::filesystem::file_size(layer.path, error);
+    return !error && size == layer.size && modified_ns(layer.path) == layer.time;
+}
+
 // Memory for a coverage plan's node passes (map::Coverage::plan, 56 bytes a ring point) over
 // files of `file_bytes`: about as much as the files (a quarter of the ring points of a .shp, 16
 // bytes each, a pass: on a 1.9 M-vertex coverage, 2 to 4 passes took no more time than one and
@@ -810,10 +817,7 @@ void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
             throw InputError("'" + reading->path + "', layer '" + reading->layer + "': more than 2 billion vertices in one map");
         }
         for (const LayerInFile* layer : polygons) {
-            std::error_code error;
-            if (std::filesystem::file_size(layer->path, error) != layer->size || error || modified_ns(layer->path) != layer->time) {
-                throw changed(*layer);
-            }
+            if (!unchanged(*layer)) throw changed(*layer);
         }
         in_file->coverage = &coverage;
     }
@@ -1121,13 +1125,9 @@ private:
     VertexView rings_at(std::size_t i) {
         if (i + 1 >= in_file_->record_ring.size()) throw std::logic_error("a feature beyond the features read");
         if (!dataset_ || i != next_) {
-            std::error_code error;
             dataset_ = open_vector(in_file_->path);
             layer_ = &pick_layer(*dataset_, in_file_->path, in_file_->layer);
-            if (std::filesystem::file_size(in_file_->path, error) != in_file_->size || error ||
-                modified_ns(in_file_->path) != in_file_->time) {
-                changed(i);
-            }
+            if (!unchanged(*in_file_)) changed(i);
             layer_->ResetReading();
             if (i > 0 && layer_->SetNextByIndex(static_cast<GIntBig>(i)) != OGRERR_NONE) changed(i);
         }
