@@ -23,6 +23,7 @@ written here. A worker that dies has its tasks rerun elsewhere by Dask; the resu
 and writing, each round's budget and the levels above the tiles run here).
 """
 import argparse
+import contextlib
 import os
 import signal
 import sys
@@ -177,8 +178,17 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                     from toposimp import UsageError
                     raise UsageError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
             else:
-                own["cluster"] = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
-                                              dashboard_address=None)
+                # Nothing on the terminal but the run's own lines (none with -q):
+                # - a new worker process first purges the folders of workers that died without
+                #   cleaning up (a killed run's) and says so at INFO, before LocalCluster quiets its
+                #   logs to warnings: the worker processes, spawned here, start with Dask's logs at
+                #   warnings (warnings still show);
+                # - the scheduler, without a dashboard, still serves HTTP (health, metrics), on
+                #   Dask's dashboard port unless told otherwise, with a warning when another
+                #   cluster's dashboard holds it: any free port.
+                with _environment(DASK_LOGGING__DISTRIBUTED="warning"):
+                    own["cluster"] = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
+                                                  dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"})
                 own["client"] = Client(own["cluster"])
         return own["client"]
 
@@ -198,6 +208,21 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     sys.stdout.write(out)
     sys.stderr.write(err)
     return status
+
+
+@contextlib.contextmanager
+def _environment(**variables):
+    """These environment variables set (for the processes started meanwhile), then as they were."""
+    before = {name: os.environ.get(name) for name in variables}
+    os.environ.update(variables)
+    try:
+        yield
+    finally:
+        for name, value in before.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 def _import_distributed_meanwhile():

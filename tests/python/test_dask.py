@@ -4,6 +4,7 @@ worker is killed in the middle."""
 import os
 import pathlib
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -442,3 +443,33 @@ def test_first_round_on_the_workers_must_fit_their_memory():
     with pytest.raises(UsageError, match="add workers, raise their limits, or use --first-round here"):
         check_first_round_fits(Workers(2**30, 2**30), fits + 1)
     check_first_round_fits(Workers(2**30, 0), 10**9)  # (a worker without a limit: Dask does not stop it)
+
+
+def test_quiet_local_cluster_after_a_killed_run(generated, binary, tmp_path):
+    """-q with the command's own LocalCluster, after a run whose workers were killed and beside
+    another cluster's dashboard: the new workers purge the dead ones' folders, and the scheduler
+    finds a port, without a word on the terminal."""
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "20%", "-q", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    # What a killed worker leaves in Dask's temporary folder: its folder and an unheld lock file.
+    temporary = tmp_path / "dask-temporary"
+    stale = temporary / "dask-worker-space" / "worker-killed"
+    stale.mkdir(parents=True)
+    (stale.parent / "worker-killed.dirlock").touch()
+    output = tmp_path / "dask.gpkg"
+    dashboard = socket.socket()  # Dask's dashboard port held, as by another cluster (unless something holds it already)
+    try:
+        dashboard.bind(("", 8787))
+        dashboard.listen()
+    except OSError:
+        pass
+    with dashboard:
+        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "1"],
+                              capture_output=True, text=True, timeout=300,
+                              env=dict(os.environ, DASK_TEMPORARY_DIRECTORY=str(temporary)))
+    assert done.returncode == 0, done.stderr
+    assert not stale.exists()  # (purged: the nanny met it)
+    assert done.stderr == ""
+    assert output.read_bytes() == reference.read_bytes()
