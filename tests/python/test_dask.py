@@ -470,6 +470,6 @@ def test_quiet_local_cluster_after_a_killed_run(generated, binary, tmp_path):
                               capture_output=True, text=True, timeout=300,
                               env=dict(os.environ, DASK_TEMPORARY_DIRECTORY=str(temporary)))
     assert done.returncode == 0, done.stderr
-    assert not stale.exists()  # (purged: the nanny met it)
+    assert not stale.exists()  # (purged: a new worker met it)
     assert done.stderr == ""
     assert output.read_bytes() == reference.read_bytes()
