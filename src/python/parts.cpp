@@ -683,7 +683,7 @@ FirstSteps::FirstSteps(const map::MapData& map, const io::VerticesInFile* in_fil
         for (const io::LayerInFile* layer : in_file->in_chain_order()) {
             const std::vector<std::uint64_t>& first = layer->record_vertex;
             const std::vector<std::uint32_t>& chain = layer->record_chain;
-            if (chain.empty() || chain.front() != next || (layer->polygons ? in_file->coverage == nullptr : false)) {
+            if (chain.empty() || chain.front() != next || (layer->polygons && in_file->coverage == nullptr)) {
                 throw std::logic_error("a map's vertices in a file, not its chains");
             }
             const std::uint64_t records = first.size() - 1;

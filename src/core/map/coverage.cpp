@@ -122,6 +122,11 @@ Neighbours neighbours_at(std::span<const Point> ring, std::span<const std::uint3
     return {before, after};
 }
 
+// Which of p's coordinates are −0.0: 1 for x, 2 for y.
+std::uint8_t zero_signs(Point p) {
+    return static_cast<std::uint8_t>((p.x == 0 && std::signbit(p.x) ? 1 : 0) | (p.y == 0 && std::signbit(p.y) ? 2 : 0));
+}
+
 }  // namespace
 
 std::uint32_t Coverage::add_ring(std::span<const Point> ring) {
@@ -279,7 +284,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     map_ = &map;
     first_chain_ = static_cast<std::uint32_t>(map.chains.size());
     first_vertex_ = map.chains.empty() ? 0 : map.chains.back().last + 1;
-    std::vector<std::uint32_t> sequence, arc, all;
+    std::vector<std::uint32_t> sequence, arc;
     auto changed = [] { return std::invalid_argument("the rings are not those of the first pass"); };
 
     // 1. The rings' sizes, which are degenerate, and each one's clean occurrences, counted by
@@ -373,10 +378,7 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
         new_chains_before_[r] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
         if (degenerate_[r]) {
             const std::uint32_t chain = add_chain_of(ring.size());
-            map.freeze(chain);
-            all.resize(ring.size());
-            for (std::uint32_t k = 0; k < all.size(); ++k) all[k] = k;
-            note_negative_zeros(ring, all, map.chains[chain].first);
+            map.freeze(chain);  // (ring_from gives it as it is given: no zero to note)
             uses_.push_back({chain, false});
             ++degenerate_rings_;
             ++r;
@@ -528,8 +530,7 @@ std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point
 void Coverage::note_negative_zeros(std::span<const Point> ring, std::span<const std::uint32_t> positions, std::uint32_t first_vertex) {
     for (std::size_t k = 0; k < positions.size(); ++k) {
         const Point p = ring[positions[k]];
-        const std::uint8_t signs = static_cast<std::uint8_t>((p.x == 0 && std::signbit(p.x) ? 1 : 0) | (p.y == 0 && std::signbit(p.y) ? 2 : 0));
-        if (signs != 0) negative_zeros_.emplace(first_vertex + static_cast<std::uint32_t>(k), signs);
+        if (const std::uint8_t signs = zero_signs(p); signs != 0) negative_zeros_.emplace(first_vertex + static_cast<std::uint32_t>(k), signs);
     }
 }
 
@@ -537,8 +538,7 @@ Point Coverage::owner_zeros(std::uint32_t v, Point p) const {
     if (p.x != 0 && p.y != 0) return p;
     std::uint8_t signs = 0;
     if (v < map_->vertices.size()) {  // (built: the vertex is there)
-        const Point q = map_->vertices[v];
-        signs = static_cast<std::uint8_t>((q.x == 0 && std::signbit(q.x) ? 1 : 0) | (q.y == 0 && std::signbit(q.y) ? 2 : 0));
+        signs = zero_signs(map_->vertices[v]);
     } else if (const auto found = negative_zeros_.find(v); found != negative_zeros_.end()) {
         signs = found->second;
     }

@@ -119,11 +119,11 @@ public:
     // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
-    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons
-    // (no record deleted), or of 2D points (read whole), their vertices are left in the files (vertices_in_file() says
-    // where; the map gets its chains only), for an engine that reads them by parts; else read as
-    // without it. (The output must then be written by write() through OGR, which reads them
-    // again: not as GeoJSON or TopoJSON.)
+    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons (no
+    // record deleted), or of 2D points (read whole), their vertices are left in the files
+    // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
+    // them by parts; else read as without it. (The output must then be written by write() through
+    // OGR, which reads them again: not as GeoJSON or TopoJSON.)
     static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
                            bool prj_as_file = false, bool vertices_in_file = false);
 
