@@ -53,12 +53,13 @@ Dask options:
                        searched for crossings, queued and its budget selected on the workers;
                        this process never holds an engine over the whole map). With 'workers',
                        Shapefiles (a .shp, or a folder of them) of plain PolyLines or of 2D
-                       polygons (no record deleted), written through GDAL (any output but
-                       GeoJSON or TopoJSON; at one target, without --decimals, --precision or
-                       --levels) are read by parts on the workers (2D point layers among them
-                       are read here, as control points): this process then never holds their
-                       vertices, and the .shp files must be at the same absolute paths,
-                       unchanged, on every worker. Other inputs are read here.
+                       polygons (no record deleted) and GeoPackages (2D (Multi)LineString and
+                       (Multi)Polygon layers), written through GDAL (any output but GeoJSON or
+                       TopoJSON; at one target, without --decimals, --precision or --levels)
+                       are read by parts on the workers (2D point layers among them are read
+                       here, as control points): this process then never holds their vertices,
+                       and the input files must be at the same absolute paths, unchanged, on
+                       every worker. Other inputs are read here.
   --send-input         with --first-round workers: read the input here and send the workers its
                        parts (for workers that cannot see the input)
 
@@ -477,7 +478,7 @@ class _Tasks:
         cuts, by_parts, part = [], False, None
         for k in range(len(steps)):
             part = steps.part(k)
-            by_parts = by_parts or "shp" in part or "polygons_file" in part
+            by_parts = by_parts or "shp" in part or "polygons_file" in part or "lines_file" in part
             cuts.append(submit(_first_cut, part, plan, options))
         del part
         facts = self._gather(client, [submit(_item, cut, 0) for cut in cuts],

@@ -19,6 +19,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace toposimp::python {
@@ -390,16 +391,27 @@ void add_chains(py::dict& dict, const map::MapData& map, const io::LayerInFile& 
     dict["first_chain"] = c0;
 }
 
+// Where features [r0, r1) of a layer left in its file are (a GeoPackage's: their FIDs too), under
+// `path_key`.
+void add_run(py::dict& dict, const io::LayerInFile& layer, const char* path_key, std::uint64_t r0, std::uint64_t r1) {
+    const io::FeatureRun run = layer.run(r0, r1);
+    dict[path_key] = layer.path;
+    dict["layer"] = layer.layer;
+    dict["size"] = std::uint64_t{layer.size};
+    dict["time"] = layer.time;
+    dict["features"] = py::make_tuple(r0, r1);
+    if (run.by_fid) dict["fids"] = py::make_tuple(run.fid_first, run.fid_end);
+}
+
+// The run of features a part made by add_run reads, its file checked first (check_part_file).
+io::FeatureRun run_of(const py::dict& dict, const char* path_key);
+
 // Features [r0, r1) of a polygon layer a map's vertices are in as a part: where they are, the
 // coverage's slice for their rings (map::arcs_of), and the chains they make.
 py::dict polygon_part_dict(const map::MapData& map, const io::LayerInFile& layer, const map::Coverage& coverage, std::uint64_t r0,
                            std::uint64_t r1) {
     py::dict dict;
-    dict["polygons_file"] = layer.path;
-    dict["layer"] = layer.layer;
-    dict["size"] = std::uint64_t{layer.size};
-    dict["time"] = layer.time;
-    dict["features"] = py::make_tuple(r0, r1);
+    add_run(dict, layer, "polygons_file", r0, r1);
     const map::CoverageSlice slice = coverage.slice(layer.record_ring[r0], layer.record_ring[r1]);
     dict["first_ring"] = slice.first_ring;
     dict["degenerate"] = array_of(slice.degenerate);
@@ -423,6 +435,11 @@ py::dict file_part_dict(const map::MapData& map, const io::VerticesInFile& in_fi
                         std::uint64_t r1) {
     if (layer.polygons) return polygon_part_dict(map, layer, *in_file.coverage, r0, r1);
     py::dict dict;
+    if (layer.ogr_lines) {
+        add_run(dict, layer, "lines_file", r0, r1);
+        add_chains(dict, map, layer, r0, r1);
+        return dict;
+    }
     dict["shp"] = layer.path;
     dict["layer"] = layer.layer;
     dict["shp_size"] = std::uint64_t{layer.size};
@@ -443,6 +460,20 @@ void check_part_file(const py::dict& dict, const std::string& path, const char* 
                              ": every worker reads the input at the same absolute path, unchanged (or use --send-input: the "
                              "parts are then sent from the command)");
     }
+}
+
+io::FeatureRun run_of(const py::dict& dict, const char* path_key) {
+    io::FeatureRun run;
+    run.path = item(dict, path_key).cast<std::string>();
+    run.layer = item(dict, "layer").cast<std::string>();
+    std::tie(run.first, run.end) = item(dict, "features").cast<std::pair<std::uint64_t, std::uint64_t>>();
+    if (dict.contains("fids")) {
+        run.by_fid = true;
+        std::tie(run.fid_first, run.fid_end) = item(dict, "fids").cast<std::pair<std::int64_t, std::int64_t>>();
+    }
+    if (run.end < run.first || run.fid_end < run.fid_first) malformed("a part's features run backwards");
+    check_part_file(dict, run.path, "size", "time");
+    return run;
 }
 
 // Does `part`, read from its file, hold the chains the part says (file_part_dict's "chains" and
@@ -471,12 +502,27 @@ map::MapData file_part_of(const py::dict& dict) {
     return part;
 }
 
+// A part read from a GeoPackage's lines layer (file_part_dict): the same chains, or InputError.
+map::MapData lines_part_of(const py::dict& dict) {
+    const io::FeatureRun run = run_of(dict, "lines_file");
+    map::MapData part;
+    {
+        py::gil_scoped_release release;
+        part = io::read_lines(run);
+    }
+    if (!holds_part_chains(part, dict)) {
+        throw io::InputError("'" + run.path + "', layer '" + run.layer + "': features " + std::to_string(run.first) + " to " +
+                             std::to_string(run.end) + " are not the lines they were when the map was read");
+    }
+    return part;
+}
+
 // A part read from its polygon layer (polygon_part_dict): the same chains, or InputError.
 map::MapData polygon_part_of(const py::dict& dict) {
-    const auto path = item(dict, "polygons_file").cast<std::string>();
-    const auto layer = item(dict, "layer").cast<std::string>();
-    const auto [r0, r1] = item(dict, "features").cast<std::pair<std::uint64_t, std::uint64_t>>();
-    check_part_file(dict, path, "size", "time");
+    const io::FeatureRun run = run_of(dict, "polygons_file");
+    const std::string& path = run.path;
+    const std::string& layer = run.layer;
+    const std::uint64_t r0 = run.first, r1 = run.end;
     map::CoverageSlice slice;
     slice.first_ring = item(dict, "first_ring").cast<std::uint32_t>();
     slice.degenerate = flat<std::uint8_t>(dict, "degenerate");
@@ -497,7 +543,7 @@ map::MapData polygon_part_of(const py::dict& dict) {
         py::gil_scoped_release release;
         try {
             part = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
-                io::for_each_polygon_ring(path, layer, r0, r1, visit);
+                io::for_each_polygon_ring(run, visit);
             });
         } catch (const std::invalid_argument&) {
             part.chains.clear();
@@ -514,6 +560,7 @@ map::MapData polygon_part_of(const py::dict& dict) {
 map::MapData part_of(const py::dict& dict) {
     if (dict.contains("shp")) return file_part_of(dict);
     if (dict.contains("polygons_file")) return polygon_part_of(dict);
+    if (dict.contains("lines_file")) return lines_part_of(dict);
     map::MapData part;
     part.vertices = points_of(dict, "vertices");
     if (part.vertices.size() >= std::numeric_limits<std::uint32_t>::max()) malformed("too many vertices");
@@ -1131,7 +1178,7 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
                             map::MapData arcs;
                             try {
                                 arcs = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
-                                    io::for_each_polygon_ring(layer->path, layer->layer, r0, r, visit);
+                                    io::for_each_polygon_ring(layer->run(r0, r), visit);
                                 });
                             } catch (const std::invalid_argument&) {
                                 throw io::InputError("'" + layer->path + "' changed while toposimp ran; nothing written");
@@ -1139,6 +1186,22 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
                             for (const Point p : arcs.vertices) add(p);
                             read += arcs.vertices.size();
                         }
+                        continue;
+                    }
+                    if (layer->ogr_lines) {
+                        const std::vector<std::uint64_t>& first = layer->record_vertex;
+                        std::uint64_t in_layer = 0;
+                        for (std::uint64_t r = 0; r + 1 < first.size();) {
+                            const std::uint64_t r0 = r;
+                            while (r + 1 < first.size() && (r == r0 || first[r] - first[r0] < budget)) ++r;
+                            const map::MapData lines = io::read_lines(layer->run(r0, r));
+                            for (const Point p : lines.vertices) add(p);
+                            in_layer += lines.vertices.size();
+                        }
+                        if (in_layer != first.back() - first.front()) {
+                            throw io::InputError("'" + layer->path + "' changed while toposimp ran; nothing written");
+                        }
+                        read += in_layer;
                         continue;
                     }
                     std::optional<io::ShapeReader> reader = io::ShapeReader::open(layer->path);

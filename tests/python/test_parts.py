@@ -372,6 +372,113 @@ def test_first_round_reads_a_folder_of_layers_by_parts(binary, tmp_path, shapefi
     assert all(one["first_chain"] + len(one["chains"]) == other["first_chain"] for one, other in zip(first.parts, first.parts[1:]))
 
 
+@pytest.fixture(scope="module")
+def geopackage(tmp_path_factory, shapefile_folder):
+    """The folder of Shapefiles as one GeoPackage (ogr2ogr: FIDs from 1), a layer each; and a copy
+    with features deleted from the cells and the rivers (FIDs with gaps)."""
+    import shutil
+    import sqlite3
+    import subprocess
+
+    out = tmp_path_factory.mktemp("geopackage")
+    path = out / "map.gpkg"
+    for name in ("cells", "rivers", "roads", "places"):
+        subprocess.run(["ogr2ogr", "-f", "GPKG", *(["-update"] if path.exists() else []), str(path), str(shapefile_folder / (name + ".shp"))],
+                       check=True, capture_output=True)
+    gaps = out / "gaps.gpkg"
+    shutil.copy(path, gaps)
+    with sqlite3.connect(gaps) as db:
+        db.execute("DELETE FROM cells WHERE fid IN (2, 9)")
+        db.execute("DELETE FROM rivers WHERE fid IN (1, 5, 6)")
+    return path, gaps
+
+
+@pytest.mark.parametrize("which", ["whole", "gaps"])
+@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"]])
+def test_first_round_reads_a_geopackage_by_parts(binary, tmp_path, geopackage, which, target):
+    """Polygon, line and point layers of one GeoPackage (its FIDs with gaps or not) to a
+    GeoPackage: every layer left in its file but the points (control points, read here), each part
+    read by its task by a range of FIDs, the output toposimp map's byte for byte."""
+    path = geopackage[0] if which == "whole" else geopackage[1]
+    arguments = [str(path), "-l", "rivers", "-l", "places", "-l", "cells", "-l", "roads", *target, *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, ".gpkg")
+    assert output.read_bytes() == reference.read_bytes()
+    kinds = [("polygons_file" in part, part["layer"]) for part in first.parts]
+    assert {kind for kind in kinds} == {(False, "rivers"), (False, "roads"), (True, "cells")}
+    assert kinds == sorted(kinds, key=lambda kind: kind[0])  # (the lines' chains first, then the coverage's arcs)
+    assert all(part.get("lines_file", part.get("polygons_file")) == str(path.resolve()) for part in first.parts)
+    assert all(isinstance(part["vertices"], int) for part in first.parts)
+    for layer in ("rivers", "cells"):
+        runs = [(part["features"], part["fids"]) for part in first.parts if part["layer"] == layer]
+        assert len(runs) > 1
+        assert all(one[0][1] == other[0][0] and one[1][1] == other[1][0] for one, other in zip(runs, runs[1:]))
+        assert runs[0][0][0] == 0 and runs[0][1][0] == (1 if which == "whole" or layer == "cells" else 2)
+    assert "300 control points" in err
+
+
+@pytest.mark.parametrize("damage, message", [
+    (lambda part: _touched(pathlib.Path(part.get("lines_file", part.get("polygons_file")))) or part,
+     "cannot be read here as it was when the map was read"),
+    (lambda part: dict(part, fids=(part["fids"][0], part["fids"][1] + 1)), "holds more features than it did|the layer ends before it"),
+    (lambda part: dict(part, features=(part["features"][0], part["features"][1] + 1)), "the layer ends before it|holds more"),
+    (lambda part: dict(part, fids=(part["fids"][1], part["fids"][0])), "a part's features run backwards"),
+])
+def test_a_geopackage_part_read_from_a_changed_input_stops_the_run(tmp_path, geopackage, damage, message):
+    """A task that reads its features from a GeoPackage that is not the one read here, or by
+    another range, stops the run with the reason; nothing is written."""
+    import shutil
+
+    shutil.copy(geopackage[0], tmp_path / "map.gpkg")
+    first = FirstRoundHere(damage=lambda at, value: damage(value) if at == "part" else value)
+    output = tmp_path / "out.gpkg"
+    with pytest.raises(ValueError, match=message):
+        _toposimp.run_command(["map", str(tmp_path / "map.gpkg"), "-l", "rivers", "--keep", "10%", "-o", str(output)], first, 1, 300, 0,
+                              None, False, False, input_on_workers=True)
+    assert not output.exists()
+
+
+def test_a_geopackage_changed_before_writing_leaves_no_output(tmp_path, geopackage):
+    """The GeoPackage read again to write the output, a feature deleted since the map was read
+    (the same size and time): refused."""
+    import os
+    import shutil
+    import sqlite3
+
+    path = tmp_path / "map.gpkg"
+    shutil.copy(geopackage[0], path)
+
+    def change(value):
+        stat = path.stat()
+        with sqlite3.connect(path) as db:
+            db.execute("DELETE FROM rivers WHERE fid = 3")
+        db.close()
+        os.utime(path, ns=(stat.st_atime_ns, stat.st_mtime_ns))
+        assert path.stat().st_size == stat.st_size
+        return value
+
+    first = FirstRoundHere(damage=lambda at, value: change(value) if at == "live" else value)
+    output = tmp_path / "out.gpkg"
+    status, out, err = _toposimp.run_command(["map", str(path), "-l", "rivers", "--keep", "10%", "-o", str(output)], first, 1, 300, 0,
+                                             None, False, False, input_on_workers=True)
+    assert status == 2
+    assert "changed while toposimp ran" in err and "nothing written" in err
+    assert not output.exists()
+
+
+def test_a_geopackage_with_3d_lines_is_read_whole(tmp_path, geopackage):
+    """A GeoPackage lines layer whose features carry Z: the dataset is read here, whole."""
+    import subprocess
+
+    path = tmp_path / "z.gpkg"
+    subprocess.run(["ogr2ogr", "-f", "GPKG", str(path), str(geopackage[0]), "rivers", "-dim", "XYZ"], check=True, capture_output=True)
+    first = FirstRoundHere()
+    status, out, err = _toposimp.run_command(["map", str(path), "--keep", "10%", "-o", str(tmp_path / "out.gpkg"), "-v"], first, 1, 300, 0,
+                                             None, False, False, input_on_workers=True)
+    assert status == 0, err
+    assert "(left in the file)" not in err and "the input is read here, whole" in err
+    assert all("lines_file" not in part and "polygons_file" not in part for part in first.parts)
+
+
 def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
     """A PolyLineZ layer among the layers asked for: every layer is read whole, and the parts
     carry their vertices."""

@@ -56,6 +56,12 @@ std::string layer_shp(const std::string& path, const std::string& name) {
     return {};
 }
 
+// A GeoPackage on disk (not behind /vsi…): its layers may be left in it, read by FID ranges.
+bool is_local_gpkg(const std::string& path, const std::string& driver) {
+    std::error_code error;
+    return driver == "GPKG" && path.rfind("/vsi", 0) != 0 && std::filesystem::is_regular_file(path, error);
+}
+
 // A layer's file as VerticesInFile keeps it: where it is (absolute: other processes read it),
 // its size and modification time.
 LayerInFile layer_in_file(const std::string& shp, const std::string& layer, std::uintmax_t size) {
@@ -273,6 +279,21 @@ private:
     std::string path_;
 };
 
+// The parts of a 2D (Multi)LineString, each a chain of the map if it is not empty (add_geometry);
+// false for any other geometry.
+bool line_parts(const OGRGeometry& geometry, std::vector<const OGRLineString*>& parts) {
+    parts.clear();
+    if (geometry.Is3D() || geometry.IsMeasured()) return false;
+    if (geometry.getGeometryType() == wkbLineString) {
+        parts.push_back(geometry.toLineString());
+    } else if (geometry.getGeometryType() == wkbMultiLineString) {
+        for (const OGRLineString* part : *geometry.toMultiLineString()) parts.push_back(part);
+    } else {
+        return false;
+    }
+    return true;
+}
+
 // A .shp record's shape as OGR reads a PolyLine: one part a LineString, more a
 // MultiLineString.
 std::unique_ptr<OGRGeometry> shape_geometry(const ShapeRecord& record) {
@@ -397,7 +418,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // With `leave_in_file` the layer's vertices stay in its .shp (`shp`: the input, or the layer's
     // file in a folder), or NotInFile is thrown; the .prj goes to the output as it is only where
     // it would without it.
-    const std::string shp = leave_in_file ? layer_shp(path, layer->name) : std::string();
+    const bool gpkg = leave_in_file && is_local_gpkg(path, summary.driver);
+    const std::string shp = !leave_in_file ? std::string() : gpkg ? path : layer_shp(path, layer->name);
     const bool copy_prj = prj_as_file && is_local_shp(path);
     const bool decode = summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
                         (leave_in_file ? !shp.empty() : copy_prj) &&
@@ -490,15 +512,62 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             layer->srs.reset(srs->Clone());
         }
     };
-    // A 2D polygon layer left in its file (VerticesInFile with a coverage): the features are read
-    // with their attributes, their rings counted and checked but not kept (the rings of every
-    // such layer are planned as one coverage from the files at the end, in finish()). NotInFile if
-    // a feature is not a 2D polygon, or its FID is not its index.
-    auto plan_polygons_in_file = [&] {
+    // A feature's FID where its run will find it (FeatureRun): a Shapefile's must be its index (no
+    // record deleted), a GeoPackage's above the one before; NotInFile otherwise.
+    auto note_fid = [&](LayerInFile& planned, GIntBig fid) {
+        if (!gpkg) {
+            if (fid != static_cast<GIntBig>(layer->features.size())) throw NotInFile();
+            return;
+        }
+        if (fid == std::numeric_limits<GIntBig>::max() || (!planned.record_fid.empty() && fid <= planned.record_fid.back())) {
+            throw NotInFile();
+        }
+        planned.record_fid.push_back(fid);
+    };
+    auto end_fids = [&](LayerInFile& planned) {
+        if (gpkg) planned.record_fid.push_back(planned.record_fid.empty() ? 0 : planned.record_fid.back() + 1);
+    };
+    // A layer left in its file (VerticesInFile), its planned layer begun: the layer's file
+    // checked, then each feature read with its attributes, its FID noted, `per_feature()` called,
+    // its geometry (if any) given to `add(geometry, label)` to fill its shape's items (or throw
+    // NotInFile) and dropped; then the FIDs' end noted and the planned layer kept.
+    auto plan_features = [&](LayerInFile&& planned, Layer::Kind kind, auto&& per_feature, auto&& add) {
+        for (;;) {
+            OGRFeatureUniquePtr feature{source.GetNextFeature()};
+            if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
+            if (!feature) break;
+            note_fid(planned, feature->GetFID());
+            per_feature(planned);
+            Layer::Shape shape;
+            shape.first = static_cast<std::uint32_t>(layer->items.size());
+            bool empty = true;
+            if (const OGRGeometry* geometry = feature->GetGeometryRef()) {
+                empty = geometry->IsEmpty();
+                shape.type = geometry->getGeometryType();
+                shape.kind = kind;
+                add(*geometry, feature_label(path, source, feature->GetFID()));
+                shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
+            }
+            count_feature(summary_of_layer, shape, empty);
+            feature->SetGeometryDirectly(nullptr);
+            layer->shapes.push_back(shape);
+            layer->features.push_back(std::move(feature));
+        }
+        per_feature(planned);  // (one more)
+        end_fids(planned);
+        in_file->layers.push_back(std::move(planned));
+    };
+    auto planned_layer = [&] {
         std::error_code error;
         const std::uintmax_t size = std::filesystem::file_size(shp, error);
         if (error || !map.vertices.empty() || carries_zm) throw NotInFile();
-        LayerInFile planned = layer_in_file(shp, layer->name, size);
+        return layer_in_file(shp, layer->name, size);
+    };
+    // A 2D polygon layer left in its file (VerticesInFile with a coverage): its rings counted and
+    // checked but not kept (the rings of every such layer are planned as one coverage from the
+    // files at the end, in finish()). NotInFile if a feature is not a 2D polygon.
+    auto plan_polygons_in_file = [&] {
+        LayerInFile planned = planned_layer();
         planned.polygons = true;
         Box& extent = in_file->extent;
         std::uint32_t& rings = in_file_rings;
@@ -518,38 +587,54 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 layer->items.push_back(rings++);
             }
         };
-        for (;;) {
-            OGRFeatureUniquePtr feature{source.GetNextFeature()};
-            if (CPLGetLastErrorType() >= CE_Failure) throw read_error();
-            if (!feature) break;
-            // (Parts are read from a feature's index on: the index must be the FID, no record
-            // deleted.)
-            if (feature->GetFID() != static_cast<GIntBig>(layer->features.size())) throw NotInFile();
-            planned.record_ring.push_back(rings);
-            Layer::Shape shape;
-            shape.first = static_cast<std::uint32_t>(layer->items.size());
-            bool empty = true;
-            if (const OGRGeometry* geometry = feature->GetGeometryRef()) {
-                empty = geometry->IsEmpty();
-                shape.type = geometry->getGeometryType();
-                shape.kind = Layer::Kind::polygons;
-                const std::string label = feature_label(path, source, feature->GetFID());
-                if (shape.type == wkbPolygon) {
-                    count_rings(*geometry->toPolygon(), label);
-                } else if (shape.type == wkbMultiPolygon) {
-                    for (const OGRPolygon* polygon : *geometry->toMultiPolygon()) count_rings(*polygon, label);
+        plan_features(
+            std::move(planned), Layer::Kind::polygons, [&](LayerInFile& into) { into.record_ring.push_back(rings); },
+            [&](const OGRGeometry& geometry, const std::string& label) {
+                if (geometry.getGeometryType() == wkbPolygon) {
+                    count_rings(*geometry.toPolygon(), label);
+                } else if (geometry.getGeometryType() == wkbMultiPolygon) {
+                    for (const OGRPolygon* polygon : *geometry.toMultiPolygon()) count_rings(*polygon, label);
                 } else {
                     throw NotInFile();
                 }
-                shape.count = static_cast<std::uint32_t>(layer->items.size()) - shape.first;
-            }
-            count_feature(summary_of_layer, shape, empty);
-            feature->SetGeometryDirectly(nullptr);
-            layer->shapes.push_back(shape);
-            layer->features.push_back(std::move(feature));
-        }
-        planned.record_ring.push_back(rings);
-        in_file->layers.push_back(std::move(planned));
+            });
+    };
+    // A GeoPackage's 2D lines layer left in its file: each feature's parts become the map's chains
+    // (as add_geometry makes them) without their vertices. NotInFile if a feature is not a 2D
+    // (Multi)LineString.
+    auto plan_lines_through_ogr = [&] {
+        LayerInFile planned = planned_layer();
+        planned.ogr_lines = true;
+        Box& extent = in_file->extent;
+        std::uint64_t& vertices = in_file->vertices;  // (the lines' so far)
+        plan_features(
+            std::move(planned), Layer::Kind::lines,
+            [&](LayerInFile& into) {
+                into.record_vertex.push_back(vertices);
+                into.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
+            },
+            [&](const OGRGeometry& geometry, const std::string& label) {
+                thread_local std::vector<const OGRLineString*> parts;
+                if (!line_parts(geometry, parts)) throw NotInFile();
+                for (const OGRLineString* part : parts) {
+                    if (part->IsEmpty()) {
+                        layer->items.push_back(kEmptyPart);
+                        continue;
+                    }
+                    const auto count = static_cast<std::uint64_t>(part->getNumPoints());
+                    if (vertices + count > std::numeric_limits<std::uint32_t>::max() / 2) {
+                        throw InputError(label + ": more than 2 billion vertices in one map");
+                    }
+                    for (int i = 0; i < part->getNumPoints(); ++i) {
+                        const Point p{part->getX(i), part->getY(i)};
+                        if (!std::isfinite(p.x) || !std::isfinite(p.y)) read_points(*part, label);  // (its refusal)
+                        extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
+                    }
+                    map.chains.push_back({static_cast<std::uint32_t>(vertices), static_cast<std::uint32_t>(vertices + count - 1)});
+                    layer->items.push_back(static_cast<std::uint32_t>(map.chains.size() - 1));
+                    vertices += count;
+                }
+            });
     };
     // A 2D point layer beside the layers left in their files is read as without them: its points
     // are control points (the command holds those anyway), written back as they were.
@@ -557,8 +642,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     const std::size_t chains_before = map.chains.size();
     if (leave_in_file) {
         const bool polygon_layer = (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) &&
-                                   summary.driver == "ESRI Shapefile";
-        if (!point_layer && (shp.empty() || (!decode && !polygon_layer))) throw NotInFile();
+                                   (summary.driver == "ESRI Shapefile" || gpkg);
+        const bool gpkg_lines = gpkg && (layer->geometry_type == wkbLineString || layer->geometry_type == wkbMultiLineString);
+        if (!point_layer && (shp.empty() || (!decode && !polygon_layer && !gpkg_lines))) throw NotInFile();
         if (!in_file) in_file.emplace();
     }
     source.ResetReading();
@@ -627,7 +713,11 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     if (!decoded) {
         if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
         if (leave_in_file && !point_layer) {
-            plan_polygons_in_file();
+            if (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) {
+                plan_polygons_in_file();
+            } else {
+                plan_lines_through_ogr();
+            }
             decoded = true;
         }
     }
@@ -807,7 +897,7 @@ void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
                 [&](const std::function<void(std::span<const Point>)>& visit) {
                     for (const LayerInFile* layer : polygons) {
                         reading = layer;
-                        for_each_polygon_ring(layer->path, layer->layer, 0, layer->record_ring.size() - 1, visit);
+                        for_each_polygon_ring(layer->run(0, layer->record_ring.size() - 1), visit);
                     }
                 },
                 map, coverage_pass_bytes(bytes));
@@ -1068,32 +1158,114 @@ void visit_rings(const OGRFeature& feature, const std::string& path, OGRLayer& l
 
 }  // namespace
 
-void for_each_polygon_ring(const std::string& path, const std::string& layer_name, std::uint64_t first, std::uint64_t end,
+namespace {
+
+// A run of features read in order, each checked to be where the run says (InputError naming the
+// feature otherwise).
+class FeatureReader {
+public:
+    explicit FeatureReader(const FeatureRun& run) : run_(run), dataset_(open_vector(run.path)), layer_(&pick_layer(*dataset_, run.path, run.layer)) {
+        QuietGdal quiet;
+        layer_->ResetReading();
+        if (run.by_fid) {
+            // (The FID column is the table's integer primary key: a range of it is a range of
+            // its rows, read in their order.)
+            std::string column = layer_->GetFIDColumn();
+            if (column.empty()) fail(run.first, ": it has no FID column");
+            for (std::size_t at = 0; (at = column.find('"', at)) != std::string::npos; at += 2) column.insert(at, 1, '"');
+            const std::string filter = "\"" + column + "\" >= " + std::to_string(run.fid_first) + " AND \"" + column + "\" < " +
+                                       std::to_string(run.fid_end);
+            if (layer_->SetAttributeFilter(filter.c_str()) != OGRERR_NONE) fail(run.first, ": its FIDs cannot be read by range" + last_gdal_error());
+        } else if (run.first > 0 && layer_->SetNextByIndex(static_cast<GIntBig>(run.first)) != OGRERR_NONE) {
+            fail(run.first, ": no such feature" + last_gdal_error());
+        }
+    }
+
+    // The run's next feature, or nullptr after its last.
+    OGRFeatureUniquePtr next() {
+        QuietGdal quiet;
+        if (next_ == run_.end) {
+            // (A range of FIDs holding more features than it did: the file changed.)
+            if (run_.by_fid && OGRFeatureUniquePtr(layer_->GetNextFeature())) fail(next_, ": the layer holds more features than it did");
+            return nullptr;
+        }
+        OGRFeatureUniquePtr feature{layer_->GetNextFeature()};
+        if (CPLGetLastErrorType() >= CE_Failure || !feature) fail(next_, feature ? last_gdal_error() : ": the layer ends before it");
+        const GIntBig fid = feature->GetFID();
+        if (run_.by_fid ? fid <= last_fid_ : fid != static_cast<GIntBig>(next_)) {
+            fail(next_, " has FID " + std::to_string(fid) + (run_.by_fid ? "" : " (a deleted record?): it cannot be read by index"));
+        }
+        last_fid_ = fid;
+        ++next_;
+        return feature;
+    }
+
+    OGRLayer& layer() { return *layer_; }
+    const FeatureRun& run() const { return run_; }
+
+private:
+    [[noreturn]] void fail(std::uint64_t feature, const std::string& why) const {
+        throw InputError("'" + run_.path + "', layer '" + run_.layer + "', feature " + std::to_string(feature) + why);
+    }
+
+    FeatureRun run_;
+    DatasetPtr dataset_;
+    OGRLayer* layer_;
+    std::uint64_t next_ = run_.first;
+    GIntBig last_fid_ = std::numeric_limits<GIntBig>::min();
+};
+
+// A feature's lines as chains of `lines` (read_lines), or false if it is not a 2D
+// (Multi)LineString.
+bool add_lines(const OGRFeature& feature, const std::string& label, map::MapData& lines) {
+    const OGRGeometry* geometry = feature.GetGeometryRef();
+    if (geometry == nullptr) return true;
+    thread_local std::vector<const OGRLineString*> parts;
+    if (!line_parts(*geometry, parts)) return false;
+    for (const OGRLineString* part : parts) {
+        if (part->IsEmpty()) continue;
+        if (lines.vertices.size() + static_cast<std::size_t>(part->getNumPoints()) >= std::numeric_limits<std::uint32_t>::max() / 2) {
+            throw InputError(label + ": more than 2 billion vertices in one part of the map");
+        }
+        lines.add_chain(read_points(*part, label));
+    }
+    return true;
+}
+
+}  // namespace
+
+FeatureRun LayerInFile::run(std::uint64_t first, std::uint64_t end) const {
+    FeatureRun run{path, layer, first, end, !record_fid.empty()};
+    if (run.by_fid) {
+        run.fid_first = record_fid.at(first);
+        run.fid_end = record_fid.at(end);
+    }
+    return run;
+}
+
+void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>)>& visit) {
+    FeatureReader reader(run);
+    while (const OGRFeatureUniquePtr feature = reader.next()) visit_rings(*feature, run.path, reader.layer(), visit);
+}
+
+void for_each_polygon_ring(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end,
                            const std::function<void(std::span<const Point>)>& visit) {
-    DatasetPtr dataset = open_vector(path);
-    OGRLayer& layer = pick_layer(*dataset, path, layer_name);
-    QuietGdal quiet;
-    layer.ResetReading();
-    if (first > 0 && layer.SetNextByIndex(static_cast<GIntBig>(first)) != OGRERR_NONE) {
-        throw InputError("'" + path + "', layer '" + layer.GetName() + "': no feature " + std::to_string(first) + last_gdal_error());
+    for_each_polygon_ring(FeatureRun{path, layer, first, end}, visit);
+}
+
+map::MapData read_lines(const FeatureRun& run) {
+    FeatureReader reader(run);
+    map::MapData lines;
+    while (const OGRFeatureUniquePtr feature = reader.next()) {
+        const std::string label = feature_label(run.path, reader.layer(), feature->GetFID());
+        if (!add_lines(*feature, label, lines)) throw InputError(label + ": not a 2D LineString or MultiLineString, as it was when the map was read");
     }
-    for (std::uint64_t k = first; k < end; ++k) {
-        OGRFeatureUniquePtr feature{layer.GetNextFeature()};
-        if (CPLGetLastErrorType() >= CE_Failure || !feature) {
-            throw InputError("error reading '" + path + "', layer '" + layer.GetName() + "', feature " + std::to_string(k) +
-                             (feature ? last_gdal_error() : ": the layer ends before it"));
-        }
-        if (feature->GetFID() != static_cast<GIntBig>(k)) {
-            throw InputError("'" + path + "', layer '" + layer.GetName() + "': feature " + std::to_string(k) + " has FID " +
-                             std::to_string(feature->GetFID()) + " (a deleted record?): its polygons cannot be read by index");
-        }
-        visit_rings(*feature, path, layer, visit);
-    }
+    return lines;
 }
 
 // The vertices of a layer's features, feature after feature: the map's, or, for a layer left in
-// its file (VerticesInFile), its records' (lines) or its features' rings (polygons), read again
-// one at a time.
+// its file (VerticesInFile), its records' (lines of a .shp), its features' lines (a GeoPackage)
+// or its features' rings (polygons), read again one at a time.
 class VertexCursor {
 public:
     VertexCursor(const map::MapData& map, const LayerInFile* in_file) : map_(map), in_file_(in_file) {}
@@ -1102,6 +1274,7 @@ public:
     VertexView at(std::size_t i) {
         if (in_file_ == nullptr) return {map_.vertices.data()};
         if (in_file_->polygons) return rings_at(i);
+        if (in_file_->ogr_lines) return lines_at(i);
         if (i + 1 >= in_file_->record_vertex.size()) throw std::logic_error("a feature beyond the records read");
         if (!reader_ || i != next_) {
             reader_ = ShapeReader::open(in_file_->path, i);
@@ -1117,26 +1290,32 @@ public:
 
 private:
     [[noreturn]] void changed(std::size_t record) const {
-        throw InputError("'" + in_file_->path + "' changed while toposimp ran: " + (in_file_->polygons ? "feature " : "record ") +
+        throw InputError("'" + in_file_->path + "' changed while toposimp ran: " + (in_file_->polygons || in_file_->ogr_lines ? "feature " : "record ") +
                          std::to_string(record) + " is not what it was when it was read; nothing written");
     }
 
-    // A polygon layer's feature i: its rings, read again through OGR.
-    VertexView rings_at(std::size_t i) {
-        if (i + 1 >= in_file_->record_ring.size()) throw std::logic_error("a feature beyond the features read");
-        if (!dataset_ || i != next_) {
-            dataset_ = open_vector(in_file_->path);
-            layer_ = &pick_layer(*dataset_, in_file_->path, in_file_->layer);
+    // Feature i read again through OGR (features from i on, if it is not the next one).
+    OGRFeatureUniquePtr feature_at(std::size_t i, std::size_t features) {
+        if (i + 1 >= features) throw std::logic_error("a feature beyond the features read");
+        if (!features_ || i != next_) {
             if (!unchanged(*in_file_)) changed(i);
-            layer_->ResetReading();
-            if (i > 0 && layer_->SetNextByIndex(static_cast<GIntBig>(i)) != OGRERR_NONE) changed(i);
+            features_.emplace(in_file_->run(i, features - 1));
         }
-        QuietGdal quiet;
-        const OGRFeatureUniquePtr feature{layer_->GetNextFeature()};
         next_ = i + 1;
-        if (!feature || CPLGetLastErrorType() >= CE_Failure || feature->GetFID() != static_cast<GIntBig>(i)) changed(i);
+        try {
+            OGRFeatureUniquePtr feature = features_->next();
+            if (!feature) changed(i);
+            return feature;
+        } catch (const InputError&) {
+            changed(i);
+        }
+    }
+
+    // A polygon layer's feature i: its rings.
+    VertexView rings_at(std::size_t i) {
+        const OGRFeatureUniquePtr feature = feature_at(i, in_file_->record_ring.size());
         rings_.clear();
-        visit_rings(*feature, in_file_->path, *layer_, [&](std::span<const Point> ring) { rings_.emplace_back(ring.begin(), ring.end()); });
+        visit_rings(*feature, in_file_->path, features_->layer(), [&](std::span<const Point> ring) { rings_.emplace_back(ring.begin(), ring.end()); });
         if (rings_.size() != in_file_->record_ring[i + 1] - in_file_->record_ring[i]) changed(i);
         VertexView view{nullptr};
         view.rings = &rings_;
@@ -1145,12 +1324,23 @@ private:
         return view;
     }
 
+    // A GeoPackage lines layer's feature i: its parts' vertices one after another.
+    VertexView lines_at(std::size_t i) {
+        const OGRFeatureUniquePtr feature = feature_at(i, in_file_->record_vertex.size());
+        lines_.vertices.clear();
+        lines_.chains.clear();
+        if (!add_lines(*feature, in_file_->path, lines_) || lines_.vertices.size() != in_file_->record_vertex[i + 1] - in_file_->record_vertex[i]) {
+            changed(i);
+        }
+        return {lines_.vertices.data(), static_cast<std::size_t>(in_file_->record_vertex[i])};
+    }
+
     const map::MapData& map_;
     const LayerInFile* in_file_;
     std::optional<ShapeReader> reader_;
-    DatasetPtr dataset_;  // (polygons)
-    OGRLayer* layer_ = nullptr;
+    std::optional<FeatureReader> features_;  // (polygons, a GeoPackage's lines)
     std::vector<std::vector<Point>> rings_;
+    map::MapData lines_;
     std::size_t next_ = 0;
 };
 

@@ -75,25 +75,35 @@ struct MemoryLayers {
 };
 
 // Where the vertices of a map read with OgrDataset::read's `vertices_in_file` are: the features
-// of the layers of Shapefiles, read again by whoever needs them. Each layer holds either
+// of layers of Shapefiles or GeoPackages, read again by whoever needs them. Each layer holds either
 // - lines: the records of a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes
-//   them (each record's parts its chains, in order), their vertices the map's from the layer's
-//   first record's on; or
+//   them, or the 2D (Multi)LineStrings of a GeoPackage layer, read through OGR (read_lines): each
+//   feature's non-empty parts its chains, in order, their vertices the map's from the layer's first
+//   feature's on; or
 // - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as one coverage
 //   with the other polygon layers' (map::Coverage::plan): the map's chains after the lines' are
 //   its arcs, in the order the features first use them; a run of features makes its own with
 //   map::arcs_of(coverage->slice(...)).
 // The map holds the chains, and no vertex.
+struct FeatureRun;
 struct LayerInFile {
-    std::string path;                          // its .shp (an absolute path)
+    std::string path;                          // its .shp or .gpkg (an absolute path)
     std::string layer;                         // its name
-    std::uintmax_t size = 0;                   // the .shp's size and modification time (ns) when it was read
+    std::uintmax_t size = 0;                   // the file's size and modification time (ns) when it was read
     std::int64_t time = 0;
     bool polygons = false;
     bool points = false;                       // a 2D point layer, read whole (control points): no chain, nothing else here
+    bool ogr_lines = false;                    // lines read through OGR (a GeoPackage's), not decoded from a .shp
     std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
     std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
     std::vector<std::uint32_t> record_ring;    // polygons: per feature and one more, its first ring
+    // A GeoPackage's: per feature and one more, its FID (rising in the order OGR reads the layer;
+    // the last one past the last feature's). Empty: each feature's FID is its index (a Shapefile
+    // without deleted records).
+    std::vector<std::int64_t> record_fid;
+
+    // Its features [first, end).
+    FeatureRun run(std::uint64_t first, std::uint64_t end) const;
 };
 struct VerticesInFile {
     std::vector<LayerInFile> layers;           // the dataset's, in its order
@@ -105,13 +115,31 @@ struct VerticesInFile {
     std::vector<const LayerInFile*> in_chain_order() const;
 };
 
-// The rings of features [first, end) of a polygon layer (in the order OGR reads the layer, each
-// feature's FID its index: a Shapefile without deleted records; InputError otherwise), as
-// OgrDataset::read gives them to its coverage: each polygon's non-empty rings, its exterior
-// first; features without polygons give none. For a coverage planned from the file
-// (map::Coverage::plan, map::arcs_of); the same refusals as read() (InputError).
+// Features [first, end) of a layer, in the order OGR reads it. `by_fid`: a GeoPackage's, their
+// FIDs rising in [fid_first, fid_end), found by the FID column's index (OGR's SetNextByIndex
+// reads a GeoPackage's every feature before); else each feature's FID is its index (a Shapefile
+// without deleted records), reached by SetNextByIndex.
+struct FeatureRun {
+    std::string path;
+    std::string layer;
+    std::uint64_t first = 0, end = 0;
+    bool by_fid = false;
+    std::int64_t fid_first = 0, fid_end = 0;
+};
+
+// The rings of a run of features of a polygon layer (InputError if a feature is not where the
+// run says), as OgrDataset::read gives them to its coverage: each polygon's non-empty rings, its
+// exterior first; features without polygons give none. For a coverage planned from the file
+// (map::Coverage::plan, map::arcs_of); the same refusals as read() (InputError). The second form:
+// a Shapefile's features [first, end).
+void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>)>& visit);
 void for_each_polygon_ring(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end,
                            const std::function<void(std::span<const Point>)>& visit);
+
+// The lines of a run of features of a GeoPackage lines layer left in its file (ogr_lines): each
+// feature's non-empty parts as chains, in order, as OgrDataset::read makes them. InputError if a
+// feature is not where the run says, or not a 2D (Multi)LineString.
+map::MapData read_lines(const FeatureRun& run);
 
 class OgrDataset {
 public:
@@ -120,7 +148,9 @@ public:
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
     // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons (no
-    // record deleted), or of 2D points (read whole), their vertices are left in the files
+    // record deleted), or a GeoPackage's (a file on disk) of 2D (Multi)LineStrings or
+    // (Multi)Polygons (its FIDs rising in read order, as a table's are), or of 2D points (read
+    // whole), their vertices are left in the files
     // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
     // them by parts; else read as without it. (The output must then be written by write() through
     // OGR, which reads them again: not as GeoJSON or TopoJSON.)

@@ -25,6 +25,23 @@ namespace toposimp::io {
 namespace {
 
 // A shapefile of one geometry type, written through OGR; geometries given as WKT ("" for none).
+// A "name" field and a feature per WKT ("": a NULL geometry) in `layer`, then the FIDs in
+// `deleted` deleted.
+void add_features(OGRLayer& layer, const std::vector<std::string>& wkts, const std::vector<GIntBig>& deleted) {
+    layer.CreateField(std::make_unique<OGRFieldDefn>("name", OFTString).get());
+    for (const std::string& wkt : wkts) {
+        OGRFeatureUniquePtr feature(OGRFeature::CreateFeature(layer.GetLayerDefn()));
+        feature->SetField("name", "a point");
+        if (!wkt.empty()) {
+            OGRGeometry* geometry = nullptr;
+            EXPECT_EQ(OGRGeometryFactory::createFromWkt(wkt.c_str(), nullptr, &geometry), OGRERR_NONE) << wkt;
+            feature->SetGeometryDirectly(geometry);
+        }
+        EXPECT_EQ(layer.CreateFeature(feature.get()), OGRERR_NONE) << wkt;
+    }
+    for (const GIntBig fid : deleted) EXPECT_EQ(layer.DeleteFeature(fid), OGRERR_NONE);
+}
+
 class ShapeFile {
 public:
     ShapeFile(const std::string& name, OGRwkbGeometryType type, const std::vector<std::string>& wkts,
@@ -42,18 +59,7 @@ public:
         OGRSpatialReference wgs84;
         wgs84.importFromEPSG(4326);
         OGRLayer* layer = dataset->CreateLayer(name.c_str(), &wgs84, type, const_cast<char**>(options));
-        layer->CreateField(std::make_unique<OGRFieldDefn>("name", OFTString).get());
-        for (const std::string& wkt : wkts) {
-            OGRFeatureUniquePtr feature(OGRFeature::CreateFeature(layer->GetLayerDefn()));
-            feature->SetField("name", "a point");
-            if (!wkt.empty()) {
-                OGRGeometry* geometry = nullptr;
-                EXPECT_EQ(OGRGeometryFactory::createFromWkt(wkt.c_str(), nullptr, &geometry), OGRERR_NONE) << wkt;
-                feature->SetGeometryDirectly(geometry);
-            }
-            EXPECT_EQ(layer->CreateFeature(feature.get()), OGRERR_NONE) << wkt;
-        }
-        for (const GIntBig fid : deleted) EXPECT_EQ(layer->DeleteFeature(fid), OGRERR_NONE);
+        add_features(*layer, wkts, deleted);
         GDALClose(dataset);
     }
     ~ShapeFile() { std::filesystem::remove_all(directory_); }
@@ -505,6 +511,18 @@ TEST(ShapefileShapes, NonFiniteVertexLeftInTheFileNamesTheFeature) {
 
 // A coverage of squares whose shared borders carry a middle point, some with a hole, then
 // multipolygons, NULL geometries and a flat ring (a frozen chain).
+// A map read with its vertices left in the file: no vertex, and the chains (and frozen ones) of
+// the map read whole.
+void expect_same_chains(const map::MapData& planned, const map::MapData& whole) {
+    EXPECT_TRUE(planned.vertices.empty());
+    ASSERT_EQ(planned.chains.size(), whole.chains.size());
+    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
+        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
+        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
+        EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
+    }
+}
+
 std::vector<std::string> grid_polygons() {
     std::vector<std::string> polygons;
     for (int i = 0; i < 4; ++i) {
@@ -590,13 +608,7 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     ASSERT_EQ(in_file->layers.size(), 1u);
     const LayerInFile& file_layer = in_file->layers[0];
     ASSERT_NE(in_file->coverage, nullptr);
-    EXPECT_TRUE(planned.vertices.empty());
-    ASSERT_EQ(planned.chains.size(), whole.chains.size());
-    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
-        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
-        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
-        EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
-    }
+    expect_same_chains(planned, whole);
     EXPECT_EQ(in_file->vertices, whole.vertices.size());
     EXPECT_EQ(file_layer.path, file.path());
     EXPECT_EQ(in_file->extent.min_x, 0);
@@ -659,6 +671,146 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFileKeepsTheArcsZeros) {
     ASSERT_EQ(planned.chains.size(), whole.chains.size());
     const std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
     expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "feature 0");
+}
+
+// A GeoPackage of `layers` (name, geometry type, WKTs: "" a NULL geometry), features with FIDs from
+// 1, then the FIDs in `deleted` (per layer) deleted.
+class GeoPackage {
+public:
+    struct Layer {
+        std::string name;
+        OGRwkbGeometryType type;
+        std::vector<std::string> wkts;
+        std::vector<GIntBig> deleted;
+    };
+
+    GeoPackage(const std::string& name, const std::vector<Layer>& layers) {
+        const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
+        directory_ = testing::temp_path("gpkg-" + std::string(test->test_suite_name()) + "-" + test->name() + "-" + name);
+        std::filesystem::remove_all(directory_);
+        std::filesystem::create_directories(directory_);
+        path_ = (directory_ / (name + ".gpkg")).string();
+        register_drivers();
+        // (Quiet: the driver warns once a layer about a MultiLineString in a LineString layer.)
+        CPLPushErrorHandler(CPLQuietErrorHandler);
+        GDALDataset* dataset = GetGDALDriverManager()->GetDriverByName("GPKG")->Create(path_.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+        OGRSpatialReference wgs84;
+        wgs84.importFromEPSG(4326);
+        for (const Layer& given : layers) {
+            OGRLayer* layer = dataset->CreateLayer(given.name.c_str(), &wgs84, given.type, nullptr);
+            add_features(*layer, given.wkts, given.deleted);
+        }
+        GDALClose(dataset);
+        CPLPopErrorHandler();
+    }
+    ~GeoPackage() { std::filesystem::remove_all(directory_); }
+
+    const std::string& path() const { return path_; }
+
+private:
+    std::filesystem::path directory_;
+    std::string path_;
+};
+
+// Lines and polygon layers of a GeoPackage, FIDs with gaps: left in the file, the same chains as
+// the map read whole, no vertex held; each feature's FID kept; any run of features read back by
+// its FIDs as the same chains (lines) or rings (polygons); written to a GeoPackage, the same bytes
+// as the map read whole, and refused, nothing written, once the file has changed. A 3D line makes
+// the dataset read whole.
+TEST(GeoPackageLayers, LeftInTheFile) {
+    const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "", "MULTILINESTRING ((2 2,3 3),EMPTY,(4 4,5 5,6 6))",
+                                            "LINESTRING (7 7,8 -8,9 7)", "LINESTRING EMPTY", "LINESTRING (1 -1,2 -2)"};
+    const GeoPackage file("layers", {{"lines", wkbLineString, lines, {2, 5}}, {"cells", wkbPolygon, grid_polygons(), {1, 7}}});
+    map::MapData whole, planned;
+    const OgrDataset read_whole = OgrDataset::read(file.path(), {}, whole);
+    const OgrDataset read_planned = OgrDataset::read(file.path(), {}, planned, false, true);
+    EXPECT_EQ(read_whole.vertices_in_file(), nullptr);
+    const VerticesInFile* in_file = read_planned.vertices_in_file();
+    ASSERT_NE(in_file, nullptr);
+    ASSERT_EQ(in_file->layers.size(), 2u);
+    ASSERT_NE(in_file->coverage, nullptr);
+    expect_same_chains(planned, whole);
+    EXPECT_EQ(in_file->vertices, whole.vertices.size());
+    EXPECT_EQ(read_planned.summary().features(), read_whole.summary().features());
+    EXPECT_EQ(read_planned.summary().sum(&LayerSummary::line_features), read_whole.summary().sum(&LayerSummary::line_features));
+    EXPECT_EQ(read_planned.summary().sum(&LayerSummary::empty_geometries), read_whole.summary().sum(&LayerSummary::empty_geometries));
+    EXPECT_EQ(read_planned.summary().arcs, read_whole.summary().arcs);
+
+    const LayerInFile& line_layer = in_file->layers[0];
+    EXPECT_TRUE(line_layer.ogr_lines);
+    EXPECT_FALSE(line_layer.polygons);
+    EXPECT_EQ(line_layer.path, std::filesystem::absolute(file.path()).string());
+    EXPECT_EQ(line_layer.record_fid, (std::vector<std::int64_t>{1, 3, 4, 6, 7}));
+    EXPECT_EQ(line_layer.record_vertex, (std::vector<std::uint64_t>{0, 2, 7, 10, 12}));
+    EXPECT_EQ(line_layer.record_chain, (std::vector<std::uint32_t>{0, 1, 3, 4, 5}));
+    const std::size_t features = line_layer.record_fid.size() - 1;
+    for (std::uint64_t first = 0; first <= features; ++first) {
+        for (std::uint64_t end = first; end <= features; ++end) {
+            SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
+            const map::MapData part = read_lines(line_layer.run(first, end));
+            map::MapData expected;
+            for (std::uint32_t c = line_layer.record_chain[first]; c < line_layer.record_chain[end]; ++c) {
+                expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
+                                                          whole.chains[c].last - whole.chains[c].first + 1));
+            }
+            expect_same_points(chains_of(part), chains_of(expected));
+        }
+    }
+    // A run that is not the file's: one more feature than its FIDs hold, or one fewer.
+    FeatureRun longer = line_layer.run(0, 2);
+    ++longer.end;
+    EXPECT_THROW((void)read_lines(longer), InputError);
+    FeatureRun shorter = line_layer.run(0, 2);
+    --shorter.end;
+    EXPECT_THROW((void)read_lines(shorter), InputError);
+
+    const LayerInFile& cells = in_file->layers[1];
+    EXPECT_TRUE(cells.polygons);
+    ASSERT_EQ(cells.record_fid.size(), grid_polygons().size() - 1);
+    EXPECT_EQ(cells.record_fid[0], 2);
+    EXPECT_EQ(cells.record_fid[5], 8);
+    for (std::size_t f = 0; f + 1 < cells.record_ring.size(); ++f) {
+        std::uint32_t count = 0;
+        for_each_polygon_ring(cells.run(f, f + 1), [&](std::span<const Point>) { ++count; });
+        EXPECT_EQ(cells.record_ring[f + 1] - cells.record_ring[f], count) << "feature " << f;
+    }
+
+    // Written (some vertices dropped, but the ends of chains), the same bytes; refused once the
+    // file has changed.
+    std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+    for (const map::Chain chain : whole.chains) {
+        for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 3 != 0;
+    }
+    const std::filesystem::path out = std::filesystem::path(file.path()).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    auto write = [&](const OgrDataset& dataset, const map::MapData& map, const std::string& name) {
+        WriteOptions options;
+        options.path = (out / name).string();
+        return dataset.write(options, map, kept);
+    };
+    auto bytes = [&](const std::string& name) {
+        std::ifstream in(out / name, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    write(read_whole, whole, "whole.gpkg");
+    write(read_planned, planned, "planned.gpkg");
+    EXPECT_FALSE(bytes("whole.gpkg").empty());
+    EXPECT_EQ(bytes("whole.gpkg"), bytes("planned.gpkg"));
+    std::filesystem::last_write_time(file.path(), std::filesystem::last_write_time(file.path()) + std::chrono::seconds(2));
+    try {
+        write(read_planned, planned, "changed.gpkg");
+        FAIL() << "no error";
+    } catch (const InputError& error) {
+        EXPECT_NE(std::string(error.what()).find("changed while toposimp ran: feature 0"), std::string::npos) << error.what();
+    }
+    EXPECT_FALSE(std::filesystem::exists(out / "changed.gpkg"));
+
+    const GeoPackage z_file("z", {{"lines", wkbLineString25D, {"LINESTRING Z (0 0 1,1 1 2)"}, {}}});
+    map::MapData z_map;
+    const OgrDataset read_z = OgrDataset::read(z_file.path(), {}, z_map, false, true);
+    EXPECT_EQ(read_z.vertices_in_file(), nullptr);
+    EXPECT_EQ(z_map.vertices.size(), 2u);
 }
 
 }  // namespace
