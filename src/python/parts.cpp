@@ -401,6 +401,7 @@ void add_run(py::dict& dict, const io::LayerInFile& layer, const char* path_key,
     dict["time"] = layer.time;
     dict["features"] = py::make_tuple(r0, r1);
     if (run.by_fid) dict["fids"] = py::make_tuple(run.fid_first, run.fid_end);
+    if (run.each_by_fid) dict["each_by_fid"] = true;
 }
 
 // The run of features a part made by add_run reads, its file checked first (check_part_file).
@@ -471,6 +472,7 @@ io::FeatureRun run_of(const py::dict& dict, const char* path_key) {
         run.by_fid = true;
         std::tie(run.fid_first, run.fid_end) = item(dict, "fids").cast<std::pair<std::int64_t, std::int64_t>>();
     }
+    run.each_by_fid = dict.contains("each_by_fid") && item(dict, "each_by_fid").cast<bool>();
     if (run.end < run.first || run.fid_end < run.fid_first) malformed("a part's features run backwards");
     check_part_file(dict, run.path, "size", "time");
     return run;

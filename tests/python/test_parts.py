@@ -416,6 +416,25 @@ def test_first_round_reads_a_geopackage_by_parts(binary, tmp_path, geopackage, w
     assert "300 control points" in err
 
 
+@pytest.mark.parametrize("layer", ["rivers", "cells"])
+def test_first_round_reads_a_flatgeobuf_by_parts(binary, tmp_path, shapefile_folder, layer):
+    """A FlatGeobuf of lines or of polygons (ogr2ogr: with its index of features), the places as
+    control points, to a FlatGeobuf: each part read by its task, by FID where it does not begin
+    the file; the output toposimp map's byte for byte."""
+    import subprocess
+
+    path = tmp_path / (layer + ".fgb")
+    subprocess.run(["ogr2ogr", "-f", "FlatGeobuf", "-nlt", "PROMOTE_TO_MULTI", str(path), str(shapefile_folder / (layer + ".shp"))],
+                   check=True, capture_output=True)
+    arguments = [str(path), "-p", str(shapefile_folder / "places.shp"), "--keep", "10%", *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, ".fgb")
+    assert output.read_bytes() == reference.read_bytes()
+    key = "polygons_file" if layer == "cells" else "lines_file"
+    assert len(first.parts) > 2 and all(part[key] == str(path.resolve()) and part["each_by_fid"] for part in first.parts)
+    assert first.parts[0]["features"][0] == 0 and all(one["features"][1] == other["features"][0]
+                                                      for one, other in zip(first.parts, first.parts[1:]))
+
+
 @pytest.mark.parametrize("damage, message", [
     (lambda part: _touched(pathlib.Path(part.get("lines_file", part.get("polygons_file")))) or part,
      "cannot be read here as it was when the map was read"),

@@ -56,10 +56,11 @@ std::string layer_shp(const std::string& path, const std::string& name) {
     return {};
 }
 
-// A GeoPackage on disk (not behind /vsi…): its layers may be left in it, read by FID ranges.
-bool is_local_gpkg(const std::string& path, const std::string& driver) {
+// A GeoPackage or FlatGeobuf file on disk (not behind /vsi…): its layers may be left in it, read
+// through OGR by FID (FeatureRun).
+bool is_local_ogr_file(const std::string& path, const std::string& driver) {
     std::error_code error;
-    return driver == "GPKG" && path.rfind("/vsi", 0) != 0 && std::filesystem::is_regular_file(path, error);
+    return (driver == "GPKG" || driver == "FlatGeobuf") && path.rfind("/vsi", 0) != 0 && std::filesystem::is_regular_file(path, error);
 }
 
 // A layer's file as VerticesInFile keeps it: where it is (absolute: other processes read it),
@@ -418,8 +419,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // With `leave_in_file` the layer's vertices stay in its .shp (`shp`: the input, or the layer's
     // file in a folder), or NotInFile is thrown; the .prj goes to the output as it is only where
     // it would without it.
-    const bool gpkg = leave_in_file && is_local_gpkg(path, summary.driver);
-    const std::string shp = !leave_in_file ? std::string() : gpkg ? path : layer_shp(path, layer->name);
+    // A GeoPackage's or FlatGeobuf's layers are read through OGR by FID; a FlatGeobuf's only with
+    // its index of features (without it, every read by FID reads the file up to the feature).
+    const bool gpkg = leave_in_file && summary.driver == "GPKG" && is_local_ogr_file(path, summary.driver);
+    const bool fgb = leave_in_file && summary.driver == "FlatGeobuf" && is_local_ogr_file(path, summary.driver) &&
+                     source.TestCapability(OLCRandomRead);
+    const bool by_ogr = gpkg || fgb;
+    const std::string shp = !leave_in_file ? std::string() : by_ogr ? path : layer_shp(path, layer->name);
     const bool copy_prj = prj_as_file && is_local_shp(path);
     const bool decode = summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
                         (leave_in_file ? !shp.empty() : copy_prj) &&
@@ -512,8 +518,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             layer->srs.reset(srs->Clone());
         }
     };
-    // A feature's FID where its run will find it (FeatureRun): a Shapefile's must be its index (no
-    // record deleted), a GeoPackage's above the one before; NotInFile otherwise.
+    // A feature's FID where its run will find it (FeatureRun): a Shapefile's or FlatGeobuf's must be
+    // its index (no record deleted), a GeoPackage's above the one before; NotInFile otherwise.
     auto note_fid = [&](LayerInFile& planned, GIntBig fid) {
         if (!gpkg) {
             if (fid != static_cast<GIntBig>(layer->features.size())) throw NotInFile();
@@ -569,6 +575,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto plan_polygons_in_file = [&] {
         LayerInFile planned = planned_layer();
         planned.polygons = true;
+        planned.each_by_fid = fgb;
         Box& extent = in_file->extent;
         std::uint32_t& rings = in_file_rings;
         // The rings of a polygon, counted.
@@ -599,12 +606,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 }
             });
     };
-    // A GeoPackage's 2D lines layer left in its file: each feature's parts become the map's chains
+    // A GeoPackage's or FlatGeobuf's 2D lines layer left in its file: each feature's parts become the map's chains
     // (as add_geometry makes them) without their vertices. NotInFile if a feature is not a 2D
     // (Multi)LineString.
     auto plan_lines_through_ogr = [&] {
         LayerInFile planned = planned_layer();
         planned.ogr_lines = true;
+        planned.each_by_fid = fgb;
         Box& extent = in_file->extent;
         std::uint64_t& vertices = in_file->vertices;  // (the lines' so far)
         plan_features(
@@ -642,9 +650,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     const std::size_t chains_before = map.chains.size();
     if (leave_in_file) {
         const bool polygon_layer = (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) &&
-                                   (summary.driver == "ESRI Shapefile" || gpkg);
-        const bool gpkg_lines = gpkg && (layer->geometry_type == wkbLineString || layer->geometry_type == wkbMultiLineString);
-        if (!point_layer && (shp.empty() || (!decode && !polygon_layer && !gpkg_lines))) throw NotInFile();
+                                   (summary.driver == "ESRI Shapefile" || by_ogr);
+        const bool ogr_lines = by_ogr && (layer->geometry_type == wkbLineString || layer->geometry_type == wkbMultiLineString);
+        if (!point_layer && (shp.empty() || (!decode && !polygon_layer && !ogr_lines))) throw NotInFile();
         if (!in_file) in_file.emplace();
     }
     source.ResetReading();
@@ -1176,6 +1184,8 @@ public:
             const std::string filter = "\"" + column + "\" >= " + std::to_string(run.fid_first) + " AND \"" + column + "\" < " +
                                        std::to_string(run.fid_end);
             if (layer_->SetAttributeFilter(filter.c_str()) != OGRERR_NONE) fail(run.first, ": its FIDs cannot be read by range" + last_gdal_error());
+        } else if (each_) {
+            if (!layer_->TestCapability(OLCRandomRead)) fail(run.first, ": the file has no index of its features");
         } else if (run.first > 0 && layer_->SetNextByIndex(static_cast<GIntBig>(run.first)) != OGRERR_NONE) {
             fail(run.first, ": no such feature" + last_gdal_error());
         }
@@ -1189,7 +1199,7 @@ public:
             if (run_.by_fid && OGRFeatureUniquePtr(layer_->GetNextFeature())) fail(next_, ": the layer holds more features than it did");
             return nullptr;
         }
-        OGRFeatureUniquePtr feature{layer_->GetNextFeature()};
+        OGRFeatureUniquePtr feature{each_ ? layer_->GetFeature(static_cast<GIntBig>(next_)) : layer_->GetNextFeature()};
         if (CPLGetLastErrorType() >= CE_Failure || !feature) fail(next_, feature ? last_gdal_error() : ": the layer ends before it");
         const GIntBig fid = feature->GetFID();
         if (run_.by_fid ? fid <= last_fid_ : fid != static_cast<GIntBig>(next_)) {
@@ -1209,6 +1219,9 @@ private:
     }
 
     FeatureRun run_;
+    // Each feature read by its FID (a run of a FlatGeobuf's not from its first feature: read in
+    // turn from the first, they come faster).
+    bool each_ = run_.each_by_fid && run_.first > 0;
     DatasetPtr dataset_;
     OGRLayer* layer_;
     std::uint64_t next_ = run_.first;
@@ -1236,6 +1249,7 @@ bool add_lines(const OGRFeature& feature, const std::string& label, map::MapData
 
 FeatureRun LayerInFile::run(std::uint64_t first, std::uint64_t end) const {
     FeatureRun run{path, layer, first, end, !record_fid.empty()};
+    run.each_by_fid = each_by_fid;
     if (run.by_fid) {
         run.fid_first = record_fid.at(first);
         run.fid_end = record_fid.at(end);

@@ -75,9 +75,11 @@ struct MemoryLayers {
 };
 
 // Where the vertices of a map read with OgrDataset::read's `vertices_in_file` are: the features
-// of layers of Shapefiles or GeoPackages, read again by whoever needs them. Each layer holds either
+// of layers of Shapefiles, GeoPackages or FlatGeobufs, read again by whoever needs them. Each
+// layer holds either
 // - lines: the records of a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes
-//   them, or the 2D (Multi)LineStrings of a GeoPackage layer, read through OGR (read_lines): each
+//   them, or the 2D (Multi)LineStrings of a GeoPackage's or FlatGeobuf's layer, read through OGR
+//   (read_lines): each
 //   feature's non-empty parts its chains, in order, their vertices the map's from the layer's first
 //   feature's on; or
 // - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as one coverage
@@ -87,13 +89,14 @@ struct MemoryLayers {
 // The map holds the chains, and no vertex.
 struct FeatureRun;
 struct LayerInFile {
-    std::string path;                          // its .shp or .gpkg (an absolute path)
+    std::string path;                          // its .shp, .gpkg or .fgb (an absolute path)
     std::string layer;                         // its name
     std::uintmax_t size = 0;                   // the file's size and modification time (ns) when it was read
     std::int64_t time = 0;
     bool polygons = false;
     bool points = false;                       // a 2D point layer, read whole (control points): no chain, nothing else here
-    bool ogr_lines = false;                    // lines read through OGR (a GeoPackage's), not decoded from a .shp
+    bool ogr_lines = false;                    // lines read through OGR (not a Shapefile's), not decoded from a .shp
+    bool each_by_fid = false;                  // a FlatGeobuf's: each feature read by its FID, its index (FeatureRun)
     std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
     std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
     std::vector<std::uint32_t> record_ring;    // polygons: per feature and one more, its first ring
@@ -117,14 +120,17 @@ struct VerticesInFile {
 
 // Features [first, end) of a layer, in the order OGR reads it. `by_fid`: a GeoPackage's, their
 // FIDs rising in [fid_first, fid_end), found by the FID column's index (OGR's SetNextByIndex
-// reads a GeoPackage's every feature before); else each feature's FID is its index (a Shapefile
-// without deleted records), reached by SetNextByIndex.
+// reads a GeoPackage's every feature before). Else each feature's FID is its index: `each_by_fid`,
+// a FlatGeobuf's with its index of features, each read by GetFeature (its SetNextByIndex and FID
+// filters read every feature before too); otherwise a Shapefile's without deleted records,
+// reached by SetNextByIndex.
 struct FeatureRun {
     std::string path;
     std::string layer;
     std::uint64_t first = 0, end = 0;
     bool by_fid = false;
     std::int64_t fid_first = 0, fid_end = 0;
+    bool each_by_fid = false;
 };
 
 // The rings of a run of features of a polygon layer (InputError if a feature is not where the
@@ -148,9 +154,9 @@ public:
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
     // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons (no
-    // record deleted), or a GeoPackage's (a file on disk) of 2D (Multi)LineStrings or
-    // (Multi)Polygons (its FIDs rising in read order, as a table's are), or of 2D points (read
-    // whole), their vertices are left in the files
+    // record deleted), or a GeoPackage's or FlatGeobuf's (a file on disk; a FlatGeobuf with its
+    // index of features) of 2D (Multi)LineStrings or (Multi)Polygons (its FIDs rising in read order,
+    // as a table's are), or of 2D points (read whole), their vertices are left in the files
     // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
     // them by parts; else read as without it. (The output must then be written by write() through
     // OGR, which reads them again: not as GeoJSON or TopoJSON.)

@@ -35,6 +35,8 @@ void add_features(OGRLayer& layer, const std::vector<std::string>& wkts, const s
         if (!wkt.empty()) {
             OGRGeometry* geometry = nullptr;
             EXPECT_EQ(OGRGeometryFactory::createFromWkt(wkt.c_str(), nullptr, &geometry), OGRERR_NONE) << wkt;
+            // (A layer of Multi geometries takes only those: a FlatGeobuf's.)
+            if (OGR_GT_IsSubClassOf(layer.GetGeomType(), wkbGeometryCollection)) geometry = OGRGeometryFactory::forceTo(geometry, layer.GetGeomType());
             feature->SetGeometryDirectly(geometry);
         }
         EXPECT_EQ(layer.CreateFeature(feature.get()), OGRERR_NONE) << wkt;
@@ -674,7 +676,8 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFileKeepsTheArcsZeros) {
 }
 
 // A GeoPackage of `layers` (name, geometry type, WKTs: "" a NULL geometry), features with FIDs from
-// 1, then the FIDs in `deleted` (per layer) deleted.
+// 1, then the FIDs in `deleted` (per layer) deleted; or a FlatGeobuf of one layer (FIDs from 0,
+// with its index of features unless `options` say SPATIAL_INDEX=NO).
 class GeoPackage {
 public:
     struct Layer {
@@ -684,20 +687,23 @@ public:
         std::vector<GIntBig> deleted;
     };
 
-    GeoPackage(const std::string& name, const std::vector<Layer>& layers) {
+    GeoPackage(const std::string& name, const std::vector<Layer>& layers, const char* driver = "GPKG", const char* extension = ".gpkg",
+               std::vector<const char*> options = {}) {
         const ::testing::TestInfo* test = ::testing::UnitTest::GetInstance()->current_test_info();
         directory_ = testing::temp_path("gpkg-" + std::string(test->test_suite_name()) + "-" + test->name() + "-" + name);
         std::filesystem::remove_all(directory_);
         std::filesystem::create_directories(directory_);
-        path_ = (directory_ / (name + ".gpkg")).string();
+        path_ = (directory_ / (name + extension)).string();
         register_drivers();
         // (Quiet: the driver warns once a layer about a MultiLineString in a LineString layer.)
         CPLPushErrorHandler(CPLQuietErrorHandler);
-        GDALDataset* dataset = GetGDALDriverManager()->GetDriverByName("GPKG")->Create(path_.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+        GDALDataset* dataset = GetGDALDriverManager()->GetDriverByName(driver)->Create(path_.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
         OGRSpatialReference wgs84;
         wgs84.importFromEPSG(4326);
         for (const Layer& given : layers) {
-            OGRLayer* layer = dataset->CreateLayer(given.name.c_str(), &wgs84, given.type, nullptr);
+            options.push_back(nullptr);
+            OGRLayer* layer = dataset->CreateLayer(given.name.c_str(), &wgs84, given.type, const_cast<char**>(options.data()));
+            options.pop_back();
             add_features(*layer, given.wkts, given.deleted);
         }
         GDALClose(dataset);
@@ -811,6 +817,76 @@ TEST(GeoPackageLayers, LeftInTheFile) {
     const OgrDataset read_z = OgrDataset::read(z_file.path(), {}, z_map, false, true);
     EXPECT_EQ(read_z.vertices_in_file(), nullptr);
     EXPECT_EQ(z_map.vertices.size(), 2u);
+}
+
+// A FlatGeobuf of lines and one of polygons (one layer each, FIDs from 0): left in their files,
+// each read by FID where a run does not begin at the first feature; the same chains, runs and
+// written bytes as read whole. Without its index of features, a FlatGeobuf is read whole.
+TEST(GeoPackageLayers, FlatGeobufLeftInTheFile) {
+    const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "", "MULTILINESTRING ((2 2,3 3),EMPTY,(4 4,5 5,6 6))",
+                                            "LINESTRING (7 7,8 -8,9 7)", "LINESTRING (1 -1,2 -2)"};
+    const GeoPackage line_file("lines", {{"lines", wkbMultiLineString, lines, {}}}, "FlatGeobuf", ".fgb");
+    const GeoPackage cell_file("cells", {{"cells", wkbMultiPolygon, grid_polygons(), {}}}, "FlatGeobuf", ".fgb");
+    for (const GeoPackage* file : {&line_file, &cell_file}) {
+        SCOPED_TRACE(file->path());
+        map::MapData whole, planned;
+        const OgrDataset read_whole = OgrDataset::read(file->path(), {}, whole);
+        const OgrDataset read_planned = OgrDataset::read(file->path(), {}, planned, false, true);
+        const VerticesInFile* in_file = read_planned.vertices_in_file();
+        ASSERT_NE(in_file, nullptr);
+        ASSERT_EQ(in_file->layers.size(), 1u);
+        expect_same_chains(planned, whole);
+        const LayerInFile& layer = in_file->layers[0];
+        EXPECT_TRUE(layer.each_by_fid);
+        EXPECT_TRUE(layer.record_fid.empty());
+        EXPECT_EQ(layer.polygons, file == &cell_file);
+        const std::size_t features = layer.record_vertex.size() - 1;
+        for (std::uint64_t first = 0; first <= features; ++first) {
+            for (std::uint64_t end = first; end <= features; ++end) {
+                SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
+                if (layer.polygons) {
+                    std::uint32_t count = 0;
+                    for_each_polygon_ring(layer.run(first, end), [&](std::span<const Point>) { ++count; });
+                    EXPECT_EQ(count, layer.record_ring[end] - layer.record_ring[first]);
+                    continue;
+                }
+                const map::MapData part = read_lines(layer.run(first, end));
+                map::MapData expected;
+                for (std::uint32_t c = layer.record_chain[first]; c < layer.record_chain[end]; ++c) {
+                    expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
+                                                              whole.chains[c].last - whole.chains[c].first + 1));
+                }
+                expect_same_points(chains_of(part), chains_of(expected));
+            }
+        }
+        FeatureRun beyond = layer.run(1, features);
+        ++beyond.end;
+        EXPECT_THROW(for_each_polygon_ring(beyond, [](std::span<const Point>) {}), InputError);
+
+        std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+        for (const map::Chain chain : whole.chains) {
+            for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 3 != 0;
+        }
+        const std::filesystem::path out = std::filesystem::path(file->path()).parent_path() / "out";
+        std::filesystem::create_directories(out);
+        const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+        auto write = [&](const OgrDataset& dataset, const map::MapData& map, const char* name) {
+            WriteOptions options;
+            options.path = (out / name).string();
+            dataset.write(options, map, kept);
+            std::ifstream in(out / name, std::ios::binary);
+            return std::string(std::istreambuf_iterator<char>(in), {});
+        };
+        const std::string written = write(read_whole, whole, "whole.gpkg");
+        EXPECT_FALSE(written.empty());
+        EXPECT_EQ(write(read_planned, planned, "planned.gpkg"), written);
+    }
+
+    const GeoPackage no_index("noindex", {{"lines", wkbMultiLineString, lines, {}}}, "FlatGeobuf", ".fgb", {"SPATIAL_INDEX=NO"});
+    map::MapData read;
+    const OgrDataset read_no_index = OgrDataset::read(no_index.path(), {}, read, false, true);
+    EXPECT_EQ(read_no_index.vertices_in_file(), nullptr);
+    EXPECT_FALSE(read.vertices.empty());
 }
 
 }  // namespace
