@@ -484,12 +484,35 @@ def test_a_geopackage_changed_before_writing_leaves_no_output(tmp_path, geopacka
     assert not output.exists()
 
 
-def test_a_geopackage_with_3d_lines_is_read_whole(tmp_path, geopackage):
-    """A GeoPackage lines layer whose features carry Z: the dataset is read here, whole."""
+@pytest.mark.parametrize("suffix, dimension", [(".gpkg", "XYZ"), (".gpkg", "XYM"), (".gpkg", "XYZM"), (".shp", "XYZ")])
+def test_lines_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, suffix, dimension):
+    """A GeoPackage's rivers with Z (their id), M or both, beside its cells, or a PolyLineZ
+    Shapefile of them: read by parts (Z and M read again where the output is written), the
+    output toposimp map's byte for byte."""
+    import subprocess
+
+    path = tmp_path / ("zm" + suffix)
+    z = ["-zfield", "id"] if "Z" in dimension else []
+    subprocess.run(["ogr2ogr", str(path), str(geopackage[0]), "rivers", "-dim", dimension, *z], check=True, capture_output=True)
+    arguments = [str(path), "--keep", "10%", *SAME_DATE]
+    if suffix == ".gpkg":
+        subprocess.run(["ogr2ogr", "-update", str(path), str(geopackage[0]), "cells"], check=True, capture_output=True)
+        arguments = [str(path), "-l", "rivers", "-l", "cells", "--keep", "10%", *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, suffix)
+    if suffix == ".gpkg":
+        assert output.read_bytes() == reference.read_bytes()
+        assert any("polygons_file" in part for part in first.parts)
+    else:
+        _same_shapefiles(output, reference)
+    assert any("lines_file" in part for part in first.parts)
+
+
+def test_a_geopackage_with_3d_polygons_is_read_whole(tmp_path, geopackage):
+    """A GeoPackage polygon layer whose features carry Z: the dataset is read here, whole."""
     import subprocess
 
     path = tmp_path / "z.gpkg"
-    subprocess.run(["ogr2ogr", "-f", "GPKG", str(path), str(geopackage[0]), "rivers", "-dim", "XYZ"], check=True, capture_output=True)
+    subprocess.run(["ogr2ogr", "-f", "GPKG", str(path), str(geopackage[0]), "cells", "-dim", "XYZ"], check=True, capture_output=True)
     first = FirstRoundHere()
     status, out, err = _toposimp.run_command(["map", str(path), "--keep", "10%", "-o", str(tmp_path / "out.gpkg"), "-v"], first, 1, 300, 0,
                                              None, False, False, input_on_workers=True)
@@ -499,7 +522,7 @@ def test_a_geopackage_with_3d_lines_is_read_whole(tmp_path, geopackage):
 
 
 def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
-    """A PolyLineZ layer among the layers asked for: every layer is read whole, and the parts
+    """A PolygonZ layer among the layers asked for: every layer is read whole, and the parts
     carry their vertices."""
     import shutil
     import sys
@@ -509,7 +532,7 @@ def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp
 
     folder = tmp_path / "folder"
     shutil.copytree(shapefile_folder, folder)
-    writer = generate_map.ShapefileWriter(folder / "heights", 13)  # (a PolyLineZ file, no record)
+    writer = generate_map.ShapefileWriter(folder / "heights", 15)  # (a PolygonZ file, no record)
     writer.close()
     first = FirstRoundHere()
     output = tmp_path / "whole.gpkg"

@@ -112,7 +112,10 @@ struct VertexView {
     // (*rings)[r - first_ring]; the map's vertices are not there.
     const std::vector<std::vector<Point>>* rings = nullptr;
     std::uint32_t first_ring = 0;
-    const LayerInFile* file = nullptr;  // (with rings: where they are)
+    const LayerInFile* file = nullptr;  // (with rings, or a feature's lines read through OGR: where they are)
+    // A feature's lines read again through OGR: their Z and M beside `data` (nullptr: none).
+    const double* z = nullptr;
+    const double* m = nullptr;
 };
 
 class VertexCursor;
@@ -280,14 +283,13 @@ private:
     std::string path_;
 };
 
-// The parts of a 2D (Multi)LineString, each a chain of the map if it is not empty (add_geometry);
-// false for any other geometry.
+// The parts of a (Multi)LineString (with Z or M or not), each a chain of the map if it is not
+// empty (add_geometry); false for any other geometry.
 bool line_parts(const OGRGeometry& geometry, std::vector<const OGRLineString*>& parts) {
     parts.clear();
-    if (geometry.Is3D() || geometry.IsMeasured()) return false;
-    if (geometry.getGeometryType() == wkbLineString) {
+    if (wkbFlatten(geometry.getGeometryType()) == wkbLineString) {
         parts.push_back(geometry.toLineString());
-    } else if (geometry.getGeometryType() == wkbMultiLineString) {
+    } else if (wkbFlatten(geometry.getGeometryType()) == wkbMultiLineString) {
         for (const OGRLineString* part : *geometry.toMultiLineString()) parts.push_back(part);
     } else {
         return false;
@@ -485,7 +487,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // id on; NotInFile if the file is not what ShapeReader decodes, in the features' order.
     auto plan_in_file = [&](std::vector<OGRFeatureUniquePtr>& features) {
         std::optional<ShapeReader> reader = ShapeReader::open(shp);
-        bool in_order = reader && reader->records() == features.size() && map.vertices.empty() && !carries_zm;
+        bool in_order = reader && reader->records() == features.size() && map.vertices.empty();
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
         if (!in_order) throw NotInFile();
         LayerInFile planned = layer_in_file(shp, layer->name, reader->shp_size());
@@ -566,7 +568,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto planned_layer = [&] {
         std::error_code error;
         const std::uintmax_t size = std::filesystem::file_size(shp, error);
-        if (error || !map.vertices.empty() || carries_zm) throw NotInFile();
+        if (error || !map.vertices.empty()) throw NotInFile();
         return layer_in_file(shp, layer->name, size);
     };
     // A 2D polygon layer left in its file (VerticesInFile with a coverage): its rings counted and
@@ -606,9 +608,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 }
             });
     };
-    // A GeoPackage's or FlatGeobuf's 2D lines layer left in its file: each feature's parts become the map's chains
-    // (as add_geometry makes them) without their vertices. NotInFile if a feature is not a 2D
-    // (Multi)LineString.
+    // A lines layer left in its file and read through OGR (a GeoPackage's or FlatGeobuf's, or a
+    // Shapefile's with Z or M): each feature's parts become the map's chains (as add_geometry makes
+    // them) without their vertices; their Z and M are read again when the output is written.
+    // NotInFile if a feature is not a (Multi)LineString.
     auto plan_lines_through_ogr = [&] {
         LayerInFile planned = planned_layer();
         planned.ogr_lines = true;
@@ -624,6 +627,12 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             [&](const OGRGeometry& geometry, const std::string& label) {
                 thread_local std::vector<const OGRLineString*> parts;
                 if (!line_parts(geometry, parts)) throw NotInFile();
+                if (geometry.Is3D() || geometry.IsMeasured()) {
+                    // (Written from the feature read again, as when it is read whole.)
+                    summary_of_layer.has_z = summary_of_layer.has_z || geometry.Is3D();
+                    summary_of_layer.has_m = summary_of_layer.has_m || geometry.IsMeasured();
+                    start_carrying_zm(map);
+                }
                 for (const OGRLineString* part : parts) {
                     if (part->IsEmpty()) {
                         layer->items.push_back(kEmptyPart);
@@ -651,7 +660,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     if (leave_in_file) {
         const bool polygon_layer = (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) &&
                                    (summary.driver == "ESRI Shapefile" || by_ogr);
-        const bool ogr_lines = by_ogr && (layer->geometry_type == wkbLineString || layer->geometry_type == wkbMultiLineString);
+        // (A Shapefile's PolyLineZ or PolyLineM too: through OGR, as when it is read whole.)
+        const OGRwkbGeometryType flat_type = wkbFlatten(layer->geometry_type);
+        const bool ogr_lines = (flat_type == wkbLineString || flat_type == wkbMultiLineString) &&
+                               (by_ogr || (summary.driver == "ESRI Shapefile" && layer->geometry_type != wkbLineString));
         if (!point_layer && (shp.empty() || (!decode && !polygon_layer && !ogr_lines))) throw NotInFile();
         if (!in_file) in_file.emplace();
     }
@@ -739,7 +751,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     }
     if (point_layer) {
         // (Points only: no vertex, no chain, nothing carried in Z or M.)
-        if (!map.vertices.empty() || map.chains.size() != chains_before || carries_zm) throw NotInFile();
+        if (!map.vertices.empty() || map.chains.size() != chains_before) throw NotInFile();
         LayerInFile points;
         points.layer = layer->name;
         points.points = true;
@@ -1022,11 +1034,18 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
         curve.setNumPoints(static_cast<int>(points.size()), FALSE);
         for (std::size_t i = 0; i < points.size(); ++i) curve.setPoint(static_cast<int>(i), points[i].x, points[i].y);
     };
+    // (Z and M from the feature read again where its vertices were left in the file.)
+    if (at.file != nullptr && at.rings == nullptr && ((with_z && at.z == nullptr) || (with_m && at.m == nullptr))) {
+        throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
+                         " is not what it was when it was read; nothing written");
+    }
+    const double* const z_of = at.z != nullptr ? at.z - at.first : z.data();
+    const double* const m_of = at.m != nullptr ? at.m - at.first : m.data();
     auto fill = [&](OGRSimpleCurve& curve, const std::vector<std::uint32_t>& vertices) {
         curve.setNumPoints(static_cast<int>(vertices.size()), FALSE);
         for (std::size_t i = 0; i < vertices.size(); ++i) {
             const std::uint32_t v = vertices[i];
-            set_point(curve, static_cast<int>(i), at[v], with_z, with_m, with_z ? z[v] : 0.0, with_m ? m[v] : 0.0);
+            set_point(curve, static_cast<int>(i), at[v], with_z, with_m, with_z ? z_of[v] : 0.0, with_m ? m_of[v] : 0.0);
         }
     };
     switch (shape.kind) {
@@ -1230,7 +1249,9 @@ private:
 
 // A feature's lines as chains of `lines` (read_lines), or false if it is not a 2D
 // (Multi)LineString.
-bool add_lines(const OGRFeature& feature, const std::string& label, map::MapData& lines) {
+// (With `z` and `m`: their Z and M too, 0 where they have none.)
+bool add_lines(const OGRFeature& feature, const std::string& label, map::MapData& lines, std::vector<double>* z = nullptr,
+               std::vector<double>* m = nullptr) {
     const OGRGeometry* geometry = feature.GetGeometryRef();
     if (geometry == nullptr) return true;
     thread_local std::vector<const OGRLineString*> parts;
@@ -1241,6 +1262,7 @@ bool add_lines(const OGRFeature& feature, const std::string& label, map::MapData
             throw InputError(label + ": more than 2 billion vertices in one part of the map");
         }
         lines.add_chain(read_points(*part, label));
+        if (z != nullptr) append_zm(*part, *z, *m);
     }
     return true;
 }
@@ -1272,7 +1294,7 @@ map::MapData read_lines(const FeatureRun& run) {
     map::MapData lines;
     while (const OGRFeatureUniquePtr feature = reader.next()) {
         const std::string label = feature_label(run.path, reader.layer(), feature->GetFID());
-        if (!add_lines(*feature, label, lines)) throw InputError(label + ": not a 2D LineString or MultiLineString, as it was when the map was read");
+        if (!add_lines(*feature, label, lines)) throw InputError(label + ": not a LineString or MultiLineString, as it was when the map was read");
     }
     return lines;
 }
@@ -1338,15 +1360,25 @@ private:
         return view;
     }
 
-    // A GeoPackage lines layer's feature i: its parts' vertices one after another.
+    // A lines layer's feature i read through OGR: its parts' vertices one after another, with
+    // their Z and M if it has them.
     VertexView lines_at(std::size_t i) {
         const OGRFeatureUniquePtr feature = feature_at(i, in_file_->record_vertex.size());
         lines_.vertices.clear();
         lines_.chains.clear();
-        if (!add_lines(*feature, in_file_->path, lines_) || lines_.vertices.size() != in_file_->record_vertex[i + 1] - in_file_->record_vertex[i]) {
+        z_.clear();
+        m_.clear();
+        const OGRGeometry* geometry = feature->GetGeometryRef();
+        const bool zm = geometry != nullptr && (geometry->Is3D() || geometry->IsMeasured());
+        if (!add_lines(*feature, in_file_->path, lines_, zm ? &z_ : nullptr, zm ? &m_ : nullptr) ||
+            lines_.vertices.size() != in_file_->record_vertex[i + 1] - in_file_->record_vertex[i]) {
             changed(i);
         }
-        return {lines_.vertices.data(), static_cast<std::size_t>(in_file_->record_vertex[i])};
+        VertexView view{lines_.vertices.data(), static_cast<std::size_t>(in_file_->record_vertex[i])};
+        view.file = in_file_;
+        if (zm && geometry->Is3D()) view.z = z_.data();
+        if (zm && geometry->IsMeasured()) view.m = m_.data();
+        return view;
     }
 
     const map::MapData& map_;
@@ -1355,6 +1387,7 @@ private:
     std::optional<FeatureReader> features_;  // (polygons, a GeoPackage's lines)
     std::vector<std::vector<Point>> rings_;
     map::MapData lines_;
+    std::vector<double> z_, m_;  // (lines_'s)
     std::size_t next_ = 0;
 };
 

@@ -78,8 +78,8 @@ struct MemoryLayers {
 // of layers of Shapefiles, GeoPackages or FlatGeobufs, read again by whoever needs them. Each
 // layer holds either
 // - lines: the records of a plain PolyLine Shapefile, decoded as read_shapefile_shapes decodes
-//   them, or the 2D (Multi)LineStrings of a GeoPackage's or FlatGeobuf's layer, read through OGR
-//   (read_lines): each
+//   them, or the (Multi)LineStrings of a GeoPackage's or FlatGeobuf's layer, or of a Shapefile's
+//   with Z or M, read through OGR (read_lines; their Z and M only when the output is written): each
 //   feature's non-empty parts its chains, in order, their vertices the map's from the layer's first
 //   feature's on; or
 // - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as one coverage
@@ -142,9 +142,9 @@ void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::
 void for_each_polygon_ring(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end,
                            const std::function<void(std::span<const Point>)>& visit);
 
-// The lines of a run of features of a GeoPackage lines layer left in its file (ogr_lines): each
-// feature's non-empty parts as chains, in order, as OgrDataset::read makes them. InputError if a
-// feature is not where the run says, or not a 2D (Multi)LineString.
+// The lines of a run of features of a lines layer left in its file and read through OGR
+// (ogr_lines): each feature's non-empty parts as chains (x and y), in order, as OgrDataset::read
+// makes them. InputError if a feature is not where the run says, or not a (Multi)LineString.
 map::MapData read_lines(const FeatureRun& run);
 
 class OgrDataset {
@@ -154,9 +154,10 @@ public:
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
     // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons (no
-    // record deleted), or a GeoPackage's or FlatGeobuf's (a file on disk; a FlatGeobuf with its
-    // index of features) of 2D (Multi)LineStrings or (Multi)Polygons (its FIDs rising in read order,
-    // as a table's are), or of 2D points (read whole), their vertices are left in the files
+    // record deleted) or of (Multi)LineStrings with Z or M, or a GeoPackage's or FlatGeobuf's (a file
+    // on disk; a FlatGeobuf with its index of features) of (Multi)LineStrings (Z and M allowed) or 2D
+    // (Multi)Polygons (its FIDs rising in read order, as a table's are), or of 2D points (read
+    // whole), their vertices are left in the files
     // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
     // them by parts; else read as without it. (The output must then be written by write() through
     // OGR, which reads them again: not as GeoJSON or TopoJSON.)

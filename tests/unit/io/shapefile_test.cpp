@@ -812,11 +812,65 @@ TEST(GeoPackageLayers, LeftInTheFile) {
     }
     EXPECT_FALSE(std::filesystem::exists(out / "changed.gpkg"));
 
-    const GeoPackage z_file("z", {{"lines", wkbLineString25D, {"LINESTRING Z (0 0 1,1 1 2)"}, {}}});
+    const GeoPackage z_file("z", {{"cells", wkbPolygon25D, {"POLYGON Z ((0 0 1,1 0 1,1 1 2,0 0 1))"}, {}}});
     map::MapData z_map;
     const OgrDataset read_z = OgrDataset::read(z_file.path(), {}, z_map, false, true);
     EXPECT_EQ(read_z.vertices_in_file(), nullptr);
-    EXPECT_EQ(z_map.vertices.size(), 2u);
+    EXPECT_FALSE(z_map.vertices.empty());
+}
+
+// Lines with Z or M (a GeoPackage's with Z and M, a PolyLineZ Shapefile) beside 2D polygons: left
+// in their files, the map holds no Z or M either; written, the same bytes as read whole (the Z
+// and M of the kept vertices read again from the features), and refused once the file changed.
+TEST(GeoPackageLayers, LinesWithZAndMLeftInTheFile) {
+    const std::vector<std::string> lines = {"LINESTRING ZM (0 0 1 2,0.5 0.5 3 4,1 1 5 6)", "",
+                                            "MULTILINESTRING ZM ((2 2 0 0,3 3 -1 -2),EMPTY,(4 4 7 7,5 5 8 8,6 6 9 9))"};
+    const GeoPackage gpkg("zm", {{"lines", wkbLineStringZM, lines, {}}, {"cells", wkbPolygon, grid_polygons(), {}}});
+    const ShapeFile shp("linez", wkbLineString25D, {"LINESTRING Z (0 0 1,0.5 0.5 3,1 1 5)", "MULTILINESTRING Z ((2 2 0,3 3 -1),(4 4 7,5 5 8,6 6 9))"});
+    for (const std::string& path : {gpkg.path(), shp.path()}) {
+        SCOPED_TRACE(path);
+        const bool is_shp = path == shp.path();
+        map::MapData whole, planned;
+        const OgrDataset read_whole = OgrDataset::read(path, {}, whole, is_shp);
+        const OgrDataset read_planned = OgrDataset::read(path, {}, planned, is_shp, true);
+        const VerticesInFile* in_file = read_planned.vertices_in_file();
+        ASSERT_NE(in_file, nullptr);
+        expect_same_chains(planned, whole);
+        EXPECT_TRUE(in_file->layers[0].ogr_lines);
+        EXPECT_EQ(read_planned.summary().layers[0].has_z, read_whole.summary().layers[0].has_z);
+        EXPECT_EQ(read_planned.summary().layers[0].has_m, read_whole.summary().layers[0].has_m);
+        const map::MapData part = read_lines(in_file->layers[0].run(1, in_file->layers[0].record_vertex.size() - 1));
+        EXPECT_EQ(part.vertices.size(), 5u);
+
+        std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+        for (const map::Chain chain : whole.chains) {
+            for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 2 != 0;
+        }
+        if (is_shp) {
+            expect_written_alike(path, read_whole, whole, read_planned, planned, kept, "feature 0");
+            continue;
+        }
+        const std::filesystem::path out = std::filesystem::path(path).parent_path() / "out";
+        std::filesystem::create_directories(out);
+        const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+        auto write = [&](const OgrDataset& dataset, const map::MapData& map, const char* name) {
+            WriteOptions options;
+            options.path = (out / name).string();
+            dataset.write(options, map, kept);
+            std::ifstream in(out / name, std::ios::binary);
+            return std::string(std::istreambuf_iterator<char>(in), {});
+        };
+        const std::string written = write(read_whole, whole, "whole.gpkg");
+        EXPECT_EQ(write(read_planned, planned, "planned.gpkg"), written);
+        // (The Z and M are there: the first feature's last kept vertex.)
+        const DatasetPtr check = open_vector((out / "planned.gpkg").string());
+        const OGRFeatureUniquePtr first(pick_layer(*check, "planned", "lines").GetNextFeature());
+        ASSERT_TRUE(first && first->GetGeometryRef());
+        const OGRLineString* line = first->GetGeometryRef()->toLineString();
+        ASSERT_EQ(line->getNumPoints(), 3);
+        EXPECT_EQ(line->getZ(2), 5);
+        EXPECT_EQ(line->getM(2), 6);
+    }
 }
 
 // A FlatGeobuf of lines and one of polygons (one layer each, FIDs from 0): left in their files,
