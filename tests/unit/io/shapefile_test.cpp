@@ -525,6 +525,29 @@ void expect_same_chains(const map::MapData& planned, const map::MapData& whole) 
     }
 }
 
+// Each chain's ends kept and its other vertices but every `nth` (as the engine keeps a chain's ends).
+std::vector<std::uint8_t> thinned(const map::MapData& whole, std::uint32_t nth) {
+    std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
+    for (const map::Chain chain : whole.chains) {
+        for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % nth != 0;
+    }
+    return kept;
+}
+
+// `map` read by `dataset`, its `kept` vertices written to the GeoPackage `name` in `input`'s
+// folder's "out": the file's bytes.
+std::string written_geopackage(const std::string& input, const OgrDataset& dataset, const map::MapData& map,
+                               const std::vector<std::uint8_t>& kept, const std::string& name) {
+    const std::filesystem::path out = std::filesystem::path(input).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    WriteOptions options;
+    options.path = (out / name).string();
+    dataset.write(options, map, kept);
+    std::ifstream in(out / name, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
 std::vector<std::string> grid_polygons() {
     std::vector<std::string> polygons;
     for (int i = 0; i < 4; ++i) {
@@ -783,34 +806,18 @@ TEST(GeoPackageLayers, LeftInTheFile) {
 
     // Written (some vertices dropped, but the ends of chains), the same bytes; refused once the
     // file has changed.
-    std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
-    for (const map::Chain chain : whole.chains) {
-        for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 3 != 0;
-    }
-    const std::filesystem::path out = std::filesystem::path(file.path()).parent_path() / "out";
-    std::filesystem::create_directories(out);
-    auto write = [&](const OgrDataset& dataset, const map::MapData& map, const std::string& name) {
-        WriteOptions options;
-        options.path = (out / name).string();
-        return dataset.write(options, map, kept);
-    };
-    auto bytes = [&](const std::string& name) {
-        std::ifstream in(out / name, std::ios::binary);
-        return std::string(std::istreambuf_iterator<char>(in), {});
-    };
-    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
-    write(read_whole, whole, "whole.gpkg");
-    write(read_planned, planned, "planned.gpkg");
-    EXPECT_FALSE(bytes("whole.gpkg").empty());
-    EXPECT_EQ(bytes("whole.gpkg"), bytes("planned.gpkg"));
+    const std::vector<std::uint8_t> kept = thinned(whole, 3);
+    const std::string written = written_geopackage(file.path(), read_whole, whole, kept, "whole.gpkg");
+    EXPECT_FALSE(written.empty());
+    EXPECT_EQ(written_geopackage(file.path(), read_planned, planned, kept, "planned.gpkg"), written);
     std::filesystem::last_write_time(file.path(), std::filesystem::last_write_time(file.path()) + std::chrono::seconds(2));
     try {
-        write(read_planned, planned, "changed.gpkg");
+        written_geopackage(file.path(), read_planned, planned, kept, "changed.gpkg");
         FAIL() << "no error";
     } catch (const InputError& error) {
         EXPECT_NE(std::string(error.what()).find("changed while toposimp ran: feature 0"), std::string::npos) << error.what();
     }
-    EXPECT_FALSE(std::filesystem::exists(out / "changed.gpkg"));
+    EXPECT_FALSE(std::filesystem::exists(std::filesystem::path(file.path()).parent_path() / "out" / "changed.gpkg"));
 
     const GeoPackage z_file("z", {{"cells", wkbPolygon25D, {"POLYGON Z ((0 0 1,1 0 1,1 1 2,0 0 1))"}, {}}});
     map::MapData z_map;
@@ -842,28 +849,15 @@ TEST(GeoPackageLayers, LinesWithZAndMLeftInTheFile) {
         const map::MapData part = read_lines(in_file->layers[0].run(1, in_file->layers[0].record_vertex.size() - 1));
         EXPECT_EQ(part.vertices.size(), 5u);
 
-        std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
-        for (const map::Chain chain : whole.chains) {
-            for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 2 != 0;
-        }
+        const std::vector<std::uint8_t> kept = thinned(whole, 2);
         if (is_shp) {
             expect_written_alike(path, read_whole, whole, read_planned, planned, kept, "feature 0");
             continue;
         }
-        const std::filesystem::path out = std::filesystem::path(path).parent_path() / "out";
-        std::filesystem::create_directories(out);
-        const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
-        auto write = [&](const OgrDataset& dataset, const map::MapData& map, const char* name) {
-            WriteOptions options;
-            options.path = (out / name).string();
-            dataset.write(options, map, kept);
-            std::ifstream in(out / name, std::ios::binary);
-            return std::string(std::istreambuf_iterator<char>(in), {});
-        };
-        const std::string written = write(read_whole, whole, "whole.gpkg");
-        EXPECT_EQ(write(read_planned, planned, "planned.gpkg"), written);
+        const std::string written = written_geopackage(path, read_whole, whole, kept, "whole.gpkg");
+        EXPECT_EQ(written_geopackage(path, read_planned, planned, kept, "planned.gpkg"), written);
         // (The Z and M are there: the first feature's last kept vertex.)
-        const DatasetPtr check = open_vector((out / "planned.gpkg").string());
+        const DatasetPtr check = open_vector((std::filesystem::path(path).parent_path() / "out" / "planned.gpkg").string());
         const OGRFeatureUniquePtr first(pick_layer(*check, "planned", "lines").GetNextFeature());
         ASSERT_TRUE(first && first->GetGeometryRef());
         const OGRLineString* line = first->GetGeometryRef()->toLineString();
@@ -917,23 +911,10 @@ TEST(GeoPackageLayers, FlatGeobufLeftInTheFile) {
         ++beyond.end;
         EXPECT_THROW(for_each_polygon_ring(beyond, [](std::span<const Point>) {}), InputError);
 
-        std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
-        for (const map::Chain chain : whole.chains) {
-            for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept[v] = v % 3 != 0;
-        }
-        const std::filesystem::path out = std::filesystem::path(file->path()).parent_path() / "out";
-        std::filesystem::create_directories(out);
-        const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
-        auto write = [&](const OgrDataset& dataset, const map::MapData& map, const char* name) {
-            WriteOptions options;
-            options.path = (out / name).string();
-            dataset.write(options, map, kept);
-            std::ifstream in(out / name, std::ios::binary);
-            return std::string(std::istreambuf_iterator<char>(in), {});
-        };
-        const std::string written = write(read_whole, whole, "whole.gpkg");
+        const std::vector<std::uint8_t> kept = thinned(whole, 3);
+        const std::string written = written_geopackage(file->path(), read_whole, whole, kept, "whole.gpkg");
         EXPECT_FALSE(written.empty());
-        EXPECT_EQ(write(read_planned, planned, "planned.gpkg"), written);
+        EXPECT_EQ(written_geopackage(file->path(), read_planned, planned, kept, "planned.gpkg"), written);
     }
 
     const GeoPackage no_index("noindex", {{"lines", wkbMultiLineString, lines, {}}}, "FlatGeobuf", ".fgb", {"SPATIAL_INDEX=NO"});
