@@ -53,14 +53,14 @@ Dask options:
                        searched for crossings, queued and its budget selected on the workers;
                        this process never holds an engine over the whole map). With 'workers',
                        Shapefiles (a .shp, or a folder of them) of PolyLines (Z or M too) or of
-                       2D polygons (no record deleted), GeoPackages and FlatGeobufs (with their
-                       index of features) of (Multi)LineString (Z or M too) and 2D
-                       (Multi)Polygon layers, written through GDAL (any output but GeoJSON or TopoJSON; at one target,
-                       without --decimals, --precision or --levels) are read by parts on the
-                       workers (2D point layers among them are read here, as control points):
-                       this process then never holds their vertices, and the input files must
-                       be at the same absolute paths, unchanged, on every worker. Other inputs
-                       are read here.
+                       2D polygons (no record deleted), GeoPackages and FlatGeobufs (a .fgb or a
+                       folder of them, with their index of features) of (Multi)LineString (Z or
+                       M too) and 2D (Multi)Polygon layers, written through GDAL (any output
+                       but GeoJSON or TopoJSON; at one target, without --decimals, --precision
+                       or --levels) are read by parts on the workers (2D point layers among them
+                       are read here, as control points): this process then never holds their
+                       vertices, and the input files must be at the same absolute paths,
+                       unchanged, on every worker. Other inputs are read here.
   --send-input         with --first-round workers: read the input here and send the workers its
                        parts (for workers that cannot see the input)
 

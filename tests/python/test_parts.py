@@ -416,23 +416,29 @@ def test_first_round_reads_a_geopackage_by_parts(binary, tmp_path, geopackage, w
     assert "300 control points" in err
 
 
-@pytest.mark.parametrize("layer", ["rivers", "cells"])
+@pytest.mark.parametrize("layer", ["rivers", "cells", "folder"])
 def test_first_round_reads_a_flatgeobuf_by_parts(binary, tmp_path, shapefile_folder, layer):
-    """A FlatGeobuf of lines or of polygons (ogr2ogr: with its index of features), the places as
-    control points, to a FlatGeobuf: each part read by its task, by FID where it does not begin
-    the file; the output toposimp map's byte for byte."""
+    """A FlatGeobuf of lines or of polygons (ogr2ogr: with its index of features), or a folder of
+    both, the places as control points, to a FlatGeobuf (the folder: to a GeoPackage): each part
+    read by its task, by FID where it does not begin the file; the output toposimp map's byte for
+    byte."""
     import subprocess
 
-    path = tmp_path / (layer + ".fgb")
-    subprocess.run(["ogr2ogr", "-f", "FlatGeobuf", "-nlt", "PROMOTE_TO_MULTI", str(path), str(shapefile_folder / (layer + ".shp"))],
-                   check=True, capture_output=True)
-    arguments = [str(path), "-p", str(shapefile_folder / "places.shp"), "--keep", "10%", *SAME_DATE]
-    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, ".fgb")
+    folder = tmp_path / "fgb"
+    folder.mkdir()
+    for name in ("rivers", "cells"):
+        subprocess.run(["ogr2ogr", "-f", "FlatGeobuf", "-nlt", "PROMOTE_TO_MULTI", str(folder / (name + ".fgb")),
+                        str(shapefile_folder / (name + ".shp"))], check=True, capture_output=True)
+    path, suffix, layers = (folder, ".gpkg", ["-l", "rivers", "-l", "cells"]) if layer == "folder" else (folder / (layer + ".fgb"), ".fgb", [])
+    arguments = [str(path), *layers, "-p", str(shapefile_folder / "places.shp"), "--keep", "10%", *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, suffix)
     assert output.read_bytes() == reference.read_bytes()
-    key = "polygons_file" if layer == "cells" else "lines_file"
-    assert len(first.parts) > 2 and all(part[key] == str(path.resolve()) and part["each_by_fid"] for part in first.parts)
-    assert first.parts[0]["features"][0] == 0 and all(one["features"][1] == other["features"][0]
-                                                      for one, other in zip(first.parts, first.parts[1:]))
+    files = {pathlib.Path(part.get("polygons_file", part.get("lines_file"))).name for part in first.parts}
+    assert files == ({"rivers.fgb", "cells.fgb"} if layer == "folder" else {layer + ".fgb"})
+    assert len(first.parts) > 2 and all(part["each_by_fid"] for part in first.parts)
+    for name in files:
+        runs = [part["features"] for part in first.parts if part.get("polygons_file", part.get("lines_file")).endswith(name)]
+        assert runs[0][0] == 0 and all(one[1] == other[0] for one, other in zip(runs, runs[1:]))
 
 
 @pytest.mark.parametrize("damage, message", [

@@ -43,24 +43,30 @@ bool is_local_shp(const std::string& path) {
 // read again, whole.
 struct NotInFile {};
 
-// The .shp of layer `name` of the dataset at `path`: `path` itself if it is a local .shp, the
-// layer's file if `path` is a folder of them; "" otherwise.
-std::string layer_shp(const std::string& path, const std::string& name) {
-    if (is_local_shp(path)) return path;
+// The file of layer `name` of the dataset at `path`, a `lower` (".shp", ".fgb") or `upper` file:
+// `path` itself if it is one on disk (not behind /vsi…), the layer's file if `path` is a folder
+// of them; "" otherwise.
+std::string layer_file(const std::string& path, const std::string& name, const char* lower, const char* upper) {
     std::error_code error;
-    if (path.rfind("/vsi", 0) == 0 || !std::filesystem::is_directory(path, error)) return {};
-    for (const char* extension : {".shp", ".SHP"}) {
-        const std::filesystem::path file = std::filesystem::path(path) / (name + extension);
+    if (path.rfind("/vsi", 0) == 0) return {};
+    const std::string extension = std::filesystem::path(path).extension().string();
+    if ((extension == lower || extension == upper) && std::filesystem::is_regular_file(path, error)) return path;
+    if (!std::filesystem::is_directory(path, error)) return {};
+    for (const char* ending : {lower, upper}) {
+        const std::filesystem::path file = std::filesystem::path(path) / (name + ending);
         if (std::filesystem::is_regular_file(file, error)) return file.string();
     }
     return {};
 }
 
-// A GeoPackage or FlatGeobuf file on disk (not behind /vsi…): its layers may be left in it, read
-// through OGR by FID (FeatureRun).
-bool is_local_ogr_file(const std::string& path, const std::string& driver) {
+// The .shp of layer `name` of the dataset at `path` (layer_file).
+std::string layer_shp(const std::string& path, const std::string& name) { return layer_file(path, name, ".shp", ".SHP"); }
+
+// A GeoPackage file on disk (not behind /vsi…): its layers may be left in it, read through OGR by
+// FID ranges (FeatureRun).
+bool is_local_gpkg(const std::string& path) {
     std::error_code error;
-    return (driver == "GPKG" || driver == "FlatGeobuf") && path.rfind("/vsi", 0) != 0 && std::filesystem::is_regular_file(path, error);
+    return path.rfind("/vsi", 0) != 0 && std::filesystem::is_regular_file(path, error);
 }
 
 // A layer's file as VerticesInFile keeps it: where it is (absolute: other processes read it),
@@ -421,13 +427,14 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // With `leave_in_file` the layer's vertices stay in its .shp (`shp`: the input, or the layer's
     // file in a folder), or NotInFile is thrown; the .prj goes to the output as it is only where
     // it would without it.
-    // A GeoPackage's or FlatGeobuf's layers are read through OGR by FID; a FlatGeobuf's only with
-    // its index of features (without it, every read by FID reads the file up to the feature).
-    const bool gpkg = leave_in_file && summary.driver == "GPKG" && is_local_ogr_file(path, summary.driver);
-    const bool fgb = leave_in_file && summary.driver == "FlatGeobuf" && is_local_ogr_file(path, summary.driver) &&
-                     source.TestCapability(OLCRandomRead);
+    // A GeoPackage's or FlatGeobuf's layers (a .fgb, or a folder of them) are read through OGR by
+    // FID; a FlatGeobuf's only with its index of features (without it, every read by FID reads
+    // the file up to the feature).
+    const bool gpkg = leave_in_file && summary.driver == "GPKG" && is_local_gpkg(path);
+    const std::string fgb_file = leave_in_file && summary.driver == "FlatGeobuf" ? layer_file(path, layer->name, ".fgb", ".FGB") : "";
+    const bool fgb = !fgb_file.empty() && source.TestCapability(OLCRandomRead);
     const bool by_ogr = gpkg || fgb;
-    const std::string shp = !leave_in_file ? std::string() : by_ogr ? path : layer_shp(path, layer->name);
+    const std::string shp = !leave_in_file ? std::string() : gpkg ? path : fgb ? fgb_file : layer_shp(path, layer->name);
     const bool copy_prj = prj_as_file && is_local_shp(path);
     const bool decode = summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
                         (leave_in_file ? !shp.empty() : copy_prj) &&
