@@ -391,8 +391,8 @@ void add_chains(py::dict& dict, const map::MapData& map, const io::LayerInFile& 
     dict["first_chain"] = c0;
 }
 
-// Where features [r0, r1) of a layer left in its file are (a GeoPackage's: their FIDs too), under
-// `path_key`.
+// Where features [r0, r1) of a layer left in its file are (io::FeatureRun: a GeoPackage's FIDs
+// too, or that a FlatGeobuf's are read one by one), its file under `path_key`.
 void add_run(py::dict& dict, const io::LayerInFile& layer, const char* path_key, std::uint64_t r0, std::uint64_t r1) {
     const io::FeatureRun run = layer.run(r0, r1);
     dict[path_key] = layer.path;
@@ -403,9 +403,6 @@ void add_run(py::dict& dict, const io::LayerInFile& layer, const char* path_key,
     if (run.by_fid) dict["fids"] = py::make_tuple(run.fid_first, run.fid_end);
     if (run.each_by_fid) dict["each_by_fid"] = true;
 }
-
-// The run of features a part made by add_run reads, its file checked first (check_part_file).
-io::FeatureRun run_of(const py::dict& dict, const char* path_key);
 
 // Features [r0, r1) of a polygon layer a map's vertices are in as a part: where they are, the
 // coverage's slice for their rings (map::arcs_of), and the chains they make.
@@ -463,6 +460,7 @@ void check_part_file(const py::dict& dict, const std::string& path, const char* 
     }
 }
 
+// The run of features a part made by add_run reads, its file checked first (check_part_file).
 io::FeatureRun run_of(const py::dict& dict, const char* path_key) {
     io::FeatureRun run;
     run.path = item(dict, path_key).cast<std::string>();
@@ -504,7 +502,8 @@ map::MapData file_part_of(const py::dict& dict) {
     return part;
 }
 
-// A part read from a GeoPackage's lines layer (file_part_dict): the same chains, or InputError.
+// A part read from a lines layer read through OGR (file_part_dict): the same chains, or
+// InputError.
 map::MapData lines_part_of(const py::dict& dict) {
     const io::FeatureRun run = run_of(dict, "lines_file");
     map::MapData part;

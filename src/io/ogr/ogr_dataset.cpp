@@ -542,10 +542,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto end_fids = [&](LayerInFile& planned) {
         if (gpkg) planned.record_fid.push_back(planned.record_fid.empty() ? 0 : planned.record_fid.back() + 1);
     };
-    // A layer left in its file (VerticesInFile), its planned layer begun: the layer's file
-    // checked, then each feature read with its attributes, its FID noted, `per_feature()` called,
-    // its geometry (if any) given to `add(geometry, label)` to fill its shape's items (or throw
-    // NotInFile) and dropped; then the FIDs' end noted and the planned layer kept.
+    // A layer left in its file (VerticesInFile), its planned layer begun (planned_layer): each
+    // feature read with its attributes, its FID noted, `per_feature()` called, its geometry (if
+    // any) given to `add(geometry, label)` to fill its shape's items (or throw NotInFile) and
+    // dropped; then `per_feature()` once more, the FIDs' end noted and the planned layer kept.
     auto plan_features = [&](LayerInFile&& planned, Layer::Kind kind, auto&& per_feature, auto&& add) {
         for (;;) {
             OGRFeatureUniquePtr feature{source.GetNextFeature()};
@@ -1237,7 +1237,6 @@ public:
     }
 
     OGRLayer& layer() { return *layer_; }
-    const FeatureRun& run() const { return run_; }
 
 private:
     [[noreturn]] void fail(std::uint64_t feature, const std::string& why) const {
