@@ -95,14 +95,14 @@ struct LayerInFile {
     std::int64_t time = 0;
     bool polygons = false;
     bool points = false;                       // a 2D point layer, read whole (control points): no chain, nothing else here
-    bool ogr_lines = false;                    // lines read through OGR (not a Shapefile's), not decoded from a .shp
+    bool ogr_lines = false;                    // lines read through OGR (a GeoPackage's, FlatGeobuf's, or Shapefile's with Z or M)
     bool each_by_fid = false;                  // a FlatGeobuf's: each feature read by its FID, its index (FeatureRun)
     std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
     std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
     std::vector<std::uint32_t> record_ring;    // polygons: per feature and one more, its first ring
     // A GeoPackage's: per feature and one more, its FID (rising in the order OGR reads the layer;
     // the last one past the last feature's). Empty: each feature's FID is its index (a Shapefile
-    // without deleted records).
+    // without deleted records, a FlatGeobuf).
     std::vector<std::int64_t> record_fid;
 
     // Its features [first, end).
