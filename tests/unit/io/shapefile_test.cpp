@@ -373,6 +373,15 @@ std::vector<std::vector<Point>> chains_of(const map::MapData& map) {
     return chains;
 }
 
+// Chains [first, end) of `whole`, with their points.
+std::vector<std::vector<Point>> chains_of(const map::MapData& whole, std::uint32_t first, std::uint32_t end) {
+    std::vector<std::vector<Point>> chains;
+    for (std::uint32_t c = first; c < end; ++c) {
+        chains.emplace_back(whole.vertices.begin() + whole.chains[c].first, whole.vertices.begin() + whole.chains[c].last + 1);
+    }
+    return chains;
+}
+
 void expect_same_points(const std::vector<std::vector<Point>>& a, const std::vector<std::vector<Point>>& b) {
     ASSERT_EQ(a.size(), b.size());
     for (std::size_t c = 0; c < a.size(); ++c) {
@@ -455,12 +464,7 @@ TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
         for (std::uint64_t end = first; end <= lines.size(); ++end) {
             SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
             const map::MapData part = read_shapefile_lines(file.path(), "infile", first, end);
-            map::MapData expected;
-            for (std::uint32_t c = file_layer.record_chain[first]; c < file_layer.record_chain[end]; ++c) {
-                expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
-                                                          whole.chains[c].last - whole.chains[c].first + 1));
-            }
-            expect_same_points(chains_of(part), chains_of(expected));
+            expect_same_points(chains_of(part), chains_of(whole, file_layer.record_chain[first], file_layer.record_chain[end]));
             EXPECT_EQ(part.vertices.size(), file_layer.record_vertex[end] - file_layer.record_vertex[first]);
         }
     }
@@ -607,12 +611,7 @@ TEST(ShapefileShapes, PolygonRingsStreamedPlanTheCoverageRead) {
             SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
             const map::CoverageSlice slice = coverage.slice(ring_before[first], ring_before[end]);
             const map::MapData part = map::arcs_of(slice, rings_of(first, end));
-            map::MapData expected;
-            for (std::uint32_t c = slice.first_chain; c < slice.end_chain; ++c) {
-                expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
-                                                          whole.chains[c].last - whole.chains[c].first + 1));
-            }
-            expect_same_points(chains_of(part), chains_of(expected));
+            expect_same_points(chains_of(part), chains_of(whole, slice.first_chain, slice.end_chain));
         }
     }
     EXPECT_THROW(for_each_polygon_ring(file.path(), "coverage", 0, polygons.size() + 1, [](std::span<const Point>) {}), InputError);
@@ -777,12 +776,7 @@ TEST(GeoPackageLayers, LeftInTheFile) {
         for (std::uint64_t end = first; end <= features; ++end) {
             SCOPED_TRACE(std::to_string(first) + " to " + std::to_string(end));
             const map::MapData part = read_lines(line_layer.run(first, end));
-            map::MapData expected;
-            for (std::uint32_t c = line_layer.record_chain[first]; c < line_layer.record_chain[end]; ++c) {
-                expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
-                                                          whole.chains[c].last - whole.chains[c].first + 1));
-            }
-            expect_same_points(chains_of(part), chains_of(expected));
+            expect_same_points(chains_of(part), chains_of(whole, line_layer.record_chain[first], line_layer.record_chain[end]));
         }
     }
     // A run that is not the file's: one more feature than its FIDs hold, or one fewer.
@@ -899,12 +893,7 @@ TEST(GeoPackageLayers, FlatGeobufLeftInTheFile) {
                     continue;
                 }
                 const map::MapData part = read_lines(layer.run(first, end));
-                map::MapData expected;
-                for (std::uint32_t c = layer.record_chain[first]; c < layer.record_chain[end]; ++c) {
-                    expected.add_chain(std::span<const Point>(whole.vertices.data() + whole.chains[c].first,
-                                                              whole.chains[c].last - whole.chains[c].first + 1));
-                }
-                expect_same_points(chains_of(part), chains_of(expected));
+                expect_same_points(chains_of(part), chains_of(whole, layer.record_chain[first], layer.record_chain[end]));
             }
         }
         FeatureRun beyond = layer.run(1, features);
