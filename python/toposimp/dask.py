@@ -52,10 +52,11 @@ Dask options:
                        map's engine in this process) or 'workers' (the map cut into tiles,
                        searched for crossings, queued and its budget selected on the workers;
                        this process never holds an engine over the whole map). With 'workers',
-                       Shapefiles (a .shp, or a folder of them) of PolyLines (Z or M too) or of
-                       2D polygons (no record deleted), GeoPackages and FlatGeobufs (a .fgb or a
-                       folder of them, with their index of features) of (Multi)LineString (Z or
-                       M too) and 2D (Multi)Polygon layers, written through GDAL (any output
+                       Shapefiles (a .shp, or a folder of them) of PolyLines or of polygons (no
+                       record deleted), GeoPackages and FlatGeobufs (a .fgb or a folder of them,
+                       with their index of features) of (Multi)LineString and (Multi)Polygon
+                       layers, Z or M too (polygons: where every ring at a shared location has
+                       the same Z and M), written through GDAL (any output
                        but GeoJSON or TopoJSON; at one target, without --decimals, --precision
                        or --levels) are read by parts on the workers (2D point layers among them
                        are read here, as control points): this process then never holds their
@@ -157,8 +158,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     than `local_budget` vertices (default LOCAL_BUDGET) runs here, whole. `on_progress(done,
     total)`: called as the tile tasks finish. `first_round`: where the first round's tiles are
     built, "workers" or "here" (the whole map's engine here). With "workers", the first round's
-    tasks read their parts of the input themselves where its format allows (Shapefiles of plain
-    PolyLines or 2D polygons, a file or a folder, written through GDAL: the input must then be at
+    tasks read their parts of the input themselves where its format allows (Shapefiles,
+    GeoPackages and FlatGeobufs of lines or polygons, written through GDAL: the input must then be at
     the same absolute path, unchanged, on every worker), and this process never holds the input's
     vertices; `send_input` sends them the parts from here instead."""
     if local_budget is None:

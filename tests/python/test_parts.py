@@ -513,36 +513,95 @@ def test_lines_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, suffi
     assert any("lines_file" in part for part in first.parts)
 
 
-def test_a_geopackage_with_3d_polygons_is_read_whole(tmp_path, geopackage):
-    """A GeoPackage polygon layer whose features carry Z: the dataset is read here, whole."""
+def _cells_with_z_and_m(source, path, dimension, per_feature=False):
+    """The cells of `source` (a GeoPackage) written to `path` with a Z, an M or both at each
+    point: a function of its location (so every ring at a shared location carries the same), or
+    with per_feature, the feature's number (so two cells at their shared border do not)."""
+    import csv
+    import re
     import subprocess
 
-    path = tmp_path / "z.gpkg"
-    subprocess.run(["ogr2ogr", "-f", "GPKG", str(path), str(geopackage[0]), "cells", "-dim", "XYZ"], check=True, capture_output=True)
+    text = path.with_suffix(".csv")
+    subprocess.run(["ogr2ogr", "-f", "CSV", str(text), str(source), "cells", "-lco", "GEOMETRY=AS_WKT"], check=True, capture_output=True)
+    with open(text, newline="") as f:
+        rows = list(csv.DictReader(f))
+    tag = {"XYZ": " Z ", "XYM": " M ", "XYZM": " ZM "}[dimension]
+
+    def extra(number, x, y):
+        z = float(number) if per_feature else 10 * float(x) + float(y) + 0.125
+        m = float(number) if per_feature else float(x) - 2 * float(y)
+        return {"XYZ": f"{z!r}", "XYM": f"{m!r}", "XYZM": f"{z!r} {m!r}"}[dimension]
+
+    for number, row in enumerate(rows):
+        wkt = re.sub(r"(-?[0-9.eE+-]+) (-?[0-9.eE+-]+)(?=[,)])", lambda p: f"{p[1]} {p[2]} {extra(number, p[1], p[2])}", row["WKT"])
+        row["WKT"] = re.sub(r"^(MULTIPOLYGON|POLYGON) ", lambda k: k[1] + tag, wkt)
+    with open(text, "w", newline="") as f:
+        writer = csv.DictWriter(f, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    subprocess.run(["ogr2ogr", str(path), str(text), "-nln", "cells" if path.suffix == ".gpkg" else path.stem, "-oo", "GEOM_POSSIBLE_NAMES=WKT",
+                    "-oo", "KEEP_GEOM_COLUMNS=NO", "-a_srs", "EPSG:4326", "-nlt", "POLYGON" + tag.strip()], check=True, capture_output=True)
+
+
+@pytest.mark.parametrize("suffix, dimension", [(".gpkg", "XYZ"), (".gpkg", "XYM"), (".gpkg", "XYZM"), (".shp", "XYZ")])
+def test_polygons_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, suffix, dimension):
+    """Cells with Z, M or both (the same at each shared location), as a GeoPackage or a PolygonZ
+    Shapefile: read by parts (each ring's Z and M read again with it where the output is
+    written), the output toposimp map's byte for byte, its Z and M there."""
+    import subprocess
+
+    path = tmp_path / ("zm" + suffix)
+    _cells_with_z_and_m(geopackage[0], path, dimension)
+    arguments = [str(path), "--keep", "10%", *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, suffix)
+    if suffix == ".gpkg":
+        assert output.read_bytes() == reference.read_bytes()
+    else:
+        _same_shapefiles(output, reference)
+    assert len([part for part in first.parts if "polygons_file" in part]) > 1
+    info = subprocess.run(["ogrinfo", "-ro", "-al", "-so", str(output)], check=True, capture_output=True, text=True).stdout
+    geometry = next(line for line in info.splitlines() if line.startswith("Geometry: "))
+    assert ("3D" in geometry) == ("Z" in dimension) and ("Measured" in geometry) == ("M" in dimension), geometry
+
+
+@pytest.mark.parametrize("dimension", ["XYZ", "XYM"])
+def test_polygons_whose_rings_differ_in_z_or_m_are_read_whole(binary, tmp_path, geopackage, dimension):
+    """Cells each at its own height (or measure): two rings at a shared location differ, and the
+    arc's vertex has the first one's, so the dataset is read here, whole; the output toposimp
+    map's byte for byte."""
+    import subprocess
+
+    path = tmp_path / "own.gpkg"
+    _cells_with_z_and_m(geopackage[0], path, dimension, per_feature=True)
+    arguments = ["map", str(path), "--keep", "10%", *SAME_DATE, "-o"]
+    reference, output = tmp_path / "reference.gpkg", tmp_path / "whole.gpkg"
+    subprocess.run([binary, *arguments, str(reference)], check=True, capture_output=True)
     first = FirstRoundHere()
-    status, out, err = _toposimp.run_command(["map", str(path), "--keep", "10%", "-o", str(tmp_path / "out.gpkg"), "-v"], first, 1, 300, 0,
-                                             None, False, False, input_on_workers=True)
+    status, out, err = _toposimp.run_command([*arguments, str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
     assert status == 0, err
+    assert output.read_bytes() == reference.read_bytes()
     assert "(left in the file)" not in err and "the input is read here, whole" in err
     assert all("lines_file" not in part and "polygons_file" not in part for part in first.parts)
 
 
 def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
-    """A PolygonZ layer among the layers asked for: every layer is read whole, and the parts
-    carry their vertices."""
+    """A polygon layer with a deleted record among the layers asked for: every layer is read
+    whole, and the parts carry their vertices."""
     import shutil
-    import sys
-
-    sys.path.insert(0, str(DATA.parent / "scripts" / "bench"))
-    import generate_map
+    import struct
 
     folder = tmp_path / "folder"
     shutil.copytree(shapefile_folder, folder)
-    writer = generate_map.ShapefileWriter(folder / "heights", 15)  # (a PolygonZ file, no record)
-    writer.close()
+    for extension in (".shp", ".shx", ".dbf"):
+        shutil.copy(folder / ("cells" + extension), folder / ("holes" + extension))
+    with open(folder / "holes.dbf", "r+b") as dbf:  # (its first record marked deleted)
+        header = dbf.read(12)
+        header_length, = struct.unpack("<H", header[8:10])
+        dbf.seek(header_length)
+        dbf.write(b"*")
     first = FirstRoundHere()
     output = tmp_path / "whole.gpkg"
-    status, out, err = _toposimp.run_command(["map", str(folder), "-l", "cells", "-l", "heights", "--keep", "10%",
+    status, out, err = _toposimp.run_command(["map", str(folder), "-l", "rivers", "-l", "holes", "--keep", "10%",
                                               "-o", str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
     assert status == 0, err
     assert "(left in the file)" not in err and "the input is read here, whole" in err

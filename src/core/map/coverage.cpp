@@ -8,6 +8,7 @@
 #include <limits>
 #include <optional>
 #include <stdexcept>
+#include <type_traits>
 #include <unordered_map>
 
 namespace toposimp::map {
@@ -280,7 +281,24 @@ void Coverage::build(MapData& map) {
 }
 
 void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_bytes) {
+    plan_rings<false>(
+        [&](const std::function<void(std::span<const Point>, std::span<const PointTag>)>& visit) {
+            rings([&](std::span<const Point> ring) { visit(ring, {}); });
+        },
+        map, pass_bytes);
+}
+
+void Coverage::plan(const TaggedRingSource& rings, MapData& map, std::size_t pass_bytes) {
+    plan_rings<true>(rings, map, pass_bytes);
+}
+
+template <bool kTagged>
+void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::size_t pass_bytes) {
     if (!ring_start_.empty()) throw std::logic_error("Coverage::plan on a coverage given rings");
+    // (The passes that do not look at the tags.)
+    auto rings = [&](const std::function<void(std::span<const Point>)>& visit) {
+        tagged([&](std::span<const Point> ring, std::span<const PointTag>) { visit(ring); });
+    };
     map_ = &map;
     first_chain_ = static_cast<std::uint32_t>(map.chains.size());
     first_vertex_ = map.chains.empty() ? 0 : map.chains.back().last + 1;
@@ -311,11 +329,15 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     // 2. Nodes, as build() finds them, in passes over the rings: each pass groups the occurrences
     // of a run of buckets, as many as fit in pass_bytes (or one bucket), every occurrence of a
     // location in the same pass.
-    struct Occurrence {
+    struct Plain {
         LocationKey key;
         Neighbours around;
         std::uint32_t index;  // among the clean occurrences
     };
+    struct Tagged : Plain {
+        PointTag tag;
+    };
+    using Occurrence = std::conditional_t<kTagged, Tagged, Plain>;
     const std::uint64_t total = clean_start_.back();
     const std::uint64_t per_pass = std::max<std::uint64_t>(1, pass_bytes / sizeof(Occurrence));
     std::vector<std::uint32_t> pass_of(kBuckets);
@@ -332,15 +354,20 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
     for (std::uint64_t pass = 0; pass < passes; ++pass) {
         found.clear();
         std::uint32_t r = 0;
-        rings([&](std::span<const Point> ring) {
-            if (r >= ring_total || ring.size() != ring_size_[r]) throw changed();
+        tagged([&](std::span<const Point> ring, std::span<const PointTag> tags) {
+            if (r >= ring_total || ring.size() != ring_size_[r] || (kTagged && tags.size() != ring.size())) throw changed();
             if (!degenerate_[r]) {
                 if (!clean_ring(ring, sequence) || sequence.size() != clean_start_[r + 1] - clean_start_[r]) throw changed();
                 for (std::size_t i = 0; i < sequence.size(); ++i) {
                     const LocationKey key(ring[sequence[i]]);
                     if (passes > 1 && pass_of[bucket_of(key)] != pass) continue;
                     if (found.size() == pass_size[pass]) throw changed();
-                    found.push_back({key, neighbours_at(ring, sequence, i), clean_start_[r] + static_cast<std::uint32_t>(i)});
+                    const Plain plain{key, neighbours_at(ring, sequence, i), clean_start_[r] + static_cast<std::uint32_t>(i)};
+                    if constexpr (kTagged) {
+                        found.push_back({plain, tags[sequence[i]]});
+                    } else {
+                        found.push_back(plain);
+                    }
                 }
             }
             ++r;
@@ -352,7 +379,10 @@ void Coverage::plan(const RingSource& rings, MapData& map, std::size_t pass_byte
         for (std::size_t g = 0; g < found.size();) {
             std::size_t h = g + 1;
             bool differ = false;
-            for (; h < found.size() && found[h].key == found[g].key; ++h) differ = differ || found[h].around != found[g].around;
+            for (; h < found.size() && found[h].key == found[g].key; ++h) {
+                differ = differ || found[h].around != found[g].around;
+                if constexpr (kTagged) tags_agree_ = tags_agree_ && found[h].tag == found[g].tag;
+            }
             for (std::size_t k = g; k < h && differ; ++k) set_bit(node_bits_, found[k].index);
             g = h;
         }
@@ -503,10 +533,14 @@ std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std
 }
 
 std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
-                                       bool arc_order) const {
+                                       bool arc_order, std::vector<std::uint32_t>* positions) const {
     std::vector<std::uint32_t> all = arc_order_vertices(ring);
+    if (positions != nullptr) positions->clear();
     if (degenerate_[ring]) {
         if (given.size() != all.size()) throw std::invalid_argument("a ring that is not the one the coverage was made of");
+        if (positions != nullptr) {
+            for (std::uint32_t k = 0; k < given.size(); ++k) positions->push_back(k);
+        }
         return {given.begin(), given.end()};  // (its own chain: its own bits)
     }
     std::vector<std::uint32_t> sequence;
@@ -521,9 +555,13 @@ std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point
     std::vector<Point> ring_out;
     for (std::uint32_t step = 0; step < size; ++step) {
         const std::uint32_t i = (from + step) % size;
-        if (kept[all[i]]) ring_out.push_back(owner_zeros(all[i], given[sequence[(i + size - offset) % size]]));
+        if (!kept[all[i]]) continue;
+        const std::uint32_t at = sequence[(i + size - offset) % size];
+        ring_out.push_back(owner_zeros(all[i], given[at]));
+        if (positions != nullptr) positions->push_back(at);
     }
     ring_out.push_back(ring_out.front());
+    if (positions != nullptr) positions->push_back(positions->front());
     return ring_out;
 }
 

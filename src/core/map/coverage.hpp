@@ -23,6 +23,18 @@ namespace toposimp::map {
 // would be given it. Called once for each pass over them.
 using RingSource = std::function<void(const std::function<void(std::span<const Point>)>& visit)>;
 
+// What a ring point carries besides its location (its Z and M, as bits), for rings that are
+// written again from their own points: the map's vertex at a location has the bits of the ring
+// that made its arc, so a ring's own point may stand in for it only where every ring at that
+// location carries the same.
+struct PointTag {
+    std::uint64_t z = 0, m = 0;
+    friend bool operator==(const PointTag&, const PointTag&) = default;
+};
+// Rings with their points' tags (as many as points).
+using TaggedRingSource =
+    std::function<void(const std::function<void(std::span<const Point>, std::span<const PointTag>)>& visit)>;
+
 struct CoverageSlice;
 
 class Coverage {
@@ -44,6 +56,12 @@ public:
     // Throws std::invalid_argument if a pass streams other rings than the first did. Instead
     // of add_ring and build; ring_vertices and ring_arcs answer as after build(); source_of does not.
     void plan(const RingSource& rings, MapData& map, std::size_t pass_bytes);
+    // The same, the rings' points tagged (72 bytes a ring point in the passes that find the
+    // nodes, where the tags are compared): tags_agree() then says whether all the clean
+    // occurrences of each location carry the same tag (closing points and consecutive duplicates,
+    // which make no vertex, and degenerate rings, which make their own chains, are not compared).
+    void plan(const TaggedRingSource& rings, MapData& map, std::size_t pass_bytes);
+    bool tags_agree() const { return tags_agree_; }
 
     // What the rings [first_ring, end_ring) need to make, on their own, the chains they are the
     // first to use (arcs_of).
@@ -60,8 +78,10 @@ public:
     // the -0.0s of the rings that make the arcs). For rings read again when they are written, the
     // map's vertices being elsewhere. Throws std::invalid_argument if `given` is not that ring.
     // (After build() too: the signs are then the map's vertices'.)
+    // `positions`, if given, gets each returned point's index in `given` (the closing point's is
+    // the first's): where the ring's Z and M are, which are the arcs' where tags_agree().
     std::vector<Point> ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
-                                 bool arc_order = false) const;
+                                 bool arc_order = false, std::vector<std::uint32_t>* positions = nullptr) const;
 
     // The map's first chain made by the rings from `ring` on (`ring` = ring_count(): one past the
     // coverage's last chain).
@@ -88,6 +108,8 @@ public:
     std::uint64_t degenerate_ring_count() const { return degenerate_rings_; }
 
 private:
+    template <bool kTagged>
+    void plan_rings(const TaggedRingSource& rings, MapData& map, std::size_t pass_bytes);
     std::vector<std::uint32_t> arc_order_vertices(std::uint32_t ring) const;
     // plan(): the -0.0 coordinates of a chain made from `positions` of `ring`; p with the signs of
     // vertex v's zeros.
@@ -107,6 +129,7 @@ private:
     std::vector<std::uint32_t> new_chains_before_; // per ring and one more: the chains the rings before it made
     std::unordered_map<std::uint32_t, std::uint8_t> negative_zeros_;  // plan(): per vertex with a -0.0, which (1: x, 2: y)
     const MapData* map_ = nullptr;
+    bool tags_agree_ = true;
     std::uint32_t first_vertex_ = 0, first_chain_ = 0;
     std::uint64_t arcs_ = 0, shared_arcs_ = 0, degenerate_rings_ = 0;
 };

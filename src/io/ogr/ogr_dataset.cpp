@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -122,6 +123,9 @@ struct VertexView {
     // A feature's lines read again through OGR: their Z and M beside `data` (nullptr: none).
     const double* z = nullptr;
     const double* m = nullptr;
+    // A feature's rings read again: their Z and M, per ring and point (nullptr: none).
+    const std::vector<std::vector<double>>* ring_z = nullptr;
+    const std::vector<std::vector<double>>* ring_m = nullptr;
 };
 
 class VertexCursor;
@@ -578,9 +582,9 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         if (error || !map.vertices.empty()) throw NotInFile();
         return layer_in_file(shp, layer->name, size);
     };
-    // A 2D polygon layer left in its file (VerticesInFile with a coverage): its rings counted and
+    // A polygon layer left in its file (VerticesInFile with a coverage): its rings counted and
     // checked but not kept (the rings of every such layer are planned as one coverage from the
-    // files at the end, in finish()). NotInFile if a feature is not a 2D polygon.
+    // files at the end, in finish()). NotInFile if a feature is not a polygon.
     auto plan_polygons_in_file = [&] {
         LayerInFile planned = planned_layer();
         planned.polygons = true;
@@ -606,9 +610,16 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         plan_features(
             std::move(planned), Layer::Kind::polygons, [&](LayerInFile& into) { into.record_ring.push_back(rings); },
             [&](const OGRGeometry& geometry, const std::string& label) {
-                if (geometry.getGeometryType() == wkbPolygon) {
+                if (geometry.Is3D() || geometry.IsMeasured()) {
+                    // (Written from the feature read again, where the plan finds every ring
+                    // carrying the same Z and M at each shared location: plan_coverage_in_files.)
+                    summary_of_layer.has_z = summary_of_layer.has_z || geometry.Is3D();
+                    summary_of_layer.has_m = summary_of_layer.has_m || geometry.IsMeasured();
+                    start_carrying_zm(map);
+                }
+                if (wkbFlatten(geometry.getGeometryType()) == wkbPolygon) {
                     count_rings(*geometry.toPolygon(), label);
-                } else if (geometry.getGeometryType() == wkbMultiPolygon) {
+                } else if (wkbFlatten(geometry.getGeometryType()) == wkbMultiPolygon) {
                     for (const OGRPolygon* polygon : *geometry.toMultiPolygon()) count_rings(*polygon, label);
                 } else {
                     throw NotInFile();
@@ -665,10 +676,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     const bool point_layer = leave_in_file && (layer->geometry_type == wkbPoint || layer->geometry_type == wkbMultiPoint);
     const std::size_t chains_before = map.chains.size();
     if (leave_in_file) {
-        const bool polygon_layer = (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) &&
-                                   (summary.driver == "ESRI Shapefile" || by_ogr);
-        // (A Shapefile's PolyLineZ or PolyLineM too: through OGR, as when it is read whole.)
+        // (Polygons, and a Shapefile's PolyLineZ or PolyLineM, with Z or M too: through OGR, as
+        // when they are read whole.)
         const OGRwkbGeometryType flat_type = wkbFlatten(layer->geometry_type);
+        const bool polygon_layer = (flat_type == wkbPolygon || flat_type == wkbMultiPolygon) && (summary.driver == "ESRI Shapefile" || by_ogr);
         const bool ogr_lines = (flat_type == wkbLineString || flat_type == wkbMultiLineString) &&
                                (by_ogr || (summary.driver == "ESRI Shapefile" && layer->geometry_type != wkbLineString));
         if (!point_layer && (shp.empty() || (!decode && !polygon_layer && !ogr_lines))) throw NotInFile();
@@ -740,7 +751,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     if (!decoded) {
         if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
         if (leave_in_file && !point_layer) {
-            if (layer->geometry_type == wkbPolygon || layer->geometry_type == wkbMultiPolygon) {
+            if (wkbFlatten(layer->geometry_type) == wkbPolygon || wkbFlatten(layer->geometry_type) == wkbMultiPolygon) {
                 plan_polygons_in_file();
             } else {
                 plan_lines_through_ogr();
@@ -920,14 +931,29 @@ void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
         };
         const LayerInFile* reading = polygons.front();
         try {
-            coverage.plan(
-                [&](const std::function<void(std::span<const Point>)>& visit) {
-                    for (const LayerInFile* layer : polygons) {
-                        reading = layer;
-                        for_each_polygon_ring(layer->run(0, layer->record_ring.size() - 1), visit);
-                    }
-                },
-                map, coverage_pass_bytes(bytes));
+            if (!carries_zm) {
+                coverage.plan(
+                    [&](const std::function<void(std::span<const Point>)>& visit) {
+                        for (const LayerInFile* layer : polygons) {
+                            reading = layer;
+                            for_each_polygon_ring(layer->run(0, layer->record_ring.size() - 1), visit);
+                        }
+                    },
+                    map, coverage_pass_bytes(bytes));
+            } else {
+                // Some layer has Z or M: a ring is written from its own points (read again), so
+                // their Z and M must be those of the rings that make the arcs, as when the map is
+                // read whole; where rings at one location differ in them, it is read whole.
+                coverage.plan(
+                    [&](const std::function<void(std::span<const Point>, std::span<const map::PointTag>)>& visit) {
+                        for (const LayerInFile* layer : polygons) {
+                            reading = layer;
+                            for_each_polygon_ring(layer->run(0, layer->record_ring.size() - 1), visit);
+                        }
+                    },
+                    map, coverage_pass_bytes(bytes));
+                if (!coverage.tags_agree()) throw NotInFile();
+            }
         } catch (const std::invalid_argument&) {
             throw changed(*reading);
         } catch (const std::length_error&) {
@@ -1037,12 +1063,10 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
         if (with_z) geometry.set3D(TRUE);
         if (with_m) geometry.setMeasured(TRUE);
     };
-    auto fill_points = [&](OGRSimpleCurve& curve, const std::vector<Point>& points) {
-        curve.setNumPoints(static_cast<int>(points.size()), FALSE);
-        for (std::size_t i = 0; i < points.size(); ++i) curve.setPoint(static_cast<int>(i), points[i].x, points[i].y);
-    };
     // (Z and M from the feature read again where its vertices were left in the file.)
-    if (at.file != nullptr && at.rings == nullptr && ((with_z && at.z == nullptr) || (with_m && at.m == nullptr))) {
+    const bool rings_again = at.rings != nullptr;
+    const bool has_z = rings_again ? at.ring_z != nullptr : at.z != nullptr, has_m = rings_again ? at.ring_m != nullptr : at.m != nullptr;
+    if (at.file != nullptr && ((with_z && !has_z) || (with_m && !has_m))) {
         throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
                          " is not what it was when it was read; nothing written");
     }
@@ -1089,9 +1113,18 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
                     if (at.rings == nullptr) {
                         fill(*ring, coverage.ring_vertices(id, kept, arc_order));
                     } else {
-                        // (Its own points: VertexCursor checked the feature has its rings.)
+                        // (Its own points: VertexCursor checked the feature has its rings. Its own
+                        // Z and M too, which are the arcs': the coverage's plan found that every
+                        // ring carries the same at each location.)
                         try {
-                            fill_points(*ring, coverage.ring_from(id, (*at.rings).at(id - at.first_ring), kept, arc_order));
+                            const std::size_t own = id - at.first_ring;
+                            std::vector<std::uint32_t> positions;
+                            const std::vector<Point> points = coverage.ring_from(id, (*at.rings).at(own), kept, arc_order, &positions);
+                            ring->setNumPoints(static_cast<int>(points.size()), FALSE);
+                            for (std::size_t i = 0; i < points.size(); ++i) {
+                                set_point(*ring, static_cast<int>(i), points[i], with_z, with_m, with_z ? (*at.ring_z).at(own).at(positions[i]) : 0.0,
+                                          with_m ? (*at.ring_m).at(own).at(positions[i]) : 0.0);
+                            }
                         } catch (const std::invalid_argument&) {
                             throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
                                              " is not what it was when it was read; nothing written");
@@ -1174,13 +1207,15 @@ namespace {
 
 // A feature's polygon rings as OgrDataset::read gives them to its coverage: each polygon's
 // non-empty rings, its exterior first (none for other geometries).
-void visit_rings(const OGRFeature& feature, const std::string& path, OGRLayer& layer, const std::function<void(std::span<const Point>)>& visit) {
+// (`visit(points, ring)`: each ring's points and the ring they were read from.)
+template <class Visit>
+void visit_rings(const OGRFeature& feature, const std::string& path, OGRLayer& layer, Visit&& visit) {
     const OGRGeometry* geometry = feature.GetGeometryRef();
     if (geometry == nullptr) return;
     const std::string label = feature_label(path, layer, feature.GetFID());
     auto rings_of = [&](const OGRPolygon& polygon) {
         for (const OGRLinearRing* ring : polygon) {
-            if (!ring->IsEmpty()) visit(read_points(*ring, label));
+            if (!ring->IsEmpty()) visit(read_points(*ring, label), *ring);
         }
     };
     if (wkbFlatten(geometry->getGeometryType()) == wkbPolygon) {
@@ -1287,7 +1322,25 @@ FeatureRun LayerInFile::run(std::uint64_t first, std::uint64_t end) const {
 
 void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>)>& visit) {
     FeatureReader reader(run);
-    while (const OGRFeatureUniquePtr feature = reader.next()) visit_rings(*feature, run.path, reader.layer(), visit);
+    while (const OGRFeatureUniquePtr feature = reader.next()) {
+        visit_rings(*feature, run.path, reader.layer(), [&](const std::vector<Point>& points, const OGRLinearRing&) { visit(points); });
+    }
+}
+
+void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>, std::span<const map::PointTag>)>& visit) {
+    FeatureReader reader(run);
+    std::vector<map::PointTag> tags;
+    while (const OGRFeatureUniquePtr feature = reader.next()) {
+        visit_rings(*feature, run.path, reader.layer(), [&](const std::vector<Point>& points, const OGRLinearRing& ring) {
+            tags.clear();
+            for (int i = 0; i < ring.getNumPoints(); ++i) {
+                // (The Z and M the whole read gives the ring's points: append_zm.)
+                tags.push_back({std::bit_cast<std::uint64_t>(ring.Is3D() ? ring.getZ(i) : 0.0),
+                                std::bit_cast<std::uint64_t>(ring.IsMeasured() ? ring.getM(i) : 0.0)});
+            }
+            visit(points, tags);
+        });
+    }
 }
 
 void for_each_polygon_ring(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end,
@@ -1357,10 +1410,22 @@ private:
     VertexView rings_at(std::size_t i) {
         const OGRFeatureUniquePtr feature = feature_at(i, in_file_->record_ring.size());
         rings_.clear();
-        visit_rings(*feature, in_file_->path, features_->layer(), [&](std::span<const Point> ring) { rings_.emplace_back(ring.begin(), ring.end()); });
+        ring_z_.clear();
+        ring_m_.clear();
+        const OGRGeometry* geometry = feature->GetGeometryRef();
+        const bool with_z = geometry != nullptr && geometry->Is3D(), with_m = geometry != nullptr && geometry->IsMeasured();
+        visit_rings(*feature, in_file_->path, features_->layer(), [&](std::vector<Point>&& points, const OGRLinearRing& ring) {
+            rings_.push_back(std::move(points));
+            std::vector<double> z, m;
+            append_zm(ring, z, m);
+            ring_z_.push_back(std::move(z));
+            ring_m_.push_back(std::move(m));
+        });
         if (rings_.size() != in_file_->record_ring[i + 1] - in_file_->record_ring[i]) changed(i);
         VertexView view{nullptr};
         view.rings = &rings_;
+        if (with_z) view.ring_z = &ring_z_;
+        if (with_m) view.ring_m = &ring_m_;
         view.first_ring = in_file_->record_ring[i];
         view.file = in_file_;
         return view;
@@ -1392,6 +1457,7 @@ private:
     std::optional<ShapeReader> reader_;
     std::optional<FeatureReader> features_;  // (polygons, a GeoPackage's lines)
     std::vector<std::vector<Point>> rings_;
+    std::vector<std::vector<double>> ring_z_, ring_m_;  // (rings_'s)
     map::MapData lines_;
     std::vector<double> z_, m_;  // (lines_'s)
     std::size_t next_ = 0;

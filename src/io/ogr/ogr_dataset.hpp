@@ -19,6 +19,7 @@
 
 namespace toposimp::map {
 class Coverage;
+struct PointTag;
 }
 
 namespace toposimp::io {
@@ -82,7 +83,7 @@ struct MemoryLayers {
 //   with Z or M, read through OGR (read_lines; their Z and M only when the output is written): each
 //   feature's non-empty parts its chains, in order, their vertices the map's from the layer's first
 //   feature's on; or
-// - polygons: the rings of a 2D polygon layer (for_each_polygon_ring), planned as one coverage
+// - polygons: the rings of a polygon layer (for_each_polygon_ring), planned as one coverage
 //   with the other polygon layers' (map::Coverage::plan): the map's chains after the lines' are
 //   its arcs, in the order the features first use them; a run of features makes its own with
 //   map::arcs_of(coverage->slice(...)).
@@ -139,6 +140,9 @@ struct FeatureRun {
 // (map::Coverage::plan, map::arcs_of); the same refusals as read() (InputError). The second form:
 // a Shapefile's features [first, end).
 void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>)>& visit);
+// The same, each ring point tagged with the bits of its Z and M (0.0 where it has none), as the
+// map read whole would give its vertex (map::Coverage::plan with tags).
+void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>, std::span<const map::PointTag>)>& visit);
 void for_each_polygon_ring(const std::string& path, const std::string& layer, std::uint64_t first, std::uint64_t end,
                            const std::function<void(std::span<const Point>)>& visit);
 
@@ -153,11 +157,12 @@ public:
     // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
-    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of 2D polygons (no
+    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of polygons (no
     // record deleted) or of (Multi)LineStrings with Z or M, or a GeoPackage's or FlatGeobuf's (a file
-    // on disk; a FlatGeobuf with its index of features) of (Multi)LineStrings (Z and M allowed) or 2D
-    // (Multi)Polygons (its FIDs rising in read order, as a table's are), or of 2D points (read
-    // whole), their vertices are left in the files
+    // on disk; a FlatGeobuf with its index of features) of (Multi)LineStrings or (Multi)Polygons
+    // (its FIDs rising in read order, as a table's are), Z and M allowed, or of 2D points (read
+    // whole), their vertices are left in the files (unless two polygon rings at a shared location
+    // carry different Z or M there: map::Coverage::plan's tags)
     // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
     // them by parts; else read as without it. (The output must then be written by write() through
     // OGR, which reads them again: not as GeoJSON or TopoJSON.)

@@ -18,6 +18,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <limits>
 
@@ -743,8 +744,7 @@ private:
 // Lines and polygon layers of a GeoPackage, FIDs with gaps: left in the file, the same chains as
 // the map read whole, no vertex held; each feature's FID kept; any run of features read back by
 // its FIDs as the same chains (lines) or rings (polygons); written to a GeoPackage, the same bytes
-// as the map read whole, and refused, nothing written, once the file has changed. A 3D line makes
-// the dataset read whole.
+// as the map read whole, and refused, nothing written, once the file has changed.
 TEST(GeoPackageLayers, LeftInTheFile) {
     const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "", "MULTILINESTRING ((2 2,3 3),EMPTY,(4 4,5 5,6 6))",
                                             "LINESTRING (7 7,8 -8,9 7)", "LINESTRING EMPTY", "LINESTRING (1 -1,2 -2)"};
@@ -812,12 +812,118 @@ TEST(GeoPackageLayers, LeftInTheFile) {
         EXPECT_NE(std::string(error.what()).find("changed while toposimp ran: feature 0"), std::string::npos) << error.what();
     }
     EXPECT_FALSE(std::filesystem::exists(std::filesystem::path(file.path()).parent_path() / "out" / "changed.gpkg"));
+}
 
-    const GeoPackage z_file("z", {{"cells", wkbPolygon25D, {"POLYGON Z ((0 0 1,1 0 1,1 1 2,0 0 1))"}, {}}});
-    map::MapData z_map;
-    const OgrDataset read_z = OgrDataset::read(z_file.path(), {}, z_map, false, true);
-    EXPECT_EQ(read_z.vertices_in_file(), nullptr);
-    EXPECT_FALSE(z_map.vertices.empty());
+// The map read whole and the map left in its file written alike (`kept`): a Shapefile's files the
+// same bytes, then refused once the input changed (expect_written_alike; returns nullptr); a
+// GeoPackage the same bytes (returns the first feature of `layer` written from the file).
+OGRFeatureUniquePtr written_alike(const std::string& path, bool is_shp, const OgrDataset& read_whole, const map::MapData& whole,
+                                  const OgrDataset& read_planned, const map::MapData& planned, const std::vector<std::uint8_t>& kept,
+                                  const char* layer) {
+    if (is_shp) {
+        expect_written_alike(path, read_whole, whole, read_planned, planned, kept, "feature 0");
+        return nullptr;
+    }
+    const std::string written = written_geopackage(path, read_whole, whole, kept, "whole.gpkg");
+    EXPECT_EQ(written_geopackage(path, read_planned, planned, kept, "planned.gpkg"), written);
+    const DatasetPtr check = open_vector((std::filesystem::path(path).parent_path() / "out" / "planned.gpkg").string());
+    return OGRFeatureUniquePtr(pick_layer(*check, "planned", layer).GetNextFeature());
+}
+
+// The polygons given as WKT with a Z and an M for each point: z_of(feature, x, y), m_of(...).
+std::vector<std::string> with_zm(const std::vector<std::string>& wkts, bool z, bool m,
+                                 const std::function<double(std::size_t, double, double)>& z_of,
+                                 const std::function<double(std::size_t, double, double)>& m_of) {
+    std::vector<std::string> out;
+    for (std::size_t f = 0; f < wkts.size(); ++f) {
+        if (wkts[f].empty()) {
+            out.emplace_back();
+            continue;
+        }
+        OGRGeometry* geometry = nullptr;
+        EXPECT_EQ(OGRGeometryFactory::createFromWkt(wkts[f].c_str(), nullptr, &geometry), OGRERR_NONE);
+        std::vector<OGRPolygon*> polygons;
+        if (wkbFlatten(geometry->getGeometryType()) == wkbPolygon) {
+            polygons.push_back(geometry->toPolygon());
+        } else {
+            for (OGRPolygon* polygon : *geometry->toMultiPolygon()) polygons.push_back(polygon);
+        }
+        if (z) geometry->set3D(TRUE);
+        if (m) geometry->setMeasured(TRUE);
+        for (OGRPolygon* polygon : polygons) {
+            for (OGRLinearRing* ring : *polygon) {
+                for (int i = 0; i < ring->getNumPoints(); ++i) {
+                    if (z) ring->setZ(i, z_of(f, ring->getX(i), ring->getY(i)));
+                    if (m) ring->setM(i, m_of(f, ring->getX(i), ring->getY(i)));
+                }
+            }
+        }
+        OGRWktOptions iso;  // (with its M: not OGC's old WKT)
+        iso.variant = wkbVariantIso;
+        out.push_back(geometry->exportToWkt(iso));
+        OGRGeometryFactory::destroyGeometry(geometry);
+    }
+    return out;
+}
+
+// Polygons with Z, M or both (GeoPackages, a PolygonZ Shapefile), every ring carrying the same Z
+// and M at each location it shares: left in their files, the same chains as read whole, written
+// the same bytes (each ring's Z and M read again with it), refused once the file has changed.
+// Where two rings at one location carry different Z (each feature its own height), or M, the
+// dataset is read whole.
+TEST(GeoPackageLayers, PolygonsWithZAndMLeftInTheFile) {
+    auto height = [](std::size_t, double x, double y) { return 10 * x + y + 0.125; };
+    auto measure = [](std::size_t, double x, double y) { return x - 2 * y; };
+    auto own = [](std::size_t f, double, double) { return static_cast<double>(f); };
+    const GeoPackage zm("zm", {{"cells", wkbPolygonZM, with_zm(grid_polygons(), true, true, height, measure), {3}}});
+    const GeoPackage z("z", {{"cells", wkbMultiPolygon25D, with_zm(grid_polygons(), true, false, height, measure), {}}});
+    const GeoPackage m("m", {{"cells", wkbPolygonM, with_zm(grid_polygons(), false, true, height, measure), {}}});
+    const ShapeFile shp("cellz", wkbPolygon25D, with_zm(grid_polygons(), true, false, height, measure));
+    for (const std::string& path : {zm.path(), z.path(), m.path(), shp.path()}) {
+        SCOPED_TRACE(path);
+        const bool is_shp = path == shp.path();
+        map::MapData whole, planned;
+        const OgrDataset read_whole = OgrDataset::read(path, {}, whole, is_shp);
+        const OgrDataset read_planned = OgrDataset::read(path, {}, planned, is_shp, true);
+        const VerticesInFile* in_file = read_planned.vertices_in_file();
+        ASSERT_NE(in_file, nullptr);
+        EXPECT_TRUE(planned.vertices.empty());
+        expect_same_chains(planned, whole);
+        EXPECT_TRUE(in_file->layers[0].polygons);
+        EXPECT_EQ(read_planned.summary().layers[0].has_z, read_whole.summary().layers[0].has_z);
+        EXPECT_EQ(read_planned.summary().layers[0].has_m, read_whole.summary().layers[0].has_m);
+        EXPECT_GT(read_whole.summary().shared_arcs, 0u);
+
+        const std::vector<std::uint8_t> kept = thinned(whole, 3);
+        const OGRFeatureUniquePtr first = written_alike(path, is_shp, read_whole, whole, read_planned, planned, kept, "cells");
+        if (is_shp) continue;
+        // (The Z and M are there.)
+        ASSERT_TRUE(first && first->GetGeometryRef());
+        const OGRGeometry* geometry = first->GetGeometryRef();
+        const OGRLinearRing* ring = wkbFlatten(geometry->getGeometryType()) == wkbPolygon
+                                        ? geometry->toPolygon()->getExteriorRing()
+                                        : geometry->toMultiPolygon()->getGeometryRef(0)->getExteriorRing();
+        ASSERT_GT(ring->getNumPoints(), 2);
+        const double x = ring->getX(1), y = ring->getY(1);
+        if (path != m.path()) {
+            EXPECT_EQ(ring->getZ(1), height(0, x, y));
+        }
+        if (path != z.path()) {
+            EXPECT_EQ(ring->getM(1), measure(0, x, y));
+        }
+        std::filesystem::last_write_time(path, std::filesystem::last_write_time(path) + std::chrono::seconds(2));
+        EXPECT_THROW(written_geopackage(path, read_planned, planned, kept, "changed.gpkg"), InputError);
+    }
+
+    const GeoPackage own_z("own_z", {{"cells", wkbPolygon25D, with_zm(grid_polygons(), true, false, own, measure), {}}});
+    const GeoPackage own_m("own_m", {{"cells", wkbPolygonZM, with_zm(grid_polygons(), true, true, height, own), {}}});
+    for (const std::string& path : {own_z.path(), own_m.path()}) {
+        SCOPED_TRACE(path);
+        map::MapData map;
+        const OgrDataset read = OgrDataset::read(path, {}, map, false, true);
+        EXPECT_EQ(read.vertices_in_file(), nullptr);
+        EXPECT_FALSE(map.vertices.empty());
+    }
 }
 
 // Lines with Z or M (a GeoPackage's with Z and M, a PolyLineZ Shapefile) beside 2D polygons: left
@@ -844,15 +950,9 @@ TEST(GeoPackageLayers, LinesWithZAndMLeftInTheFile) {
         EXPECT_EQ(part.vertices.size(), 5u);
 
         const std::vector<std::uint8_t> kept = thinned(whole, 2);
-        if (is_shp) {
-            expect_written_alike(path, read_whole, whole, read_planned, planned, kept, "feature 0");
-            continue;
-        }
-        const std::string written = written_geopackage(path, read_whole, whole, kept, "whole.gpkg");
-        EXPECT_EQ(written_geopackage(path, read_planned, planned, kept, "planned.gpkg"), written);
+        const OGRFeatureUniquePtr first = written_alike(path, is_shp, read_whole, whole, read_planned, planned, kept, "lines");
+        if (is_shp) continue;
         // (The Z and M are there: the first feature's last kept vertex.)
-        const DatasetPtr check = open_vector((std::filesystem::path(path).parent_path() / "out" / "planned.gpkg").string());
-        const OGRFeatureUniquePtr first(pick_layer(*check, "planned", "lines").GetNextFeature());
         ASSERT_TRUE(first && first->GetGeometryRef());
         const OGRLineString* line = first->GetGeometryRef()->toLineString();
         ASSERT_EQ(line->getNumPoints(), 3);

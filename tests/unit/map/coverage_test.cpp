@@ -352,6 +352,121 @@ TEST(Coverage, PlannedFromStreamedRingsIsTheBuild) {
     }
 }
 
+// Rings with tags (Z and M) streamed to the plan: where every occurrence of a location that
+// makes a vertex carries the same tag, tags_agree(), and ring_from says where in the ring each
+// point it gives is, so that the ring's own tags are the arcs' vertices'.
+using Tags = std::vector<std::vector<PointTag>>;
+
+TaggedRingSource tagged_stream(const std::vector<std::vector<Point>>& rings, const Tags& tags) {
+    return [&rings, &tags](const std::function<void(std::span<const Point>, std::span<const PointTag>)>& visit) {
+        for (std::size_t r = 0; r < rings.size(); ++r) visit(rings[r], tags[r]);
+    };
+}
+
+// A tag for each location (the same for 0.0 and -0.0, as for the location).
+PointTag tag_at(Point p) {
+    return {std::bit_cast<std::uint64_t>(p.x == 0 ? 0.0 : p.x) * 3 + 1, std::bit_cast<std::uint64_t>(p.y == 0 ? 0.0 : p.y) ^ 0x5555};
+}
+
+Tags tags_by_location(const std::vector<std::vector<Point>>& rings) {
+    Tags tags;
+    for (const auto& ring : rings) {
+        tags.emplace_back();
+        for (const Point p : ring) tags.back().push_back(tag_at(p));
+    }
+    return tags;
+}
+
+bool agree(const std::vector<std::vector<Point>>& rings, const Tags& tags, std::size_t pass_bytes = std::size_t{1} << 20) {
+    MapData map;
+    Coverage coverage;
+    coverage.plan(tagged_stream(rings, tags), map, pass_bytes);
+    return coverage.tags_agree();
+}
+
+TEST(Coverage, TaggedRingsAgreeWhereEveryOccurrenceOfALocationCarriesTheSame) {
+    // Two squares sharing the edge (1,0)–(1,1); the second with a duplicate in a row at (2,1).
+    // A third ring too thin to split (degenerate) touches them at (2,0).
+    const std::vector<std::vector<Point>> rings = {
+        {{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0, 0}},
+        {{1, 0}, {2, 0}, {2, 1}, {2, 1}, {1, 1}, {1, 0}},
+        {{2, 0}, {3, 0}, {2, 0}},
+    };
+    const Tags same = tags_by_location(rings);
+    // The tags with ring r's point k's Z (or M) changed.
+    auto changed = [&](std::size_t r, std::size_t k, bool m = false) {
+        Tags tags = same;
+        (m ? tags[r][k].m : tags[r][k].z) ^= 1;
+        return tags;
+    };
+    for (const std::size_t pass_bytes : {std::size_t{1} << 20, std::size_t{1}}) {
+        EXPECT_TRUE(agree(rings, same, pass_bytes));
+        EXPECT_FALSE(agree(rings, changed(1, 4), pass_bytes));  // (1,1) in the second ring: the first ring's differs
+        EXPECT_FALSE(agree(rings, changed(0, 1, true), pass_bytes));  // (1,0) in the first ring, its M
+    }
+    // Points that make no vertex of their own are not compared: a closing point, the second of
+    // a duplicate in a row (clean_ring keeps the first), and a degenerate ring's, whose chain
+    // is its own. Nor a point of one ring only: nothing to compare it with.
+    for (const auto& [r, k] : {std::pair{0, 4}, {1, 3}, {2, 0}, {0, 3}}) EXPECT_TRUE(agree(rings, changed(r, k))) << r << ", " << k;
+    // The second ring's own points stand for the arcs' vertices: where they are in it.
+    MapData map;
+    Coverage coverage;
+    coverage.plan(tagged_stream(rings, same), map, 1 << 20);
+    std::vector<std::uint8_t> kept(map.chains.back().last + 1, 1);
+    std::vector<std::uint32_t> positions;
+    const std::vector<Point> own = coverage.ring_from(1, rings[1], kept, false, &positions);
+    EXPECT_EQ(positions, (std::vector<std::uint32_t>{0, 1, 2, 4, 0}));
+    ASSERT_EQ(own.size(), positions.size());
+    coverage.ring_from(2, rings[2], kept, false, &positions);
+    EXPECT_EQ(positions, (std::vector<std::uint32_t>{0, 1, 2}));  // (degenerate: as given)
+}
+
+TEST(Coverage, TaggedPlanIsThePlanAndItsPositionsAreTheRingsPoints) {
+    for (std::uint64_t seed = 0; seed < 30; ++seed) {
+        const std::vector<std::vector<Point>> rings = snapped_rings(seed);
+        const Tags tags = tags_by_location(rings);
+        MapData plain_map;
+        Coverage plain;
+        plain.plan(stream(rings), plain_map, 1 << 20);
+        std::mt19937_64 rng(seed);
+        std::vector<std::uint8_t> kept(plain_map.chains.back().last + 1);
+        for (auto& k : kept) k = static_cast<std::uint8_t>(rng() % 3 != 0);
+        for (const Chain& chain : plain_map.chains) kept[chain.first] = 1;
+        for (const std::size_t pass_bytes : {std::size_t{1} << 20, std::size_t{72 * 7}, std::size_t{1}}) {
+            SCOPED_TRACE("seed " + std::to_string(seed) + ", pass_bytes " + std::to_string(pass_bytes));
+            MapData map;
+            Coverage coverage;
+            coverage.plan(tagged_stream(rings, tags), map, pass_bytes);
+            EXPECT_TRUE(coverage.tags_agree());
+            ASSERT_EQ(map.chains.size(), plain_map.chains.size());
+            for (std::size_t c = 0; c < map.chains.size(); ++c) {
+                ASSERT_EQ(map.chains[c].first, plain_map.chains[c].first);
+                ASSERT_EQ(map.chains[c].last, plain_map.chains[c].last);
+            }
+            for (std::uint32_t r = 0; r < coverage.ring_count(); ++r) {
+                for (const bool arc_order : {false, true}) {
+                    std::vector<std::uint32_t> positions;
+                    const std::vector<Point> own = coverage.ring_from(r, rings[r], kept, arc_order, &positions);
+                    const std::vector<Point> untagged = plain.ring_from(r, rings[r], kept, arc_order);
+                    ASSERT_EQ(own.size(), untagged.size());
+                    for (std::size_t k = 0; k < own.size(); ++k) {
+                        ASSERT_TRUE(std::bit_cast<std::uint64_t>(own[k].x) == std::bit_cast<std::uint64_t>(untagged[k].x) &&
+                                    std::bit_cast<std::uint64_t>(own[k].y) == std::bit_cast<std::uint64_t>(untagged[k].y));
+                    }
+                    ASSERT_EQ(positions.size(), own.size());
+                    for (std::size_t k = 0; k < own.size(); ++k) {
+                        ASSERT_LT(positions[k], rings[r].size());
+                        ASSERT_TRUE(same_location(rings[r][positions[k]], own[k])) << "ring " << r << ", point " << k;
+                    }
+                    if (!map.is_frozen(coverage.ring_arcs(r)[0].chain)) {
+                        ASSERT_EQ(positions.back(), positions.front());  // (closed)
+                    }
+                }
+            }
+        }
+    }
+}
+
 // Rings that are not what they were: the plan's later passes, or a slice given other rings,
 // say so instead of planning or making other chains.
 TEST(Coverage, StreamedRingsThatChangeAreRefused) {
