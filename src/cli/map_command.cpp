@@ -751,11 +751,12 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     log.debug("{} chains, {} vertices{}, {} control points", input.map.chains.size(), in_file ? in_file->vertices : input.map.vertices.size(),
               in_file ? " (left in the file)" : "", input.map.control_points.size());
     if (context.map_engine_in_file && !in_file && !options.giscup) {
-        log.debug("the input is read here, whole: only Shapefiles (a file, or a folder of them) of PolyLines or of "
-                  "polygons (no record deleted), GeoPackage and FlatGeobuf (indexed) layers of (Multi)LineStrings or "
-                  "(Multi)Polygons (Z or M too; polygons: the same Z and M on every ring at a shared location), and 2D "
-                  "points, written through GDAL (not GeoJSON or TopoJSON), at one target without --decimals, "
-                  "--precision or --levels, are read by parts");
+        const std::string why = input.dataset ? input.dataset->summary().read_whole_because : std::string();
+        log.debug("the input is read here, whole{}{}", why.empty() ? "" : ": ", why);
+        log.debug("(only Shapefiles (a file, or a folder of them) of PolyLines or of polygons (no record deleted), GeoPackage "
+                  "and FlatGeobuf (indexed) layers of (Multi)LineStrings or (Multi)Polygons (Z or M too; polygons: the same Z "
+                  "and M on every ring at a shared location), and 2D points, written through GDAL (not GeoJSON or TopoJSON), "
+                  "at one target without --decimals, --precision or --levels, are read by parts)");
     }
 
     // The engine builds chains, indexes and ranks inside simplify().

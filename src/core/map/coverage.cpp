@@ -381,7 +381,9 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
             bool differ = false;
             for (; h < found.size() && found[h].key == found[g].key; ++h) {
                 differ = differ || found[h].around != found[g].around;
-                if constexpr (kTagged) tags_agree_ = tags_agree_ && found[h].tag == found[g].tag;
+                if constexpr (kTagged) {
+                    if (!tags_differ_at_ && found[h].tag != found[g].tag) tags_differ_at_ = found[g].key.point();
+                }
             }
             for (std::size_t k = g; k < h && differ; ++k) set_bit(node_bits_, found[k].index);
             g = h;

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -61,7 +62,9 @@ public:
     // occurrences of each location carry the same tag (closing points and consecutive duplicates,
     // which make no vertex, and degenerate rings, which make their own chains, are not compared).
     void plan(const TaggedRingSource& rings, MapData& map, std::size_t pass_bytes);
-    bool tags_agree() const { return tags_agree_; }
+    bool tags_agree() const { return !tags_differ_at_; }
+    // Where they do not (the first such location the passes found), if anywhere.
+    const std::optional<Point>& tags_differ_at() const { return tags_differ_at_; }
 
     // What the rings [first_ring, end_ring) need to make, on their own, the chains they are the
     // first to use (arcs_of).
@@ -129,7 +132,7 @@ private:
     std::vector<std::uint32_t> new_chains_before_; // per ring and one more: the chains the rings before it made
     std::unordered_map<std::uint32_t, std::uint8_t> negative_zeros_;  // plan(): per vertex with a -0.0, which (1: x, 2: y)
     const MapData* map_ = nullptr;
-    bool tags_agree_ = true;
+    std::optional<Point> tags_differ_at_;
     std::uint32_t first_vertex_ = 0, first_chain_ = 0;
     std::uint64_t arcs_ = 0, shared_arcs_ = 0, degenerate_rings_ = 0;
 };

@@ -2,6 +2,7 @@
 
 #include "core/map/coverage.hpp"
 #include "io/common/errors.hpp"
+#include "io/common/number_format.hpp"
 #include "io/common/output_file.hpp"
 #include "io/map/gpkg_points.hpp"
 #include "io/map/shapefile.hpp"
@@ -41,8 +42,10 @@ bool is_local_shp(const std::string& path) {
 }
 
 // A layer that cannot be left in its file (OgrDataset::read's vertices_in_file): the dataset is
-// read again, whole.
-struct NotInFile {};
+// read again, whole. `why` says which and why, for -v (DatasetSummary::read_whole_because).
+struct NotInFile {
+    std::string why;
+};
 
 // The file of layer `name` of the dataset at `path`, a `lower` (".shp", ".fgb") or `upper` file:
 // `path` itself if it is one on disk (not behind /vsi…), the layer's file if `path` is a folder
@@ -418,6 +421,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     summary_of_layer.has_z = OGR_GT_HasZ(layer->geometry_type);
     summary_of_layer.has_m = OGR_GT_HasM(layer->geometry_type);
     if (summary_of_layer.has_z || summary_of_layer.has_m) start_carrying_zm(map);
+    auto not_in_file = [&](const std::string& why) { return NotInFile{"'" + path + "', layer '" + layer->name + "': " + why}; };
     // A plain PolyLine Shapefile going to a Shapefile: OGR hands out each geometry with the
     // layer's CRS, and the first one makes the driver parse the .prj with PROJ (and search
     // proj.db for its EPSG code) — most of a small file's run, for a CRS that is only written
@@ -500,7 +504,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         std::optional<ShapeReader> reader = ShapeReader::open(shp);
         bool in_order = reader && reader->records() == features.size() && map.vertices.empty();
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
-        if (!in_order) throw NotInFile();
+        if (!in_order) throw not_in_file("its records are not those the Shapefile reader takes, in OGR's order");
         LayerInFile planned = layer_in_file(shp, layer->name, reader->shp_size());
         planned.record_vertex.reserve(features.size() + 1);
         planned.record_chain.reserve(features.size() + 1);
@@ -510,7 +514,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         layer->features.reserve(features.size());
         for (std::size_t i = 0; i < features.size(); ++i) {
             const ShapeRecord* record = reader->next();
-            if (record == nullptr || !record->z.empty()) throw NotInFile();
+            if (record == nullptr || !record->z.empty()) throw not_in_file("record " + std::to_string(i) + " is not one the Shapefile reader takes");
             planned.record_vertex.push_back(vertices);
             planned.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
             if (vertices + record->xy.size() > std::numeric_limits<std::uint32_t>::max() / 2) {
@@ -535,11 +539,15 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // its index (no record deleted), a GeoPackage's above the one before; NotInFile otherwise.
     auto note_fid = [&](LayerInFile& planned, GIntBig fid) {
         if (!gpkg) {
-            if (fid != static_cast<GIntBig>(layer->features.size())) throw NotInFile();
+            if (fid != static_cast<GIntBig>(layer->features.size())) {
+                throw not_in_file("feature " + std::to_string(layer->features.size()) + " has FID " + std::to_string(fid) +
+                                  " (a record deleted: its parts are found by index)");
+            }
             return;
         }
         if (fid == std::numeric_limits<GIntBig>::max() || (!planned.record_fid.empty() && fid <= planned.record_fid.back())) {
-            throw NotInFile();
+            throw not_in_file("its features do not come in rising FID order (FID " + std::to_string(fid) + " after " +
+                              std::to_string(planned.record_fid.empty() ? 0 : planned.record_fid.back()) + ")");
         }
         planned.record_fid.push_back(fid);
     };
@@ -579,7 +587,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     auto planned_layer = [&] {
         std::error_code error;
         const std::uintmax_t size = std::filesystem::file_size(shp, error);
-        if (error || !map.vertices.empty()) throw NotInFile();
+        if (error) throw not_in_file("its file's size cannot be read (" + error.message() + ")");
+        if (!map.vertices.empty()) throw not_in_file("a layer before it is held in memory");
         return layer_in_file(shp, layer->name, size);
     };
     // A polygon layer left in its file (VerticesInFile with a coverage): its rings counted and
@@ -603,7 +612,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                     if (!std::isfinite(p.x) || !std::isfinite(p.y)) read_points(*ring, label);  // (its refusal)
                     extent = {std::min(extent.min_x, p.x), std::min(extent.min_y, p.y), std::max(extent.max_x, p.x), std::max(extent.max_y, p.y)};
                 }
-                if (rings == std::numeric_limits<std::uint32_t>::max()) throw NotInFile();
+                if (rings == std::numeric_limits<std::uint32_t>::max()) throw not_in_file("more than 4 billion rings");
                 layer->items.push_back(rings++);
             }
         };
@@ -622,7 +631,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 } else if (wkbFlatten(geometry.getGeometryType()) == wkbMultiPolygon) {
                     for (const OGRPolygon* polygon : *geometry.toMultiPolygon()) count_rings(*polygon, label);
                 } else {
-                    throw NotInFile();
+                    throw NotInFile{label + " is a " + std::string(OGRGeometryTypeToName(geometry.getGeometryType())) +
+                                    " in a polygon layer"};
                 }
             });
     };
@@ -644,7 +654,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             },
             [&](const OGRGeometry& geometry, const std::string& label) {
                 thread_local std::vector<const OGRLineString*> parts;
-                if (!line_parts(geometry, parts)) throw NotInFile();
+                if (!line_parts(geometry, parts)) {
+                    throw NotInFile{label + " is a " + std::string(OGRGeometryTypeToName(geometry.getGeometryType())) +
+                                    " in a line layer"};
+                }
                 if (geometry.Is3D() || geometry.IsMeasured()) {
                     // (Written from the feature read again, as when it is read whole.)
                     summary_of_layer.has_z = summary_of_layer.has_z || geometry.Is3D();
@@ -682,7 +695,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         const bool polygon_layer = (flat_type == wkbPolygon || flat_type == wkbMultiPolygon) && (summary.driver == "ESRI Shapefile" || by_ogr);
         const bool ogr_lines = (flat_type == wkbLineString || flat_type == wkbMultiLineString) &&
                                (by_ogr || (summary.driver == "ESRI Shapefile" && layer->geometry_type != wkbLineString));
-        if (!point_layer && (shp.empty() || (!decode && !polygon_layer && !ogr_lines))) throw NotInFile();
+        if (!point_layer && shp.empty()) {
+            throw not_in_file(summary.driver == "FlatGeobuf" ? "a FlatGeobuf without its index of features"
+                                                             : "its format (" + summary.driver + ") is not read by parts");
+        }
+        if (!point_layer && !decode && !polygon_layer && !ogr_lines) {
+            throw not_in_file("its geometry type (" + std::string(OGRGeometryTypeToName(layer->geometry_type)) + ") is not read by parts");
+        }
         if (!in_file) in_file.emplace();
     }
     source.ResetReading();
@@ -769,7 +788,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     }
     if (point_layer) {
         // (Points only: no vertex, no chain, nothing carried in Z or M.)
-        if (!map.vertices.empty() || map.chains.size() != chains_before) throw NotInFile();
+        if (!map.vertices.empty() || map.chains.size() != chains_before) throw not_in_file("a point layer with other geometries");
         LayerInFile points;
         points.layer = layer->name;
         points.points = true;
@@ -952,7 +971,14 @@ void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
                         }
                     },
                     map, coverage_pass_bytes(bytes));
-                if (!coverage.tags_agree()) throw NotInFile();
+                if (!coverage.tags_agree()) {
+                    const Point at = *coverage.tags_differ_at();
+                    std::string where = "two polygon rings at (";
+                    append_number(where, at.x);
+                    where += ", ";
+                    append_number(where, at.y);
+                    throw NotInFile{where + ") carry different Z or M there (a shared vertex keeps those of the ring that made its border)"};
+                }
             }
         } catch (const std::invalid_argument&) {
             throw changed(*reading);
@@ -993,11 +1019,16 @@ OgrDataset OgrDataset::read(const std::string& path, const std::vector<std::stri
         // (Every layer left in its file, or none: a layer that cannot be has the dataset read
         // whole.)
         const map::MapData given = map;
+        std::string why;
         try {
             return read_dataset(path, layer_names_wanted, map, prj_as_file, true);
-        } catch (const NotInFile&) {
+        } catch (const NotInFile& not_in_file) {
             map = given;
+            why = not_in_file.why;
         }
+        OgrDataset whole = read_dataset(path, layer_names_wanted, map, prj_as_file, false);
+        whole.data_->summary.read_whole_because = why;
+        return whole;
     }
     return read_dataset(path, layer_names_wanted, map, prj_as_file, false);
 }

@@ -43,6 +43,8 @@ struct DatasetSummary {
     std::uint64_t arcs = 0;              // polygon rings split at nodes
     std::uint64_t shared_arcs = 0;       // arcs used by two rings (or twice)
     std::uint64_t degenerate_rings = 0;  // fewer than 3 corners or flat: written back unchanged
+    // Read with vertices_in_file but read whole: which layer could not be left in its file, and why.
+    std::string read_whole_because;
 
     std::uint64_t features() const;
     std::uint64_t sum(std::uint64_t LayerSummary::*field) const;

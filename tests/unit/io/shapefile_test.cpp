@@ -923,7 +923,13 @@ TEST(GeoPackageLayers, PolygonsWithZAndMLeftInTheFile) {
         const OgrDataset read = OgrDataset::read(path, {}, map, false, true);
         EXPECT_EQ(read.vertices_in_file(), nullptr);
         EXPECT_FALSE(map.vertices.empty());
+        // (Where: the first location found shared by rings that differ, a corner or border point of the grid.)
+        const std::string& why = read.summary().read_whole_because;
+        EXPECT_EQ(why.rfind("two polygon rings at (", 0), 0u) << why;
+        EXPECT_NE(why.find(") carry different Z or M there"), std::string::npos) << why;
     }
+    map::MapData map;  // (read whole without being asked to leave it in the file: no reason)
+    EXPECT_EQ(OgrDataset::read(own_z.path(), {}, map).summary().read_whole_because, "");
 }
 
 // Lines with Z or M (a GeoPackage's with Z and M, a PolyLineZ Shapefile) beside 2D polygons: left
@@ -1011,6 +1017,7 @@ TEST(GeoPackageLayers, FlatGeobufLeftInTheFile) {
     const OgrDataset read_no_index = OgrDataset::read(no_index.path(), {}, read, false, true);
     EXPECT_EQ(read_no_index.vertices_in_file(), nullptr);
     EXPECT_FALSE(read.vertices.empty());
+    EXPECT_EQ(read_no_index.summary().read_whole_because, "'" + no_index.path() + "', layer 'lines': a FlatGeobuf without its index of features");
 }
 
 }  // namespace
