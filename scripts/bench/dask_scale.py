@@ -7,7 +7,7 @@ for byte, and toposimp check on it.
     scripts/bench/dask_scale.py BUILD_DIR [--cells 250] [--edge-vertices 40] [--rivers 2000]
                                 [--river-steps 2000] [--points 2000000] [--workers 2]
                                 [--memory-limit 1GiB] [--target "--keep 10%"] [--data DIR]
-                                [--dask-options "--first-round here"] [--lines-only] [--cells-only [--z]]
+                                [--dask-options "--first-round here"] [--lines-only] [--cells-only [--z [zero|cell]]]
                                 [--geopackage] [--no-check]
 
 The map (generate_map.py --shapefiles) is written to --data (default build/bench-data/scale-N)
@@ -15,8 +15,10 @@ once. --lines-only: the rivers alone (a plain PolyLine Shapefile, written to a S
 input that --first-round workers reads by parts) with the control points, no cells written (a
 bigger --cells then spreads them, and fewer cross). --cells-only: the cells' coverage alone (a
 plain Polygon Shapefile, written to a Shapefile: read by parts too) with the control points; with
---z, as a PolygonZ Shapefile (cellsz.shp, made once with ogr2ogr -dim XYZ: each vertex's Z 0, so
-every ring at a shared location has the same; read by parts too).
+--z, as a PolygonZ Shapefile (made once with ogr2ogr -dim XYZ; read by parts too): `zero`
+(cellsz.shp) each vertex's Z 0, so every ring at a shared location has the same; `cell`
+(cellsz_cell.shp) each cell's Z its id, so the rings at every shared location differ (the worst
+case for the notes the plan keeps where they do).
 --geopackage: the cells, rivers and roads as layers of one GeoPackage (map.gpkg beside the
 Shapefiles, made once with ogr2ogr), an input --first-round workers reads by parts too.
 Vertices are counted as the input stores them (a border shared by two cells twice) and as the map
@@ -50,7 +52,8 @@ def main():
     parser.add_argument("--dask-options", default="", help="more python3 -m toposimp.dask options")
     parser.add_argument("--lines-only", action="store_true", help="the rivers alone, Shapefile to Shapefile")
     parser.add_argument("--cells-only", action="store_true", help="the cells' coverage alone, Shapefile to Shapefile")
-    parser.add_argument("--z", action="store_true", help="with --cells-only: the cells as a PolygonZ Shapefile")
+    parser.add_argument("--z", nargs="?", const="zero", choices=["zero", "cell"],
+                        help="with --cells-only: the cells as a PolygonZ Shapefile, Z 0 or each cell's id")
     parser.add_argument("--geopackage", action="store_true", help="the cells, rivers and roads as one GeoPackage, not the folder")
     parser.add_argument("--no-check", action="store_true", help="no toposimp check of the output (e.g. the same bytes checked before)")
     a = parser.parse_args()
@@ -75,15 +78,17 @@ def main():
         layers, source = [], str(data / ("cells.shp" if a.cells_only else "rivers.shp"))
         single_out, dask_out = data / "single.shp", data / "dask.shp"
         if a.z and a.cells_only:
-            source = str(data / "cellsz.shp")
+            stem = "cellsz" if a.z == "zero" else "cellsz_cell"
+            source = str(data / f"{stem}.shp")
             if not pathlib.Path(source).exists():
                 import subprocess
 
-                subprocess.run(["ogr2ogr", str(data / "cellsz.staging.shp"), str(data / "cells.shp"), "-dim", "XYZ", "-nln", "cellsz.staging"],
-                               check=True)
+                z = [] if a.z == "zero" else ["-zfield", "id"]
+                subprocess.run(["ogr2ogr", str(data / f"{stem}.staging.shp"), str(data / "cells.shp"), "-dim", "XYZ", *z,
+                                "-nln", f"{stem}.staging"], check=True)
                 for extension in (".shp", ".shx", ".dbf", ".prj"):
-                    if (data / f"cellsz.staging{extension}").exists():
-                        (data / f"cellsz.staging{extension}").rename(data / f"cellsz{extension}")
+                    if (data / f"{stem}.staging{extension}").exists():
+                        (data / f"{stem}.staging{extension}").rename(data / f"{stem}{extension}")
     if a.geopackage:
         source = str(data / "map.gpkg")
         if not pathlib.Path(source).exists():
@@ -121,7 +126,7 @@ def main():
           f"and {a.points / 1e6:.1f} M control points "
           f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each"
           + (f", toposimp.dask {a.dask_options}" if a.dask_options else "") + (", the rivers alone" if a.lines_only else "")
-          + (", the cells alone" if a.cells_only else "") + (" with Z (PolygonZ)" if a.cells_only and a.z else "")
+          + (", the cells alone" if a.cells_only else "") + (f" with Z (PolygonZ, {'0' if a.z == 'zero' else 'each cell its id'})" if a.cells_only and a.z else "")
           + (", as one GeoPackage" if a.geopackage else ""))
     print()
     print("| run | seconds | command peak MiB | worker peaks MiB | output identical |")

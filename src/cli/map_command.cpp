@@ -754,9 +754,9 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
         const std::string why = input.dataset ? input.dataset->summary().read_whole_because : std::string();
         log.debug("the input is read here, whole{}{}", why.empty() ? "" : ": ", why);
         log.debug("(only Shapefiles (a file, or a folder of them) of PolyLines or of polygons (no record deleted), GeoPackage "
-                  "and FlatGeobuf (indexed) layers of (Multi)LineStrings or (Multi)Polygons (Z or M too; polygons: the same Z "
-                  "and M on every ring at a shared location), and 2D points, written through GDAL (not GeoJSON or TopoJSON), "
-                  "at one target without --decimals, --precision or --levels, are read by parts)");
+                  "and FlatGeobuf (indexed) layers of (Multi)LineStrings or (Multi)Polygons (Z or M too), and 2D points, "
+                  "written through GDAL (not GeoJSON or TopoJSON), at one target without --decimals, --precision or "
+                  "--levels, are read by parts)");
     }
 
     // The engine builds chains, indexes and ranks inside simplify().

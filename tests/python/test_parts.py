@@ -519,7 +519,6 @@ def _cells_with_z_and_m(source, path, dimension, per_feature=False):
     point: a function of its location (so every ring at a shared location carries the same), or
     with per_feature, the feature's number (so two cells at their shared border do not)."""
     import csv
-    import re
     import subprocess
 
     text = path.with_suffix(".csv")
@@ -544,15 +543,18 @@ def _cells_with_z_and_m(source, path, dimension, per_feature=False):
                     "-oo", "KEEP_GEOM_COLUMNS=NO", "-a_srs", "EPSG:4326", "-nlt", "POLYGON" + tag.strip()], check=True, capture_output=True)
 
 
+@pytest.mark.parametrize("per_feature", [False, True])
 @pytest.mark.parametrize("suffix, dimension", [(".gpkg", "XYZ"), (".gpkg", "XYM"), (".gpkg", "XYZM"), (".shp", "XYZ")])
-def test_polygons_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, suffix, dimension):
-    """Cells with Z, M or both (the same at each shared location), as a GeoPackage or a PolygonZ
-    Shapefile: read by parts (each ring's Z and M read again with it where the output is
-    written), the output toposimp map's byte for byte, its Z and M there."""
+def test_polygons_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, suffix, dimension, per_feature):
+    """Cells with Z, M or both, as a GeoPackage or a PolygonZ Shapefile: a function of the
+    location (the same on every ring at a shared location), or each cell's number (rings at a
+    shared location differ: there each vertex has the Z and M of the cell that made the border).
+    Read by parts (each ring's Z and M read again with it where the output is written), the
+    output toposimp map's byte for byte, its Z and M there."""
     import subprocess
 
     path = tmp_path / ("zm" + suffix)
-    _cells_with_z_and_m(geopackage[0], path, dimension)
+    _cells_with_z_and_m(geopackage[0], path, dimension, per_feature)
     arguments = [str(path), "--keep", "10%", *SAME_DATE]
     first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, suffix)
     if suffix == ".gpkg":
@@ -563,27 +565,6 @@ def test_polygons_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, su
     info = subprocess.run(["ogrinfo", "-ro", "-al", "-so", str(output)], check=True, capture_output=True, text=True).stdout
     geometry = next(line for line in info.splitlines() if line.startswith("Geometry: "))
     assert ("3D" in geometry) == ("Z" in dimension) and ("Measured" in geometry) == ("M" in dimension), geometry
-
-
-@pytest.mark.parametrize("dimension", ["XYZ", "XYM"])
-def test_polygons_whose_rings_differ_in_z_or_m_are_read_whole(binary, tmp_path, geopackage, dimension):
-    """Cells each at its own height (or measure): two rings at a shared location differ, and the
-    arc's vertex has the first one's, so the dataset is read here, whole; the output toposimp
-    map's byte for byte."""
-    import subprocess
-
-    path = tmp_path / "own.gpkg"
-    _cells_with_z_and_m(geopackage[0], path, dimension, per_feature=True)
-    arguments = ["map", str(path), "--keep", "10%", *SAME_DATE, "-o"]
-    reference, output = tmp_path / "reference.gpkg", tmp_path / "whole.gpkg"
-    subprocess.run([binary, *arguments, str(reference)], check=True, capture_output=True)
-    first = FirstRoundHere()
-    status, out, err = _toposimp.run_command([*arguments, str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
-    assert status == 0, err
-    assert output.read_bytes() == reference.read_bytes()
-    assert "(left in the file)" not in err
-    assert re.search(r"the input is read here, whole: two polygon rings at \([-0-9.e]+, [-0-9.e]+\) carry different Z or M there", err), err
-    assert all("lines_file" not in part and "polygons_file" not in part for part in first.parts)
 
 
 def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):

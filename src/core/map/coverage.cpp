@@ -350,6 +350,7 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
     const std::uint64_t passes = pass_size.size();
     node_bits_.assign((total + 63) / 64, 0);
     std::vector<Occurrence> found;
+    std::vector<LocationKey> conflicts;  // (with tags: the locations where they differ)
     found.reserve(static_cast<std::size_t>(*std::max_element(pass_size.begin(), pass_size.end())));
     for (std::uint64_t pass = 0; pass < passes; ++pass) {
         found.clear();
@@ -381,15 +382,19 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
             bool differ = false;
             for (; h < found.size() && found[h].key == found[g].key; ++h) {
                 differ = differ || found[h].around != found[g].around;
-                if constexpr (kTagged) {
-                    if (!tags_differ_at_ && found[h].tag != found[g].tag) tags_differ_at_ = found[g].key.point();
-                }
+            }
+            if constexpr (kTagged) {
+                bool conflict = false;
+                for (std::size_t k = g + 1; k < h && !conflict; ++k) conflict = found[k].tag != found[g].tag;
+                if (conflict) conflicts.push_back(found[g].key);
             }
             for (std::size_t k = g; k < h && differ; ++k) set_bit(node_bits_, found[k].index);
             g = h;
         }
     }
     std::vector<Occurrence>().swap(found);
+    std::sort(conflicts.begin(), conflicts.end());
+    tag_conflicts_ = conflicts.size();
 
     // 3. The arcs, as build() makes them, their vertices left where the rings are.
     ArcTable arcs;
@@ -404,8 +409,8 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
     start_offset_.assign(ring_total, 0);
     new_chains_before_.assign(ring_total + 1, 0);
     std::uint32_t r = 0;
-    rings([&](std::span<const Point> ring) {
-        if (r >= ring_total || ring.size() != ring_size_[r]) throw changed();
+    tagged([&](std::span<const Point> ring, std::span<const PointTag> tags) {
+        if (r >= ring_total || ring.size() != ring_size_[r] || (kTagged && tags.size() != ring.size())) throw changed();
         uses_start_.push_back(static_cast<std::uint32_t>(uses_.size()));
         new_chains_before_[r] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
         if (degenerate_[r]) {
@@ -434,6 +439,15 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
                 if (!whole_ring) arcs.add(key, positions.size(), chain);
                 uses_.push_back({chain, false});
                 note_negative_zeros(ring, positions, map.chains[chain].first);
+                if (!conflicts.empty()) {
+                    // (Where the rings' tags differ, the arc's vertices carry this ring's.)
+                    for (std::size_t k = 0; k < positions.size(); ++k) {
+                        if (std::binary_search(conflicts.begin(), conflicts.end(), key(k))) {
+                            arc_tag_vertices_.push_back(map.chains[chain].first + static_cast<std::uint32_t>(k));  // (rising: chains come in order)
+                            arc_tags_.push_back(tags[positions[k]]);
+                        }
+                    }
+                }
             });
         start_offset_[r] = start == size ? 0 : (size - start) % size;
         ++r;
@@ -535,15 +549,20 @@ std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std
 }
 
 std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
-                                       bool arc_order, std::vector<std::uint32_t>* positions) const {
+                                       bool arc_order) const {
+    std::vector<Point> points;
+    for (const RingPoint& p : ring_points_from(ring, given, kept, arc_order)) points.push_back(p.point);
+    return points;
+}
+
+std::vector<Coverage::RingPoint> Coverage::ring_points_from(std::uint32_t ring, std::span<const Point> given,
+                                                            const std::vector<std::uint8_t>& kept, bool arc_order) const {
     std::vector<std::uint32_t> all = arc_order_vertices(ring);
-    if (positions != nullptr) positions->clear();
+    std::vector<RingPoint> ring_out;
     if (degenerate_[ring]) {
         if (given.size() != all.size()) throw std::invalid_argument("a ring that is not the one the coverage was made of");
-        if (positions != nullptr) {
-            for (std::uint32_t k = 0; k < given.size(); ++k) positions->push_back(k);
-        }
-        return {given.begin(), given.end()};  // (its own chain: its own bits)
+        for (std::uint32_t k = 0; k < given.size(); ++k) ring_out.push_back({given[k], k, all[k]});  // (its own chain: its own bits)
+        return ring_out;
     }
     std::vector<std::uint32_t> sequence;
     if (!clean_ring(given, sequence) || sequence.size() != all.size()) {
@@ -554,16 +573,13 @@ std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point
     // points taken from the occurrences instead of the arcs.
     const std::uint32_t offset = start_offset_[ring];
     const std::uint32_t from = !arc_order && kept[all[offset]] ? offset : 0;
-    std::vector<Point> ring_out;
     for (std::uint32_t step = 0; step < size; ++step) {
         const std::uint32_t i = (from + step) % size;
         if (!kept[all[i]]) continue;
         const std::uint32_t at = sequence[(i + size - offset) % size];
-        ring_out.push_back(owner_zeros(all[i], given[at]));
-        if (positions != nullptr) positions->push_back(at);
+        ring_out.push_back({owner_zeros(all[i], given[at]), at, all[i]});
     }
     ring_out.push_back(ring_out.front());
-    if (positions != nullptr) positions->push_back(positions->front());
     return ring_out;
 }
 

@@ -2,7 +2,6 @@
 
 #include "core/map/coverage.hpp"
 #include "io/common/errors.hpp"
-#include "io/common/number_format.hpp"
 #include "io/common/output_file.hpp"
 #include "io/map/gpkg_points.hpp"
 #include "io/map/shapefile.hpp"
@@ -960,9 +959,10 @@ void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
                     },
                     map, coverage_pass_bytes(bytes));
             } else {
-                // Some layer has Z or M: a ring is written from its own points (read again), so
-                // their Z and M must be those of the rings that make the arcs, as when the map is
-                // read whole; where rings at one location differ in them, it is read whole.
+                // Some layer has Z or M: a ring is written from its own points (read again), with
+                // their Z and M, but where the rings at a location differ in them: there each arc
+                // vertex gets those of the ring that made the arc, as when the map is read whole
+                // (the plan notes them: Coverage::arc_tag).
                 coverage.plan(
                     [&](const std::function<void(std::span<const Point>, std::span<const map::PointTag>)>& visit) {
                         for (const LayerInFile* layer : polygons) {
@@ -971,14 +971,6 @@ void OgrDataset::Data::plan_coverage_in_files(map::MapData& map) {
                         }
                     },
                     map, coverage_pass_bytes(bytes));
-                if (!coverage.tags_agree()) {
-                    const Point at = *coverage.tags_differ_at();
-                    std::string where = "two polygon rings at (";
-                    append_number(where, at.x);
-                    where += ", ";
-                    append_number(where, at.y);
-                    throw NotInFile{where + ") carry different Z or M there (a shared vertex keeps those of the ring that made its border)"};
-                }
             }
         } catch (const std::invalid_argument&) {
             throw changed(*reading);
@@ -1145,16 +1137,21 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
                         fill(*ring, coverage.ring_vertices(id, kept, arc_order));
                     } else {
                         // (Its own points: VertexCursor checked the feature has its rings. Its own
-                        // Z and M too, which are the arcs': the coverage's plan found that every
-                        // ring carries the same at each location.)
+                        // Z and M too, but where the rings at a location carry different ones: there
+                        // each vertex has those of the ring that made its arc, which the coverage's
+                        // plan noted.)
                         try {
                             const std::size_t own = id - at.first_ring;
-                            std::vector<std::uint32_t> positions;
-                            const std::vector<Point> points = coverage.ring_from(id, (*at.rings).at(own), kept, arc_order, &positions);
+                            const std::vector<map::Coverage::RingPoint> points = coverage.ring_points_from(id, (*at.rings).at(own), kept, arc_order);
                             ring->setNumPoints(static_cast<int>(points.size()), FALSE);
                             for (std::size_t i = 0; i < points.size(); ++i) {
-                                set_point(*ring, static_cast<int>(i), points[i], with_z, with_m, with_z ? (*at.ring_z).at(own).at(positions[i]) : 0.0,
-                                          with_m ? (*at.ring_m).at(own).at(positions[i]) : 0.0);
+                                double point_z = with_z ? (*at.ring_z).at(own).at(points[i].position) : 0.0;
+                                double point_m = with_m ? (*at.ring_m).at(own).at(points[i].position) : 0.0;
+                                if (const map::PointTag* arc = coverage.arc_tag(points[i].vertex)) {
+                                    point_z = std::bit_cast<double>(arc->z);
+                                    point_m = std::bit_cast<double>(arc->m);
+                                }
+                                set_point(*ring, static_cast<int>(i), points[i].point, with_z, with_m, point_z, point_m);
                             }
                         } catch (const std::invalid_argument&) {
                             throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +

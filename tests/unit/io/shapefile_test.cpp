@@ -668,15 +668,9 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     const OgrDataset read_deleted = OgrDataset::read(deleted.path(), {}, with_deleted, true, true);
     EXPECT_EQ(read_deleted.vertices_in_file(), nullptr);
     EXPECT_FALSE(with_deleted.vertices.empty());
+    EXPECT_EQ(read_deleted.summary().read_whole_because,
+              "'" + deleted.path() + "', layer 'polygonsdeleted': feature 3 has FID 4 (a record deleted: its parts are found by index)");
     EXPECT_THROW(for_each_polygon_ring(deleted.path(), "polygonsdeleted", 0, 5, [](std::span<const Point>) {}), InputError);
-
-    std::vector<std::string> with_z = polygons;
-    with_z.emplace_back("POLYGON Z ((0 0 1,1 0 1,1 1 1,0 0 1))");
-    const ShapeFile z_file("polygonsz", wkbPolygon25D, with_z);
-    map::MapData z_map;
-    const OgrDataset read_z = OgrDataset::read(z_file.path(), {}, z_map, true, true);
-    EXPECT_EQ(read_z.vertices_in_file(), nullptr);
-    EXPECT_FALSE(z_map.vertices.empty());
 }
 
 // Polygons that share a border where one has -0.0 and the other 0.0 (one location): left in the
@@ -866,37 +860,56 @@ std::vector<std::string> with_zm(const std::vector<std::string>& wkts, bool z, b
     return out;
 }
 
-// Polygons with Z, M or both (GeoPackages, a PolygonZ Shapefile), every ring carrying the same Z
-// and M at each location it shares: left in their files, the same chains as read whole, written
-// the same bytes (each ring's Z and M read again with it), refused once the file has changed.
-// Where two rings at one location carry different Z (each feature its own height), or M, the
-// dataset is read whole.
+// Polygons with Z, M or both (GeoPackages, PolygonZ Shapefiles), each ring's Z and M a function
+// of the location (the same on every ring sharing it) or of the feature (each cell at its own
+// height or measure: rings at a shared location differ, and its vertex has those of the ring
+// that made the border): left in their files, the same chains as read whole, written the same
+// bytes (each ring's Z and M read again with it, the arc vertices' noted where rings differ),
+// refused once the file has changed.
 TEST(GeoPackageLayers, PolygonsWithZAndMLeftInTheFile) {
-    auto height = [](std::size_t, double x, double y) { return 10 * x + y + 0.125; };
-    auto measure = [](std::size_t, double x, double y) { return x - 2 * y; };
-    auto own = [](std::size_t f, double, double) { return static_cast<double>(f); };
-    const GeoPackage zm("zm", {{"cells", wkbPolygonZM, with_zm(grid_polygons(), true, true, height, measure), {3}}});
-    const GeoPackage z("z", {{"cells", wkbMultiPolygon25D, with_zm(grid_polygons(), true, false, height, measure), {}}});
-    const GeoPackage m("m", {{"cells", wkbPolygonM, with_zm(grid_polygons(), false, true, height, measure), {}}});
-    const ShapeFile shp("cellz", wkbPolygon25D, with_zm(grid_polygons(), true, false, height, measure));
-    for (const std::string& path : {zm.path(), z.path(), m.path(), shp.path()}) {
-        SCOPED_TRACE(path);
-        const bool is_shp = path == shp.path();
+    using Value = std::function<double(std::size_t, double, double)>;
+    const Value height = [](std::size_t, double x, double y) { return 10 * x + y + 0.125; };
+    const Value measure = [](std::size_t, double x, double y) { return x - 2 * y; };
+    const Value own = [](std::size_t f, double, double) { return static_cast<double>(f); };
+    struct Case {
+        std::string name;
+        OGRwkbGeometryType type;
+        Value z, m;
+        bool shapefile = false;
+    };
+    const std::vector<Case> cases = {
+        {"zm", wkbPolygonZM, height, measure},     {"z", wkbMultiPolygon25D, height, nullptr}, {"m", wkbPolygonM, nullptr, measure},
+        {"own_z", wkbPolygon25D, own, nullptr},    {"own_m", wkbPolygonZM, height, own},       {"cellz", wkbPolygon25D, height, nullptr, true},
+        {"own_cellz", wkbPolygon25D, own, nullptr, true},
+    };
+    for (const Case& given : cases) {
+        SCOPED_TRACE(given.name);
+        const std::vector<std::string> wkts = with_zm(grid_polygons(), given.z != nullptr, given.m != nullptr, given.z ? given.z : own,
+                                                      given.m ? given.m : own);
+        std::optional<GeoPackage> gpkg;
+        std::optional<ShapeFile> shp;
+        if (given.shapefile) {
+            shp.emplace(given.name, given.type, wkts);
+        } else {
+            gpkg.emplace(given.name, std::vector<GeoPackage::Layer>{{"cells", given.type, wkts, given.name == "zm" ? std::vector<GIntBig>{3} : std::vector<GIntBig>{}}});
+        }
+        const std::string path = given.shapefile ? shp->path() : gpkg->path();
         map::MapData whole, planned;
-        const OgrDataset read_whole = OgrDataset::read(path, {}, whole, is_shp);
-        const OgrDataset read_planned = OgrDataset::read(path, {}, planned, is_shp, true);
+        const OgrDataset read_whole = OgrDataset::read(path, {}, whole, given.shapefile);
+        const OgrDataset read_planned = OgrDataset::read(path, {}, planned, given.shapefile, true);
         const VerticesInFile* in_file = read_planned.vertices_in_file();
-        ASSERT_NE(in_file, nullptr);
+        ASSERT_NE(in_file, nullptr) << read_planned.summary().read_whole_because;
         EXPECT_TRUE(planned.vertices.empty());
         expect_same_chains(planned, whole);
         EXPECT_TRUE(in_file->layers[0].polygons);
         EXPECT_EQ(read_planned.summary().layers[0].has_z, read_whole.summary().layers[0].has_z);
         EXPECT_EQ(read_planned.summary().layers[0].has_m, read_whole.summary().layers[0].has_m);
         EXPECT_GT(read_whole.summary().shared_arcs, 0u);
+        EXPECT_EQ(read_planned.summary().read_whole_because, "");
 
         const std::vector<std::uint8_t> kept = thinned(whole, 3);
-        const OGRFeatureUniquePtr first = written_alike(path, is_shp, read_whole, whole, read_planned, planned, kept, "cells");
-        if (is_shp) continue;
+        const OGRFeatureUniquePtr first = written_alike(path, given.shapefile, read_whole, whole, read_planned, planned, kept, "cells");
+        if (given.shapefile) continue;
         // (The Z and M are there.)
         ASSERT_TRUE(first && first->GetGeometryRef());
         const OGRGeometry* geometry = first->GetGeometryRef();
@@ -905,31 +918,15 @@ TEST(GeoPackageLayers, PolygonsWithZAndMLeftInTheFile) {
                                         : geometry->toMultiPolygon()->getGeometryRef(0)->getExteriorRing();
         ASSERT_GT(ring->getNumPoints(), 2);
         const double x = ring->getX(1), y = ring->getY(1);
-        if (path != m.path()) {
-            EXPECT_EQ(ring->getZ(1), height(0, x, y));
+        if (given.z) {
+            EXPECT_EQ(ring->getZ(1), given.z(0, x, y));
         }
-        if (path != z.path()) {
-            EXPECT_EQ(ring->getM(1), measure(0, x, y));
+        if (given.m) {
+            EXPECT_EQ(ring->getM(1), given.m(0, x, y));
         }
         std::filesystem::last_write_time(path, std::filesystem::last_write_time(path) + std::chrono::seconds(2));
         EXPECT_THROW(written_geopackage(path, read_planned, planned, kept, "changed.gpkg"), InputError);
     }
-
-    const GeoPackage own_z("own_z", {{"cells", wkbPolygon25D, with_zm(grid_polygons(), true, false, own, measure), {}}});
-    const GeoPackage own_m("own_m", {{"cells", wkbPolygonZM, with_zm(grid_polygons(), true, true, height, own), {}}});
-    for (const std::string& path : {own_z.path(), own_m.path()}) {
-        SCOPED_TRACE(path);
-        map::MapData map;
-        const OgrDataset read = OgrDataset::read(path, {}, map, false, true);
-        EXPECT_EQ(read.vertices_in_file(), nullptr);
-        EXPECT_FALSE(map.vertices.empty());
-        // (Where: the first location found shared by rings that differ, a corner or border point of the grid.)
-        const std::string& why = read.summary().read_whole_because;
-        EXPECT_EQ(why.rfind("two polygon rings at (", 0), 0u) << why;
-        EXPECT_NE(why.find(") carry different Z or M there"), std::string::npos) << why;
-    }
-    map::MapData map;  // (read whole without being asked to leave it in the file: no reason)
-    EXPECT_EQ(OgrDataset::read(own_z.path(), {}, map).summary().read_whole_because, "");
 }
 
 // Lines with Z or M (a GeoPackage's with Z and M, a PolyLineZ Shapefile) beside 2D polygons: left
