@@ -11,8 +11,8 @@
 
 #include "core/map/map_data.hpp"
 
-#include <cstdint>
 #include <algorithm>
+#include <cstdint>
 #include <functional>
 #include <span>
 #include <unordered_map>
