@@ -619,8 +619,8 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             std::move(planned), Layer::Kind::polygons, [&](LayerInFile& into) { into.record_ring.push_back(rings); },
             [&](const OGRGeometry& geometry, const std::string& label) {
                 if (geometry.Is3D() || geometry.IsMeasured()) {
-                    // (Written from the feature read again, where the plan finds every ring
-                    // carrying the same Z and M at each shared location: plan_coverage_in_files.)
+                    // (Written from the feature read again; where the rings at a shared location
+                    // differ, with the Z and M the plan notes: plan_coverage_in_files.)
                     summary_of_layer.has_z = summary_of_layer.has_z || geometry.Is3D();
                     summary_of_layer.has_m = summary_of_layer.has_m || geometry.IsMeasured();
                     start_carrying_zm(map);
@@ -1444,6 +1444,7 @@ private:
         const bool with_z = geometry != nullptr && geometry->Is3D(), with_m = geometry != nullptr && geometry->IsMeasured();
         visit_rings(*feature, in_file_->path, features_->layer(), [&](std::vector<Point>&& points, const OGRLinearRing& ring) {
             rings_.push_back(std::move(points));
+            if (!with_z && !with_m) return;
             std::vector<double> z, m;
             append_zm(ring, z, m);
             ring_z_.push_back(std::move(z));
