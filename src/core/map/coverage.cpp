@@ -302,7 +302,7 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
     map_ = &map;
     first_chain_ = static_cast<std::uint32_t>(map.chains.size());
     first_vertex_ = map.chains.empty() ? 0 : map.chains.back().last + 1;
-    std::vector<std::uint32_t> sequence, arc;
+    std::vector<std::uint32_t> sequence, arc, clean_of;
     auto changed = [] { return std::invalid_argument("the rings are not those of the first pass"); };
 
     // 1. The rings' sizes, which are degenerate, and each one's clean occurrences, counted by
@@ -350,7 +350,8 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
     const std::uint64_t passes = pass_size.size();
     node_bits_.assign((total + 63) / 64, 0);
     std::vector<Occurrence> found;
-    std::vector<LocationKey> conflicts;  // (with tags: the locations where they differ)
+    std::vector<std::uint64_t> conflict_bits;  // (with tags: per clean occurrence, do the tags at its location differ)
+    if constexpr (kTagged) conflict_bits.assign((total + 63) / 64, 0);
     found.reserve(static_cast<std::size_t>(*std::max_element(pass_size.begin(), pass_size.end())));
     for (std::uint64_t pass = 0; pass < passes; ++pass) {
         found.clear();
@@ -386,15 +387,16 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
             if constexpr (kTagged) {
                 bool conflict = false;
                 for (std::size_t k = g + 1; k < h && !conflict; ++k) conflict = found[k].tag != found[g].tag;
-                if (conflict) conflicts.push_back(found[g].key);
+                if (conflict) {
+                    ++tag_conflicts_;
+                    for (std::size_t k = g; k < h; ++k) set_bit(conflict_bits, found[k].index);
+                }
             }
             for (std::size_t k = g; k < h && differ; ++k) set_bit(node_bits_, found[k].index);
             g = h;
         }
     }
     std::vector<Occurrence>().swap(found);
-    std::sort(conflicts.begin(), conflicts.end());
-    tag_conflicts_ = conflicts.size();
 
     // 3. The arcs, as build() makes them, their vertices left where the rings are.
     ArcTable arcs;
@@ -424,6 +426,10 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
         if (!clean_ring(ring, sequence) || sequence.size() != clean_start_[r + 1] - clean_start_[r]) throw changed();
         const std::uint32_t base = clean_start_[r];
         const auto size = static_cast<std::uint32_t>(sequence.size());
+        if (tag_conflicts_ > 0) {  // (the ring's positions to their clean occurrences, for the conflict bits)
+            clean_of.resize(ring.size());
+            for (std::uint32_t i = 0; i < size; ++i) clean_of[sequence[i]] = base + i;
+        }
         const std::uint32_t start = cut_at_nodes(
             sequence, [&](std::uint32_t i) { return bit_at(node_bits_, base + i); }, arc,
             [&](std::span<const std::uint32_t> positions, bool whole_ring) {
@@ -439,10 +445,10 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
                 if (!whole_ring) arcs.add(key, positions.size(), chain);
                 uses_.push_back({chain, false});
                 note_negative_zeros(ring, positions, map.chains[chain].first);
-                if (!conflicts.empty()) {
+                if (tag_conflicts_ > 0) {
                     // (Where the rings' tags differ, the arc's vertices carry this ring's.)
                     for (std::size_t k = 0; k < positions.size(); ++k) {
-                        if (std::binary_search(conflicts.begin(), conflicts.end(), key(k))) {
+                        if (bit_at(conflict_bits, clean_of[positions[k]])) {
                             arc_tag_vertices_.push_back(map.chains[chain].first + static_cast<std::uint32_t>(k));  // (rising: chains come in order)
                             arc_tags_.push_back(tags[positions[k]]);
                         }

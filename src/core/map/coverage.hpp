@@ -62,8 +62,8 @@ public:
     // the tag of each arc vertex there (that of the ring that made the arc, as build() takes a
     // vertex's point and source from it) is noted: arc_tag(). Closing points and consecutive
     // duplicates, which make no vertex, and degenerate rings, which make their own chains, are
-    // not compared. Memory: 16 bytes a location where tags differ while the arcs are cut, and 20
-    // bytes an arc vertex there.
+    // not compared. Memory: a bit a clean occurrence (where tags differ) while the arcs are cut,
+    // and 20 bytes an arc vertex where they do.
     void plan(const TaggedRingSource& rings, MapData& map, std::size_t pass_bytes);
     // plan() with tags: arc vertex v's tag where the rings at its location differ (nullptr
     // elsewhere: there every ring's own point carries the arc vertex's tag).
