@@ -567,6 +567,23 @@ def test_polygons_with_z_or_m_are_read_by_parts(binary, tmp_path, geopackage, su
     assert ("3D" in geometry) == ("Z" in dimension) and ("Measured" in geometry) == ("M" in dimension), geometry
 
 
+@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"]])
+def test_real_states_each_at_its_own_height_are_read_by_parts(binary, tmp_path, target):
+    """Natural Earth's states (testdata) as XYZM, each state's Z its row number times 1.5 (so the
+    rings differ along every shared border) and M 0: read by parts, the output toposimp map's
+    byte for byte."""
+    import subprocess
+
+    path = tmp_path / "states_zm.gpkg"
+    subprocess.run(["ogr2ogr", str(path), str(DATA / "ne_states_slice.gpkg"), "-dialect", "sqlite", "-sql",
+                    'SELECT *, CAST(rowid AS REAL) * 1.5 AS height FROM "states"', "-zfield", "height", "-dim", "XYZM", "-nln", "states"],
+                   check=True, capture_output=True)
+    arguments = [str(path), *target, *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 2000, ".gpkg")
+    assert output.read_bytes() == reference.read_bytes()
+    assert len([part for part in first.parts if "polygons_file" in part]) > 1
+
+
 def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
     """A polygon layer with a deleted record among the layers asked for: every layer is read
     whole, and the parts carry their vertices."""
