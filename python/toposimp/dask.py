@@ -52,8 +52,8 @@ Dask options:
                        map's engine in this process) or 'workers' (the map cut into tiles,
                        searched for crossings, queued and its budget selected on the workers;
                        this process never holds an engine over the whole map). With 'workers',
-                       Shapefiles (a .shp, or a folder of them) of PolyLines or of polygons (no
-                       record deleted), GeoPackages and FlatGeobufs (a .fgb or a folder of them,
+                       Shapefiles (a .shp, or a folder of them) of PolyLines or of polygons,
+                       GeoPackages and FlatGeobufs (a .fgb or a folder of them,
                        with their index of features) of (Multi)LineString and (Multi)Polygon
                        layers, Z or M too, written through GDAL (any output but GeoJSON or
                        TopoJSON; at one target, without --decimals, --precision or --levels)

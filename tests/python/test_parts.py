@@ -584,28 +584,52 @@ def test_real_states_each_at_its_own_height_are_read_by_parts(binary, tmp_path, 
     assert len([part for part in first.parts if "polygons_file" in part]) > 1
 
 
-def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
-    """A polygon layer with a deleted record among the layers asked for: every layer is read
-    whole, and the parts carry their vertices."""
-    import shutil
+def _delete_records(dbf_path, records):
+    """Marks `records` of a .dbf deleted (as an editor does before the file is packed)."""
     import struct
+
+    with open(dbf_path, "r+b") as dbf:
+        header = dbf.read(12)
+        header_length, record_length = struct.unpack("<HH", header[8:12])
+        for record in records:
+            dbf.seek(header_length + record * record_length)
+            dbf.write(b"*")
+
+
+def test_shapefiles_with_deleted_records_are_read_by_parts(binary, tmp_path, shapefile_folder):
+    """A folder whose cells (polygons) and rivers (plain PolyLines) have deleted records: both
+    left in their files and read by their record numbers (the rivers through OGR, as the decoder
+    reads records by index), the output toposimp map's byte for byte."""
+    import shutil
 
     folder = tmp_path / "folder"
     shutil.copytree(shapefile_folder, folder)
-    for extension in (".shp", ".shx", ".dbf"):
-        shutil.copy(folder / ("cells" + extension), folder / ("holes" + extension))
-    with open(folder / "holes.dbf", "r+b") as dbf:  # (its first record marked deleted)
-        header = dbf.read(12)
-        header_length, = struct.unpack("<H", header[8:10])
-        dbf.seek(header_length)
-        dbf.write(b"*")
+    _delete_records(folder / "cells.dbf", [0, 5, 6, 20])
+    _delete_records(folder / "rivers.dbf", [2, 3])
+    arguments = [str(folder), "-l", "rivers", "-l", "places", "-l", "cells", "--keep", "10%", *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, ".gpkg")
+    assert output.read_bytes() == reference.read_bytes()
+    fids = {part["layer"]: part["fids"] for part in first.parts if "fids" in part}
+    assert set(fids) == {"cells", "rivers"}, first.parts[:2]
+
+
+def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
+    """A PointZ layer among the layers asked for (points with Z are not control points): every
+    layer is read whole, the parts carry their vertices, and -v says why."""
+    import shutil
+    import subprocess
+
+    folder = tmp_path / "folder"
+    shutil.copytree(shapefile_folder, folder)
+    subprocess.run(["ogr2ogr", str(folder / "heights.shp"), str(folder / "places.shp"), "-dim", "XYZ", "-nln", "heights"],
+                   check=True, capture_output=True)
     first = FirstRoundHere()
     output = tmp_path / "whole.gpkg"
-    status, out, err = _toposimp.run_command(["map", str(folder), "-l", "rivers", "-l", "holes", "--keep", "10%",
+    status, out, err = _toposimp.run_command(["map", str(folder), "-l", "rivers", "-l", "heights", "--keep", "10%",
                                               "-o", str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
     assert status == 0, err
     assert "(left in the file)" not in err
-    assert f"the input is read here, whole: '{folder}', layer 'holes': feature 0 has FID 1 (a record deleted" in err, err
+    assert f"the input is read here, whole: '{folder}', layer 'heights': its geometry type (3D Point) is not read by parts" in err, err
     assert all("shp" not in part and "polygons_file" not in part for part in first.parts)
 
 

@@ -498,12 +498,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         }
     };
     // The records streamed, the vertices left in the file (VerticesInFile), from the next vertex
-    // id on; NotInFile if the file is not what ShapeReader decodes, in the features' order.
+    // id on; false if the file is not what ShapeReader decodes, in the features' order (a record
+    // deleted: then its lines are left in the file through OGR, by FID).
     auto plan_in_file = [&](std::vector<OGRFeatureUniquePtr>& features) {
         std::optional<ShapeReader> reader = ShapeReader::open(shp);
         bool in_order = reader && reader->records() == features.size() && map.vertices.empty();
         for (std::size_t i = 0; i < features.size() && in_order; ++i) in_order = features[i]->GetFID() == static_cast<GIntBig>(i);
-        if (!in_order) throw not_in_file("its records are not those the Shapefile reader takes, in OGR's order");
+        if (!in_order) return false;
         LayerInFile planned = layer_in_file(shp, layer->name, reader->shp_size());
         planned.record_vertex.reserve(features.size() + 1);
         planned.record_chain.reserve(features.size() + 1);
@@ -533,16 +534,23 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         } else if (const OGRSpatialReference* srs = source.GetSpatialRef()) {
             layer->srs.reset(srs->Clone());
         }
+        return true;
     };
-    // A feature's FID where its run will find it (FeatureRun): a Shapefile's or FlatGeobuf's must be
-    // its index (no record deleted), a GeoPackage's above the one before; NotInFile otherwise.
+    // A feature's FID where its run will find it (FeatureRun): a FlatGeobuf's must be its index, a
+    // GeoPackage's above the one before; a Shapefile's is its record number, its index until a
+    // record is deleted, from where they are kept as a GeoPackage's are (the records before it
+    // noted then). NotInFile otherwise.
     auto note_fid = [&](LayerInFile& planned, GIntBig fid) {
-        if (!gpkg) {
-            if (fid != static_cast<GIntBig>(layer->features.size())) {
-                throw not_in_file("feature " + std::to_string(layer->features.size()) + " has FID " + std::to_string(fid) +
-                                  " (a record deleted: its parts are found by index)");
+        const auto index = static_cast<GIntBig>(layer->features.size());
+        if (fgb || (!gpkg && planned.record_fid.empty() && fid == index)) {
+            if (fid != index) {
+                throw not_in_file("feature " + std::to_string(index) + " has FID " + std::to_string(fid) +
+                                  " (its parts are found by index)");
             }
             return;
+        }
+        if (!gpkg && planned.record_fid.empty()) {
+            for (GIntBig before = 0; before < index; ++before) planned.record_fid.push_back(before);
         }
         if (fid == std::numeric_limits<GIntBig>::max() || (!planned.record_fid.empty() && fid <= planned.record_fid.back())) {
             throw not_in_file("its features do not come in rising FID order (FID " + std::to_string(fid) + " after " +
@@ -551,7 +559,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         planned.record_fid.push_back(fid);
     };
     auto end_fids = [&](LayerInFile& planned) {
-        if (gpkg) planned.record_fid.push_back(planned.record_fid.empty() ? 0 : planned.record_fid.back() + 1);
+        if (gpkg || !planned.record_fid.empty()) planned.record_fid.push_back(planned.record_fid.empty() ? 0 : planned.record_fid.back() + 1);
     };
     // A layer left in its file (VerticesInFile), its planned layer begun (planned_layer): each
     // feature read with its attributes, its FID noted, `per_feature()` called, its geometry (if
@@ -714,8 +722,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
             features.push_back(std::move(feature));
         }
         if (leave_in_file) {
-            plan_in_file(features);
-            decoded = true;
+            decoded = plan_in_file(features);
         } else if (std::optional<ShapeTable> records = read_shapefile_shapes(path)) {
             // (The records' vertices go to the map in record order: the features must come in it.)
             bool in_order = records->size() == features.size();
@@ -1264,7 +1271,11 @@ public:
     explicit FeatureReader(const FeatureRun& run) : run_(run), dataset_(open_vector(run.path)), layer_(&pick_layer(*dataset_, run.path, run.layer)) {
         QuietGdal quiet;
         layer_->ResetReading();
-        if (run.by_fid) {
+        if (run.by_fid && shapefile_) {
+            // (A Shapefile's FIDs are its record numbers, deleted ones skipped: its
+            // SetNextByIndex goes to a record number, reading on from there.)
+            if (run.fid_first > 0 && layer_->SetNextByIndex(run.fid_first) != OGRERR_NONE) fail(run.first, ": no such record" + last_gdal_error());
+        } else if (run.by_fid) {
             // (The FID column is the table's integer primary key: a range of it is a range of
             // its rows, read in their order.)
             std::string column = layer_->GetFIDColumn();
@@ -1285,12 +1296,16 @@ public:
         QuietGdal quiet;
         if (next_ == run_.end) {
             // (A range of FIDs holding more features than it did: the file changed.)
-            if (run_.by_fid && OGRFeatureUniquePtr(layer_->GetNextFeature())) fail(next_, ": the layer holds more features than it did");
+            if (run_.by_fid) {
+                const OGRFeatureUniquePtr after(layer_->GetNextFeature());
+                if (after && after->GetFID() < run_.fid_end) fail(next_, ": the layer holds more features than it did");
+            }
             return nullptr;
         }
         OGRFeatureUniquePtr feature{each_ ? layer_->GetFeature(static_cast<GIntBig>(next_)) : layer_->GetNextFeature()};
         if (CPLGetLastErrorType() >= CE_Failure || !feature) fail(next_, feature ? last_gdal_error() : ": the layer ends before it");
         const GIntBig fid = feature->GetFID();
+        if (run_.by_fid && (fid < run_.fid_first || fid >= run_.fid_end)) fail(next_, ": the layer ends before it (FID " + std::to_string(fid) + ")");
         if (run_.by_fid ? fid <= last_fid_ : fid != static_cast<GIntBig>(next_)) {
             fail(next_, " has FID " + std::to_string(fid) + (run_.by_fid ? "" : " (a deleted record?): it cannot be read by index"));
         }
@@ -1312,6 +1327,7 @@ private:
     bool each_ = run_.each_by_fid && run_.first > 0;
     DatasetPtr dataset_;
     OGRLayer* layer_;
+    bool shapefile_ = dataset_->GetDriver() != nullptr && std::string(dataset_->GetDriver()->GetDescription()) == "ESRI Shapefile";
     std::uint64_t next_ = run_.first;
     GIntBig last_fid_ = std::numeric_limits<GIntBig>::min();
 };

@@ -98,14 +98,15 @@ struct LayerInFile {
     std::int64_t time = 0;
     bool polygons = false;
     bool points = false;                       // a 2D point layer, read whole (control points): no chain, nothing else here
-    bool ogr_lines = false;                    // lines read through OGR (a GeoPackage's, FlatGeobuf's, or Shapefile's with Z or M)
+    bool ogr_lines = false;                    // lines read through OGR (a GeoPackage's, FlatGeobuf's, or Shapefile's with Z or M or a deleted record)
     bool each_by_fid = false;                  // a FlatGeobuf's: each feature read by its FID, its index (FeatureRun)
     std::vector<std::uint64_t> record_vertex;  // per feature and one more: the first vertex of its chains
     std::vector<std::uint32_t> record_chain;   // per feature and one more: its first chain
     std::vector<std::uint32_t> record_ring;    // polygons: per feature and one more, its first ring
-    // A GeoPackage's: per feature and one more, its FID (rising in the order OGR reads the layer;
-    // the last one past the last feature's). Empty: each feature's FID is its index (a Shapefile
-    // without deleted records, a FlatGeobuf).
+    // A GeoPackage's, or a Shapefile's with a deleted record: per feature and one more, its FID
+    // (rising in the order OGR reads the layer; the last one past the last feature's; a
+    // Shapefile's FIDs are its record numbers). Empty: each feature's FID is its index (a
+    // Shapefile without deleted records, a FlatGeobuf).
     std::vector<std::int64_t> record_fid;
 
     // Its features [first, end).
@@ -121,9 +122,10 @@ struct VerticesInFile {
     std::vector<const LayerInFile*> in_chain_order() const;
 };
 
-// Features [first, end) of a layer, in the order OGR reads it. `by_fid`: a GeoPackage's, their
-// FIDs rising in [fid_first, fid_end), found by the FID column's index (OGR's SetNextByIndex
-// reads a GeoPackage's every feature before). Else each feature's FID is its index: `each_by_fid`,
+// Features [first, end) of a layer, in the order OGR reads it. `by_fid`: their FIDs rising in
+// [fid_first, fid_end); a GeoPackage's found by the FID column's index (OGR's SetNextByIndex
+// reads a GeoPackage's every feature before), a Shapefile's from record fid_first on (its
+// SetNextByIndex goes to a record number). Else each feature's FID is its index: `each_by_fid`,
 // a FlatGeobuf's with its index of features, each read by GetFeature (its SetNextByIndex and FID
 // filters read every feature before too); otherwise a Shapefile's without deleted records,
 // reached by SetNextByIndex.
@@ -159,12 +161,11 @@ public:
     // naming the file, layer and feature for anything it cannot accept. `prj_as_file`: the output
     // will be a Shapefile, so a Shapefile's .prj may be carried over as it is instead of parsed
     // (see read_layer). `vertices_in_file`: if every layer read is a Shapefile's (a file, or a
-    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of polygons (no
-    // record deleted) or of (Multi)LineStrings with Z or M, or a GeoPackage's or FlatGeobuf's (a file
+    // folder of them) of plain PolyLines that the Shapefile reader decodes, or of polygons or of
+    // (Multi)LineStrings with Z, M or deleted records, or a GeoPackage's or FlatGeobuf's (a file
     // on disk; a FlatGeobuf with its index of features) of (Multi)LineStrings or (Multi)Polygons
     // (its FIDs rising in read order, as a table's are), Z and M allowed, or of 2D points (read
-    // whole), their vertices are left in the files (unless two polygon rings at a shared location
-    // carry different Z or M there: map::Coverage::plan's tags)
+    // whole), their vertices are left in the files
     // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
     // them by parts; else read as without it. (The output must then be written by write() through
     // OGR, which reads them again: not as GeoJSON or TopoJSON.)

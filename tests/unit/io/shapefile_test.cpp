@@ -391,6 +391,18 @@ void expect_same_points(const std::vector<std::vector<Point>>& a, const std::vec
     }
 }
 
+// A map read with its vertices left in the file: no vertex, and the chains (and frozen ones) of
+// the map read whole.
+void expect_same_chains(const map::MapData& planned, const map::MapData& whole) {
+    EXPECT_TRUE(planned.vertices.empty());
+    ASSERT_EQ(planned.chains.size(), whole.chains.size());
+    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
+        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
+        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
+        EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
+    }
+}
+
 // Writes the map read whole and the map left in the file (the same `kept`) and expects the same
 // bytes; then, the input touched, expects the map left in the file refused with `changed` (the
 // start of its message after the path), nothing written.
@@ -428,8 +440,8 @@ void expect_written_alike(const std::string& input, const OgrDataset& read_whole
 
 // A map read with its vertices left in the file: the same chains as the map read whole, no
 // vertex held; where they are (each record's first vertex and chain, their extent); any range of
-// records read back as the same chains; written, the same bytes as the map read whole. Only a
-// file the decoder takes is left: a deleted record makes it read whole.
+// records read back as the same chains; written, the same bytes as the map read whole. With a
+// deleted record, the lines are left in the file through OGR instead.
 TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
     const std::vector<std::string> lines = {"LINESTRING (0 0,1 1)", "", "MULTILINESTRING ((2 2,3 3),(4 4,5 5,6 6))",
                                             "LINESTRING (7 7,8 -8,9 7)", "", ""};
@@ -477,11 +489,25 @@ TEST(ShapefileShapes, MapVerticesLeftInTheFile) {
     kept[1] = kept[4] = kept[8] = 0;
     expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "record 0");
 
+    // A deleted record: not what the decoder reads in OGR's order, so the lines are left in the
+    // file through OGR, their record numbers kept from the gap on; the same chains, and written
+    // alike.
     const ShapeFile deleted("infiledeleted", wkbLineString, lines, {2});
-    map::MapData with_deleted;
+    map::MapData with_deleted, whole_deleted;
     const OgrDataset read_deleted = OgrDataset::read(deleted.path(), {}, with_deleted, true, true);
-    EXPECT_EQ(read_deleted.vertices_in_file(), nullptr);
-    EXPECT_EQ(with_deleted.vertices.size(), 5u);
+    const OgrDataset read_deleted_whole = OgrDataset::read(deleted.path(), {}, whole_deleted, true);
+    ASSERT_NE(read_deleted.vertices_in_file(), nullptr) << read_deleted.summary().read_whole_because;
+    EXPECT_TRUE(with_deleted.vertices.empty());
+    EXPECT_EQ(whole_deleted.vertices.size(), 5u);
+    expect_same_chains(with_deleted, whole_deleted);
+    const LayerInFile& deleted_layer = read_deleted.vertices_in_file()->layers.at(0);
+    EXPECT_TRUE(deleted_layer.ogr_lines);
+    EXPECT_EQ(deleted_layer.record_fid.at(2), 3);
+    const map::MapData part = read_lines(deleted_layer.run(1, deleted_layer.record_fid.size() - 1));
+    EXPECT_EQ(part.vertices.size(), whole_deleted.vertices.size() - (whole_deleted.chains[0].last + 1));
+    std::vector<std::uint8_t> kept_deleted(whole_deleted.vertices.size(), 1);
+    kept_deleted[1] = 0;
+    expect_written_alike(deleted.path(), read_deleted_whole, whole_deleted, read_deleted, with_deleted, kept_deleted, "feature 0");
 }
 
 // A non-finite vertex: the map left in the file names it as the map read whole does, and so does
@@ -516,20 +542,6 @@ TEST(ShapefileShapes, NonFiniteVertexLeftInTheFileNamesTheFeature) {
     }
 }
 
-// A coverage of squares whose shared borders carry a middle point, some with a hole, then
-// multipolygons, NULL geometries and a flat ring (a frozen chain).
-// A map read with its vertices left in the file: no vertex, and the chains (and frozen ones) of
-// the map read whole.
-void expect_same_chains(const map::MapData& planned, const map::MapData& whole) {
-    EXPECT_TRUE(planned.vertices.empty());
-    ASSERT_EQ(planned.chains.size(), whole.chains.size());
-    for (std::size_t c = 0; c < whole.chains.size(); ++c) {
-        EXPECT_EQ(planned.chains[c].first, whole.chains[c].first);
-        EXPECT_EQ(planned.chains[c].last, whole.chains[c].last);
-        EXPECT_EQ(planned.is_frozen(static_cast<std::uint32_t>(c)), whole.is_frozen(static_cast<std::uint32_t>(c)));
-    }
-}
-
 // Each chain's ends kept and its other vertices but every `nth` (as the engine keeps a chain's ends).
 std::vector<std::uint8_t> thinned(const map::MapData& whole, std::uint32_t nth) {
     std::vector<std::uint8_t> kept(whole.vertices.size(), 1);
@@ -553,6 +565,8 @@ std::string written_geopackage(const std::string& input, const OgrDataset& datas
     return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// A coverage of squares whose shared borders carry a middle point, some with a hole, then
+// multipolygons, NULL geometries and a flat ring (a frozen chain).
 std::vector<std::string> grid_polygons() {
     std::vector<std::string> polygons;
     for (int i = 0; i < 4; ++i) {
@@ -662,14 +676,35 @@ TEST(ShapefileShapes, PolygonLayerLeftInTheFile) {
     }
     expect_written_alike(file.path(), read_whole, whole, read_planned, planned, kept, "feature 0");
 
-    // A deleted record: parts are read from a feature's index, which is then not its FID.
-    const ShapeFile deleted("polygonsdeleted", wkbPolygon, polygons, {3});
-    map::MapData with_deleted;
+    // Deleted records: left in the file too, its features' FIDs (record numbers) kept from the
+    // first gap on; every run read back by its FIDs gives the rings read whole; written alike.
+    // (Read by index, a run past the first deleted record is refused.)
+    const ShapeFile deleted("polygonsdeleted", wkbPolygon, polygons, {3, 7, 8});
+    map::MapData with_deleted, whole_deleted;
     const OgrDataset read_deleted = OgrDataset::read(deleted.path(), {}, with_deleted, true, true);
-    EXPECT_EQ(read_deleted.vertices_in_file(), nullptr);
-    EXPECT_FALSE(with_deleted.vertices.empty());
-    EXPECT_EQ(read_deleted.summary().read_whole_because,
-              "'" + deleted.path() + "', layer 'polygonsdeleted': feature 3 has FID 4 (a record deleted: its parts are found by index)");
+    const OgrDataset read_deleted_whole = OgrDataset::read(deleted.path(), {}, whole_deleted, true);
+    ASSERT_NE(read_deleted.vertices_in_file(), nullptr) << read_deleted.summary().read_whole_because;
+    expect_same_chains(with_deleted, whole_deleted);
+    const LayerInFile& deleted_layer = read_deleted.vertices_in_file()->layers.at(0);
+    ASSERT_EQ(deleted_layer.record_fid.size(), polygons.size() - 3 + 1);
+    EXPECT_EQ(deleted_layer.record_fid[3], 4);
+    EXPECT_EQ(deleted_layer.record_fid[6], 9);
+    const std::size_t features = deleted_layer.record_fid.size() - 1;
+    for (std::size_t first = 0; first <= features; ++first) {
+        for (std::size_t end = first; end <= features; ++end) {
+            std::uint32_t count = 0;
+            for_each_polygon_ring(deleted_layer.run(first, end), [&](std::span<const Point>) { ++count; });
+            EXPECT_EQ(count, deleted_layer.record_ring[end] - deleted_layer.record_ring[first]) << first << " to " << end;
+        }
+    }
+    FeatureRun longer = deleted_layer.run(0, 3);  // (a run claiming the record after a gap)
+    ++longer.end;
+    EXPECT_THROW(for_each_polygon_ring(longer, [](std::span<const Point>) {}), InputError);
+    std::vector<std::uint8_t> kept_deleted(whole_deleted.vertices.size(), 1);
+    for (const map::Chain chain : whole_deleted.chains) {
+        for (std::uint32_t v = chain.first + 1; v < chain.last; ++v) kept_deleted[v] = v % 3 != 0;
+    }
+    expect_written_alike(deleted.path(), read_deleted_whole, whole_deleted, read_deleted, with_deleted, kept_deleted, "feature 0");
     EXPECT_THROW(for_each_polygon_ring(deleted.path(), "polygonsdeleted", 0, 5, [](std::span<const Point>) {}), InputError);
 }
 
