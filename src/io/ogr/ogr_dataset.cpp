@@ -1305,7 +1305,10 @@ public:
         OGRFeatureUniquePtr feature{each_ ? layer_->GetFeature(static_cast<GIntBig>(next_)) : layer_->GetNextFeature()};
         if (CPLGetLastErrorType() >= CE_Failure || !feature) fail(next_, feature ? last_gdal_error() : ": the layer ends before it");
         const GIntBig fid = feature->GetFID();
-        if (run_.by_fid && (fid < run_.fid_first || fid >= run_.fid_end)) fail(next_, ": the layer ends before it (FID " + std::to_string(fid) + ")");
+        if (run_.by_fid && (fid < run_.fid_first || fid >= run_.fid_end)) {
+            fail(next_, ": the layer ends before it (the next feature has FID " + std::to_string(fid) + ", past the run's FIDs " +
+                            std::to_string(run_.fid_first) + " to " + std::to_string(run_.fid_end - 1) + ")");
+        }
         if (run_.by_fid ? fid <= last_fid_ : fid != static_cast<GIntBig>(next_)) {
             fail(next_, " has FID " + std::to_string(fid) + (run_.by_fid ? "" : " (a deleted record?): it cannot be read by index"));
         }
