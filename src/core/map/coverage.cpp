@@ -417,7 +417,7 @@ void Coverage::plan_rings(const TaggedRingSource& tagged, MapData& map, std::siz
         new_chains_before_[r] = static_cast<std::uint32_t>(map.chains.size()) - first_chain_;
         if (degenerate_[r]) {
             const std::uint32_t chain = add_chain_of(ring.size());
-            map.freeze(chain);  // (ring_from gives it as it is given: no zero to note)
+            map.freeze(chain);  // (ring_points_from gives it as it is given: no zero to note)
             uses_.push_back({chain, false});
             ++degenerate_rings_;
             ++r;
@@ -552,13 +552,6 @@ std::vector<std::uint32_t> Coverage::ring_vertices(std::uint32_t ring, const std
     }
     ring_out.push_back(ring_out.front());
     return ring_out;
-}
-
-std::vector<Point> Coverage::ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
-                                       bool arc_order) const {
-    std::vector<Point> points;
-    for (const RingPoint& p : ring_points_from(ring, given, kept, arc_order)) points.push_back(p.point);
-    return points;
 }
 
 std::vector<Coverage::RingPoint> Coverage::ring_points_from(std::uint32_t ring, std::span<const Point> given,

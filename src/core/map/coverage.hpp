@@ -87,12 +87,9 @@ public:
     // at most in the sign of a zero, and a zero gets the sign the arc's vertex has: plan() notes
     // the -0.0s of the rings that make the arcs). For rings read again when they are written, the
     // map's vertices being elsewhere. Throws std::invalid_argument if `given` is not that ring.
-    // (After build() too: the signs are then the map's vertices'.)
-    std::vector<Point> ring_from(std::uint32_t ring, std::span<const Point> given, const std::vector<std::uint8_t>& kept,
-                                 bool arc_order = false) const;
-    // The same, each point with where it is in `given` (the closing point: the first's) and the
-    // map vertex it stands for: its tag is arc_tag(vertex) if there is one, else the ring's own
-    // at `position`.
+    // (After build() too: the signs are then the map's vertices'.) Each point comes with where it
+    // is in `given` (the closing point: the first's) and the map vertex it stands for: its tag is
+    // arc_tag(vertex) if there is one, else the ring's own at `position`.
     struct RingPoint {
         Point point;
         std::uint32_t position;

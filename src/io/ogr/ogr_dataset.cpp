@@ -1377,14 +1377,14 @@ void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::
 void for_each_polygon_ring(const FeatureRun& run, const std::function<void(std::span<const Point>, std::span<const map::PointTag>)>& visit) {
     FeatureReader reader(run);
     std::vector<map::PointTag> tags;
+    std::vector<double> z, m;
     while (const OGRFeatureUniquePtr feature = reader.next()) {
         visit_rings(*feature, run.path, reader.layer(), [&](const std::vector<Point>& points, const OGRLinearRing& ring) {
+            z.clear();
+            m.clear();
+            append_zm(ring, z, m);  // (the Z and M the whole read gives the ring's points)
             tags.clear();
-            for (int i = 0; i < ring.getNumPoints(); ++i) {
-                // (The Z and M the whole read gives the ring's points: append_zm.)
-                tags.push_back({std::bit_cast<std::uint64_t>(ring.Is3D() ? ring.getZ(i) : 0.0),
-                                std::bit_cast<std::uint64_t>(ring.IsMeasured() ? ring.getM(i) : 0.0)});
-            }
+            for (std::size_t i = 0; i < z.size(); ++i) tags.push_back({std::bit_cast<std::uint64_t>(z[i]), std::bit_cast<std::uint64_t>(m[i])});
             visit(points, tags);
         });
     }

@@ -316,12 +316,12 @@ TEST(Coverage, PlannedFromStreamedRingsIsTheBuild) {
                     ASSERT_EQ(vertices, streamed.ring_vertices(r, kept, arc_order)) << "ring " << r;
                     // The ring from its own points: the arcs' points bit for bit (a -0.0
                     // where the arc's vertex has one, though the ring has 0.0, and the reverse).
-                    const std::vector<Point> own = streamed.ring_from(r, rings[r], kept, arc_order);
+                    const std::vector<Coverage::RingPoint> own = streamed.ring_points_from(r, rings[r], kept, arc_order);
                     ASSERT_EQ(own.size(), vertices.size()) << "ring " << r;
                     for (std::size_t k = 0; k < own.size(); ++k) {
                         const Point want = built.vertices[vertices[k]];
-                        ASSERT_TRUE(std::bit_cast<std::uint64_t>(own[k].x) == std::bit_cast<std::uint64_t>(want.x) &&
-                                    std::bit_cast<std::uint64_t>(own[k].y) == std::bit_cast<std::uint64_t>(want.y))
+                        ASSERT_TRUE(std::bit_cast<std::uint64_t>(own[k].point.x) == std::bit_cast<std::uint64_t>(want.x) &&
+                                    std::bit_cast<std::uint64_t>(own[k].point.y) == std::bit_cast<std::uint64_t>(want.y))
                             << "ring " << r << ", point " << k;
                     }
                 }
@@ -502,8 +502,8 @@ TEST(Coverage, StreamedRingsThatChangeAreRefused) {
     one_longer[1].insert(one_longer[1].begin() + 1, Point{0.5, 0.25});
     EXPECT_THROW(arcs_of(slice, stream(one_longer)), std::invalid_argument);
     const std::vector<std::uint8_t> all_kept(built.vertices.size(), 1);
-    EXPECT_NO_THROW(whole.ring_from(1, rings[1], all_kept));
-    EXPECT_THROW(whole.ring_from(1, one_longer[1], all_kept), std::invalid_argument);
+    EXPECT_NO_THROW(whole.ring_points_from(1, rings[1], all_kept));
+    EXPECT_THROW(whole.ring_points_from(1, one_longer[1], all_kept), std::invalid_argument);
     std::vector<std::vector<Point>> degenerate_longer = rings;  // a frozen ring, one point longer
     const auto frozen = std::find_if(built.frozen.begin(), built.frozen.end(), [](std::uint8_t f) { return f != 0; }) - built.frozen.begin();
     ASSERT_LT(static_cast<std::size_t>(frozen), built.chains.size());
