@@ -98,7 +98,9 @@ public:
     // The point accept(id, point) takes that comes first in the order (base row, x, id), or
     // kRemoved: the point any_in_cells would stop at on a grid without row_split, whatever the
     // split. Each row is sorted by (x, id), so its first accepted point is its least; rows of
-    // one base row are all read once one of them has a point.
+    // one base row are all read once one of them has a point. accept is also asked about the
+    // taken-out points, with id kRemoved (it must refuse them), so that it can fold that test
+    // into its own without a branch.
     template <class Accept>
     std::uint32_t first_in_cells(const Box& box, Accept&& accept) const {
         std::uint32_t best = kRemoved, best_row = 0;
@@ -111,7 +113,7 @@ public:
             for (const Point* p = from; p != last && p->x <= box.max_x; ++p) {
                 if (best != kRemoved && best_point.x < p->x) break;  // (nothing later in this row comes first)
                 const std::uint32_t id = load(ids_[static_cast<std::size_t>(p - points_.data())]);
-                if (id == kRemoved || !accept(id, *p)) continue;
+                if (!accept(id, *p)) continue;
                 if (best == kRemoved || p->x < best_point.x || (p->x == best_point.x && id < best)) {
                     best = id;
                     best_point = *p;

@@ -351,14 +351,13 @@ private:
             std::size_t child;
             Entry least;
             if (first + kArity <= size) {
-                // A full node: a tournament of conditional moves.
-                const Entry e0 = heap[first], e1 = heap[first + 1], e2 = heap[first + 2], e3 = heap[first + 3];
-                const bool b01 = e1 < e0, b23 = e3 < e2;
-                const Entry m01 = b01 ? e1 : e0, m23 = b23 ? e3 : e2;
-                const std::size_t c01 = first + b01, c23 = first + 2 + b23;
-                const bool right = m23 < m01;
-                least = right ? m23 : m01;
-                child = right ? c23 : c01;
+                // A full node: a tournament of indices, chosen by arithmetic (a choice between
+                // two 128-bit values would be a branch).
+                const std::size_t left = first + std::size_t{heap[first + 1] < heap[first]};
+                const std::size_t right = first + 2 + std::size_t{heap[first + 3] < heap[first + 2]};
+                const std::size_t far = std::size_t{0} - std::size_t{heap[right] < heap[left]};  // all ones or zero
+                child = left ^ ((left ^ right) & far);
+                least = heap[child];
             } else {
                 child = first;
                 least = heap[first];
@@ -1671,7 +1670,13 @@ public:
         // The blocker a vertex waits on is the first point in the triangle in the grid's base
         // order, as the split rows do not change it.
         blocker = grid_->first_in_cells(box, [&](std::uint32_t id, Point q) {
-            if (id == v || !box_contains(box, q) || same_location(q, a) || same_location(q, c)) return false;
+            // A point that can block: live, not v, inside the box, not at a or c — one test,
+            // without a branch per condition (most points the rows give fail one of them, in no
+            // order a predictor can learn).
+            const bool other = (id != PointGrid::kRemoved) & (id != v) & (q.x >= box.min_x) & (q.x <= box.max_x) &
+                               (q.y >= box.min_y) & (q.y <= box.max_y) & !((q.x == a.x) & (q.y == a.y)) &
+                               !((q.x == c.x) & (q.y == c.y));
+            if (!other) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
             return triangle->contains(q);
         });
