@@ -24,8 +24,16 @@ struct Box {
 };
 
 inline Box triangle_box(Point a, Point b, Point c) {
-    auto lo = [](double u, double v, double w) { return u < v ? (u < w ? u : w) : (v < w ? v : w); };
-    auto hi = [](double u, double v, double w) { return u > v ? (u > w ? u : w) : (v > w ? v : w); };
+    // (The same choices as u < v ? (u < w ? u : w) : (v < w ? v : w), written as two of the
+    // form x < y ? x : y, which compilers turn into min/max instructions instead of branches.)
+    auto lo = [](double u, double v, double w) {
+        const double m = u < v ? u : v;
+        return m < w ? m : w;
+    };
+    auto hi = [](double u, double v, double w) {
+        const double m = u > v ? u : v;
+        return m > w ? m : w;
+    };
     return {lo(a.x, b.x, c.x), lo(a.y, b.y, c.y), hi(a.x, b.x, c.x), hi(a.y, b.y, c.y)};
 }
 

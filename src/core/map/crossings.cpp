@@ -377,7 +377,7 @@ std::vector<std::uint8_t> find_improper_segments(const MapData& map, exact::Arit
                 const auto& [tb, t, t_ends] = first[j];
                 // Every cell the two share tests them (not only the one of their overlap's low
                 // corner): a cell then settles its own segments, whatever the others do.
-                if (sb.min_y > tb.max_y || tb.min_y > sb.max_y || tb.min_x > sb.max_x) return;
+                if ((sb.min_y > tb.max_y) | (tb.min_y > sb.max_y) | (tb.min_x > sb.max_x)) return;  // (one branch, not three)
                 if (only_their_shared_end(map, s, t, arithmetic, worker.counted)) return;
                 if (exact::improper_contact(map.vertices[s], map.vertices[s + 1], map.vertices[t], map.vertices[t + 1], arithmetic,
                                             worker.counted)) {

@@ -55,9 +55,9 @@ struct Grid {
     bool clip = false;
 
     Box part_in_row(Point a, Point b, std::uint32_t r) const {
-        if (before(b, a)) std::swap(a, b);
         const Box box = segment_box(a, b);
         if (!clip || row(box.max_y) - row(box.min_y) < 2) return box;
+        if (before(b, a)) std::swap(a, b);  // (here only: which end comes first is a coin toss a predictor loses)
         const double low = std::max(box.min_y, row.origin + (static_cast<double>(r) - 0.25) * cell_height);
         const double high = std::min(box.max_y, row.origin + (static_cast<double>(r) + 1.25) * cell_height);
         const double dy = b.y - a.y;  // not zero: the segment spans three rows or more
