@@ -1323,7 +1323,9 @@ public:
     }
 
     double area_of(std::uint32_t v) const {
-        return rank_of(map_.vertices[prev_[v]], map_.vertices[v], map_.vertices[next_[v]], options_.ranking);
+        const Point a = map_.vertices[prev_[v]], b = map_.vertices[v], c = map_.vertices[next_[v]];
+        // (The plain area inline: rank_of is not, and the sweep asks for an area about 3 times a removal.)
+        return plain_ranking_ ? effective_area(a, b, c) : rank_of(a, b, c, options_.ranking);
     }
 
     // ---- the sweep -----------------------------------------------------------------------
@@ -1673,9 +1675,9 @@ public:
             // A point that can block: live, not v, inside the box, not at a or c — one test,
             // without a branch per condition (most points the rows give fail one of them, in no
             // order a predictor can learn).
-            const bool other = (id != PointGrid::kRemoved) & (id != v) & (q.x >= box.min_x) & (q.x <= box.max_x) &
-                               (q.y >= box.min_y) & (q.y <= box.max_y) & !((q.x == a.x) & (q.y == a.y)) &
-                               !((q.x == c.x) & (q.y == c.y));
+            // (Its x is in the box's range: first_in_cells reads no other.)
+            const bool other = (id != PointGrid::kRemoved) & (id != v) & (q.y >= box.min_y) & (q.y <= box.max_y) &
+                               !((q.x == a.x) & (q.y == a.y)) & !((q.x == c.x) & (q.y == c.y));
             if (!other) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
             return triangle->contains(q);
@@ -1879,6 +1881,7 @@ public:
     std::vector<Point> owned_points_;
     std::span<const Point> control_points_;  // until indexed
     const SimplifyOptions& options_;
+    const bool plain_ranking_ = !options_.ranking.spherical && options_.ranking.weighting == 0;  // (area_of)
     const std::uint32_t vertex_count_;
     const int threads_;
     const std::size_t parallel_min_;  // below this many items a loop runs on one thread
