@@ -1672,13 +1672,14 @@ public:
         // The blocker a vertex waits on is the first point in the triangle in the grid's base
         // order, as the split rows do not change it.
         blocker = grid_->first_in_cells(box, [&](std::uint32_t id, Point q) {
-            // A point that can block: live, not v, inside the box, not at a or c — one test,
-            // without a branch per condition (most points the rows give fail one of them, in no
-            // order a predictor can learn).
-            // (Its x is in the box's range: first_in_cells reads no other.)
-            const bool other = (id != PointGrid::kRemoved) & (id != v) & (q.y >= box.min_y) & (q.y <= box.max_y) &
-                               !((q.x == a.x) & (q.y == a.y)) & !((q.x == c.x) & (q.y == c.y));
-            if (!other) return false;
+            // A point that can block: live, not v, inside the box, not at a or c. Most points the
+            // rows give fail one of these in no order a predictor can learn, so the cheap ones
+            // are one test without a branch per condition: not p, v or n themselves (the usual
+            // points at a or c), inside the box (its x is in the box's range: first_in_cells
+            // reads no other). Then the rare others at a or c.
+            const bool other = (id != PointGrid::kRemoved) & (id != v) & (id != p) & (id != n) & (q.y >= box.min_y) &
+                               (q.y <= box.max_y);
+            if (!other || same_location(q, a) || same_location(q, c)) return false;
             if (!triangle) triangle.emplace(a, b, c, options_.arithmetic, stats.predicates);
             return triangle->contains(q);
         });
