@@ -1374,17 +1374,11 @@ public:
     bool mark_smallest(std::uint64_t budget) {
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
         const auto share = static_cast<std::size_t>(threads);
-        std::vector<std::size_t> offset(share + 1, 0);
-#pragma omp parallel num_threads(threads)
-        parallel::for_my_shares(threads, [&](int t) {
-            std::size_t queued = 0;
-            for_each_undecided(t, threads, [&](std::uint32_t v) { queued += state_[v] == State::queued; });
-            offset[static_cast<std::size_t>(t) + 1] = queued;
-        });
-        for (std::size_t t = 0; t < share; ++t) offset[t + 1] += offset[t];
-        const std::size_t queued = offset.back();
-        if (queued == 0) return false;
-        FillLater<std::uint64_t> keys(queued);
+        // Each thread's keys from offset[t], with room for every vertex its share looks at (the
+        // queued ones are most of them: counting them first was a pass of its own).
+        std::vector<std::size_t> offset(share + 1, 0), filled(share, 0);
+        for (std::size_t t = 0; t < share; ++t) offset[t + 1] = offset[t] + undecided_count(static_cast<int>(t), threads);
+        FillLater<std::uint64_t> keys(offset.back());
 #pragma omp parallel num_threads(threads)
         parallel::for_my_shares(threads, [&](int t) {
             std::size_t k = offset[static_cast<std::size_t>(t)];
@@ -1392,11 +1386,15 @@ public:
                 marked_[v] = 0;
                 if (state_[v] == State::queued) keys[k++] = std::bit_cast<std::uint64_t>(area_of(v));
             });
+            filled[static_cast<std::size_t>(t)] = k - offset[static_cast<std::size_t>(t)];
         });
+        std::size_t queued = 0;
+        for (const std::size_t count : filled) queued += count;
+        if (queued == 0) return false;
         // The budget-th smallest key (the largest when the budget takes them all), and of those
         // equal to it the first `rank` in id order: each thread's run of keys is a list.
         std::vector<std::span<const std::uint64_t>> runs(share);
-        for (std::size_t t = 0; t < share; ++t) runs[t] = {keys.data() + offset[t], keys.data() + offset[t + 1]};
+        for (std::size_t t = 0; t < share; ++t) runs[t] = {keys.data() + offset[t], filled[t]};
         const std::uint64_t wanted = std::min<std::uint64_t>(budget, queued);
         round_budget_ = wanted;
         const parallel::Selection kth = parallel::select_kth(runs, wanted, threads, [](std::uint64_t own) { return own; });
@@ -1426,21 +1424,35 @@ public:
 
     // Puts every queued (and, in rounds, marked) vertex on its level's list, in id order.
     void schedule_queued() {
-        std::vector<std::vector<std::vector<std::uint32_t>>> parts(static_cast<std::size_t>(threads_),
-                                                                   std::vector<std::vector<std::uint32_t>>(levels_));
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
+        const auto share = static_cast<std::size_t>(threads);
+        std::vector<std::vector<std::vector<std::uint32_t>>> parts(share, std::vector<std::vector<std::uint32_t>>(levels_));
 #pragma omp parallel num_threads(threads)
         parallel::for_my_shares(threads, [&](int t) {
             auto& part = parts[static_cast<std::size_t>(t)];
+            part[0].reserve(undecided_count(t, threads));  // (most go to level 0: no growing copies)
             for_each_undecided(t, threads, [&](std::uint32_t v) {
                 if (state_[v] == State::queued && (!use_marks_ || marked_[v])) part[level_of(v)].push_back(v);
             });
         });
-        for (const auto& part : parts) {
-            for (unsigned level = 0; level < levels_; ++level) {
-                later_[level].insert(later_[level].end(), part[level].begin(), part[level].end());
+        // Appended in thread order, so each list stays in id order; copied on all threads.
+        std::vector<std::size_t> at(share * levels_);
+        for (unsigned level = 0; level < levels_; ++level) {
+            std::size_t end = later_[level].size();
+            for (std::size_t t = 0; t < share; ++t) {
+                at[t * levels_ + level] = end;
+                end += parts[t][level].size();
             }
+            later_[level].resize(end);
         }
+#pragma omp parallel num_threads(threads)
+        parallel::for_my_shares(threads, [&](int t) {
+            const auto& part = parts[static_cast<std::size_t>(t)];
+            for (unsigned level = 0; level < levels_; ++level) {
+                std::copy(part[level].begin(), part[level].end(),
+                          later_[level].begin() + static_cast<std::ptrdiff_t>(at[static_cast<std::size_t>(t) * levels_ + level]));
+            }
+        });
     }
 
     // Calls visit(v) for the vertices a round looks at in share `part` of `parts` (contiguous,
@@ -1463,6 +1475,17 @@ public:
                 visit(static_cast<std::uint32_t>(64 * w + static_cast<std::size_t>(std::countr_zero(bits))));
             }
         }
+    }
+
+    // How many vertices for_each_undecided(part, parts) visits.
+    std::size_t undecided_count(int part, int parts) const {
+        const std::size_t words = (std::size_t{vertex_count_} + 63) / 64;
+        const std::size_t first = words * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
+        const std::size_t last = words * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
+        if (undecided_.empty()) return std::min<std::size_t>(vertex_count_, 64 * last) - std::min<std::size_t>(vertex_count_, 64 * first);
+        std::size_t count = 0;
+        for (std::size_t w = first; w < last; ++w) count += static_cast<std::size_t>(std::popcount(undecided_[w]));
+        return count;
     }
 
     void keep_undecided() {
