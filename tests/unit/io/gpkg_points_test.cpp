@@ -124,34 +124,38 @@ TEST(GpkgPoints, EveryEncodingReadsAsOgrReadsIt) {
 }
 
 // Rows split over connections by FID range, with gaps: the points of one connection, in order.
+// FIDs close together (each thread's part one connection) and spread out (each part read in
+// pieces, a connection each: 2 threads here).
 TEST(GpkgPoints, FidRangesOnSeveralConnectionsGiveTheSamePoints) {
-    GpkgFile file("ranges");
-    {
-        sqlite3* db = nullptr;
-        ASSERT_EQ(sqlite3_open(file.path().c_str(), &db), SQLITE_OK);
-        sqlite3_exec(db, "BEGIN", nullptr, nullptr, nullptr);
-        sqlite3_stmt* statement = nullptr;
-        sqlite3_prepare_v2(db, "INSERT INTO points (fid, geom) VALUES (?1, ?2)", -1, &statement, nullptr);
-        std::uint64_t state = 12345;
-        for (std::int64_t fid = 1; fid < 300000; fid += 1 + (fid % 5 == 0 ? 3 : 0)) {  // gaps
-            state = state * 6364136223846793005ull + 1442695040888963407ull;
-            const double x = static_cast<double>(state >> 11) * 0x1p-53 * 360 - 180;
-            const Bytes blob = gp_blob(true, 0, wkb_point(true, 1, {x, x / 3}));
-            sqlite3_bind_int64(statement, 1, fid);
-            sqlite3_bind_blob(statement, 2, blob.data(), static_cast<int>(blob.size()), SQLITE_TRANSIENT);
-            ASSERT_EQ(sqlite3_step(statement), SQLITE_DONE);
-            sqlite3_reset(statement);
+    for (const std::int64_t spread : {std::int64_t{1}, std::int64_t{13}}) {
+        GpkgFile file("ranges" + std::to_string(spread));
+        {
+            sqlite3* db = nullptr;
+            ASSERT_EQ(sqlite3_open(file.path().c_str(), &db), SQLITE_OK);
+            sqlite3_exec(db, "BEGIN", nullptr, nullptr, nullptr);
+            sqlite3_stmt* statement = nullptr;
+            sqlite3_prepare_v2(db, "INSERT INTO points (fid, geom) VALUES (?1, ?2)", -1, &statement, nullptr);
+            std::uint64_t state = 12345;
+            for (std::int64_t k = 1; k < 300000; k += 1 + (k % 5 == 0 ? 3 : 0)) {  // gaps
+                state = state * 6364136223846793005ull + 1442695040888963407ull;
+                const double x = static_cast<double>(state >> 11) * 0x1p-53 * 360 - 180;
+                const Bytes blob = gp_blob(true, 0, wkb_point(true, 1, {x, x / 3}));
+                sqlite3_bind_int64(statement, 1, k * spread);
+                sqlite3_bind_blob(statement, 2, blob.data(), static_cast<int>(blob.size()), SQLITE_TRANSIENT);
+                ASSERT_EQ(sqlite3_step(statement), SQLITE_DONE);
+                sqlite3_reset(statement);
+            }
+            sqlite3_finalize(statement);
+            sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
+            sqlite3_close(db);
         }
-        sqlite3_finalize(statement);
-        sqlite3_exec(db, "COMMIT", nullptr, nullptr, nullptr);
-        sqlite3_close(db);
-    }
-    const std::vector<Point> reference = file.read_with_ogr();
-    ASSERT_GT(reference.size(), 100000u);
-    for (const unsigned threads : {1u, 2u, 3u, 7u}) {
-        const std::optional<std::vector<Point>> read = read_gpkg_points(file.table(), threads);
-        ASSERT_TRUE(read.has_value()) << threads;
-        expect_same_points(*read, reference);
+        const std::vector<Point> reference = file.read_with_ogr();
+        ASSERT_GT(reference.size(), 100000u);
+        for (const unsigned threads : {1u, 2u, 3u, 7u}) {
+            const std::optional<std::vector<Point>> read = read_gpkg_points(file.table(), threads);
+            ASSERT_TRUE(read.has_value()) << threads;
+            expect_same_points(*read, reference);
+        }
     }
 }
 
