@@ -150,21 +150,19 @@ Decoded decode_blob(const unsigned char* data, std::size_t size, std::vector<Poi
     return decode_wkb(in, out, false);
 }
 
-// Appends the rows with from <= FID < to (to: none, up to the last; all rows when `range` is
-// false), in FID order, to `points`; false if they are not points this reader decodes.
-bool append_rows(const GpkgTable& table, bool range, std::int64_t from, std::optional<std::int64_t> to, std::vector<Point>& points) {
+// Appends the rows with from <= FID < to (to: none, up to the last), in FID order, to `points`;
+// false if they are not points this reader decodes.
+bool append_rows(const GpkgTable& table, std::int64_t from, std::optional<std::int64_t> to, std::vector<Point>& points) {
     Connection db = open_read_only(table.path);
     if (!db) return false;
     const std::string fid = sql_identifier(table.fid_column);
     std::string sql = "SELECT " + fid + ", " + sql_identifier(table.geometry_column) + " FROM " + sql_identifier(table.table);
-    if (range) sql += " WHERE " + fid + " >= ?1" + (to ? " AND " + fid + " < ?2" : "");
+    sql += " WHERE " + fid + " >= ?1" + (to ? " AND " + fid + " < ?2" : "");
     sql += " ORDER BY " + fid;
     Statement statement = prepare(db.get(), sql);
     if (!statement) return false;
-    if (range) {
-        sqlite3_bind_int64(statement.get(), 1, from);
-        if (to) sqlite3_bind_int64(statement.get(), 2, *to);
-    }
+    sqlite3_bind_int64(statement.get(), 1, from);
+    if (to) sqlite3_bind_int64(statement.get(), 2, *to);
     int status = SQLITE_ROW;
     while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
         const int kind = sqlite3_column_type(statement.get(), 1);
@@ -184,14 +182,6 @@ bool append_rows(const GpkgTable& table, bool range, std::int64_t from, std::opt
     return status == SQLITE_DONE;
 }
 
-std::optional<std::vector<Point>> read_rows(const GpkgTable& table, bool range, std::int64_t from, std::optional<std::int64_t> to,
-                                            std::size_t expected) {
-    std::vector<Point> points;
-    points.reserve(expected);
-    if (!append_rows(table, range, from, to, points)) return std::nullopt;
-    return points;
-}
-
 // The rows of FIDs from `from` on, `span` of them (counted modulo 2^64) or up to the last when
 // `to` is none, else below `to`, read in pieces, each through a connection of its own: a
 // connection maps the pages it reads (open_read_only), and closing it lets them go, so that
@@ -209,7 +199,7 @@ std::optional<std::vector<Point>> read_rows_in_pieces(const GpkgTable& table, st
         const auto begin = static_cast<std::int64_t>(static_cast<std::uint64_t>(from) + step * k);
         const std::optional<std::int64_t> end =
             k + 1 == pieces ? to : std::optional(static_cast<std::int64_t>(static_cast<std::uint64_t>(from) + step * (k + 1)));
-        if (!append_rows(table, true, begin, end, points)) return std::nullopt;
+        if (!append_rows(table, begin, end, points)) return std::nullopt;
     }
     return points;
 }
@@ -246,7 +236,7 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
     auto reservation = [most_rows](std::uint64_t fids) { return static_cast<std::size_t>(std::min(fids, most_rows)); };
     // Below this many FIDs one connection is as quick as starting several.
     constexpr std::uint64_t kSplitFrom = 1 << 16;
-    if (threads <= 1 || gaps < kSplitFrom) return read_rows(table, false, 0, 0, reservation(gaps + 1));
+    if (threads <= 1 || gaps < kSplitFrom) return read_rows_in_pieces(table, first, std::nullopt, gaps, reservation(gaps + 1));
     std::vector<std::future<std::optional<std::vector<Point>>>> parts;
     const std::uint64_t share = gaps / threads;
     for (unsigned t = 0; t < threads; ++t) {
