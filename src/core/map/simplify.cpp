@@ -261,8 +261,8 @@ private:
 // of its mispredicted branches on GSHHG): four children a node, half the levels of a binary
 // heap for as many comparisons, so half the moves and slot writes; and each area kept as the
 // bits of the double (non-negative, never −0: rank_of), which order as the values do, so that
-// comparing two entries is integer arithmetic without a branch and the least of four children
-// is found by conditional moves.
+// comparing two entries is integer arithmetic without a branch, and the least of four children
+// is found by arithmetic on their indices, not by branches.
 class BlockQueue {
 public:
     bool empty() const { return heap_.empty(); }
