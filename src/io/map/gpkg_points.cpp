@@ -31,10 +31,6 @@ Connection open_read_only(const std::string& path) {
     const int status = sqlite3_open_v2(path.c_str(), &db, SQLITE_OPEN_READONLY | SQLITE_OPEN_NOMUTEX, nullptr);
     Connection connection(db);  // closed even when opening failed
     if (status != SQLITE_OK) return nullptr;
-    // Pages read from the file mapped in memory instead of copied by read() into SQLite's own
-    // buffers: the kernel's copying was an eighth of the CPU time of a run with GSHHG's 10 M
-    // control points (issue 34). SQLite caps it at its compiled limit and reads the rest as before.
-    sqlite3_exec(connection.get(), "PRAGMA mmap_size = 9223372036854775807", nullptr, nullptr, nullptr);
     return connection;
 }
 
@@ -150,57 +146,41 @@ Decoded decode_blob(const unsigned char* data, std::size_t size, std::vector<Poi
     return decode_wkb(in, out, false);
 }
 
-// Appends the rows with from <= FID < to (to: none, up to the last), in FID order, to `points`;
-// false if they are not points this reader decodes.
-bool append_rows(const GpkgTable& table, std::int64_t from, std::optional<std::int64_t> to, std::vector<Point>& points) {
+// The rows with from <= FID < to (to: none, up to the last; all rows when `range` is false), in
+// FID order.
+std::optional<std::vector<Point>> read_rows(const GpkgTable& table, bool range, std::int64_t from, std::optional<std::int64_t> to,
+                                            std::size_t expected) {
     Connection db = open_read_only(table.path);
-    if (!db) return false;
+    if (!db) return std::nullopt;
     const std::string fid = sql_identifier(table.fid_column);
     std::string sql = "SELECT " + fid + ", " + sql_identifier(table.geometry_column) + " FROM " + sql_identifier(table.table);
-    sql += " WHERE " + fid + " >= ?1" + (to ? " AND " + fid + " < ?2" : "");
+    if (range) sql += " WHERE " + fid + " >= ?1" + (to ? " AND " + fid + " < ?2" : "");
     sql += " ORDER BY " + fid;
     Statement statement = prepare(db.get(), sql);
-    if (!statement) return false;
-    sqlite3_bind_int64(statement.get(), 1, from);
-    if (to) sqlite3_bind_int64(statement.get(), 2, *to);
+    if (!statement) return std::nullopt;
+    if (range) {
+        sqlite3_bind_int64(statement.get(), 1, from);
+        if (to) sqlite3_bind_int64(statement.get(), 2, *to);
+    }
+    std::vector<Point> points;
+    points.reserve(expected);
     int status = SQLITE_ROW;
     while ((status = sqlite3_step(statement.get())) == SQLITE_ROW) {
         const int kind = sqlite3_column_type(statement.get(), 1);
         if (kind == SQLITE_NULL) continue;
-        if (kind != SQLITE_BLOB) return false;
+        if (kind != SQLITE_BLOB) return std::nullopt;
         const auto* data = static_cast<const unsigned char*>(sqlite3_column_blob(statement.get(), 1));
         const auto size = static_cast<std::size_t>(sqlite3_column_bytes(statement.get(), 1));
         switch (decode_blob(data, size, points)) {
             case Decoded::ok: break;
-            case Decoded::not_decoded: return false;
+            case Decoded::not_decoded: return std::nullopt;
             case Decoded::non_finite:
                 throw InputError("'" + table.path + "', layer '" + table.table + "', feature " +
                                  std::to_string(sqlite3_column_int64(statement.get(), 0)) +
                                  ": control point has a non-finite coordinate");
         }
     }
-    return status == SQLITE_DONE;
-}
-
-// The rows of FIDs from `from` on, `span` of them (counted modulo 2^64) or up to the last when
-// `to` is none, else below `to`, read in pieces, each through a connection of its own: a
-// connection maps the pages it reads (open_read_only), and closing it lets them go, so that
-// the pages mapped at once are a piece's, not the whole part's (mapped pages count in the
-// process's resident memory).
-std::optional<std::vector<Point>> read_rows_in_pieces(const GpkgTable& table, std::int64_t from, std::optional<std::int64_t> to,
-                                                      std::uint64_t span, std::size_t expected) {
-    constexpr std::uint64_t kPieces = 8, kSmallest = 1 << 16;
-    const std::uint64_t pieces = span / kPieces >= kSmallest ? kPieces : 1;
-    const std::uint64_t step = span / pieces;
-    std::vector<Point> points;
-    points.reserve(expected);
-    for (std::uint64_t k = 0; k < pieces; ++k) {
-        // (Modular, as the parts' bounds are: never past the part's end.)
-        const auto begin = static_cast<std::int64_t>(static_cast<std::uint64_t>(from) + step * k);
-        const std::optional<std::int64_t> end =
-            k + 1 == pieces ? to : std::optional(static_cast<std::int64_t>(static_cast<std::uint64_t>(from) + step * (k + 1)));
-        if (!append_rows(table, begin, end, points)) return std::nullopt;
-    }
+    if (status != SQLITE_DONE) return std::nullopt;
     return points;
 }
 
@@ -236,7 +216,7 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
     auto reservation = [most_rows](std::uint64_t fids) { return static_cast<std::size_t>(std::min(fids, most_rows)); };
     // Below this many FIDs one connection is as quick as starting several.
     constexpr std::uint64_t kSplitFrom = 1 << 16;
-    if (threads <= 1 || gaps < kSplitFrom) return read_rows_in_pieces(table, first, std::nullopt, gaps, reservation(gaps + 1));
+    if (threads <= 1 || gaps < kSplitFrom) return read_rows(table, false, 0, 0, reservation(gaps + 1));
     std::vector<std::future<std::optional<std::vector<Point>>>> parts;
     const std::uint64_t share = gaps / threads;
     for (unsigned t = 0; t < threads; ++t) {
@@ -247,9 +227,8 @@ std::optional<std::vector<Point>> read_gpkg_points(const GpkgTable& table, unsig
         // (The first part reserves room for all: the others are then appended to it, not all
         // copied into a new array — 160 MB for 10 M points, 0.1 s.)
         const std::size_t expected = reservation(t == 0 ? gaps + 1 : t + 1 == threads ? gaps - share * t + 1 : share);
-        const std::uint64_t span = t + 1 == threads ? gaps - share * t : share;  // (the last part: its last FID is `last`)
-        parts.push_back(std::async(std::launch::async, [&table, from, to, span, expected] {
-            return read_rows_in_pieces(table, from, to, span, expected);
+        parts.push_back(std::async(std::launch::async, [&table, from, to, expected] {
+            return read_rows(table, true, from, to, expected);
         }));
     }
     std::vector<std::optional<std::vector<Point>>> read;

@@ -124,8 +124,7 @@ TEST(GpkgPoints, EveryEncodingReadsAsOgrReadsIt) {
 }
 
 // Rows split over connections by FID range, with gaps: the points of one connection, in order.
-// FIDs close together (each thread's part one connection) and spread out (each part read in
-// pieces, a connection each: 2 threads here).
+// FIDs close together and spread out (13 apart: parts of other sizes).
 TEST(GpkgPoints, FidRangesOnSeveralConnectionsGiveTheSamePoints) {
     for (const std::int64_t spread : {std::int64_t{1}, std::int64_t{13}}) {
         GpkgFile file("ranges" + std::to_string(spread));
