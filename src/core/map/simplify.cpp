@@ -1462,9 +1462,7 @@ public:
     // list: 1.2 MB for GSHHG's 9.7 M vertices where a list took 20 MB at the peak (issue 34).
     template <class Visit>
     void for_each_undecided(int part, int parts, Visit&& visit) const {
-        const std::size_t words = (std::size_t{vertex_count_} + 63) / 64;
-        const std::size_t first = words * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
-        const std::size_t last = words * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
+        const auto [first, last] = share_words(part, parts);
         if (undecided_.empty()) {
             const auto end = static_cast<std::uint32_t>(std::min<std::size_t>(vertex_count_, 64 * last));
             for (auto v = static_cast<std::uint32_t>(64 * first); v < end; ++v) visit(v);
@@ -1477,11 +1475,17 @@ public:
         }
     }
 
+    // Share `part` of `parts` of the undecided bitmap's words (all vertices' words before the
+    // first round), [first, last).
+    std::pair<std::size_t, std::size_t> share_words(int part, int parts) const {
+        const std::size_t words = (std::size_t{vertex_count_} + 63) / 64;
+        return {words * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts),
+                words * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts)};
+    }
+
     // How many vertices for_each_undecided(part, parts) visits.
     std::size_t undecided_count(int part, int parts) const {
-        const std::size_t words = (std::size_t{vertex_count_} + 63) / 64;
-        const std::size_t first = words * static_cast<std::size_t>(part) / static_cast<std::size_t>(parts);
-        const std::size_t last = words * static_cast<std::size_t>(part + 1) / static_cast<std::size_t>(parts);
+        const auto [first, last] = share_words(part, parts);
         if (undecided_.empty()) return std::min<std::size_t>(vertex_count_, 64 * last) - std::min<std::size_t>(vertex_count_, 64 * first);
         std::size_t count = 0;
         for (std::size_t w = first; w < last; ++w) count += static_cast<std::size_t>(std::popcount(undecided_[w]));
