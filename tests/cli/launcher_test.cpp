@@ -69,6 +69,24 @@ TEST(Launcher, MeshCommandWithoutGdalRefusesGisJobs) {
     EXPECT_FALSE(std::filesystem::exists(options.output));
 }
 
+// The whole tool runs with glibc's malloc asking for transparent huge pages, unless the user set
+// that tunable; other tunables the user set are kept.
+TEST(Launcher, WholeToolGetsHugePagesForItsHeap) {
+    const auto dir = fresh_dir("launcher");
+    const std::string map = "'" + std::string(TOPOSIMP_BINARY) + "' map '" + testdata("nh_borders.gpkg") + "' --keep 50% -v -o '";
+    auto run = [&](const std::string& environment, const std::string& name) {
+        const std::string command = environment + " " + map + (dir / name).string() + "' 2>'" + (dir / "err.txt").string() + "'";
+        EXPECT_EQ(WEXITSTATUS(std::system(command.c_str())), 0) << command;
+        return slurp(dir / "err.txt");
+    };
+    const std::string asked = "transparent huge pages asked for (glibc.malloc.hugetlb=1";
+    EXPECT_NE(run("env -u GLIBC_TUNABLES", "a.gpkg").find(asked), std::string::npos);
+    EXPECT_NE(run("GLIBC_TUNABLES=glibc.malloc.check=0", "b.gpkg").find(asked), std::string::npos);
+    const std::string refused = run("GLIBC_TUNABLES=glibc.malloc.hugetlb=0", "c.gpkg");
+    EXPECT_EQ(refused.find(asked), std::string::npos);
+    EXPECT_NE(refused.find("glibc.malloc.hugetlb not set"), std::string::npos) << refused;
+}
+
 TEST(Launcher, MissingWholeToolIsAClearError) {
     const auto dir = fresh_dir("launcher");
     const auto alone = dir / "toposimp";
