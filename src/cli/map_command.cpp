@@ -763,7 +763,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
         const std::string why = input.dataset ? input.dataset->summary().read_whole_because : std::string();
         log.debug("the input is read here, whole{}{}", why.empty() ? "" : ": ", why);
         log.debug("(only Shapefiles (a file, or a folder of them) of PolyLines or of polygons, GeoPackage "
-                  "and FlatGeobuf (indexed) layers of (Multi)LineStrings or (Multi)Polygons (Z or M too), and 2D points, "
+                  "and FlatGeobuf (indexed) layers of (Multi)LineStrings or (Multi)Polygons (Z or M too), and points, "
                   "written through GDAL (not GeoJSON or TopoJSON), at one target without --decimals, --precision or "
                   "--levels, are read by parts)");
     }

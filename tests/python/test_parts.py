@@ -613,23 +613,44 @@ def test_shapefiles_with_deleted_records_are_read_by_parts(binary, tmp_path, sha
     assert set(fids) == {"cells", "rivers"}, first.parts[:2]
 
 
-def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
-    """A PointZ layer among the layers asked for (points with Z are not control points): every
-    layer is read whole, the parts carry their vertices, and -v says why."""
+@pytest.mark.parametrize("dimension", ["XYZ", "XYM", "XYZM"])
+def test_points_with_z_or_m_beside_layers_left_in_their_files(binary, tmp_path, shapefile_folder, dimension):
+    """A point layer with Z or M among the layers asked for: the others are left in their files,
+    its points are control points held here, written back with their Z and M; the output
+    toposimp map's byte for byte."""
     import shutil
     import subprocess
 
     folder = tmp_path / "folder"
     shutil.copytree(shapefile_folder, folder)
-    subprocess.run(["ogr2ogr", str(folder / "heights.shp"), str(folder / "places.shp"), "-dim", "XYZ", "-nln", "heights"],
+    subprocess.run(["ogr2ogr", str(folder / "heights.shp"), str(folder / "places.shp"), "-dim", dimension, "-nln", "heights"],
                    check=True, capture_output=True)
+    arguments = [str(folder), "-l", "rivers", "-l", "heights", "-l", "cells", "--keep", "10%", *SAME_DATE]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, arguments, 1, 300, ".gpkg")
+    assert output.read_bytes() == reference.read_bytes()
+    assert "the input is read here, whole" not in err
+    info = subprocess.run(["ogrinfo", "-ro", "-so", str(output), "heights"], check=True, capture_output=True, text=True).stdout
+    geometry = next(line for line in info.splitlines() if line.startswith("Geometry: "))
+    assert ("3D" in geometry) == ("Z" in dimension) and ("Measured" in geometry) == ("M" in dimension), geometry
+
+
+def test_a_folder_with_a_layer_that_cannot_be_left_in_its_file_is_read_whole(tmp_path, shapefile_folder):
+    """A folder of FlatGeobufs, one of them without its index of features: every layer is read
+    whole, the parts carry their vertices, and -v says why."""
+    import subprocess
+
+    folder = tmp_path / "folder"
+    folder.mkdir()
+    for name, options in (("rivers", []), ("cells", ["-lco", "SPATIAL_INDEX=NO"])):
+        subprocess.run(["ogr2ogr", "-f", "FlatGeobuf", str(folder / (name + ".fgb")), str(shapefile_folder / (name + ".shp")), *options],
+                       check=True, capture_output=True)
     first = FirstRoundHere()
     output = tmp_path / "whole.gpkg"
-    status, out, err = _toposimp.run_command(["map", str(folder), "-l", "rivers", "-l", "heights", "--keep", "10%",
-                                              "-o", str(output), "-v"], first, 1, 300, 0, None, False, False, input_on_workers=True)
+    status, out, err = _toposimp.run_command(["map", str(folder), "--keep", "10%", "-o", str(output), "-v"], first, 1, 300, 0, None,
+                                             False, False, input_on_workers=True)
     assert status == 0, err
     assert "(left in the file)" not in err
-    assert f"the input is read here, whole: '{folder}', layer 'heights': its geometry type (3D Point) is not read by parts" in err, err
+    assert f"the input is read here, whole: '{folder}', layer 'cells': a FlatGeobuf without its index of features" in err, err
     assert all("shp" not in part and "polygons_file" not in part for part in first.parts)
 
 

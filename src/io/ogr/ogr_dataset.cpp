@@ -337,6 +337,11 @@ std::unique_ptr<OGRGeometry> shape_geometry(const ShapeRecord& record) {
 
 namespace {
 
+// (Multi)Point, with Z or M or not.
+bool is_point_type(OGRwkbGeometryType type) {
+    return wkbFlatten(type) == wkbPoint || wkbFlatten(type) == wkbMultiPoint;
+}
+
 // A feature in its layer's counts: empty (or NULL), polygons, lines.
 void count_feature(LayerSummary& summary_of_layer, const OgrDataset::Data::Layer::Shape& shape, bool empty) {
     if (empty) {
@@ -356,10 +361,11 @@ void OgrDataset::Data::add_geometry(Layer& layer, Layer::Shape& shape, LayerSumm
                                     const std::string& label, map::MapData& map) {
     shape.type = geometry.getGeometryType();
     if (geometry.Is3D() || geometry.IsMeasured()) {
-        // A layer declared 2D may hold 3D features: keep their Z/M too.
+        // A layer declared 2D may hold 3D features: keep their Z/M too (a point's are in its
+        // geometry, kept as it is).
         summary_of_layer.has_z = summary_of_layer.has_z || geometry.Is3D();
         summary_of_layer.has_m = summary_of_layer.has_m || geometry.IsMeasured();
-        start_carrying_zm(map);
+        if (!is_point_type(shape.type)) start_carrying_zm(map);
     }
     switch (wkbFlatten(shape.type)) {
         case wkbLineString:
@@ -419,7 +425,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     layer->geometry_type = source.GetGeomType();
     summary_of_layer.has_z = OGR_GT_HasZ(layer->geometry_type);
     summary_of_layer.has_m = OGR_GT_HasM(layer->geometry_type);
-    if (summary_of_layer.has_z || summary_of_layer.has_m) start_carrying_zm(map);
+    if ((summary_of_layer.has_z || summary_of_layer.has_m) && !is_point_type(layer->geometry_type)) start_carrying_zm(map);
     auto not_in_file = [&](const std::string& why) { return NotInFile{"'" + path + "', layer '" + layer->name + "': " + why}; };
     // A plain PolyLine Shapefile going to a Shapefile: OGR hands out each geometry with the
     // layer's CRS, and the first one makes the driver parse the .prj with PROJ (and search
@@ -691,9 +697,10 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                 }
             });
     };
-    // A 2D point layer beside the layers left in their files is read as without them: its points
-    // are control points (the command holds those anyway), written back as they were.
-    const bool point_layer = leave_in_file && (layer->geometry_type == wkbPoint || layer->geometry_type == wkbMultiPoint);
+    // A point layer beside the layers left in their files is read as without them: its points
+    // are control points (the command holds those anyway), written back as they were, with their
+    // Z and M if they have them.
+    const bool point_layer = leave_in_file && is_point_type(layer->geometry_type);
     const std::size_t chains_before = map.chains.size();
     if (leave_in_file) {
         // (Polygons, and a Shapefile's PolyLineZ or PolyLineM, with Z or M too: through OGR, as
