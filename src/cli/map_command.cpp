@@ -751,7 +751,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     // (An engine that reads the vertices itself gets them left in the file where it can.)
     const bool vertices_in_file = context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() &&
                                   !publishing.decimal_grid && options.quantize == 0 && io::is_ogr_written_output(options.output, options.format);
-    log.debug("heap: {}", huge_pages_asked() ? "transparent huge pages asked for (glibc.malloc.hugetlb=1, as the toposimp command sets it)"
+    log.debug("heap: {}", huge_pages_asked() ? "transparent huge pages asked for (glibc.malloc.hugetlb=1, as toposimp and toposimp.dask set it)"
                                              : "glibc.malloc.hugetlb not set: huge pages only where the system's THP mode is `always`");
     MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory, vertices_in_file);
     time.read = seconds_since(start);

@@ -334,6 +334,24 @@ def test_command_line(generated, binary, tmp_path):
     assert wrong.returncode == 2 and "--first-round" in wrong.stderr and not (tmp_path / "no.gpkg").exists()
 
 
+def test_command_line_asks_for_huge_pages(generated, tmp_path):
+    """`python3 -m toposimp.dask` started without glibc.malloc.hugetlb in GLIBC_TUNABLES runs
+    with it (the command's process started again with it, as its workers); one the user set is
+    kept."""
+    import os
+
+    polygons_and_lines, _ = generated
+    environment = {name: value for name, value in os.environ.items() if name != "GLIBC_TUNABLES"}
+    for tunables, asked in ((None, True), ("glibc.malloc.check=0", True), ("glibc.malloc.hugetlb=0", False)):
+        if tunables is not None:
+            environment["GLIBC_TUNABLES"] = tunables
+        output = tmp_path / ("out%s.gpkg" % len(str(tunables)))
+        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", str(polygons_and_lines), "--keep", "20%", "-o", str(output),
+                               "--workers", "1", "-v"], capture_output=True, text=True, timeout=300, env=environment)
+        assert done.returncode == 0, done.stderr
+        assert ("transparent huge pages asked for" in done.stderr) == asked, (tunables, done.stderr[:2000])
+
+
 def test_quiet_run_with_big_tiles_prints_nothing(cluster, binary, tmp_path):
     """-q: nothing on stderr, also when a task's tiles pass Dask's 5 MiB "large object" mark (the
     tiles travel with their tasks on purpose; Dask's advice to scatter them is not for the user)."""
