@@ -6,9 +6,12 @@ the command's peak memory, each worker's peak memory, and whether the output is 
     scripts/bench/dask_bench.py BUILD_DIR [--input build/bench-data/gshhg.shp] [--runs 3]
                                 [--workers 1,2,4] [--target "--keep 10%" --target "--max"]
                                 [--variant "" --variant "--first-round here"]
+                                [--worker-env GLIBC_TUNABLES=glibc.malloc.hugetlb=1]
 
 BUILD_DIR holds the toposimp executable and python/ (the package). Each --variant (toposimp.dask
-options; default: none) is a row of its own, on a LocalCluster of its own. Prints a Markdown table.
+options; default: none) is a row of its own, on a LocalCluster of its own. The LocalCluster's workers
+start with --worker-env's variables (default: transparent huge pages asked for, as toposimp.dask
+gives the workers of the LocalCluster it starts; none with --worker-env ""). Prints a Markdown table.
 """
 import argparse
 import os
@@ -63,7 +66,10 @@ def main():
     parser.add_argument("--target", action="append")
     parser.add_argument("--threads", type=int, default=2, help="toposimp map -j (the single process)")
     parser.add_argument("--variant", action="append", help="toposimp.dask options of a row (repeat for several)")
+    parser.add_argument("--worker-env", action="append", metavar="NAME=VALUE",
+                        help="the workers' environment (default: GLIBC_TUNABLES=glibc.malloc.hugetlb=1)")
     a = parser.parse_args()
+    worker_env = dict(v.split("=", 1) for v in (a.worker_env or ["GLIBC_TUNABLES=glibc.malloc.hugetlb=1"]) if v)
     targets = a.target or ["--keep 10%", "--max"]
     build = pathlib.Path(a.build).resolve()
     env = dict(CLEAN_ENV, PYTHONPATH=str(build / "python"))
@@ -80,6 +86,7 @@ def main():
             seconds = statistics.median(s for s, _ in single)
             rows.append((target, f"toposimp map -j {a.threads}", seconds, 1.0, max(m for _, m in single), "", "yes"))
             for workers, variant in [(int(w), v) for w in a.workers.split(",") for v in (a.variant or [""])]:
+                os.environ.update(worker_env)  # (read by the worker processes as they start)
                 cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
                 client = Client(cluster)
                 runs = []
@@ -97,7 +104,8 @@ def main():
                 d = statistics.median(s for s, _ in runs)
                 rows.append((target, f"toposimp.dask{' ' + variant if variant else ''}, {workers} worker{'s' if workers > 1 else ''}", d, d / seconds,
                              max(m for _, m in runs), " / ".join(f"{p:.0f}" for p in peaks), "yes" if identical else "NO"))
-    print(f"input: {a.input}; median of {a.runs} runs; LocalCluster started before the timing, one thread per worker")
+    print(f"input: {a.input}; median of {a.runs} runs; LocalCluster started before the timing, one thread per worker"
+          f"{', workers with ' + ' '.join(f'{k}={v}' for k, v in worker_env.items()) if worker_env else ''}")
     print()
     print("| target | run | seconds | × single | command peak MiB | worker peaks MiB | output identical |")
     print("|---|---|---|---|---|---|---|")

@@ -6,6 +6,10 @@ the same run for the ratio. Prints a Markdown table of wall-time medians, toposi
 peak memory, and whether the two builds wrote byte-identical files:
 
     scripts/bench/map_speed.py OLD_BUILD_DIR NEW_BUILD_DIR [--runs 3] [--data build/bench-data] [--jobs a,b]
+                               [--old-env NAME=VALUE ...] [--new-env NAME=VALUE ...]
+
+--old-env/--new-env add environment variables to one side's runs (e.g. one build on both sides,
+--old-env GLIBC_TUNABLES=glibc.malloc.hugetlb=0 to time it without transparent huge pages).
 
 Data: scripts/bench/fetch-data.sh (GSHHG, its points, Natural Earth, the cities; mapshaper from npm)."""
 import argparse
@@ -38,14 +42,14 @@ def digest(folder):
     return h.hexdigest()[:16]
 
 
-def run_toposimp(build, data, job, threads, out_dir):
+def run_toposimp(build, data, job, threads, out_dir, env=None):
     source, points, target = JOBS[job]
     command = [os.path.join(build, "toposimp"), "map", os.path.join(data, source), "-o", os.path.join(out_dir, "out.shp"),
                "--overwrite", "--json", "-j", str(threads)] + target
     if points:
         command += ["-p", os.path.join(data, points)]
     start = time.perf_counter()
-    result = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    result = subprocess.run(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
     wall = time.perf_counter() - start
     if result.returncode != 0:
         sys.exit("%s failed:\n%s" % (" ".join(command), result.stderr[-2000:]))
@@ -59,7 +63,11 @@ def main():
     parser.add_argument("--runs", type=int, default=3)
     parser.add_argument("--data", default=os.path.join(ROOT, "build", "bench-data"))
     parser.add_argument("--jobs", default=",".join(JOBS))
+    parser.add_argument("--old-env", action="append", default=[], metavar="NAME=VALUE")
+    parser.add_argument("--new-env", action="append", default=[], metavar="NAME=VALUE")
     args = parser.parse_args()
+    environments = {"old": dict(os.environ, **dict(v.split("=", 1) for v in args.old_env)),
+                    "new": dict(os.environ, **dict(v.split("=", 1) for v in args.new_env))}
     mapshaper = os.path.join(args.data, "node_modules", ".bin", "mapshaper")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
@@ -72,7 +80,7 @@ def main():
                     for which, build in (("old", args.old), ("new", args.new)):
                         out_dir = os.path.join(tmp, which)
                         os.makedirs(out_dir, exist_ok=True)
-                        wall, summary = run_toposimp(build, args.data, job, threads, out_dir)
+                        wall, summary = run_toposimp(build, args.data, job, threads, out_dir, environments[which])
                         walls[which].append(wall)
                         report.setdefault(which, []).append(summary)
                         outputs[which] = digest(out_dir)
