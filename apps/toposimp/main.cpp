@@ -10,6 +10,8 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -29,14 +31,20 @@ std::filesystem::path whole_tool() {
     return ::access(beside.c_str(), X_OK) == 0 ? beside : installed;
 }
 
-// toposimp-gdal's environment: this one, with glibc's malloc told to ask for transparent huge
+// Did the user (or an exec of ours) name glibc.malloc.hugetlb in GLIBC_TUNABLES?
+bool huge_pages_named() {
+    const char* tunables = std::getenv("GLIBC_TUNABLES");
+    return tunables != nullptr && std::string_view(tunables).find("glibc.malloc.hugetlb") != std::string_view::npos;
+}
+
+// The environment jobs run in: this one, with glibc's malloc told to ask for transparent huge
 // pages for the heap (the tunable glibc.malloc.hugetlb=1: madvise(MADV_HUGEPAGE) on what it takes
 // from the kernel), unless the user set that tunable. Where THP is in `madvise` mode (as on the
-// machines we measure on), a map's arrays of hundreds of MB otherwise sit on 4 KiB pages: a page
-// fault per 4 KiB and a TLB miss on nearly every access at random (GSHHG at --keep 10 % on 2
-// threads: the run 14 % faster, the same peak; BENCHMARKS.md). glibc reads tunables when a
-// program starts, so they are set here, before the exec.
-std::vector<std::string> tool_environment() {
+// machines we measure on), big arrays otherwise sit on 4 KiB pages: a page fault per 4 KiB and a
+// TLB miss on nearly every access at random (GSHHG at --keep 10 % on 2 threads 13 % faster, a
+// 2 M-triangle terrain 18 %, the same peaks; BENCHMARKS.md). glibc reads tunables when a program
+// starts, so they are set before an exec: of toposimp-gdal, or of this program again.
+std::vector<std::string> job_environment() {
     constexpr std::string_view kName = "GLIBC_TUNABLES=", kHugePages = "glibc.malloc.hugetlb=1";
     std::vector<std::string> environment;
     bool tunables = false;
@@ -55,6 +63,17 @@ std::vector<std::string> tool_environment() {
     return environment;
 }
 
+// Mesh files from this size on are simplified with huge pages (a 2 M-triangle PLY is 50 MB).
+constexpr std::uintmax_t kHugePagesFrom = 8u << 20;
+
+// An environment as execve takes it.
+std::vector<char*> pointers(std::vector<std::string>& environment) {
+    std::vector<char*> envp;
+    for (std::string& variable : environment) envp.push_back(variable.data());
+    envp.push_back(nullptr);
+    return envp;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -65,14 +84,18 @@ int main(int argc, char** argv) {
         std::vector<char*> tool_argv{const_cast<char*>(tool.c_str())};
         for (int i = 1; i < argc; ++i) tool_argv.push_back(argv[i]);
         tool_argv.push_back(nullptr);
-        std::vector<std::string> environment = tool_environment();
-        std::vector<char*> tool_envp;
-        for (std::string& variable : environment) tool_envp.push_back(variable.data());
-        tool_envp.push_back(nullptr);
-        ::execve(tool.c_str(), tool_argv.data(), tool_envp.data());
+        std::vector<std::string> environment = job_environment();
+        ::execve(tool.c_str(), tool_argv.data(), pointers(environment).data());
         std::cerr << "toposimp: error: cannot run " << tool.string() << ": " << std::strerror(errno)
                   << " (toposimp-gdal, the part of toposimp that reads GIS formats, is not installed there)\n";
         return toposimp::cli::kUsageError;
+    }
+    std::error_code error;
+    if (!huge_pages_named() && std::filesystem::file_size(options.input, error) >= kHugePagesFrom && !error) {
+        // (A big mesh job here: this program again, with huge pages; as it is if that fails. A
+        // small one is quicker without: an exec and 2 MiB pages zeroed, 5 ms of a 65 ms job.)
+        std::vector<std::string> environment = job_environment();
+        ::execve("/proc/self/exe", argv, pointers(environment).data());
     }
     // As in toposimp-gdal's main: freed big arrays stay in the heap, not unmapped and faulted
     // in again phase after phase.

@@ -8,6 +8,7 @@
 #include <optional>
 #include <sstream>
 #include <string>
+#include <string_view>
 
 namespace toposimp::cli {
 
@@ -35,6 +36,15 @@ inline std::optional<double> parse_share(const std::string& keep, const std::str
         return std::nullopt;
     }
     return value;
+}
+
+// Does glibc's malloc ask for transparent huge pages (GLIBC_TUNABLES has glibc.malloc.hugetlb=1:
+// the toposimp command and toposimp.dask set it for themselves unless the user set it)? For -v.
+inline const char* heap_pages() {
+    const char* tunables = std::getenv("GLIBC_TUNABLES");
+    return tunables != nullptr && std::string_view(tunables).find("glibc.malloc.hugetlb=1") != std::string_view::npos
+               ? "transparent huge pages asked for (glibc.malloc.hugetlb=1, as toposimp and toposimp.dask set it)"
+               : "glibc.malloc.hugetlb not set: huge pages only where the system's THP mode is `always`";
 }
 
 // Peak resident memory of this process so far, in MiB (Linux /proc; 0 where unknown).

@@ -31,7 +31,6 @@
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
-#include <string_view>
 #include <thread>
 
 namespace toposimp::cli {
@@ -571,12 +570,6 @@ void check_spherical(const MapOptions& options, const MapInput& input) {
     }
 }
 
-// Does glibc's malloc ask for transparent huge pages (apps/toposimp sets it for toposimp-gdal)?
-bool huge_pages_asked() {
-    const char* tunables = std::getenv("GLIBC_TUNABLES");
-    return tunables != nullptr && std::string_view(tunables).find("glibc.malloc.hugetlb=1") != std::string_view::npos;
-}
-
 // One result per level (one level: the run's own target). Levels on a grid are rounded as they
 // are simplified (levels.hpp); a single run is rounded when it is published.
 map::Levels simplify_all(MapInput& input, const map::SimplifyOptions& simplify_options, const MapOptions& options,
@@ -751,8 +744,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     // (An engine that reads the vertices itself gets them left in the file where it can.)
     const bool vertices_in_file = context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() &&
                                   !publishing.decimal_grid && options.quantize == 0 && io::is_ogr_written_output(options.output, options.format);
-    log.debug("heap: {}", huge_pages_asked() ? "transparent huge pages asked for (glibc.malloc.hugetlb=1, as toposimp and toposimp.dask set it)"
-                                             : "glibc.malloc.hugetlb not set: huge pages only where the system's THP mode is `always`");
+    log.debug("heap: {}", heap_pages());
     MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory, vertices_in_file);
     time.read = seconds_since(start);
     check_spherical(options, input);

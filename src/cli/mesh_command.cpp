@@ -468,6 +468,7 @@ int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal
     Timings time;
     Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet), context.progress);
     engine->progress = [&progress](double done) { progress.update(done); };
+    log.debug("heap: {}", heap_pages());
     // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
     const io::MeshFormatInfo* format = memory ? nullptr : output_format(options);
     std::optional<io::OutputFile> output;

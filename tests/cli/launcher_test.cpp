@@ -69,22 +69,38 @@ TEST(Launcher, MeshCommandWithoutGdalRefusesGisJobs) {
     EXPECT_FALSE(std::filesystem::exists(options.output));
 }
 
-// The whole tool runs with glibc's malloc asking for transparent huge pages, unless the user set
-// that tunable; other tunables the user set are kept.
-TEST(Launcher, WholeToolGetsHugePagesForItsHeap) {
+// Jobs run with glibc's malloc asking for transparent huge pages, unless the user set that tunable
+// (other tunables the user set are kept): map jobs in the whole tool, mesh files of 8 MiB or more
+// here (this program started again with it; a small one runs as it is).
+TEST(Launcher, JobsGetHugePagesForTheirHeap) {
     const auto dir = fresh_dir("launcher");
-    const std::string map = "'" + std::string(TOPOSIMP_BINARY) + "' map '" + testdata("nh_borders.gpkg") + "' --keep 50% -v -o '";
-    auto run = [&](const std::string& environment, const std::string& name) {
-        const std::string command = environment + " " + map + (dir / name).string() + "' 2>'" + (dir / "err.txt").string() + "'";
+    const std::string binary = "'" + std::string(TOPOSIMP_BINARY) + "' ";
+    const std::string map = binary + "map '" + testdata("nh_borders.gpkg") + "' --keep 50% -v -o '";
+    // A mesh file past 8 MiB: the torus with a comment line of 8 MiB.
+    const auto big = dir / "big_torus.off";
+    {
+        const std::string torus = slurp(testdata("mesh/torus.off"));
+        std::ofstream out(big, std::ios::binary);
+        out << torus.substr(0, torus.find('\n') + 1) << "# " << std::string(8u << 20, 'x') << "\n" << torus.substr(torus.find('\n') + 1);
+    }
+    const std::string mesh = binary + "mesh '" + big.string() + "' --keep 50% -v -o '";
+    auto run = [&](const std::string& environment, const std::string& job, const std::string& name) {
+        const std::string command = environment + " " + job + (dir / name).string() + "' 2>'" + (dir / "err.txt").string() + "'";
         EXPECT_EQ(WEXITSTATUS(std::system(command.c_str())), 0) << command;
         return slurp(dir / "err.txt");
     };
     const std::string asked = "transparent huge pages asked for (glibc.malloc.hugetlb=1";
-    EXPECT_NE(run("env -u GLIBC_TUNABLES", "a.gpkg").find(asked), std::string::npos);
-    EXPECT_NE(run("GLIBC_TUNABLES=glibc.malloc.check=0", "b.gpkg").find(asked), std::string::npos);
-    const std::string refused = run("GLIBC_TUNABLES=glibc.malloc.hugetlb=0", "c.gpkg");
-    EXPECT_EQ(refused.find(asked), std::string::npos);
-    EXPECT_NE(refused.find("glibc.malloc.hugetlb not set"), std::string::npos) << refused;
+    int k = 0;
+    for (const std::string& job : {map, mesh}) {
+        const std::string extension = job == map ? ".gpkg" : ".ply";
+        EXPECT_NE(run("env -u GLIBC_TUNABLES", job, std::to_string(k++) + extension).find(asked), std::string::npos) << job;
+        EXPECT_NE(run("GLIBC_TUNABLES=glibc.malloc.check=0", job, std::to_string(k++) + extension).find(asked), std::string::npos) << job;
+        const std::string refused = run("GLIBC_TUNABLES=glibc.malloc.hugetlb=0", job, std::to_string(k++) + extension);
+        EXPECT_EQ(refused.find(asked), std::string::npos) << job;
+        EXPECT_NE(refused.find("glibc.malloc.hugetlb not set"), std::string::npos) << refused;
+    }
+    const std::string small = run("env -u GLIBC_TUNABLES", binary + "mesh '" + testdata("mesh/torus.off") + "' --keep 50% -v -o '", "small.ply");
+    EXPECT_NE(small.find("glibc.malloc.hugetlb not set"), std::string::npos) << small;
 }
 
 TEST(Launcher, MissingWholeToolIsAClearError) {
