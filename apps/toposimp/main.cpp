@@ -41,9 +41,10 @@ bool huge_pages_named() {
 // pages for the heap (the tunable glibc.malloc.hugetlb=1: madvise(MADV_HUGEPAGE) on what it takes
 // from the kernel), unless the user set that tunable. Where THP is in `madvise` mode (as on the
 // machines we measure on), big arrays otherwise sit on 4 KiB pages: a page fault per 4 KiB and a
-// TLB miss on nearly every access at random (GSHHG at --keep 10 % on 2 threads 13 % faster, a
-// 2 M-triangle terrain 18 %, the same peaks; BENCHMARKS.md). glibc reads tunables when a program
-// starts, so they are set before an exec: of toposimp-gdal, or of this program again.
+// TLB miss on nearly every access at random (on a VM whose page faults were slow: GSHHG at --keep
+// 10 % on 2 threads 13 % faster, a 2 M-triangle terrain 18 %; about even when they were fast; the
+// same peaks; BENCHMARKS.md). glibc reads tunables when a program starts, so they are set before
+// an exec: of toposimp-gdal, or of this program again.
 std::vector<std::string> job_environment() {
     constexpr std::string_view kName = "GLIBC_TUNABLES=", kHugePages = "glibc.malloc.hugetlb=1";
     std::vector<std::string> environment;
