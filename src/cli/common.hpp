@@ -44,7 +44,7 @@ inline const char* heap_pages() {
     const char* tunables = std::getenv("GLIBC_TUNABLES");
     return tunables != nullptr && std::string_view(tunables).find("glibc.malloc.hugetlb=1") != std::string_view::npos
                ? "transparent huge pages asked for (glibc.malloc.hugetlb=1, as toposimp and toposimp.dask set it)"
-               : "glibc.malloc.hugetlb not set: huge pages only where the system's THP mode is `always`";
+               : "glibc.malloc.hugetlb is not 1: huge pages only where the system's THP mode is `always`";
 }
 
 // Peak resident memory of this process so far, in MiB (Linux /proc; 0 where unknown).
