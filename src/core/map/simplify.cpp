@@ -385,6 +385,7 @@ struct Worker {
     BlockQueue queue;                                // the block's queue
     std::vector<std::vector<std::uint32_t>> later;   // per level: vertices to queue there
     std::vector<std::uint32_t> released;             // waiters outside the block whose blocker went
+    std::vector<std::uint32_t> touched;              // vertices queued again (Simplifier::few_)
     std::uint32_t block = 0;                         // the block being processed
     SimplifyStats stats;
     std::uint64_t reported = 0;  // removals already added to the progress count
@@ -1344,10 +1345,13 @@ public:
         stats_.removal_goal = goal;
         work_ = static_cast<double>(goal);
         use_marks_ = true;
-        while (stats_.removed < goal && mark_smallest(goal - stats_.removed)) {
+        while (stats_.removed < goal && select_round(goal - stats_.removed)) {
             ++stats_.rounds;
             schedule_queued();
+            narrow_split_rings();
             sweep();
+            narrowed_ = false;
+            collect_touched_ = false;
             keep_undecided();
         }
         stats_.target_reached = stats_.removed >= goal;
@@ -1371,7 +1375,14 @@ public:
     // budget-th smallest, K, is selected from them (parallel/select.hpp, the same selection as
     // the mesh engine's round threshold). Then every queued vertex with a smaller area is marked,
     // and of those with area K, the first ones in id order up to the budget.
-    bool mark_smallest(std::uint64_t budget) {
+    //
+    // `keep_few` (one process's rounds): when the budget is a small part of the queued vertices,
+    // also keep what the next round's selection needs to look at a few vertices only (few_).
+    bool mark_smallest(std::uint64_t budget, bool keep_few = false) {
+        few_.valid = false;
+        few_.ranked.clear();
+        few_.marked.clear();
+        few_.touched.clear();
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
         const auto share = static_cast<std::size_t>(threads);
         // Each thread's keys from offset[t], with room for every vertex its share looks at (the
@@ -1401,6 +1412,11 @@ public:
         const std::uint64_t key = kth.key;
         std::uint64_t rank = wanted;
         for (const std::uint64_t less : kth.less) rank -= less;
+        // The next round's: the unmarked queued vertices up to the key of rank 2 · wanted.
+        const bool listed = keep_few && wanted <= queued / kFewShare;
+        const std::uint64_t few_bound =
+            listed ? parallel::select_kth(runs, std::min<std::uint64_t>(2 * wanted, queued), threads, [](std::uint64_t own) { return own; }).key : 0;
+        std::vector<std::vector<std::uint32_t>> marked_parts(listed ? share : 0), ranked_parts(listed ? share : 0);
         // Mark: areas below the key, and the first `rank` vertices (in id order) at the key.
         std::vector<std::uint64_t> at_key(share + 1, 0);  // keys at the key in the runs before
         for (std::size_t t = 0; t < share; ++t) at_key[t + 1] = at_key[t] + kth.equal[t];
@@ -1417,13 +1433,128 @@ public:
                     marked_[v] = 1;
                     if (++seen == rank) bound_ = {std::bit_cast<double>(key), global(v)};
                 }
+                if (!listed) return;
+                if (marked_[v]) {
+                    marked_parts[static_cast<std::size_t>(t)].push_back(v);
+                } else if (own <= few_bound) {
+                    ranked_parts[static_cast<std::size_t>(t)].push_back(v);
+                }
             });
         });
+        if (listed) {
+            for (std::size_t t = 0; t < share; ++t) {
+                few_.marked.insert(few_.marked.end(), marked_parts[t].begin(), marked_parts[t].end());
+                few_.ranked.insert(few_.ranked.end(), ranked_parts[t].begin(), ranked_parts[t].end());
+            }
+            few_.bound = few_bound;
+            few_.valid = true;
+        }
         return true;
+    }
+
+    // A round's selection in one process: from the few vertices it can be among when the last
+    // round's left them (mark_few), else from every queued vertex.
+    bool select_round(std::uint64_t budget) {
+        if (few_.valid && mark_few(budget)) {
+            ++stats_.rounds_from_few;
+            collect_touched_ = true;
+            return true;
+        }
+        const bool found = mark_smallest(budget, true);
+        collect_touched_ = few_.valid;
+        return found;
+    }
+
+    // mark_smallest's marks, from few_ instead of every queued vertex. A queued vertex no round
+    // touched since the last selection (touched: queued again by requeue or queue_released, the
+    // only ways a vertex becomes queued or its area changes) was queued then, with the key it
+    // has now: marked then, or, if its key is at most few_.bound, ranked. So every queued vertex
+    // of key ≤ few_.bound is ranked, marked or touched, and if at least `budget` of those are
+    // queued with such a key, the budget smallest (area, id) of all queued vertices are among
+    // them: the same marks, and the same bound, as the full selection. Otherwise (false) nothing
+    // changed and the full selection runs. The next round's few are kept as mark_smallest keeps
+    // them, from these candidates, under a bound no higher.
+    bool mark_few(std::uint64_t budget) {
+        std::vector<std::uint32_t>& ids = few_.ids;
+        ids.clear();
+        ids.insert(ids.end(), few_.ranked.begin(), few_.ranked.end());
+        ids.insert(ids.end(), few_.marked.begin(), few_.marked.end());
+        ids.insert(ids.end(), few_.touched.begin(), few_.touched.end());
+        std::sort(ids.begin(), ids.end());
+        ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+        std::vector<std::pair<std::uint64_t, std::uint32_t>>& ranked = few_.pairs;  // (key, id)
+        ranked.clear();
+        std::size_t below = 0;  // the first `below` have keys ≤ few_.bound
+        for (const std::uint32_t v : ids) {
+            if (state_[v] != State::queued) continue;
+            const std::uint64_t key = std::bit_cast<std::uint64_t>(area_of(v));
+            ranked.push_back({key, v});
+            if (key <= few_.bound) std::swap(ranked[below++], ranked.back());
+        }
+        if (below < budget || budget == 0) {
+            few_.valid = false;
+            return false;
+        }
+        const auto first = ranked.begin(), wanted_end = first + static_cast<std::ptrdiff_t>(budget);
+        const auto below_end = first + static_cast<std::ptrdiff_t>(below);
+        std::nth_element(first, wanted_end - 1, below_end);
+        // The marks: the last round's cleared (those still undecided, as mark_smallest clears
+        // them), this round's set.
+        for (const std::uint32_t v : few_.marked) {
+            if (state_[v] != State::fixed && state_[v] != State::removed) marked_[v] = 0;
+        }
+        std::uint64_t key = 0;
+        std::uint32_t last = 0;
+        few_.marked.clear();
+        for (auto it = first; it != wanted_end; ++it) {
+            marked_[it->second] = 1;
+            few_.marked.push_back(it->second);
+            if (*it >= std::pair{key, last}) std::tie(key, last) = *it;
+        }
+        std::sort(few_.marked.begin(), few_.marked.end());
+        bound_ = {std::bit_cast<double>(key), global(last)};
+        round_budget_ = budget;
+        // The next round's few: the unmarked up to the key of rank 2 · budget among them.
+        if (below_end - wanted_end > static_cast<std::ptrdiff_t>(budget)) {
+            const auto at = wanted_end + static_cast<std::ptrdiff_t>(budget) - 1;
+            std::nth_element(wanted_end, at, below_end);
+            few_.bound = at->first;
+        }
+        few_.ranked.clear();
+        for (auto it = wanted_end; it != below_end; ++it) {
+            if (it->first <= few_.bound) few_.ranked.push_back(it->second);
+        }
+        few_.touched.clear();
+        return true;
+    }
+
+    // The split rings a round of a count target can ask about: those holding one of its marked
+    // vertices, the only ones it judges (they are on the levels' lists once scheduled). Late
+    // rounds mark a few hundred vertices where a map has a hundred thousand split rings, and
+    // deciding them all (a walk along each ring, at each level) was then most of such a round's
+    // time (issue 34). Used where shorter than the list of every split ring.
+    void narrow_split_rings() {
+        std::size_t marked = 0;
+        for (unsigned level = 0; level < levels_; ++level) marked += later_[level].size();
+        narrowed_ = marked < split_rings_.size();
+        if (!narrowed_) return;
+        round_rings_.clear();
+        for (unsigned level = 0; level < levels_; ++level) {
+            for (const std::uint32_t v : later_[level]) {
+                const std::uint32_t c = chain_of_[v];
+                if (whole_level_[c] != kOpen && whole_level_[c] > 0) round_rings_.push_back(c);
+            }
+        }
+        std::sort(round_rings_.begin(), round_rings_.end());
+        round_rings_.erase(std::unique(round_rings_.begin(), round_rings_.end()), round_rings_.end());
     }
 
     // Puts every queued (and, in rounds, marked) vertex on its level's list, in id order.
     void schedule_queued() {
+        if (use_marks_ && few_.valid) {  // (this round's marks are listed, in id order)
+            for (const std::uint32_t v : few_.marked) later_[level_of(v)].push_back(v);
+            return;
+        }
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
         const auto share = static_cast<std::size_t>(threads);
         std::vector<std::vector<std::vector<std::uint32_t>>> parts(share, std::vector<std::vector<std::uint32_t>>(levels_));
@@ -1553,6 +1684,7 @@ public:
             for (unsigned l = level + 1; l < levels_; ++l) {
                 later_[l].insert(later_[l].end(), worker.later[l].begin(), worker.later[l].end());
             }
+            few_.touched.insert(few_.touched.end(), worker.touched.begin(), worker.touched.end());
             add(stats_, worker.stats);
         }
         progress_.store(0, std::memory_order_relaxed);
@@ -1612,10 +1744,11 @@ public:
     // For each ring not within one block at this level: can its fixed vertices alone keep it
     // at 4 or more distinct locations? Then the ring rule cannot bite here.
     void decide_split_rings(unsigned level) {
-        const auto rings = static_cast<std::ptrdiff_t>(split_rings_.size());
+        const std::vector<std::uint32_t>& split = narrowed_ ? round_rings_ : split_rings_;
+        const auto rings = static_cast<std::ptrdiff_t>(split.size());
 #pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (rings >= 256)
         for (std::ptrdiff_t i = 0; i < rings; ++i) {
-            const std::uint32_t c = split_rings_[static_cast<std::size_t>(i)];
+            const std::uint32_t c = split[static_cast<std::size_t>(i)];
             if (whole_level_[c] <= level) continue;
             if (split_over_tiles(c)) {
                 // A piece: its cut ends settle it, or the tiles' fixed locations together do.
@@ -1832,6 +1965,7 @@ public:
         if (state_[u] == State::fixed || state_[u] == State::removed) return;
         if (state_[u] == State::waiting) stop_waiting(u);
         state_[u] = State::queued;
+        if (collect_touched_) worker.touched.push_back(u);
         if (use_marks_ && !marked_[u]) return;  // not this round's
         const unsigned at = level_of(u);
         if (at <= level) {
@@ -1877,7 +2011,10 @@ public:
         }
         std::sort(released.begin(), released.end());
         for (const std::uint32_t u : released) {
-            if (state_[u] == State::waiting && !waits_.waits(u)) state_[u] = State::queued;
+            if (state_[u] == State::waiting && !waits_.waits(u)) {
+                state_[u] = State::queued;
+                if (collect_touched_) few_.touched.push_back(u);
+            }
         }
     }
 
@@ -1928,6 +2065,21 @@ public:
     std::vector<std::uint32_t> distinct_;    // per closed chain: distinct live locations; 0 if open
     std::vector<std::int8_t> orientation_;   // per chain: input ring orientation, 2 = unknown
     std::vector<std::uint32_t> split_rings_;  // the rings not in one level-0 block (whole_level_ above 0)
+    std::vector<std::uint32_t> round_rings_;  // of those, the ones this round judges a vertex of (narrow_split_rings)
+    bool narrowed_ = false;                   // decide_split_rings decides round_rings_ only
+    // Count targets in one process (mark_smallest's keep_few, mark_few): what the next round's
+    // selection looks at, when a round's budget is at most a kFewShare-th of the queued vertices.
+    static constexpr std::uint64_t kFewShare = 16;
+    struct Few {
+        bool valid = false;
+        std::uint64_t bound = 0;             // a key: every unmarked queued vertex of key ≤ bound is ranked
+        std::vector<std::uint32_t> ranked;   // at the last selection
+        std::vector<std::uint32_t> marked;   // by the last selection, in id order
+        std::vector<std::uint32_t> touched;  // queued again (or anew) since
+        std::vector<std::uint32_t> ids;                            // (mark_few's scratch)
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;  // (mark_few's scratch)
+    } few_;
+    bool collect_touched_ = false;  // requeue and queue_released list into few_.touched
     std::vector<std::uint8_t> whole_level_;  // per chain: first level where the ring is in one block; kOpen
     std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
     Waits waits_;

@@ -99,6 +99,7 @@ struct SimplifyStats {
     std::uint64_t blocked_by_coincidence = 0;  // refused: two segments would coincide
     std::uint64_t pinned_by_crossing = 0;    // interior vertices kept: ends of crossing segments
     std::uint32_t rounds = 0;                // count targets: rounds of parallel sweeps
+    std::uint32_t rounds_from_few = 0;       // of those, selected among the few the round before left (one process only)
     std::uint32_t levels = 0;                // levels of the block grid
     int threads = 1;                         // threads used
     // Wall time of the phases (dissertation Table 3.1: initialize = index + crossings).

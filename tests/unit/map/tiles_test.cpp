@@ -449,6 +449,37 @@ TEST(MapTiles, AWaitInATileThatSitsOutARoundHolds) {
     }
 }
 
+// The late rounds of a count target in one process select among the few vertices the round
+// before left near its bound (mark_few); runs in parts select among every queued vertex. Maps
+// that reach their targets in many rounds, the same marks either way, on 1 and 2 threads.
+TEST(MapTiles, LateRoundsSelectAmongTheFewTheRoundBeforeLeftAsAmongAll) {
+    for (const std::uint64_t seed : {11, 12}) {
+        std::mt19937_64 rng(seed);
+        testing::RandomMapOptions shape;
+        shape.chains = 400;
+        shape.max_steps = 120;
+        shape.rings = 150;
+        shape.control_points = 3000;
+        shape.roads = seed == 12 ? 6 : 0;
+        const MapData map = testing::random_planar_map(rng, shape);
+        for (const double keep : {0.7, 0.6}) {
+            for (const int threads : {1, 2}) {
+                SimplifyOptions options;
+                options.stop = {Target::keep_fraction, keep};
+                options.parallel_threshold = 0;
+                options.threads = threads;
+                const SimplifyResult whole = simplify(map, options);
+                const std::string what = "seed " + std::to_string(seed) + ", keep " + std::to_string(keep) + ", " +
+                                         std::to_string(threads) + " threads";
+                EXPECT_GT(whole.stats.rounds_from_few, 0u) << what;
+                EXPECT_LT(whole.stats.rounds_from_few, whole.stats.rounds) << what << ": the first round looks at all";
+                expect_same(simplify_in_tiles(map, options, 0), whole, what);
+                expect_same(simplify_in_tiles(map, options, 2, whole.stats.removed / 8, true, true), whole, what + ", in tiles");
+            }
+        }
+    }
+}
+
 // Equal areas everywhere (zigzags on a small integer lattice): a count target's rounds end on a tie,
 // broken by whole-map ids, which each tile must compare as the single process does.
 TEST(MapTiles, TiesAtARoundsBoundAreBrokenByWholeMapIds) {
@@ -472,6 +503,10 @@ TEST(MapTiles, TiesAtARoundsBoundAreBrokenByWholeMapIds) {
         options.stop = {Target::keep_fraction, keep};
         const SimplifyResult whole = simplify(map, options);
         ASSERT_TRUE(whole.stats.target_reached);
+        // (At 50 % and 30 % the late rounds' budgets are small enough for mark_few: the ties fall to it too.)
+        if (keep >= 0.3) {
+            EXPECT_GT(whole.stats.rounds_from_few, 0u) << "keep " << keep;
+        }
         for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
             expect_same_in_tiles(map, options, tile_level, whole,
                         "keep " + std::to_string(keep) + ", tile level " + std::to_string(tile_level));
