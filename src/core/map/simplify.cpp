@@ -1338,7 +1338,7 @@ public:
         later_.assign(levels_ + 1, {});
         if (target == Target::max || target == Target::max_area) {
             start_single_sweep();
-            schedule_queued();
+            schedule_queued(true);
             sweep();
             return;
         }
@@ -1347,7 +1347,7 @@ public:
         use_marks_ = true;
         while (stats_.removed < goal && select_round(goal - stats_.removed)) {
             ++stats_.rounds;
-            schedule_queued();
+            schedule_queued(true);
             narrow_split_rings();
             sweep();
             narrowed_ = false;
@@ -1534,23 +1534,29 @@ public:
     // deciding them all (a walk along each ring, at each level) was then most of such a round's
     // time (issue 34). Used where shorter than the list of every split ring.
     void narrow_split_rings() {
-        std::size_t marked = 0;
+        std::size_t marked = grouped_ahead_ ? grouped_.size() : 0;
         for (unsigned level = 0; level < levels_; ++level) marked += later_[level].size();
         narrowed_ = marked < split_rings_.size();
         if (!narrowed_) return;
         round_rings_.clear();
-        for (unsigned level = 0; level < levels_; ++level) {
-            for (const std::uint32_t v : later_[level]) {
+        auto add = [&](const std::vector<std::uint32_t>& candidates) {
+            for (const std::uint32_t v : candidates) {
                 const std::uint32_t c = chain_of_[v];
                 if (whole_level_[c] != kOpen && whole_level_[c] > 0) round_rings_.push_back(c);
             }
-        }
+        };
+        if (grouped_ahead_) add(grouped_);
+        for (unsigned level = 0; level < levels_; ++level) add(later_[level]);
         std::sort(round_rings_.begin(), round_rings_.end());
         round_rings_.erase(std::unique(round_rings_.begin(), round_rings_.end()), round_rings_.end());
     }
 
     // Puts every queued (and, in rounds, marked) vertex on its level's list, in id order.
-    void schedule_queued() {
+    // `group_first` (one process's sweeps): level 0's go straight to grouped_ instead, grouped by
+    // block as group_by_block would group them (grouped_ahead_), not through a list of their own
+    // first: the biggest level's list and its grouped copy were both held when the first round
+    // began, at the run's peak (33 MB of GSHHG's).
+    void schedule_queued(bool group_first = false) {
         if (use_marks_ && few_.valid) {  // (this round's marks are listed, in id order)
             for (const std::uint32_t v : few_.marked) later_[level_of(v)].push_back(v);
             return;
@@ -1566,6 +1572,7 @@ public:
                 if (state_[v] == State::queued && (!use_marks_ || marked_[v])) part[level_of(v)].push_back(v);
             });
         });
+        if (group_first && later_[0].empty()) group_ahead(parts, threads);
         // Appended in thread order, so each list stays in id order; copied on all threads.
         std::vector<std::size_t> at(share * levels_);
         for (unsigned level = 0; level < levels_; ++level) {
@@ -1584,6 +1591,41 @@ public:
                           later_[level].begin() + static_cast<std::ptrdiff_t>(at[static_cast<std::size_t>(t) * levels_ + level]));
             }
         });
+    }
+
+    // Level 0's candidates, parts[t][0] of each thread t in id order, into grouped_ and start_ as
+    // group_by_block(0) would place them (all are queued and of level 0), taken out of parts.
+    void group_ahead(std::vector<std::vector<std::vector<std::uint32_t>>>& parts, int threads) {
+        const auto share = static_cast<std::size_t>(threads);
+        const std::uint32_t blocks = blocks_at(0);
+        std::vector<std::size_t> place(std::size_t{blocks} * share, 0);  // [block][thread]
+#pragma omp parallel num_threads(threads)
+        parallel::for_my_shares(threads, [&](int t) {
+            std::vector<std::size_t> mine(blocks, 0);
+            for (const std::uint32_t v : parts[static_cast<std::size_t>(t)][0]) ++mine[block_at(v, 0)];
+            for (std::uint32_t b = 0; b < blocks; ++b) place[std::size_t{b} * share + static_cast<std::size_t>(t)] = mine[b];
+        });
+        start_.resize(std::size_t{blocks} + 1);
+        std::size_t total = 0;
+        for (std::uint32_t b = 0; b < blocks; ++b) {
+            start_[b] = static_cast<std::uint32_t>(total);
+            for (std::size_t t = 0; t < share; ++t) {
+                const std::size_t here = place[std::size_t{b} * share + t];
+                place[std::size_t{b} * share + t] = total;
+                total += here;
+            }
+        }
+        start_[blocks] = static_cast<std::uint32_t>(total);
+        grouped_.resize(total);
+#pragma omp parallel num_threads(threads)
+        parallel::for_my_shares(threads, [&](int t) {
+            std::vector<std::size_t> fill(blocks);
+            for (std::uint32_t b = 0; b < blocks; ++b) fill[b] = place[std::size_t{b} * share + static_cast<std::size_t>(t)];
+            std::vector<std::uint32_t>& mine = parts[static_cast<std::size_t>(t)][0];
+            for (const std::uint32_t v : mine) grouped_[fill[block_at(v, 0)]++] = v;
+            std::vector<std::uint32_t>().swap(mine);
+        });
+        grouped_ahead_ = total > 0;
     }
 
     // Calls visit(v) for the vertices a round looks at in share `part` of `parts` (contiguous,
@@ -1649,7 +1691,7 @@ public:
     void sweep() {
         if (slot_.empty()) slot_.assign(vertex_count_, kNone);  // (after the first round's selection, not beside it)
         for (unsigned level = 0; level < levels_; ++level) {
-            if (later_[level].empty()) continue;  // (nothing to do there: late rounds leave most levels empty)
+            if (later_[level].empty() && !(level == 0 && grouped_ahead_)) continue;  // (late rounds leave most levels empty)
             compact_grid();
             process_level(level);
             stop_if_cancelled(options_.cancel);
@@ -1658,7 +1700,9 @@ public:
 
     void process_level(unsigned level) {
         decide_split_rings(level);
-        const std::size_t kept = group_by_block(level);
+        const bool ahead = level == 0 && grouped_ahead_;  // (then later_[0] is empty)
+        grouped_ahead_ = false;
+        const std::size_t kept = ahead ? grouped_.size() : group_by_block(level);
         std::vector<std::uint32_t>& start = start_;
         std::vector<std::uint32_t>& grouped = grouped_;
         const std::uint32_t blocks = blocks_at(level);
@@ -2080,6 +2124,7 @@ public:
         std::vector<std::pair<std::uint64_t, std::uint32_t>> pairs;  // (mark_few's scratch)
     } few_;
     bool collect_touched_ = false;  // requeue and queue_released list into few_.touched
+    bool grouped_ahead_ = false;    // grouped_ and start_ hold level 0's candidates (schedule_queued's group_first)
     std::vector<std::uint8_t> whole_level_;  // per chain: first level where the ring is in one block; kOpen
     std::vector<std::uint8_t> ring_clear_;   // per split ring, this level: ≥ 4 fixed locations
     Waits waits_;
