@@ -1593,18 +1593,10 @@ public:
         });
     }
 
-    // Level 0's candidates, parts[t][0] of each thread t in id order, into grouped_ and start_ as
-    // group_by_block(0) would place them (all are queued and of level 0), taken out of parts.
-    void group_ahead(std::vector<std::vector<std::vector<std::uint32_t>>>& parts, int threads) {
-        const auto share = static_cast<std::size_t>(threads);
-        const std::uint32_t blocks = blocks_at(0);
-        std::vector<std::size_t> place(std::size_t{blocks} * share, 0);  // [block][thread]
-#pragma omp parallel num_threads(threads)
-        parallel::for_my_shares(threads, [&](int t) {
-            std::vector<std::size_t> mine(blocks, 0);
-            for (const std::uint32_t v : parts[static_cast<std::size_t>(t)][0]) ++mine[block_at(v, 0)];
-            for (std::uint32_t b = 0; b < blocks; ++b) place[std::size_t{b} * share + static_cast<std::size_t>(t)] = mine[b];
-        });
+    // The counting sort's middle (group_by_block, group_ahead): `place`, the candidates each
+    // thread counted per block ([block][thread]), becomes where each thread's first of a block
+    // goes; start_ gets where each block's begin; grouped_ is sized. Returns how many there are.
+    std::size_t place_blocks(std::vector<std::size_t>& place, std::uint32_t blocks, std::size_t share) {
         start_.resize(std::size_t{blocks} + 1);
         std::size_t total = 0;
         for (std::uint32_t b = 0; b < blocks; ++b) {
@@ -1617,6 +1609,22 @@ public:
         }
         start_[blocks] = static_cast<std::uint32_t>(total);
         grouped_.resize(total);
+        return total;
+    }
+
+    // Level 0's candidates, parts[t][0] of each thread t in id order, into grouped_ and start_ as
+    // group_by_block(0) would place them (all are queued and of level 0), taken out of parts.
+    void group_ahead(std::vector<std::vector<std::vector<std::uint32_t>>>& parts, int threads) {
+        const auto share = static_cast<std::size_t>(threads);
+        const std::uint32_t blocks = blocks_at(0);
+        std::vector<std::size_t> place(std::size_t{blocks} * share, 0);  // [block][thread]
+#pragma omp parallel num_threads(threads)
+        parallel::for_my_shares(threads, [&](int t) {
+            std::vector<std::size_t> mine(blocks, 0);
+            for (const std::uint32_t v : parts[static_cast<std::size_t>(t)][0]) ++mine[block_at(v, 0)];
+            for (std::uint32_t b = 0; b < blocks; ++b) place[std::size_t{b} * share + static_cast<std::size_t>(t)] = mine[b];
+        });
+        const std::size_t total = place_blocks(place, blocks, share);
 #pragma omp parallel num_threads(threads)
         parallel::for_my_shares(threads, [&](int t) {
             std::vector<std::size_t> fill(blocks);
@@ -1760,18 +1768,7 @@ public:
             }
             for (std::uint32_t b = 0; b < blocks; ++b) place[std::size_t{b} * share + static_cast<std::size_t>(t)] = mine[b];
         });
-        start_.resize(std::size_t{blocks} + 1);
-        std::size_t total = 0;
-        for (std::uint32_t b = 0; b < blocks; ++b) {
-            start_[b] = static_cast<std::uint32_t>(total);
-            for (std::size_t t = 0; t < share; ++t) {
-                const std::size_t here = place[std::size_t{b} * share + t];
-                place[std::size_t{b} * share + t] = total;
-                total += here;
-            }
-        }
-        start_[blocks] = static_cast<std::uint32_t>(total);
-        grouped_.resize(total);
+        const std::size_t total = place_blocks(place, blocks, share);
 #pragma omp parallel num_threads(threads)
         parallel::for_my_shares(threads, [&](int t) {
             const auto [begin, end] = range(t);
