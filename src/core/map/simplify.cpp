@@ -447,9 +447,11 @@ public:
         set_up();
         stats_.seconds_index = lap(start);
         stop_if_cancelled(options_.cancel);
-        std::vector<std::uint8_t> pinned = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_);
-        pin_from_improper(map_, pinned, threads_, vertex_count_ >= parallel_min_);
-        pin(pinned);
+        {
+            std::vector<std::uint8_t> pinned = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_);
+            pin_from_improper(map_, pinned, threads_, vertex_count_ >= parallel_min_);
+            pin(pinned);
+        }  // (a byte a vertex not held through the sweep)
         stats_.seconds_crossings = lap(start);
         simplify_vertices();
         stats_.seconds_sweep = lap(start);
