@@ -52,14 +52,15 @@ public:
 
     // Indexes `first` as ids [0, f) and `second` as ids [f, f + s). About `points_per_cell`
     // points share a cell on average. Built on `threads` threads (0: OpenMP's default) when
-    // big; the grid is the same for any number.
+    // big; the grid is the same for any number. Once `cancel` is set (core/cancel.hpp) the
+    // build passes over the rows left and the grid is incomplete: the caller must then stop.
     //
     // The cells are first laid out square-ish (the *base* cells); `row_split` k then cuts each
     // base row into 2^k rows and joins columns 2^k at a time, keeping the number of cells: thin
     // rows read fewer points outside a small query box when points crowd along lines (shores,
     // borders). Base row r is rows r·2^k to r·2^k + 2^k − 1 exactly (row(y) >> k == base_row(y)).
     explicit PointGrid(std::span<const Point> first, std::span<const Point> second = {}, double points_per_cell = 2.0,
-                       int threads = 0, unsigned row_split = 0);
+                       int threads = 0, unsigned row_split = 0, const std::atomic<bool>* cancel = nullptr);
 
     // A grid with the cells of `geometry` in `window` only (a tile of a bigger grid): every point
     // inside the window lands in the cell the bigger grid puts it in, with the same order within
@@ -212,7 +213,7 @@ private:
 
     template <bool Windowed>
     void build(std::span<const Point> first, std::span<const Point> second, int threads_wanted,
-               std::span<const std::uint8_t> skip_first = {});
+               std::span<const std::uint8_t> skip_first = {}, const std::atomic<bool>* cancel = nullptr);
 
     static std::uint32_t cell_of(double value, double origin, double scale, std::uint32_t count) {
         double t = (value - origin) * scale;

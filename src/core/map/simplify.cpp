@@ -1077,10 +1077,14 @@ public:
 
     // ---- set-up --------------------------------------------------------------------------
 
+    // (Ctrl-C is heard between the steps, and inside the grid's build: a user stopping a big map
+    // waits for none of them to finish.)
     void set_up() {
         index_points();
+        stop_if_cancelled(options_.cancel);
         set_up_levels();
         find_shared_locations();
+        stop_if_cancelled(options_.cancel);
         build_chains();
     }
 
@@ -1090,7 +1094,7 @@ public:
         if (tile_) {
             index_tile_points();
         } else {
-            grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit);
+            grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit, options_.cancel);
         }
         geometry_ = grid_->geometry();
         stats_.control_points = control_points_.size();
