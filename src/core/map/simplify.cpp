@@ -1601,7 +1601,7 @@ public:
 
     // The counting sort's middle (group_by_block, group_ahead): `place`, the candidates each
     // thread counted per block ([block][thread]), becomes where each thread's first of a block
-    // goes; start_ gets where each block's begin; grouped_ is sized. Returns how many there are.
+    // goes; start_ gets where each block's candidates begin; grouped_ is sized. Returns how many.
     std::size_t place_blocks(std::vector<std::size_t>& place, std::uint32_t blocks, std::size_t share) {
         start_.resize(std::size_t{blocks} + 1);
         std::size_t total = 0;
