@@ -31,10 +31,12 @@ std::filesystem::path whole_tool() {
     return ::access(beside.c_str(), X_OK) == 0 ? beside : installed;
 }
 
+constexpr std::string_view kHugePagesTunable = "glibc.malloc.hugetlb";
+
 // Did the user (or an exec of ours) name glibc.malloc.hugetlb in GLIBC_TUNABLES?
 bool huge_pages_named() {
     const char* tunables = std::getenv("GLIBC_TUNABLES");
-    return tunables != nullptr && std::string_view(tunables).find("glibc.malloc.hugetlb") != std::string_view::npos;
+    return tunables != nullptr && std::string_view(tunables).find(kHugePagesTunable) != std::string_view::npos;
 }
 
 // The environment jobs run in: this one, with glibc's malloc told to ask for transparent huge
@@ -53,7 +55,7 @@ std::vector<std::string> job_environment() {
         std::string variable = *entry;
         if (variable.starts_with(kName)) {
             tunables = true;
-            if (variable.find("glibc.malloc.hugetlb") == std::string::npos) {
+            if (variable.find(kHugePagesTunable) == std::string::npos) {
                 variable += variable.size() > kName.size() ? ":" : "";
                 variable += kHugePages;
             }
