@@ -1570,10 +1570,13 @@ public:
         const int threads = vertex_count_ >= parallel_min_ ? threads_ : 1;
         const auto share = static_cast<std::size_t>(threads);
         std::vector<std::vector<std::vector<std::uint32_t>>> parts(share, std::vector<std::vector<std::uint32_t>>(levels_));
+        // Room for level 0 (most go there: no growing copies), taken here, not by each thread
+        // from its own malloc arena, which keeps it once freed: on GSHHG at 10 % on 2 threads,
+        // the run's peak 31 MiB lower and this pass 20–28 ms instead of 58–67.
+        for (std::size_t t = 0; t < share; ++t) parts[t][0].reserve(undecided_count(static_cast<int>(t), threads));
 #pragma omp parallel num_threads(threads)
         parallel::for_my_shares(threads, [&](int t) {
             auto& part = parts[static_cast<std::size_t>(t)];
-            part[0].reserve(undecided_count(t, threads));  // (most go to level 0: no growing copies)
             for_each_undecided(t, threads, [&](std::uint32_t v) {
                 if (state_[v] == State::queued && (!use_marks_ || marked_[v])) part[level_of(v)].push_back(v);
             });
