@@ -7,7 +7,7 @@ set -euo pipefail
 packages=(build-essential cmake ninja-build pkg-config file python3
           libgdal-dev gdal-bin libsqlite3-dev libgeos-dev libgmp-dev libcli11-dev libspdlog-dev libgtest-dev libgmock-dev groff-base
           clang libclang-rt-14-dev libomp-dev
-          pybind11-dev python3-dev python3-numpy python3-geopandas python3-pytest python3-distributed)
+          pybind11-dev python3-dev python3-numpy python3-geopandas python3-pytest python3-distributed libjemalloc2)
 for arg in "$@"; do
   case "$arg" in
     --qgis) packages+=(qgis python3-qgis) ;;

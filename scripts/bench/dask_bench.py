@@ -6,12 +6,13 @@ the command's peak memory, each worker's peak memory, and whether the output is 
     scripts/bench/dask_bench.py BUILD_DIR [--input build/bench-data/gshhg.shp] [--runs 3]
                                 [--workers 1,2,4] [--target "--keep 10%" --target "--max"]
                                 [--variant "" --variant "--first-round here"]
-                                [--worker-env GLIBC_TUNABLES=glibc.malloc.hugetlb=1]
+                                [--worker-env GLIBC_TUNABLES=glibc.malloc.hugetlb=1 --worker-env ...]
 
 BUILD_DIR holds the toposimp executable and python/ (the package). Each --variant (toposimp.dask
 options; default: none) is a row of its own, on a LocalCluster of its own. The LocalCluster's workers
-start with --worker-env's variables (default: transparent huge pages asked for, as toposimp.dask
-gives the workers of the LocalCluster it starts; none with --worker-env ""). Prints a Markdown table.
+start with --worker-env's variables (default: what toposimp.dask gives the workers of the
+LocalCluster it starts: transparent huge pages asked for, and jemalloc preloaded where it is
+installed, as --worker-malloc auto does; none with --worker-env ""). Prints a Markdown table.
 """
 import argparse
 import os
@@ -67,14 +68,19 @@ def main():
     parser.add_argument("--threads", type=int, default=2, help="toposimp map -j (the single process)")
     parser.add_argument("--variant", action="append", help="toposimp.dask options of a row (repeat for several)")
     parser.add_argument("--worker-env", action="append", metavar="NAME=VALUE",
-                        help="the workers' environment (default: GLIBC_TUNABLES=glibc.malloc.hugetlb=1)")
+                        help="the workers' environment (default: as toposimp.dask's LocalCluster)")
     a = parser.parse_args()
-    worker_env = dict(v.split("=", 1) for v in (a.worker_env or ["GLIBC_TUNABLES=glibc.malloc.hugetlb=1"]) if v)
     targets = a.target or ["--keep 10%", "--max"]
     build = pathlib.Path(a.build).resolve()
     env = dict(CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
+    from toposimp import dask as toposimp_dask
+
+    if a.worker_env:
+        worker_env = dict(v.split("=", 1) for v in a.worker_env if v)
+    else:
+        worker_env = {"GLIBC_TUNABLES": toposimp_dask._huge_pages(""), **toposimp_dask._worker_malloc("auto", CLEAN_ENV)}
 
     rows = []
     with tempfile.TemporaryDirectory() as folder:

@@ -492,3 +492,47 @@ def test_quiet_local_cluster_after_a_killed_run(generated, binary, tmp_path):
     assert not stale.exists()  # (purged: a new worker met it)
     assert done.stderr == ""
     assert output.read_bytes() == reference.read_bytes()
+
+
+def test_worker_malloc_is_chosen_as_asked(monkeypatch):
+    """--worker-malloc: 'auto' preloads jemalloc where it is installed and leaves glibc's malloc
+    where not, 'jemalloc' where it is not installed is a usage error, and an LD_PRELOAD or
+    MALLOC_CONF of the user's is kept."""
+    import ctypes.util
+
+    from toposimp import UsageError
+    from toposimp import dask as toposimp_dask
+
+    monkeypatch.setattr(ctypes.util, "find_library", lambda name: "libjemalloc.so.2" if name == "jemalloc" else None)
+    assert toposimp_dask._worker_malloc("auto", {}) == {"LD_PRELOAD": "libjemalloc.so.2", "MALLOC_CONF": "thp:always"}
+    assert toposimp_dask._worker_malloc("jemalloc", {"MALLOC_CONF": "narenas:2"}) == {"LD_PRELOAD": "libjemalloc.so.2",
+                                                                                     "MALLOC_CONF": "narenas:2"}
+    assert toposimp_dask._worker_malloc("auto", {"LD_PRELOAD": "/opt/mine.so"}) == {}
+    assert toposimp_dask._worker_malloc("glibc", {}) == {}
+    monkeypatch.setattr(ctypes.util, "find_library", lambda name: None)
+    assert toposimp_dask._worker_malloc("auto", {}) == {}
+    with pytest.raises(UsageError, match="libjemalloc2"):
+        toposimp_dask._worker_malloc("jemalloc", {})
+
+
+def test_local_cluster_workers_run_the_malloc_asked_for(generated, binary, tmp_path):
+    """The LocalCluster's workers really run jemalloc's malloc by default where it is installed
+    (CI installs Debian's libjemalloc2), glibc's with --worker-malloc glibc, and the output is
+    toposimp map's either way."""
+    import ctypes.util
+
+    if ctypes.util.find_library("jemalloc") is None:
+        pytest.skip("libjemalloc2 is not installed (scripts/setup.sh installs it)")
+    polygons_and_lines, _ = generated
+    arguments = [str(polygons_and_lines), "--keep", "20%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    environment = {name: value for name, value in os.environ.items() if name not in ("LD_PRELOAD", "MALLOC_CONF")}
+    for choice, expected in (("auto", "jemalloc"), ("glibc", "glibc")):
+        output = tmp_path / f"{choice}.gpkg"
+        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "1",
+                               "--local-budget", "0", "--worker-malloc", choice, "-v"],
+                              capture_output=True, text=True, timeout=300, env=environment)
+        assert done.returncode == 0, done.stderr
+        assert f"the LocalCluster's workers' malloc: {expected} (--worker-malloc {choice})" in done.stderr, done.stderr[-2000:]
+        assert output.read_bytes() == reference.read_bytes()
