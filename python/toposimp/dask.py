@@ -68,7 +68,7 @@ Dask options:
                        'jemalloc' or 'glibc'. A worker runs task after task, each allocating
                        its tile's arrays afresh: jemalloc keeps freed memory for the next task
                        where glibc gives big blocks back to the kernel, to be faulted in again
-                       (GSHHG at 10 % on 2 workers: 7.4 s against 9.9 s). Workers started by
+                       (GSHHG at 10 % on 2 workers here: 7.4-7.5 s against 8.7-9.9 s). Workers started by
                        you (--scheduler) use what their environment says, e.g.
                        LD_PRELOAD=libjemalloc.so.2 MALLOC_CONF=thp:always dask worker ...
 
@@ -261,11 +261,12 @@ def _huge_pages(tunables):
 def _worker_malloc(which, environ):
     """The environment the LocalCluster's workers get for their allocator `which` ("auto",
     "jemalloc" or "glibc"): jemalloc preloaded (LD_PRELOAD), asking for transparent huge pages
-    (MALLOC_CONF thp:always, as _huge_pages does for glibc's), unless the environment already
-    preloads something or configures jemalloc (then it is left as it is). A worker runs task after
-    task, each building its tiles' arrays afresh and freeing them: glibc hands blocks over 32 MiB
-    back to the kernel at once (its largest mmap threshold), and the next task has every page
-    faulted in and zeroed again, where jemalloc keeps freed pages for a while and reuses them.
+    (MALLOC_CONF thp:always, as _huge_pages does for glibc's; a MALLOC_CONF of the user's is
+    kept instead), unless the environment already preloads something (then nothing changes; with
+    "jemalloc" too). A worker runs task after task, each building its tiles' arrays afresh and
+    freeing them: glibc hands blocks over 32 MiB back to the kernel at once (its largest mmap
+    threshold), and the next task has every page faulted in and zeroed again, where jemalloc
+    keeps freed pages for a while and reuses them.
     "auto": jemalloc where Debian's libjemalloc2 is installed, else glibc's malloc."""
     from toposimp import UsageError
 
