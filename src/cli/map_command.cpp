@@ -425,6 +425,11 @@ void report(const map::SimplifyStats& stats, const map::StopCriterion& stop, con
     if (stats.pinned_by_crossing > 0) {
         log.debug("{} vertices kept at the ends of segments that cross or touch other lines in the input", stats.pinned_by_crossing);
     }
+    for (std::size_t k = 0; k < stats.round_times.size(); ++k) {
+        const map::RoundTimes& round = stats.round_times[k];
+        log.trace("round {}: {} removed; selection {:.3f} s, scheduling {:.3f} s, sweep {:.3f} s", k + 1, round.removed,
+                  round.seconds_select, round.seconds_schedule, round.seconds_sweep);
+    }
     const std::string summary = fmt::format("{} -> {} vertices ({} removed, {} refused), {}, {:.3f} s", stats.vertices_in,
                                             stats.vertices_out, stats.removed, stats.blocked(), describe(stop), time.total);
     if (err_is_terminal || options.verbosity > 0) log.info("{}", summary);

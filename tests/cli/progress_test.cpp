@@ -11,6 +11,7 @@
 #include <cmath>
 #include <cstdio>
 #include <regex>
+#include <sstream>
 
 extern char** environ;
 
@@ -64,6 +65,35 @@ TEST(Progress, MapReportsEachPhaseAsLines) {
     const std::vector<std::string> expected{"reading " + testdata("nh_borders.gpkg"), "simplifying", "writing " + out,
                                             "validating"};
     EXPECT_EQ(names, expected) << r.err;
+}
+
+// -vv lists a count target's rounds, one line each, their removals adding up to the run's; none
+// for --max, which sweeps once.
+TEST(Progress, VeryVerboseMapListsEachRound) {
+    const auto dir = fresh_dir("progress");
+    const std::string out = (dir / "out.gpkg").string();
+    auto json_number = [](const std::string& json, const std::string& key) {
+        std::smatch match;
+        EXPECT_TRUE(std::regex_search(json, match, std::regex("\"" + key + "\":(\\d+)"))) << key << " in " << json;
+        return match.empty() ? -1L : std::stol(match[1]);
+    };
+    const CliResult r = run_cli({"map", testdata("nh_borders.gpkg"), "-o", out, "--keep", "10%", "-vv", "--json", "-j", "2"});
+    ASSERT_EQ(r.code, 0) << r.err;
+    static const std::regex round_line(R"(toposimp: trace: round (\d+): (\d+) removed; selection \d+\.\d{3} s, scheduling \d+\.\d{3} s, sweep \d+\.\d{3} s)");
+    long rounds = 0, removed = 0;
+    std::istringstream in(r.err);
+    for (std::string line; std::getline(in, line);) {
+        std::smatch match;
+        if (!std::regex_match(line, match, round_line)) continue;
+        EXPECT_EQ(std::stol(match[1]), ++rounds) << line;
+        removed += std::stol(match[2]);
+    }
+    EXPECT_GT(rounds, 1) << r.err;
+    EXPECT_EQ(rounds, json_number(r.out, "rounds")) << r.err;
+    EXPECT_EQ(removed, json_number(r.out, "removed")) << r.err;
+    const CliResult once = run_cli({"map", testdata("nh_borders.gpkg"), "-o", out, "--max", "-vv", "--overwrite"});
+    ASSERT_EQ(once.code, 0) << once.err;
+    EXPECT_EQ(once.err.find("trace: round"), std::string::npos) << once.err;
 }
 
 TEST(Progress, MeshReportsSimplificationUpToTheTarget) {

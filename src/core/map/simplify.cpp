@@ -1351,14 +1351,21 @@ public:
         stats_.removal_goal = goal;
         work_ = static_cast<double>(goal);
         use_marks_ = true;
+        auto start = Clock::now();
         while (stats_.removed < goal && select_round(goal - stats_.removed)) {
             ++stats_.rounds;
+            RoundTimes& round = stats_.round_times.emplace_back();
+            round.removed = stats_.removed;
+            round.seconds_select = lap(start);
             schedule_queued(true);
             narrow_split_rings();
+            round.seconds_schedule = lap(start);
             sweep();
             narrowed_ = false;
             collect_touched_ = false;
             keep_undecided();
+            round.seconds_sweep = lap(start);
+            round.removed = stats_.removed - round.removed;
         }
         stats_.target_reached = stats_.removed >= goal;
     }

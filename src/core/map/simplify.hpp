@@ -87,6 +87,15 @@ struct SimplifyOptions {
     const std::atomic<bool>* cancel = nullptr;
 };
 
+// One round of a count target in one process (-vv prints them): what it removed and where its
+// time went.
+struct RoundTimes {
+    std::uint64_t removed = 0;
+    double seconds_select = 0;    // choosing the round's vertices (mark_smallest or mark_few)
+    double seconds_schedule = 0;  // queuing them by level and block
+    double seconds_sweep = 0;     // the levels' blocks, and what the round leaves for the next
+};
+
 struct SimplifyStats {
     std::uint64_t vertices_in = 0;
     std::uint64_t vertices_out = 0;
@@ -107,6 +116,7 @@ struct SimplifyStats {
     double seconds_crossings = 0;  // improper contacts of the input
     double seconds_sweep = 0;      // removing vertices
     exact::PredicateStats predicates;
+    std::vector<RoundTimes> round_times;  // count targets in one process: each round's
 
     std::uint64_t blocked() const { return blocked_by_point + blocked_by_ring + blocked_by_coincidence; }
 };
