@@ -116,7 +116,7 @@ struct SimplifyStats {
     double seconds_crossings = 0;  // improper contacts of the input
     double seconds_sweep = 0;      // removing vertices
     exact::PredicateStats predicates;
-    std::vector<RoundTimes> round_times;  // count targets in one process: each round's
+    std::vector<RoundTimes> round_times;  // count targets in one process: each round's removals and times
 
     std::uint64_t blocked() const { return blocked_by_point + blocked_by_ring + blocked_by_coincidence; }
 };
