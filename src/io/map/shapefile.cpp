@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdint>
@@ -12,6 +13,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <span>
 
@@ -409,6 +411,150 @@ const ShapeRecord* ShapeReader::next() {
     }
     s.record = ShapeRecord{s.xy, s.z, s.part_starts};
     return &s.record;
+}
+
+// ---- PolyLineWriter ------------------------------------------------------------------------
+
+namespace {
+
+void put_big_u32(unsigned char* at, std::uint32_t value) {
+    for (int i = 0; i < 4; ++i) at[i] = static_cast<unsigned char>(value >> (24 - 8 * i));
+}
+
+void put_little_u32(unsigned char* at, std::uint32_t value) {
+    for (int i = 0; i < 4; ++i) at[i] = static_cast<unsigned char>(value >> (8 * i));
+}
+
+void put_little_f64(unsigned char* at, double value) {
+    const auto bits = std::bit_cast<std::uint64_t>(value);
+    for (int i = 0; i < 8; ++i) at[i] = static_cast<unsigned char>(bits >> (8 * i));
+}
+
+// shapelib's MIN and MAX, in their order: the bound first.
+double low_of(double bound, double v) { return bound < v ? bound : v; }
+double high_of(double bound, double v) { return bound > v ? bound : v; }
+
+// A file written front to back through a buffer.
+class BufferedOutput {
+public:
+    explicit BufferedOutput(const std::filesystem::path& path) : out_(path, std::ios::binary | std::ios::trunc) {
+        buffer_.reserve(kBuffer);
+    }
+    bool is_open() const { return out_.is_open(); }
+
+    void put(const unsigned char* bytes, std::size_t count) {
+        if (buffer_.size() + count > kBuffer) flush();
+        if (count > kBuffer) {
+            out_.write(reinterpret_cast<const char*>(bytes), static_cast<std::streamsize>(count));
+            return;
+        }
+        buffer_.insert(buffer_.end(), bytes, bytes + count);
+    }
+    void flush() {
+        out_.write(reinterpret_cast<const char*>(buffer_.data()), static_cast<std::streamsize>(buffer_.size()));
+        buffer_.clear();
+    }
+    // Flushes, writes `header` over the file's first bytes and closes it; false if anything failed.
+    bool close_with_header(std::span<const unsigned char> header) {
+        flush();
+        out_.seekp(0);
+        out_.write(reinterpret_cast<const char*>(header.data()), static_cast<std::streamsize>(header.size()));
+        out_.close();
+        return !out_.fail();
+    }
+    bool good() const { return out_.good(); }
+
+private:
+    static constexpr std::size_t kBuffer = std::size_t{1} << 20;
+    std::ofstream out_;
+    std::vector<unsigned char> buffer_;
+};
+
+constexpr std::uint32_t kPolyLine = 3;
+constexpr std::size_t kHeader = 100;
+
+}  // namespace
+
+struct PolyLineWriter::State {
+    State(const std::filesystem::path& shp, const std::filesystem::path& shx) : shp_file(shp), shx_file(shx) {}
+    BufferedOutput shp_file, shx_file;
+    std::string shown_as;
+    std::uint64_t shp_size = kHeader;  // bytes so far
+    std::uint64_t records = 0;
+    std::array<double, 4> box{};      // x low, y low, x high, y high
+    std::vector<unsigned char> record;
+};
+
+PolyLineWriter::PolyLineWriter(const std::string& shp, std::string shown_as) {
+    const std::filesystem::path shp_path(shp);
+    state_ = std::make_unique<State>(shp_path, std::filesystem::path(shp_path).replace_extension(".shx"));
+    state_->shown_as = std::move(shown_as);
+    if (!state_->shp_file.is_open() || !state_->shx_file.is_open()) {
+        throw OutputError("cannot write '" + state_->shown_as + "': " + std::strerror(errno));
+    }
+    const std::array<unsigned char, kHeader> placeholder{};
+    state_->shp_file.put(placeholder.data(), placeholder.size());
+    state_->shx_file.put(placeholder.data(), placeholder.size());
+}
+
+PolyLineWriter::PolyLineWriter(PolyLineWriter&&) noexcept = default;
+PolyLineWriter& PolyLineWriter::operator=(PolyLineWriter&&) noexcept = default;
+PolyLineWriter::~PolyLineWriter() = default;
+
+bool PolyLineWriter::add(std::span<const std::uint32_t> part_starts, std::span<const Point> xy) {
+    State& s = *state_;
+    const bool null = part_starts.empty();
+    // Content: the shape type; then the box, the part and point counts, the parts and the points.
+    const std::size_t content = null ? 4 : 44 + 4 * part_starts.size() + 16 * xy.size();
+    if (s.shp_size + 8 + content > std::numeric_limits<std::uint32_t>::max()) return false;
+    std::vector<unsigned char>& record = s.record;
+    record.resize(8 + content);
+    put_big_u32(&record[0], static_cast<std::uint32_t>(s.records + 1));
+    put_big_u32(&record[4], static_cast<std::uint32_t>(content / 2));
+    put_little_u32(&record[8], null ? 0 : kPolyLine);
+    if (s.records == 0) {
+        s.box = null ? std::array<double, 4>{} : std::array<double, 4>{xy[0].x, xy[0].y, xy[0].x, xy[0].y};
+    }
+    if (!null) {
+        std::array<double, 4> box{xy[0].x, xy[0].y, xy[0].x, xy[0].y};
+        unsigned char* at = &record[52 + 4 * part_starts.size()];
+        for (const Point& p : xy) {
+            box = {low_of(box[0], p.x), low_of(box[1], p.y), high_of(box[2], p.x), high_of(box[3], p.y)};
+            s.box = {low_of(s.box[0], p.x), low_of(s.box[1], p.y), high_of(s.box[2], p.x), high_of(s.box[3], p.y)};
+            put_little_f64(at, p.x);
+            put_little_f64(at + 8, p.y);
+            at += 16;
+        }
+        for (int i = 0; i < 4; ++i) put_little_f64(&record[12 + 8 * i], box[static_cast<std::size_t>(i)]);
+        put_little_u32(&record[44], static_cast<std::uint32_t>(part_starts.size()));
+        put_little_u32(&record[48], static_cast<std::uint32_t>(xy.size()));
+        for (std::size_t k = 0; k < part_starts.size(); ++k) put_little_u32(&record[52 + 4 * k], part_starts[k]);
+    }
+    std::array<unsigned char, 8> index{};
+    put_big_u32(&index[0], static_cast<std::uint32_t>(s.shp_size / 2));
+    put_big_u32(&index[4], static_cast<std::uint32_t>(content / 2));
+    s.shp_file.put(record.data(), record.size());
+    s.shx_file.put(index.data(), index.size());
+    s.shp_size += record.size();
+    ++s.records;
+    if (!s.shp_file.good() || !s.shx_file.good()) throw OutputError("cannot write '" + s.shown_as + "': " + std::strerror(errno));
+    return true;
+}
+
+void PolyLineWriter::finish() {
+    State& s = *state_;
+    // The header: file code 9994 and the length in 16-bit words (big-endian), version 1000, the
+    // shape type, the box, and Z and M ranges of 0 (little-endian).
+    std::array<unsigned char, kHeader> header{};
+    put_big_u32(&header[0], 9994);
+    put_big_u32(&header[24], static_cast<std::uint32_t>(s.shp_size / 2));
+    put_little_u32(&header[28], 1000);
+    put_little_u32(&header[32], kPolyLine);
+    for (int i = 0; i < 4; ++i) put_little_f64(&header[36 + 8 * i], s.box[static_cast<std::size_t>(i)]);
+    const bool shp_written = s.shp_file.close_with_header(header);
+    put_big_u32(&header[24], static_cast<std::uint32_t>((kHeader + 8 * s.records) / 2));
+    const bool shx_written = s.shx_file.close_with_header(header);
+    if (!shp_written || !shx_written) throw OutputError("cannot write '" + s.shown_as + "': " + std::strerror(errno));
 }
 
 void refuse_non_finite(const ShapeRecord& record, const std::function<std::string()>& label) {

@@ -89,6 +89,36 @@ private:
     std::unique_ptr<State> state_;
 };
 
+// A PolyLine Shapefile's .shp and .shx written record by record, byte for byte as GDAL 3.6's
+// Shapefile driver writes a 2D LineString or MultiLineString layer (shapelib's SHPWriteObject
+// through OGR; tests/unit/io/shapefile_test.cpp compares the two), without an OGR geometry per
+// feature: on GSHHG that was most of the write. Each record's parts in order; a record without
+// parts is a null shape. Boxes as shapelib makes them: a record's from its first vertex on, the
+// file's from the first record's first vertex (0 if that record is null), each widened with
+// (low < v ? low : v) and (high > v ? high : v), so that a 0 can replace a −0. The .dbf and .prj
+// are another writer's (OGR's, for a layer without geometry).
+class PolyLineWriter {
+public:
+    // Creates `shp` and the .shx beside it (its extension replaced by ".shx"); OutputError naming
+    // `shown_as` if it cannot.
+    PolyLineWriter(const std::string& shp, std::string shown_as);
+    PolyLineWriter(PolyLineWriter&&) noexcept;
+    PolyLineWriter& operator=(PolyLineWriter&&) noexcept;
+    ~PolyLineWriter();
+
+    // Appends a record: the points of `xy`, its parts starting at `part_starts` (rising, the first
+    // 0, none empty); no part, a null shape. False, and nothing written, if the .shp would pass
+    // the format's 4 GiB (shapelib refuses such a record too). OutputError if writing failed.
+    bool add(std::span<const std::uint32_t> part_starts, std::span<const Point> xy);
+
+    // Writes both headers and closes the files; OutputError if anything failed.
+    void finish();
+
+private:
+    struct State;
+    std::unique_ptr<State> state_;
+};
+
 // InputError "<label()>: vertex i has a non-finite coordinate (x, y)" for a record's first
 // non-finite vertex (i counted from its part's first), as the map's readers word it.
 void refuse_non_finite(const ShapeRecord& record, const std::function<std::string()>& label);

@@ -1601,6 +1601,46 @@ CPLStringList layer_options_for(const MapFormatRules* rules, const std::vector<s
     return options;
 }
 
+// Feature `index` of a layer lines_written_here takes, as a record of `shapes`: the kept vertices
+// of each of its chains a part (build_geometry's lines, without the empty parts, which OGR's
+// writer leaves out); NULL and empty geometries a null shape.
+void add_record_lines(PolyLineWriter& shapes, const OgrDataset::Data::Layer& layer, std::size_t index, const map::MapData& map,
+                      VertexView at, const std::vector<std::uint8_t>& kept, const std::string& layer_name, const std::string& path) {
+    thread_local std::vector<std::uint32_t> part_starts;
+    thread_local std::vector<Point> xy;
+    part_starts.clear();
+    xy.clear();
+    const OgrDataset::Data::Layer::Shape& shape = layer.shapes[index];
+    if (shape.kind == OgrDataset::Data::Layer::Kind::lines) {
+        for (std::uint32_t k = 0; k < shape.count; ++k) {
+            const std::uint32_t chain = layer.items[shape.first + k];
+            if (chain == kEmptyPart) continue;
+            const auto start = static_cast<std::uint32_t>(xy.size());
+            for (std::uint32_t v = map.chains[chain].first; v <= map.chains[chain].last; ++v) {
+                if (kept[v]) xy.push_back(at[v]);
+            }
+            if (xy.size() > start) part_starts.push_back(start);
+        }
+    }
+    if (!shapes.add(part_starts, xy)) {
+        throw OutputError("cannot write feature " + std::to_string(layer.features[index]->GetFID()) + " of layer '" + layer_name +
+                          "' to '" + path + "': a Shapefile's .shp holds at most 4 GB; write a GeoPackage or FlatGeobuf");
+    }
+}
+
+// Whether `layer` goes to the Shapefile `options.path` through PolyLineWriter: a 2D LineString or
+// MultiLineString layer whose every feature is lines, NULL or empty, written as one .shp (a
+// lower-case extension: GDAL's name for the .shx is then ".shx") without creation options.
+bool lines_written_here(const OgrDataset::Data::Layer& layer, const WriteOptions& options) {
+    using Kind = OgrDataset::Data::Layer::Kind;
+    if (options.shapes_through_ogr || !options.layer_options.empty() || !options.dataset_options.empty()) return false;
+    if (std::filesystem::path(options.path).extension() != ".shp" || options.path.rfind("/vsi", 0) == 0) return false;
+    if (layer.geometry_type != wkbLineString && layer.geometry_type != wkbMultiLineString) return false;
+    return std::all_of(layer.shapes.begin(), layer.shapes.end(), [&](const OgrDataset::Data::Layer::Shape& shape) {
+        return shape.kind == Kind::null || shape.kind == Kind::lines || (shape.kind == Kind::untouched && layer.untouched[shape.first]->IsEmpty());
+    });
+}
+
 }  // namespace
 
 TopoGeometry OgrDataset::Data::topo_geometry(const Layer& layer, std::size_t index) const {
@@ -1760,7 +1800,13 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             const Data::Layer& layer = *layer_pointer;
             const std::string name = output_name(layer);
             CPLStringList layer_options = layer_options_for(rules, options.layer_options, layer);
-            OGRLayer* target = dataset->CreateLayer(name.c_str(), layer.srs.get(), layer.geometry_type, layer_options.List());
+            // A Shapefile of lines: OGR writes the attributes and the CRS (a layer without
+            // geometry: the .dbf and .prj only, the same bytes), PolyLineWriter the shapes.
+            std::optional<PolyLineWriter> shapes;
+            if (driver_name == "ESRI Shapefile" && layer_count == 1 && lines_written_here(layer, options)) {
+                shapes.emplace(output.staging_path(), options.path);
+            }
+            OGRLayer* target = dataset->CreateLayer(name.c_str(), layer.srs.get(), shapes ? wkbNone : layer.geometry_type, layer_options.List());
             if (target == nullptr) throw OutputError("cannot create layer '" + name + "' in '" + options.path + "'" + last_gdal_error());
             for (int i = 0; i < layer.definition->GetFieldCount(); ++i) {
                 if (target->CreateField(layer.definition->GetFieldDefn(i), TRUE) != OGRERR_NONE) {
@@ -1781,7 +1827,11 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 OGRFeature feature(target->GetLayerDefn());
                 feature.SetFrom(layer.features[i].get(), field_map.data(), TRUE);
                 if (keep_fids) feature.SetFID(layer.features[i]->GetFID());
-                feature.SetGeometryDirectly(data.build_geometry(layer, i, map, vertices.at(i), kept).release());
+                if (shapes) {
+                    add_record_lines(*shapes, layer, i, map, vertices.at(i), kept, name, options.path);
+                } else {
+                    feature.SetGeometryDirectly(data.build_geometry(layer, i, map, vertices.at(i), kept).release());
+                }
                 if (target->CreateFeature(&feature) != OGRERR_NONE) {
                     throw OutputError("cannot write feature " + std::to_string(layer.features[i]->GetFID()) + " of layer '" +
                                       name + "' to '" + options.path + "'" + last_gdal_error());
@@ -1790,6 +1840,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             if (transaction && dataset->CommitTransaction() != OGRERR_NONE) {
                 throw OutputError("cannot commit '" + options.path + "'" + last_gdal_error());
             }
+            if (shapes) shapes->finish();
         }
         dataset.reset();
         if (CPLGetLastErrorType() >= CE_Failure) throw OutputError("error writing '" + options.path + "'" + last_gdal_error());

@@ -63,6 +63,9 @@ struct WriteOptions {
     // Called with the written (and verified) file before it is moved into place; throwing
     // from it leaves no output.
     std::function<void(const std::string& written)> before_commit;
+    // A Shapefile of 2D lines gets its .shp and .shx through OGR too, as any other output, not
+    // from PolyLineWriter (tests compare the two).
+    bool shapes_through_ogr = false;
 };
 
 // Layers handed over in memory (the Python module): each feature's geometry as WKB, in order.
@@ -183,7 +186,9 @@ public:
 
     // Writes the layers with only the kept vertices. The written file is read back and its
     // coordinates compared bit for bit before it is moved into place (OutputError otherwise).
-    // Returns warnings worth telling the user (e.g. values a format cannot hold).
+    // Returns warnings worth telling the user (e.g. values a format cannot hold). A Shapefile
+    // of 2D lines gets its shapes from PolyLineWriter (shapefile.hpp), the same bytes as OGR's
+    // driver writes (GSHHG at 10 %: the write 0.34–0.39 s → 0.16–0.18 s), its attributes from OGR.
     std::vector<std::string> write(const WriteOptions& options, const map::MapData& map,
                                    const std::vector<std::uint8_t>& kept) const;
 

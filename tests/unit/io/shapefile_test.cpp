@@ -231,14 +231,19 @@ void expect_same_record(const ShapeRecord& read, const Reference& reference, std
     }
 }
 
+// A layer to write through OGR (ShapeFile): its name, geometry type and features as WKT.
+struct LayerCase {
+    const char* name;
+    OGRwkbGeometryType type;
+    std::vector<std::string> wkts;
+};
+// The least subnormal double, and a sum that is not its decimal text.
+constexpr const char* kTiny = "4.9406564584124654e-324";
+constexpr const char* kOdd = "0.30000000000000004";
+
 TEST(ShapefileShapes, EveryLineAndPolygonTypeReadsAsOgrReadsIt) {
-    const std::string tiny = "4.9406564584124654e-324", odd = "0.30000000000000004";
-    struct Case {
-        const char* name;
-        OGRwkbGeometryType type;
-        std::vector<std::string> wkts;
-    };
-    const std::vector<Case> cases = {
+    const std::string tiny = kTiny, odd = kOdd;
+    const std::vector<LayerCase> cases = {
         {"line", wkbLineString, {"LINESTRING (0 0,1 " + odd + ",2 " + tiny + ")", "", "LINESTRING (1e300 -1e-300,5 6)"}},
         {"multiline", wkbMultiLineString, {"MULTILINESTRING ((0 0,1 1),(2 2,3 3,4 " + odd + "))", "LINESTRING (7 7,8 8)"}},
         {"linez", wkbLineString25D, {"LINESTRING Z (0 0 1,1 1 " + odd + ")", "MULTILINESTRING Z ((0 0 0,1 0 0),(5 5 5,6 6 6))"}},
@@ -250,7 +255,7 @@ TEST(ShapefileShapes, EveryLineAndPolygonTypeReadsAsOgrReadsIt) {
           "MULTIPOLYGON (((20 20,20 30,30 30,20 20)),((40 40,40 " + odd + ",50 40,40 40)))"}},
         {"polygonz", wkbPolygon25D, {"POLYGON Z ((0 0 1,0 10 2,10 10 3,0 0 1))"}},
     };
-    for (const Case& c : cases) {
+    for (const LayerCase& c : cases) {
         SCOPED_TRACE(c.name);
         const ShapeFile file(c.name, c.type, c.wkts);
         const std::optional<ShapeTable> read = read_shapefile_shapes(file.path());
@@ -1050,6 +1055,108 @@ TEST(GeoPackageLayers, FlatGeobufLeftInTheFile) {
     EXPECT_EQ(read_no_index.vertices_in_file(), nullptr);
     EXPECT_FALSE(read.vertices.empty());
     EXPECT_EQ(read_no_index.summary().read_whole_because, "'" + no_index.path() + "', layer 'lines': a FlatGeobuf without its index of features");
+}
+
+std::string file_bytes(const std::filesystem::path& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// PolyLineWriter's .shp and .shx are byte for byte what OGR's Shapefile driver writes for the
+// same lines: NULL and empty geometries (null shapes), several parts with an empty one (left
+// out), a first record without a shape (the file's box then starts at 0), −0 beside 0 in the
+// boxes either way round, huge, tiny and subnormal values, a one-point line, one record.
+TEST(ShapefileWriter, PolyLinesAreWhatOgrWrites) {
+    const std::string tiny = kTiny, odd = kOdd;
+    const std::vector<LayerCase> cases = {
+        {"null_first", wkbLineString, {"", "LINESTRING (5 6,7 8)", "LINESTRING EMPTY", "MULTILINESTRING ((1 2,3 4),EMPTY,(9 9,10 10))"}},
+        {"zeros", wkbLineString, {"LINESTRING (-0 -0,0 0)", "LINESTRING (0 -0,-0 0,-0 -0)", "LINESTRING (5 6,7 8)"}},
+        {"negative_zero_last", wkbLineString, {"LINESTRING (0 0,-0 -0)", "LINESTRING (-0 0,-1 -1,0 -0)"}},
+        {"extremes", wkbMultiLineString,
+         {"MULTILINESTRING ((1e300 -1e-300,-1e300 1e-300,2 " + tiny + "),(0.1 " + odd + ",-3 -3))", "LINESTRING (1 1,2 2)"}},
+        {"one_point", wkbLineString, {"LINESTRING (3 3)", "LINESTRING (4 4,5 5)"}},
+        {"all_null", wkbLineString, {"", "LINESTRING EMPTY"}},
+        {"one", wkbLineString, {"LINESTRING (-5 -6,7 8,1 2)"}},
+    };
+    for (const LayerCase& c : cases) {
+        SCOPED_TRACE(c.name);
+        const ShapeFile ogr(c.name, c.type, c.wkts);
+        const std::filesystem::path mine = ogr.sibling(".shp").parent_path() / "mine.shp";
+        PolyLineWriter writer(mine.string(), mine.string());
+        for (const std::string& wkt : c.wkts) {
+            std::vector<std::uint32_t> part_starts;
+            std::vector<Point> xy;
+            if (!wkt.empty()) {
+                OGRGeometry* geometry = nullptr;
+                ASSERT_EQ(OGRGeometryFactory::createFromWkt(wkt.c_str(), nullptr, &geometry), OGRERR_NONE);
+                std::unique_ptr<OGRGeometry> owned(geometry);
+                std::vector<const OGRLineString*> parts;
+                if (wkbFlatten(geometry->getGeometryType()) == wkbLineString) {
+                    parts.push_back(geometry->toLineString());
+                } else {
+                    for (const OGRLineString* part : *geometry->toMultiLineString()) parts.push_back(part);
+                }
+                for (const OGRLineString* part : parts) {
+                    if (part->IsEmpty()) continue;
+                    part_starts.push_back(static_cast<std::uint32_t>(xy.size()));
+                    for (int i = 0; i < part->getNumPoints(); ++i) xy.push_back({part->getX(i), part->getY(i)});
+                }
+            }
+            EXPECT_TRUE(writer.add(part_starts, xy));
+        }
+        writer.finish();
+        for (const char* extension : {".shp", ".shx"}) {
+            const std::string expected = file_bytes(ogr.sibling(extension));
+            EXPECT_GT(expected.size(), 100u) << extension;
+            EXPECT_EQ(file_bytes(std::filesystem::path(mine).replace_extension(extension)), expected) << extension;
+        }
+    }
+}
+
+// PolyLineWriter cannot create its files: OutputError naming the output.
+TEST(ShapefileWriter, UnwritableFolderIsAnOutputError) {
+    try {
+        PolyLineWriter writer("/nonexistent-folder/out.shp", "out.shp");
+        FAIL() << "no error";
+    } catch (const OutputError& error) {
+        EXPECT_NE(std::string(error.what()).find("cannot write 'out.shp'"), std::string::npos) << error.what();
+    }
+}
+
+// A line layer written to a Shapefile (its shapes by PolyLineWriter, its attributes and CRS by
+// OGR as a layer without geometry) gives the files written wholly through OGR, byte for byte:
+// every vertex kept or a thinned map, NULL, empty and multi-part features, the input's .prj
+// carried as a file or its CRS written by OGR.
+TEST(ShapefileWriter, LineLayerOutputIsOgrsOutput) {
+    const ShapeFile input("roads", wkbLineString,
+                          {"LINESTRING (0 0,1 1,2 0,3 1,4 0)", "", "MULTILINESTRING ((10 10,11 12,12 10,13 12),(20 20,21 22,22 20))",
+                           "LINESTRING EMPTY", "LINESTRING (-0 -0,0.5 0.25,1 -0)"});
+    const std::filesystem::path out = std::filesystem::path(input.path()).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    for (const bool prj_as_file : {true, false}) {
+        map::MapData map;
+        const OgrDataset dataset = OgrDataset::read(input.path(), {}, map, prj_as_file);
+        for (const std::uint32_t nth : {1000u, 2u}) {
+            SCOPED_TRACE(std::to_string(nth) + (prj_as_file ? " .prj as a file" : " CRS through OGR"));
+            const std::vector<std::uint8_t> kept = thinned(map, nth);
+            auto write = [&](const std::string& name, bool through_ogr) {
+                WriteOptions options;
+                options.path = (out / name).string();
+                options.overwrite = true;
+                options.shapes_through_ogr = through_ogr;
+                EXPECT_TRUE(dataset.write(options, map, kept).empty());
+            };
+            write("here.shp", false);
+            write("ogr.shp", true);
+            for (const char* extension : {".shp", ".shx", ".dbf", ".prj"}) {
+                const std::string expected = file_bytes(out / (std::string("ogr") + extension));
+                EXPECT_FALSE(expected.empty()) << extension;
+                EXPECT_EQ(file_bytes(out / (std::string("here") + extension)), expected) << extension;
+            }
+            EXPECT_EQ(std::filesystem::exists(out / "here.cpg"), std::filesystem::exists(out / "ogr.cpg"));
+        }
+    }
 }
 
 }  // namespace
