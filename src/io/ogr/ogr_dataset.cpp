@@ -427,12 +427,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     summary_of_layer.has_m = OGR_GT_HasM(layer->geometry_type);
     if ((summary_of_layer.has_z || summary_of_layer.has_m) && !is_point_type(layer->geometry_type)) start_carrying_zm(map);
     auto not_in_file = [&](const std::string& why) { return NotInFile{"'" + path + "', layer '" + layer->name + "': " + why}; };
-    // A plain PolyLine Shapefile going to a Shapefile: OGR hands out each geometry with the
+    // A plain PolyLine Shapefile: its shapes are decoded from the .shp here (shapefile.hpp; a
+    // one-part record is a LineString, more a MultiLineString, as OGR reads them) after OGR has
+    // read the attributes only: OGR's geometries cost GSHHG 0.1-0.14 s more. Going to a
+    // Shapefile, its .prj file goes to the output as it is: OGR hands out each geometry with the
     // layer's CRS, and the first one makes the driver parse the .prj with PROJ (and search
     // proj.db for its EPSG code) — most of a small file's run, for a CRS that is only written
-    // back. Then the shapes are decoded from the .shp here (shapefile.hpp; a one-part record is
-    // a LineString, more a MultiLineString, as OGR reads them) after OGR has read the attributes
-    // only, and the .prj file goes to the output as it is. A .shp this reader does not take is
+    // back. Going elsewhere, the CRS is parsed once, as the output needs it. A .shp this reader does not take is
     // read again through OGR, geometries and all. (Decoding on a thread of its own beside OGR saved
     // 0.03 s on GSHHG but raised the peak of a run with 10 M control points by 30 MB: the thread's
     // malloc arena stays.) With `leave_in_file`, the records are streamed and their vertices left
@@ -450,7 +451,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     const std::string shp = !leave_in_file ? std::string() : gpkg ? path : fgb ? fgb_file : layer_shp(path, layer->name);
     const bool copy_prj = prj_as_file && is_local_shp(path);
     const bool decode = summary.driver == "ESRI Shapefile" && layer->geometry_type == wkbLineString &&
-                        (leave_in_file ? !shp.empty() : copy_prj) &&
+                        (leave_in_file ? !shp.empty() : is_local_shp(path)) &&
                         source.SetIgnoredFields(std::array<const char*, 2>{"OGR_GEOMETRY", nullptr}.data()) == OGRERR_NONE;
     layer->definition = source.GetLayerDefn();
     layer->definition->Reference();
@@ -494,7 +495,13 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         layer->shapes.push_back(shape);
         layer->features.push_back(std::move(feature));
     };
-    auto find_prj = [&] {
+    // The CRS of a layer whose geometries OGR did not hand out: the .prj file as it is, for a
+    // Shapefile output, else parsed (once, by the layer).
+    auto take_crs = [&] {
+        if (!copy_prj) {
+            if (const OGRSpatialReference* srs = source.GetSpatialRef()) layer->srs.reset(srs->Clone());
+            return;
+        }
         for (const char* extension : {".prj", ".PRJ"}) {
             std::error_code error;
             if (std::filesystem::exists(std::filesystem::path(path).replace_extension(extension), error)) {
@@ -535,11 +542,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
         planned.record_vertex.push_back(vertices);
         planned.record_chain.push_back(static_cast<std::uint32_t>(map.chains.size()));
         in_file->layers.push_back(std::move(planned));
-        if (copy_prj) {
-            find_prj();
-        } else if (const OGRSpatialReference* srs = source.GetSpatialRef()) {
-            layer->srs.reset(srs->Clone());
-        }
+        take_crs();
         return true;
     };
     // A feature's FID where its run will find it (FeatureRun): a FlatGeobuf's must be its index, a
@@ -759,7 +762,7 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
                     std::vector<Point>().swap(records->xy);
                 }
                 map.chains.reserve(map.chains.size() + records->part_starts.size());
-                find_prj();
+                take_crs();
                 layer->shapes.reserve(features.size());
                 layer->features.reserve(features.size());
                 for (std::size_t r = 0; r < features.size(); ++r) {

@@ -1062,6 +1062,39 @@ std::string file_bytes(const std::filesystem::path& path) {
     return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// A line Shapefile going to another format: its shapes decoded here, not through OGR, and its
+// CRS parsed for the output: the GeoPackage written holds the input's CRS and every line as OGR
+// reads it from the input.
+TEST(ShapefileShapes, LinesGoingElsewhereKeepTheirCrs) {
+    const ShapeFile input("rivers", wkbLineString,
+                          {"LINESTRING (0 0,1 1,2 0)", "", "MULTILINESTRING ((10 10,11 12),(20 20,21 22,22 20))"});
+    map::MapData map;
+    const OgrDataset dataset = OgrDataset::read(input.path(), {}, map, /*prj_as_file=*/false);
+    const std::filesystem::path out = std::filesystem::path(input.path()).parent_path() / "rivers.gpkg";
+    WriteOptions options;
+    options.path = out.string();
+    dataset.write(options, map, std::vector<std::uint8_t>(map.vertices.size(), 1));
+    DatasetPtr written = open_vector(out.string());
+    DatasetPtr original = open_vector(input.path());
+    OGRLayer* layer = written->GetLayer(0);
+    OGRLayer* source = original->GetLayer(0);
+    ASSERT_NE(layer->GetSpatialRef(), nullptr);
+    EXPECT_TRUE(layer->GetSpatialRef()->IsSame(source->GetSpatialRef()));
+    EXPECT_TRUE(layer->GetSpatialRef()->IsGeographic());
+    std::size_t count = 0;
+    for (OGRFeatureUniquePtr feature{source->GetNextFeature()}; feature; feature.reset(source->GetNextFeature()), ++count) {
+        OGRFeatureUniquePtr copy{layer->GetNextFeature()};
+        ASSERT_TRUE(copy);
+        const OGRGeometry* expected = feature->GetGeometryRef();
+        const OGRGeometry* actual = copy->GetGeometryRef();
+        ASSERT_EQ(expected == nullptr, actual == nullptr) << count;
+        if (expected != nullptr) {
+            EXPECT_TRUE(expected->Equals(actual)) << count;
+        }
+    }
+    EXPECT_EQ(count, 3u);
+}
+
 // PolyLineWriter's .shp and .shx are byte for byte what OGR's Shapefile driver writes for the
 // same lines: NULL and empty geometries (null shapes), several parts with an empty one (left
 // out), a first record without a shape (the file's box then starts at 0), −0 beside 0 in the
