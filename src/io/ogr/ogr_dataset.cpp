@@ -433,11 +433,11 @@ void OgrDataset::Data::read_layer(const std::string& path, OGRLayer& source, map
     // Shapefile, its .prj file goes to the output as it is: OGR hands out each geometry with the
     // layer's CRS, and the first one makes the driver parse the .prj with PROJ (and search
     // proj.db for its EPSG code) — most of a small file's run, for a CRS that is only written
-    // back. Going elsewhere, the CRS is parsed once, as the output needs it. A .shp this reader does not take is
-    // read again through OGR, geometries and all. (Decoding on a thread of its own beside OGR saved
-    // 0.03 s on GSHHG but raised the peak of a run with 10 M control points by 30 MB: the thread's
-    // malloc arena stays.) With `leave_in_file`, the records are streamed and their vertices left
-    // in the file (VerticesInFile).
+    // back. Going elsewhere, the CRS is parsed once, as the output needs it. A .shp this reader
+    // does not take is read again through OGR, geometries and all. (Decoding on a thread of its
+    // own beside OGR saved 0.03 s on GSHHG but raised the peak of a run with 10 M control points
+    // by 30 MB: the thread's malloc arena stays.) With `leave_in_file`, the records are streamed
+    // and their vertices left in the file (VerticesInFile).
     // With `leave_in_file` the layer's vertices stay in its .shp (`shp`: the input, or the layer's
     // file in a folder), or NotInFile is thrown; the .prj goes to the output as it is only where
     // it would without it.
@@ -1606,11 +1606,11 @@ CPLStringList layer_options_for(const MapFormatRules* rules, const std::vector<s
 
 // Feature `index` of a layer lines_written_here takes, as a record of `shapes`: the kept vertices
 // of each of its chains a part (build_geometry's lines, without the empty parts, which OGR's
-// writer leaves out); NULL and empty geometries a null shape.
+// writer leaves out); NULL and empty geometries a null shape. `part_starts` and `xy` are the
+// caller's room for the record.
 void add_record_lines(PolyLineWriter& shapes, const OgrDataset::Data::Layer& layer, std::size_t index, const map::MapData& map,
-                      VertexView at, const std::vector<std::uint8_t>& kept, const std::string& layer_name, const std::string& path) {
-    thread_local std::vector<std::uint32_t> part_starts;
-    thread_local std::vector<Point> xy;
+                      VertexView at, const std::vector<std::uint8_t>& kept, const std::string& layer_name, const std::string& path,
+                      std::vector<std::uint32_t>& part_starts, std::vector<Point>& xy) {
     part_starts.clear();
     xy.clear();
     const OgrDataset::Data::Layer::Shape& shape = layer.shapes[index];
@@ -1806,6 +1806,8 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
             // A Shapefile of lines: OGR writes the attributes and the CRS (a layer without
             // geometry: the .dbf and .prj only, the same bytes), PolyLineWriter the shapes.
             std::optional<PolyLineWriter> shapes;
+            std::vector<std::uint32_t> part_starts;
+            std::vector<Point> xy;
             if (driver_name == "ESRI Shapefile" && layer_count == 1 && lines_written_here(layer, options)) {
                 shapes.emplace(output.staging_path(), options.path);
             }
@@ -1831,7 +1833,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 feature.SetFrom(layer.features[i].get(), field_map.data(), TRUE);
                 if (keep_fids) feature.SetFID(layer.features[i]->GetFID());
                 if (shapes) {
-                    add_record_lines(*shapes, layer, i, map, vertices.at(i), kept, name, options.path);
+                    add_record_lines(*shapes, layer, i, map, vertices.at(i), kept, name, options.path, part_starts, xy);
                 } else {
                     feature.SetGeometryDirectly(data.build_geometry(layer, i, map, vertices.at(i), kept).release());
                 }
