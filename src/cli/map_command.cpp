@@ -567,10 +567,11 @@ void check_outputs(const MapOptions& options, const std::vector<Level>& levels) 
 
 void check_spherical(const MapOptions& options, const MapInput& input) {
     if (!options.spherical) return;
-    for (const io::LayerSummary& layer : input.dataset->summary().layers) {
-        if (!layer.geographic) {
+    const std::vector<io::LayerSummary>& layers = input.dataset->summary().layers;
+    for (std::size_t k = 0; k < layers.size(); ++k) {
+        if (!input.dataset->geographic(k)) {
             throw io::InputError("--spherical ranks by areas on the sphere and needs longitude, latitude: '" + options.input +
-                                 "', layer '" + layer.layer + "' is not in a geographic CRS");
+                                 "', layer '" + layers[k].layer + "' is not in a geographic CRS");
         }
     }
 }

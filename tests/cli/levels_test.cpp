@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <regex>
@@ -168,6 +169,42 @@ TEST(Ranking, WeightedAndSphericalRunsAreCleanAndUnitsNeedTheSphere) {
     EXPECT_NE(projected.err.find("layer 'borders'"), std::string::npos) << projected.err;
     EXPECT_EQ(run_cli({"map", states, "-o", (dir / "w.gpkg").string(), "--weighting", "1.5"}).code, 2);
     EXPECT_FALSE(std::filesystem::exists(dir / "u.gpkg") || std::filesystem::exists(dir / "nh.gpkg") || std::filesystem::exists(dir / "w.gpkg"));
+}
+
+// A Shapefile's copy of `layer` of the GeoPackage `source`, at `shp`.
+void shapefile_copy(const std::string& source, const char* layer, const std::string& shp) {
+    GDALAllRegister();
+    GDALDatasetUniquePtr from(GDALDataset::Open(source.c_str(), GDAL_OF_VECTOR));
+    GDALDataset* to = GetGDALDriverManager()->GetDriverByName("ESRI Shapefile")->Create(shp.c_str(), 0, 0, 0, GDT_Unknown, nullptr);
+    ASSERT_NE(to, nullptr);
+    EXPECT_NE(to->CopyLayer(from->GetLayerByName(layer), std::filesystem::path(shp).stem().c_str()), nullptr);
+    GDALClose(to);
+}
+
+// A Shapefile going to a Shapefile carries its .prj as a file, unparsed; --spherical parses it then:
+// Natural Earth's polygons (longitude, latitude) are ranked on the sphere and their .prj goes to
+// the output as it was; NH's borders (Web Mercator) are refused, naming the layer, nothing written.
+TEST(Ranking, SphericalReadsTheCrsOfAShapefileCarriedAsAFile) {
+    const auto dir = fresh_dir("ranking-shp");
+    const std::string states = (dir / "states.shp").string(), borders = (dir / "borders.shp").string();
+    shapefile_copy(testdata("ne_states_slice.gpkg"), "states", states);
+    shapefile_copy(testdata("nh_borders.gpkg"), "borders", borders);
+    const std::filesystem::path out = dir / "out";
+    std::filesystem::create_directories(out);
+    const CliResult spherical = run_cli({"map", states, "-o", (out / "states.shp").string(), "--keep", "20%", "--spherical", "--json"});
+    ASSERT_EQ(spherical.code, 0) << spherical.err;
+    EXPECT_NE(spherical.out.find("\"spherical\":true"), std::string::npos) << spherical.out;
+    auto bytes = [](const std::filesystem::path& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::string(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_FALSE(bytes(dir / "states.prj").empty());
+    EXPECT_EQ(bytes(out / "states.prj"), bytes(dir / "states.prj"));
+    EXPECT_EQ(run_cli({"check", states, (out / "states.shp").string()}).code, 0);
+    const CliResult projected = run_cli({"map", borders, "-o", (out / "borders.shp").string(), "--spherical"});
+    EXPECT_EQ(projected.code, 2);
+    EXPECT_NE(projected.err.find("layer 'borders' is not in a geographic CRS"), std::string::npos) << projected.err;
+    EXPECT_FALSE(std::filesystem::exists(out / "borders.shp"));
 }
 
 }  // namespace

@@ -20,6 +20,7 @@
 #include <fstream>
 #include <functional>
 #include <sstream>
+#include <tuple>
 #include <limits>
 
 namespace toposimp::io {
@@ -1060,6 +1061,48 @@ TEST(GeoPackageLayers, FlatGeobufLeftInTheFile) {
 std::string file_bytes(const std::filesystem::path& path) {
     std::ifstream in(path, std::ios::binary);
     return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// A 2D polygon Shapefile going to a Shapefile is decoded here, its polygons put together as OGR's
+// driver does (organizePolygons, ONLY_CCW) and its .prj carried unparsed: the same map and, thinned
+// and written, the same .shp, .shx and .dbf as the layer read through OGR. Holes, multipolygons,
+// an island in a lake, a hole touching its shell, NULL and flat polygons.
+TEST(ShapefileShapes, PolygonsDecodedHereAreOgrsPolygons) {
+    std::vector<std::string> polygons = grid_polygons();
+    polygons.emplace_back("MULTIPOLYGON (((30 30,40 30,40 40,30 40,30 30),(32 32,32 38,38 38,38 32,32 32)),"
+                          "((34 34,36 34,36 36,34 36,34 34)))");  // an island in a lake
+    polygons.emplace_back("POLYGON ((50 50,60 50,60 60,50 60,50 50),(50 50,52 55,55 52,50 50),(56 56,58 56,58 58,56 56))");
+    polygons.emplace_back("MULTIPOLYGON (((70 70,71 70,71 71,70 70)),((72 70,74 70,74 72,72 72,72 70),(72.5 70.5,72.5 71.5,73.5 71.5,72.5 70.5)))");
+    const ShapeFile file("parcels", wkbPolygon, polygons);
+    map::MapData here, through_ogr;
+    const OgrDataset decoded = OgrDataset::read(file.path(), {}, here, /*prj_as_file=*/true);
+    const OgrDataset read_by_ogr = OgrDataset::read(file.path(), {}, through_ogr, /*prj_as_file=*/false);
+    ASSERT_EQ(here.vertices.size(), through_ogr.vertices.size());
+    EXPECT_EQ(std::memcmp(here.vertices.data(), through_ogr.vertices.data(), here.vertices.size() * sizeof(Point)), 0);
+    ASSERT_EQ(here.chains.size(), through_ogr.chains.size());
+    for (std::size_t c = 0; c < here.chains.size(); ++c) {
+        EXPECT_EQ(here.chains[c].first, through_ogr.chains[c].first);
+        EXPECT_EQ(here.chains[c].last, through_ogr.chains[c].last);
+    }
+    EXPECT_EQ(decoded.summary().sum(&LayerSummary::polygon_features), read_by_ogr.summary().sum(&LayerSummary::polygon_features));
+    EXPECT_EQ(decoded.summary().degenerate_rings, read_by_ogr.summary().degenerate_rings);
+    EXPECT_TRUE(decoded.geographic(0));
+    const std::filesystem::path out = std::filesystem::path(file.path()).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    const std::vector<std::uint8_t> kept = thinned(here, 2);
+    // (A Shapefile's writer finds outer rings and holes itself: the polygons' make-up shows in WKB.)
+    EXPECT_EQ(decoded.to_memory(here, kept).layers.at(0).wkb, read_by_ogr.to_memory(through_ogr, kept).layers.at(0).wkb);
+    for (const auto& [dataset, map, name] : {std::tuple{&decoded, &here, "here.shp"}, std::tuple{&read_by_ogr, &through_ogr, "ogr.shp"}}) {
+        WriteOptions options;
+        options.path = (out / name).string();
+        dataset->write(options, *map, kept);
+    }
+    for (const char* extension : {".shp", ".shx", ".dbf"}) {
+        const std::string expected = file_bytes(out / (std::string("ogr") + extension));
+        EXPECT_FALSE(expected.empty()) << extension;
+        EXPECT_EQ(file_bytes(out / (std::string("here") + extension)), expected) << extension;
+    }
 }
 
 // A line Shapefile going to another format: its shapes decoded here, not through OGR, and its
