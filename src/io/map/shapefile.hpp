@@ -1,5 +1,7 @@
 // Shapefile records read straight from the .shp, .shx and .dbf, not through OGR: control
-// points, and the shapes of a written output when they are read back.
+// points, the shapes of PolyLine layers (and of small Polygon layers going to a Shapefile), and
+// the shapes of a written output when they are read back; and the .shp and .shx of a PolyLine
+// output written (PolyLineWriter).
 //
 // Reading features through OGR makes the Shapefile driver parse the layer's .prj with PROJ
 // (and look for a matching EPSG entry in proj.db) the first time a geometry is handed out:
