@@ -183,7 +183,7 @@ public:
     const DatasetSummary& summary() const;
     // Is layer k's CRS longitude, latitude (degrees)? Asked only by --spherical: a Shapefile's .prj
     // carried to the output as a file is parsed here, not when the layer is read (PROJ opening
-    // its database takes 15-40 ms, a tenth of a small map's run).
+    // its database: a small line Shapefile's run 0.135 -> 0.107 s without it).
     bool geographic(std::size_t layer) const;
     const VerticesInFile* vertices_in_file() const;  // nullptr: the map holds its vertices
 
