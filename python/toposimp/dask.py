@@ -608,6 +608,7 @@ class _Tasks:
         # pass (the first pass came with the answers above), until the bucket it falls in is small
         # enough to be gathered here.
         wanted = steps.wanted()
+        marks = steps.marks  # (off now for a count target that runs as --max)
 
         def dense(histograms):
             total = numpy.zeros(1 << 16, dtype=numpy.uint64)

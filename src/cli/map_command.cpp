@@ -415,6 +415,10 @@ void report(const map::SimplifyStats& stats, const map::StopCriterion& stop, con
         log.warn("target not reached: removed {} of the {} vertices asked for; no more can go without changing topology",
                  stats.removed, stats.removal_goal);
     }
+    if (stats.swept_as_max) {
+        log.debug("the target asks for at least as many removals as the rules can ever allow (chain ends, pinned vertices and "
+                  "each ring's last 3 locations stay): run as --max, in one sweep");
+    }
     log.debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP", stats.predicates.filter_decided,
               stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks);
     const double memory = peak_memory_mib();
@@ -443,7 +447,7 @@ std::string json_summary(const MapOptions& options, const map::StopCriterion& st
     json.field("features", features).field("vertices_in", stats.vertices_in).field("vertices_out", stats.vertices_out);
     json.field("removed", stats.removed).field("control_points", stats.control_points);
     json.object("target").field("criterion", describe(stop)).field("removal_goal", stats.removal_goal);
-    json.field("reached", stats.target_reached).end();
+    json.field("reached", stats.target_reached).field("swept_as_max", stats.swept_as_max).end();
     json.object("blocked")
         .field("total", stats.blocked())
         .field("point_in_triangle", stats.blocked_by_point)

@@ -7,6 +7,9 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+#include <string>
+
 namespace toposimp {
 namespace {
 
@@ -186,6 +189,68 @@ TEST(RandomMapsParallel, CountTargetsLandExactly) {
         }
     }
     EXPECT_GT(reached, runs * 3 / 4);
+}
+
+// The most any run can remove, counted here from the rules' own terms: chain ends stay, pinned
+// vertices stay, and a closed chain keeps min(3, d) of its d distinct locations, its ends at
+// one of them (so min(2, d − 1) of its interior vertices, which pinned ones may be).
+std::uint64_t most_that_can_go(const map::MapData& map, std::uint64_t pinned) {
+    std::uint64_t interior = 0, ring_minimum = 0;
+    for (const map::Chain& chain : map.chains) {
+        if (chain.last > chain.first) interior += chain.last - chain.first - 1;
+        const Point first = map.vertices[chain.first], last = map.vertices[chain.last];
+        if (chain.last == chain.first || first.x != last.x || first.y != last.y) continue;
+        std::set<std::pair<double, double>> locations;
+        for (std::uint32_t v = chain.first; v < chain.last; ++v) {
+            locations.emplace(map.vertices[v].x + 0.0, map.vertices[v].y + 0.0);  // (−0 as 0)
+        }
+        ring_minimum += std::min<std::uint64_t>(2, locations.size() - 1);
+    }
+    const std::uint64_t queued = interior - pinned;
+    return queued - std::min(queued, ring_minimum > pinned ? ring_minimum - pinned : 0);
+}
+
+// A count target asking for at least that many removals cannot be reached by any run: it runs
+// as --max (one sweep, no rounds) and gives --max's result; one removal fewer runs in rounds and
+// never removes more than asked. And --max never removes more than the bound (which is what
+// makes the first case safe).
+TEST(RandomMapsParallel, ACountTargetNoRunCanReachRunsAsMax) {
+    int swept = 0;
+    for (Setting setting : settings()) {
+        setting.map.rings = 8;
+        setting.map.roads = 2;
+        for (std::uint64_t seed = 0; seed < 10; ++seed) {
+            std::mt19937_64 rng(seed * 7919 + 3);
+            const map::MapData input = testing::random_planar_map(rng, setting.map);
+            const std::string what = std::string(setting.name) + " seed " + std::to_string(seed);
+            for (const int threads : {1, 3}) {
+                map::SimplifyOptions options;
+                options.parallel_threshold = 0;
+                options.threads = threads;
+                options.stop = {map::Target::max, 0};
+                const map::SimplifyResult max = map::simplify(input, options);
+                const std::uint64_t bound = most_that_can_go(input, max.stats.pinned_by_crossing);
+                ASSERT_LE(max.stats.removed, bound) << what;
+                if (bound == 0) continue;
+                options.stop = {map::Target::remove_points, static_cast<double>(bound)};
+                const map::SimplifyResult at_bound = map::simplify(input, options);
+                EXPECT_TRUE(at_bound.stats.swept_as_max) << what;
+                EXPECT_EQ(at_bound.kept, max.kept) << what;
+                EXPECT_EQ(at_bound.stats.rounds, 0u) << what;
+                EXPECT_EQ(at_bound.stats.removal_goal, bound) << what;
+                EXPECT_EQ(at_bound.stats.target_reached, max.stats.removed == bound) << what;
+                options.stop = {map::Target::keep_points, 0};
+                EXPECT_EQ(map::simplify(input, options).kept, max.kept) << what;
+                options.stop = {map::Target::remove_points, static_cast<double>(bound - 1)};
+                const map::SimplifyResult below = map::simplify(input, options);
+                EXPECT_FALSE(below.stats.swept_as_max) << what;
+                EXPECT_GE(below.stats.rounds, 1u) << what;
+                EXPECT_LE(below.stats.removed, bound - 1) << what;
+                swept += at_bound.stats.swept_as_max;
+            }
+        }
+    }
+    EXPECT_GT(swept, 50);
 }
 
 // Repeated runs give the same output (no dependence on addresses or hash order).

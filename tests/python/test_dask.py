@@ -90,7 +90,10 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     client, workers = cluster
     lines, places = {"gpkg": generated, "shapefile": generated_shapefiles, "polygon shapefile": generated_cells}[input_kind]
     suffix = ".gpkg" if input_kind == "gpkg" else ".shp"
-    arguments = [str(lines), "-p", str(places), "--keep", "10%", *SAME_DATE]
+    # Targets that rounds reach (crossing rivers and roads pin many vertices: a target no run can
+    # reach runs as --max, in one round).
+    keep = {"gpkg": "30%", "shapefile": "50%", "polygon shapefile": "10%"}[input_kind]
+    arguments = [str(lines), "-p", str(places), "--keep", keep, *SAME_DATE]
     reference = tmp_path / ("reference" + suffix)
     done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -201,7 +204,8 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
 
     client, _ = cluster
     polygons_and_lines, places = generated
-    for target in (["--max"], ["--max-area", "0.002"], ["--keep-points", "30000"], ["--remove-points", "5000"]):
+    # (--keep 10%: more than any run can remove, so run as --max; the others in rounds.)
+    for target in (["--max"], ["--max-area", "0.002"], ["--keep-points", "30000"], ["--remove-points", "5000"], ["--keep", "10%"]):
         arguments = [str(polygons_and_lines), "-p", str(places), *target, *SAME_DATE]
         reference = tmp_path / "reference.gpkg"
         subprocess.run([binary, "map", *arguments, "-o", str(reference), "--overwrite"], check=True, capture_output=True)
@@ -219,7 +223,7 @@ def test_budget_selected_pass_by_pass_on_the_workers(cluster, generated, binary,
 
     client, _ = cluster
     polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "15%", *SAME_DATE]
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "35%", *SAME_DATE]
     reference = tmp_path / "reference.gpkg"
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     monkeypatch.setattr(toposimp_dask, "PAIRS_GATHERED", 0)
@@ -315,7 +319,7 @@ def test_levels_and_published_precision(cluster, generated, binary, tmp_path):
 def test_command_line(generated, binary, tmp_path):
     """The module as a command: its own LocalCluster, toposimp map's options and --json."""
     polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "20%", *SAME_DATE]
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
     reference = tmp_path / "reference.gpkg"
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     output = tmp_path / "dask.gpkg"

@@ -203,7 +203,8 @@ def crossing_map(tmp_path_factory):
                                  points=600, seed=5)
 
 
-@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"], ["--keep-points", "1500"], ["--max-area", "2e-4"]])
+# (--keep 10%: more than any run can remove here, run as --max: no selection.)
+@pytest.mark.parametrize("target", [["--keep", "50%"], ["--max"], ["--keep-points", "1500"], ["--max-area", "2e-4"], ["--keep", "10%"]])
 @pytest.mark.parametrize("level, gather_after", [(0, 0), (2, 0), (2, 3), (3, 1)])
 def test_first_round_by_stages_gives_the_same_bytes(binary, tmp_path, crossing_map, target, level, gather_after):
     """The first round built, searched, selected and run by the stages' tasks (each tile pickled
@@ -221,8 +222,10 @@ def test_first_round_by_stages_gives_the_same_bytes(binary, tmp_path, crossing_m
     status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output)], first, level, 700, 0, None, False, False)
     assert status == 0, err
     assert output.read_bytes() == reference.read_bytes()
+    swept = '"swept_as_max":true' in done.stdout
+    assert swept == (target == ["--keep", "10%"])
     if target[0] in ("--keep", "--keep-points"):
-        assert first.stages == ["pairs" if gather_after < 3 else "ids"]
+        assert first.stages == ([] if swept else ["pairs" if gather_after < 3 else "ids"])
     with pytest.raises(RuntimeError, match="the first round is over"):
         first.steps.border()
 

@@ -31,7 +31,9 @@
 // the `missing` smallest current areas as its budget (a threshold plus a mark on exactly those
 // vertices) and lets every block remove marked vertices up to the threshold; a round never
 // removes more than it marked, and the next round starts from what is left. So the count lands
-// exactly on the target when the target can be reached at all.
+// exactly on the target when the target can be reached at all. A count target that asks for at
+// least as many removals as the rules could ever allow (SimplifyStats::swept_as_max) cannot be
+// reached by any run: it runs as --max.
 #pragma once
 
 #include "core/exact/predicates.hpp"
@@ -103,6 +105,9 @@ struct SimplifyStats {
     std::uint64_t removed = 0;
     std::uint64_t removal_goal = 0;          // for count targets; 0 otherwise
     bool target_reached = true;              // false if a count target could not be met
+    // A count target asking for at least as many removals as the rules could ever allow (chain
+    // ends stay, rings keep 3 locations, pinned vertices stay): run as --max, in one sweep.
+    bool swept_as_max = false;
     std::uint64_t blocked_by_point = 0;      // removals refused: a point in the triangle
     std::uint64_t blocked_by_ring = 0;       // refused: a ring would lose area or orientation
     std::uint64_t blocked_by_coincidence = 0;  // refused: two segments would coincide

@@ -341,11 +341,13 @@ public:
     void found(std::span<const std::uint32_t> border, const exact::PredicateStats& predicates);
     // The segments leaving a tile that meet another, over every tile (sorted; after every found).
     const std::vector<std::uint32_t>& border();
+    // Whether the tiles run on marks (a count target's budget): asked of queue(), and again after
+    // wanted(), which turns it off for a count target that runs as --max (swept_as_max).
     bool marks() const { return marks_; }
     // The tiles' queue(): what each pinned and queued.
     void queued(std::uint64_t pinned, std::uint64_t keys);
     // How many of the smallest keys the first budget takes: 0 when no selection is to be made
-    // (--max, --max-area; a count target with nothing to go).
+    // (--max, --max-area; a count target with nothing to go, or run as --max).
     std::uint64_t wanted();
     void bound(parallel::KeyedSelection selection);
     double bound_key() const { return so_far_.bound_key; }

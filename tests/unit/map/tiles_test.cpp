@@ -29,6 +29,7 @@ void expect_same(const SimplifyResult& parts, const SimplifyResult& whole, const
     EXPECT_EQ(parts.stats.predicates.gmp_fallbacks, whole.stats.predicates.gmp_fallbacks) << what;
     EXPECT_EQ(parts.stats.removal_goal, whole.stats.removal_goal) << what;
     EXPECT_EQ(parts.stats.target_reached, whole.stats.target_reached) << what;
+    EXPECT_EQ(parts.stats.swept_as_max, whole.stats.swept_as_max) << what;
 }
 
 // The same but for the predicates' counts, which a first round built by parts (FirstRound) counts
@@ -71,14 +72,19 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
         const MapData map = testing::random_planar_map(rng, shape);
         const GridPlan plan = plan_grid(map);
         ASSERT_GE(plan.levels, 3u) << "the map should have several levels of blocks";
+        // Count targets that rounds reach: removing 60 % or 30 % of what --max removes (the roads'
+        // crossings pin many vertices: 10 % of the vertices, say, no run could reach).
+        double most = 0;
         for (const Target target : {Target::max, Target::max_area, Target::keep_fraction, Target::keep_points}) {
             SimplifyOptions options;
-            const double quarter = static_cast<double>(map.vertices.size() / 4);
-            options.stop = {target, target == Target::keep_fraction ? 0.1 : target == Target::keep_points ? quarter : 2.0};
+            const double all = static_cast<double>(map.vertices.size());
+            options.stop = {target, target == Target::keep_fraction ? 1 - 0.6 * most / all : target == Target::keep_points ? all - 0.3 * most : 2.0};
             options.parallel_threshold = 0;
             options.threads = 2;
             const SimplifyResult whole = simplify(map, options);
             ASSERT_GT(whole.stats.removed, 0u);
+            ASSERT_FALSE(whole.stats.swept_as_max) << "count targets here run in rounds";
+            if (target == Target::max) most = static_cast<double>(whole.stats.removed);
             for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
                 const std::string what = "seed " + std::to_string(seed) + ", target " + std::to_string(static_cast<int>(target)) +
                                          ", tile level " + std::to_string(tile_level);
@@ -117,6 +123,34 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
     }
 }
 
+// A count target that no run can reach runs as --max in every way of running in parts too: the
+// single process's result, which is --max's.
+TEST(MapTiles, ACountTargetNoRunCanReachRunsAsMaxInParts) {
+    std::mt19937_64 rng(5);
+    testing::RandomMapOptions shape;
+    shape.chains = 100;
+    shape.max_steps = 50;
+    shape.rings = 40;
+    shape.control_points = 800;
+    shape.roads = 4;
+    const MapData map = testing::random_planar_map(rng, shape);
+    const GridPlan plan = plan_grid(map);
+    SimplifyOptions options;
+    options.parallel_threshold = 0;
+    options.threads = 2;
+    options.stop = {Target::max, 0};
+    const SimplifyResult max = simplify(map, options);
+    for (const StopCriterion stop : {StopCriterion{Target::keep_points, 0}, StopCriterion{Target::keep_fraction, 0.001}}) {
+        options.stop = stop;
+        const SimplifyResult whole = simplify(map, options);
+        ASSERT_TRUE(whole.stats.swept_as_max);
+        ASSERT_EQ(whole.kept, max.kept);
+        for (unsigned tile_level = 0; tile_level <= plan.levels; tile_level += 2) {
+            expect_same_in_tiles(map, options, tile_level, whole, "tile level " + std::to_string(tile_level));
+        }
+    }
+}
+
 // The first round by parts on what random maps lack: frozen chains (never simplified, yet in the
 // crossing search: here roads frozen over the map), chains of one vertex, and long segments
 // that pass through tiles holding none of their vertices.
@@ -139,9 +173,10 @@ TEST(MapTiles, TheFirstRoundByPartsWithFrozenChainsLoneVerticesAndLongSegments) 
     ASSERT_GE(plan.levels, 3u);
     for (const Target target : {Target::max, Target::keep_fraction}) {
         SimplifyOptions options;
-        options.stop = {target, 0.2};
+        options.stop = {target, 0.6};
         const SimplifyResult whole = simplify(map, options);
         ASSERT_GT(whole.stats.pinned_by_crossing, 0u);
+        ASSERT_FALSE(whole.stats.swept_as_max) << "the count target runs in rounds";
         for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
             for (const std::size_t part : {std::size_t{1}, std::size_t{500}}) {
                 expect_same_but_predicates(simplify_by_parts(map, options, tile_level, part), whole,
@@ -165,7 +200,7 @@ TEST(MapTiles, GroupSizesAreWhatTheGroupsHold) {
     shape.roads = 6;
     const MapData map = testing::random_planar_map(rng, shape);
     SimplifyOptions options;
-    options.stop = {Target::keep_fraction, 0.1};
+    options.stop = {Target::keep_fraction, 0.6};
     options.parallel_threshold = 0;
     MapInParts parts(map, options, 1);
     int rounds = 0, groups_seen = 0;
@@ -398,14 +433,22 @@ TEST(MapTiles, APinchedRingKeepsItsLobesAtEveryTileLevel) {
         return std::hypot(q.x - 40, q.y - 50) < 10.5 || (q.x > 49 && q.x < 71 && q.y > 39 && q.y < 61);
     });
     ASSERT_EQ(plan_grid(map).levels, plan.levels);
+    std::uint64_t max_kept = 0;
     for (const Target target : {Target::max, Target::keep_points}) {
         SimplifyOptions options;
-        options.stop = {target, target == Target::max ? 0.0 : 3.0};
+        // The count target: what --max keeps, reached in rounds (3, say, no run could reach: it
+        // would run as --max).
+        options.stop = {target, static_cast<double>(max_kept)};
         const SimplifyResult whole = simplify(map, options);
+        max_kept = whole.stats.vertices_out;
+        EXPECT_EQ(whole.stats.swept_as_max, false);
+        EXPECT_EQ(whole.stats.rounds > 0, target == Target::keep_points);
         const std::vector<std::uint8_t> ring_kept(whole.kept.begin(), whole.kept.begin() + static_cast<std::ptrdiff_t>(ring.size()));
         EXPECT_EQ(std::count(ring_kept.begin() + 1, ring_kept.begin() + kLeft, 1), 2) << "two of the left lobe's vertices stay";
         for (std::size_t v = kLeft; v < ring.size(); ++v) EXPECT_EQ(ring_kept[v], 1) << "the pinch and the right lobe stay";
-        EXPECT_GT(whole.stats.blocked_by_coincidence, 0u);
+        if (target == Target::max) {
+            EXPECT_GT(whole.stats.blocked_by_coincidence, 0u);  // (the rounds need not try)
+        }
         for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
             expect_same_in_tiles(map, options, tile_level, whole,
                         "target " + std::to_string(static_cast<int>(target)) + ", tile level " + std::to_string(tile_level));
