@@ -492,9 +492,11 @@ PolyLineWriter::PolyLineWriter(const std::string& shp, std::string shown_as) {
     if (!state_->shp_file.is_open() || !state_->shx_file.is_open()) {
         throw OutputError("cannot write '" + state_->shown_as + "': " + std::strerror(errno));
     }
-    const std::array<unsigned char, kHeader> placeholder{};
-    state_->shp_file.put(placeholder.data(), placeholder.size());
-    state_->shx_file.put(placeholder.data(), placeholder.size());
+    // Room for the headers, which hold the files' lengths and the box: finish() writes them
+    // over it once the records are written.
+    const std::array<unsigned char, kHeader> header_room{};
+    state_->shp_file.put(header_room.data(), header_room.size());
+    state_->shx_file.put(header_room.data(), header_room.size());
 }
 
 PolyLineWriter::PolyLineWriter(PolyLineWriter&&) noexcept = default;
