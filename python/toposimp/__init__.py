@@ -28,6 +28,10 @@ Example::
 
 from __future__ import annotations
 
+from . import _launch
+
+_launch.restart_the_dask_command()  # (first: before the engine and numpy load)
+
 import json
 import logging
 import threading

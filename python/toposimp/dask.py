@@ -28,7 +28,7 @@ import os
 import signal
 import sys
 
-from toposimp import _toposimp
+from toposimp import _launch, _toposimp
 
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
@@ -173,27 +173,27 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     vertices; `send_input` sends them the parts from here instead. `worker_malloc`: the allocator
     of the LocalCluster's workers, "auto" (jemalloc where installed), "jemalloc" or "glibc"
     (_worker_malloc)."""
+    if first_round not in ("workers", "here"):
+        raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
     if local_budget is None:
         local_budget = LOCAL_BUDGET
     malloc = _worker_malloc(worker_malloc, os.environ) if client is None and not scheduler else {}
     verbose = any(a == "--verbose" or (len(a) > 1 and a[0] == "-" and set(a[1:]) == {"v"}) for a in map_arguments)
     progress = _Progress(quiet)
+    if verbose:
+        sys.stderr.write(f"toposimp.dask: debug: this process's glibc tunables: {os.environ.get('GLIBC_TUNABLES') or '(none)'}\n")
     own = {}  # the client and LocalCluster made here, if any
-    if client is None:
-        _import_distributed_meanwhile()
+    connecting = _Connecting(scheduler) if client is None else None
 
     def connected():
         if client is not None:
             return client
         if "client" not in own:
-            from distributed import Client, LocalCluster
             if scheduler:
-                try:
-                    own["client"] = Client(scheduler)
-                except (OSError, ValueError) as error:  # (unreachable: OSError after Dask's connect timeout)
-                    from toposimp import UsageError
-                    raise UsageError(f"cannot reach the Dask scheduler at {scheduler}: {error}") from None
+                own["client"] = connecting.take()
             else:
+                from distributed import Client, LocalCluster
+
                 # Nothing on the terminal but the run's own lines (none with -q):
                 # - a new worker process first purges the folders of workers that died without
                 #   cleaning up (a killed run's) and says so at INFO, before LocalCluster quiets its
@@ -202,7 +202,7 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                 # - the scheduler, without a dashboard, still serves HTTP (health, metrics), on
                 #   Dask's dashboard port unless told otherwise, with a warning when another
                 #   cluster's dashboard holds it: any free port.
-                with _environment(DASK_LOGGING__DISTRIBUTED="warning", GLIBC_TUNABLES=_huge_pages(os.environ.get("GLIBC_TUNABLES", "")),
+                with _environment(DASK_LOGGING__DISTRIBUTED="warning", GLIBC_TUNABLES=_launch.huge_pages(os.environ.get("GLIBC_TUNABLES", "")),
                                   **malloc):
                     own["cluster"] = LocalCluster(n_workers=workers or os.cpu_count(), threads_per_worker=1, processes=True,
                                                   dashboard_address=None, scheduler_kwargs={"dashboard_address": ":0"})
@@ -213,8 +213,6 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                                      f"(--worker-malloc {worker_malloc})\n")
         return own["client"]
 
-    if first_round not in ("workers", "here"):
-        raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
     run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here")
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
@@ -222,6 +220,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                                                  sys.stderr.isatty(), _main_thread(),
                                                  input_on_workers=first_round == "workers" and not send_input)
     finally:
+        if connecting is not None:
+            connecting.close()
         if "client" in own:
             own["client"].close()
         if "cluster" in own:
@@ -246,22 +246,10 @@ def _environment(**variables):
                 os.environ[name] = value
 
 
-def _huge_pages(tunables):
-    """glibc's tunables `tunables` with malloc asking for transparent huge pages for the heap
-    (glibc.malloc.hugetlb=1), unless they say otherwise: a map's arrays of hundreds of MB then sit
-    on 2 MiB pages where the kernel's THP mode is `madvise` (fewer page faults, fewer TLB misses;
-    the toposimp command does the same for its own process). Read by glibc when a process starts:
-    set for the worker processes started here, and for this command's own process by
-    _restart_with_huge_pages."""
-    if "glibc.malloc.hugetlb" in tunables:
-        return tunables
-    return tunables + (":" if tunables else "") + "glibc.malloc.hugetlb=1"
-
-
 def _worker_malloc(which, environ):
     """The environment the LocalCluster's workers get for their allocator `which` ("auto",
     "jemalloc" or "glibc"): jemalloc preloaded (LD_PRELOAD), asking for transparent huge pages
-    (MALLOC_CONF thp:always, as _huge_pages does for glibc's; a MALLOC_CONF of the user's is
+    (MALLOC_CONF thp:always, as _launch.huge_pages does for glibc's; a MALLOC_CONF of the user's is
     kept instead), unless the environment already preloads something (then nothing changes; with
     "jemalloc" too). A worker runs task after task, each building its tiles' arrays afresh and
     freeing them: glibc hands blocks over 32 MiB back to the kernel at once (its largest mmap
@@ -295,30 +283,45 @@ def _malloc_here():
         return "unknown"
 
 
-def _restart_with_huge_pages():
-    """`python3 -m toposimp.dask` started without glibc.malloc.hugetlb in GLIBC_TUNABLES: the same
-    command line again, in this process, with it (see _huge_pages)."""
-    tunables = os.environ.get("GLIBC_TUNABLES", "")
-    if "glibc.malloc.hugetlb" in tunables or not getattr(sys, "orig_argv", None):
-        return
-    try:
-        os.execve(sys.executable, sys.orig_argv, dict(os.environ, GLIBC_TUNABLES=_huge_pages(tunables)))
-    except OSError:
-        pass  # (then without)
+class _Connecting:
+    """distributed imported (a third of a second) and, given a scheduler's address, a Client made,
+    on a thread of its own while the engine reads the input without the GIL (0.3-0.4 s of every run
+    against a running scheduler that would otherwise wait for the input to be read); take() waits
+    for them."""
 
+    def __init__(self, scheduler):
+        import threading
 
-def _import_distributed_meanwhile():
-    """Imports distributed (a third of a second) on a thread of its own while the engine reads the
-    input without the GIL; the first use of it waits for that import (Python's import lock)."""
-    import threading
+        self.scheduler, self.client, self.error = scheduler, None, None
+        self.thread = threading.Thread(target=self._run, name="toposimp.dask connect", daemon=True)
+        self.thread.start()
 
-    def load():
+    def _run(self):
         try:
-            import distributed  # noqa: F401
-        except Exception:  # (the import in connected() raises it again, where it is reported)
-            pass
+            import distributed
+            if self.scheduler:
+                self.client = distributed.Client(self.scheduler)
+        except Exception as error:  # (raised again by take(), where it is reported)
+            self.error = error
 
-    threading.Thread(target=load, name="toposimp.dask import", daemon=True).start()
+    def take(self):
+        """The Client (the caller closes it), once made; raises what stopped it."""
+        from toposimp import UsageError
+
+        self.thread.join()
+        if isinstance(self.error, (OSError, ValueError)):  # (unreachable: OSError after Dask's connect timeout)
+            raise UsageError(f"cannot reach the Dask scheduler at {self.scheduler}: {self.error}") from None
+        if self.error is not None:
+            raise self.error
+        client, self.client = self.client, None
+        return client
+
+    def close(self):
+        """The Client closed, if it was made and not taken."""
+        self.thread.join()
+        if self.client is not None:
+            self.client.close()
+            self.client = None
 
 
 # What a worker holds besides its tiles (Python, Dask, numpy, this package: 115 MiB measured), and
@@ -781,5 +784,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    _restart_with_huge_pages()
+    _launch.restart_with_huge_pages()  # (run as a script: the package did it for -m)
     sys.exit(main())

@@ -75,12 +75,12 @@ def main():
     env = dict(CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
-    from toposimp import dask as toposimp_dask
+    from toposimp import _launch as toposimp_launch, dask as toposimp_dask
 
     if a.worker_env:
         worker_env = dict(v.split("=", 1) for v in a.worker_env if v)
     else:
-        worker_env = {"GLIBC_TUNABLES": toposimp_dask._huge_pages(""), **toposimp_dask._worker_malloc("auto", CLEAN_ENV)}
+        worker_env = {"GLIBC_TUNABLES": toposimp_launch.huge_pages(""), **toposimp_dask._worker_malloc("auto", CLEAN_ENV)}
 
     rows = []
     with tempfile.TemporaryDirectory() as folder:

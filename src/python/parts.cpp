@@ -1143,6 +1143,16 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     const auto start = Clock::now();
     unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : 0;
     std::uint64_t budget = 1'000'000;  // (the first round's parts' size too; this if the tile level is given and tile_points is a callable)
+    bool first_here = true;  // the first round's tiles built here (or on the workers: run_groups.first_round)
+    {
+        py::gil_scoped_acquire gil;
+        first_here = !py::hasattr(run_groups, "first_round");
+    }
+    if (in_file && first_here) throw std::logic_error("a map's vertices left in its file, and its first round here");
+    // Built here, the whole map's engine is set up and searched for crossings first: tile_points
+    // may wait for the workers (toposimp.dask connects meanwhile), and the tile level is set after.
+    std::unique_ptr<map::MapInParts> parts;
+    if (first_here) parts = std::make_unique<map::MapInParts>(map, options, level, here_below);
     {
         py::gil_scoped_acquire gil;
         if (tile_level < 0) {
@@ -1161,7 +1171,7 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
         }
         grid = map::plan_grid(box.min_x, box.min_y, box.max_x, box.max_y, std::size_t{vertices} + map.control_points.size());
     } else {
-        grid = map::plan_grid(map);
+        grid = parts ? parts->plan() : map::plan_grid(map);
     }
     if (tile_level < 0) {
         level = tile_level_for(grid, budget, [&](auto&& add) {
@@ -1223,16 +1233,9 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
             for (const Point p : map.control_points) add(p);
         });
     }
-    bool first_here = true;  // the first round's tiles built here (or on the workers: run_groups.first_round)
-    {
-        py::gil_scoped_acquire gil;
-        first_here = !py::hasattr(run_groups, "first_round");
-    }
-    if (in_file && first_here) throw std::logic_error("a map's vertices left in its file, and its first round here");
-    std::unique_ptr<map::MapInParts> parts;
     unsigned round = 1;
     if (first_here) {
-        parts = std::make_unique<map::MapInParts>(map, options, level, here_below);
+        parts->set_tile_level(level);
     } else {
         // The map is cut into parts on the workers, and the first round's tiles are built, searched
         // and run there; this process holds only what FirstRoundLead holds, then the live map.

@@ -354,6 +354,37 @@ def test_command_line_asks_for_huge_pages(generated, tmp_path):
                                "--workers", "1", "-v"], capture_output=True, text=True, timeout=300, env=environment)
         assert done.returncode == 0, done.stderr
         assert ("transparent huge pages asked for" in done.stderr) == asked, (tunables, done.stderr[:2000])
+        # (The command's heap thresholds with them, where the command asked.)
+        assert ("glibc.malloc.mmap_threshold=33554432" in done.stderr) == asked, (tunables, done.stderr[:2000])
+
+
+def test_the_command_restarts_before_the_engine_loads():
+    """The package restarts `python3 -m toposimp.dask` itself (glibc reads its tunables when a
+    process starts), before the engine and numpy load: it knows the command from the interpreter's
+    command line, whatever options come before -m, and no other."""
+    from toposimp import _launch
+
+    for argv, runs in ((["python3", "-m", "toposimp.dask", "map", "in.shp"], True),
+                       (["python3", "-X", "importtime", "-W", "error", "-u", "-m", "toposimp.dask"], True),
+                       (["python3", "-mtoposimp.dask"], True),
+                       (["python3", "-m", "toposimp"], False),
+                       (["python3", "-m", "toposimp.dask2"], False),
+                       (["python3", "script.py", "-m", "toposimp.dask"], False),
+                       (["python3", "-c", "import toposimp", "-m", "toposimp.dask"], False),
+                       (["python3", "-m"], False),
+                       (["python3"], False)):
+        assert _launch.runs_module(argv, "toposimp.dask") == runs, argv
+    assert _launch.command_tunables("") == \
+        "glibc.malloc.hugetlb=1:glibc.malloc.mmap_threshold=33554432:glibc.malloc.trim_threshold=268435456"
+    assert _launch.command_tunables("glibc.malloc.trim_threshold=0:glibc.malloc.hugetlb=0") == \
+        "glibc.malloc.trim_threshold=0:glibc.malloc.hugetlb=0:glibc.malloc.mmap_threshold=33554432"
+    # In a restarted command, the engine was not loaded before the restart: run with a tunable
+    # set, the first process would have loaded it and printed nothing.
+    done = subprocess.run([sys.executable, "-X", "importtime", "-m", "toposimp.dask", "--help"], capture_output=True, text=True,
+                          env={name: value for name, value in os.environ.items() if name != "GLIBC_TUNABLES"}, timeout=120)
+    assert done.returncode == 0, done.stderr
+    loads = [line for line in done.stderr.splitlines() if line.rstrip().endswith("toposimp._toposimp")]
+    assert len(loads) == 1, done.stderr[-3000:]
 
 
 def test_quiet_run_with_big_tiles_prints_nothing(cluster, binary, tmp_path):

@@ -586,6 +586,13 @@ public:
         return tile_level_;
     }
 
+    // Before the first round: the tile level start_parts set, changed (capped at the levels).
+    unsigned set_tile_level(unsigned tile_level) {
+        if (rounds_started_ != 0 || stats_.rounds != 0) throw std::logic_error("a run in parts' tile level changed after its first round");
+        tile_level_ = std::min(tile_level, levels_);
+        return tile_level_;
+    }
+
     // `here_below`: a round of a count target whose budget is smaller runs here, whole.
     bool next_part_round(std::uint64_t here_below) {
         if (!use_marks_) return rounds_started_++ == 0;
@@ -2276,6 +2283,8 @@ MapInParts::~MapInParts() = default;
 const GridPlan& MapInParts::plan() const { return plan_; }
 
 unsigned MapInParts::tile_level() const { return tile_level_; }
+
+void MapInParts::set_tile_level(unsigned tile_level) { tile_level_ = engine_->set_tile_level(tile_level); }
 
 bool MapInParts::next_round() { return engine_->next_part_round(here_below_); }
 

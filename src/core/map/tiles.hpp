@@ -182,6 +182,9 @@ public:
 
     const GridPlan& plan() const;
     unsigned tile_level() const;
+    // Another tile level (capped at the plan's levels), before the first round: the set-up and
+    // the crossing search, which the constructor runs, do not depend on it.
+    void set_tile_level(unsigned tile_level);
     // Starts a round (one for --max and --max-area; count targets: while vertices are to go and
     // can); false when there is none left.
     bool next_round();

@@ -151,6 +151,47 @@ TEST(MapTiles, ACountTargetNoRunCanReachRunsAsMaxInParts) {
     }
 }
 
+// The tile level set after the engine is built (MapInParts::set_tile_level: toposimp.dask learns
+// it from the workers while the set-up and the crossing search run) gives what building it at that
+// level gives, capped at the levels; once a round has started it can no longer change.
+TEST(MapTiles, TheTileLevelSetAfterTheSetUpIsTheOneBuiltWith) {
+    std::mt19937_64 rng(7);
+    testing::RandomMapOptions shape;
+    shape.chains = 100;
+    shape.max_steps = 50;
+    shape.rings = 40;
+    shape.control_points = 800;
+    shape.roads = 2;
+    const MapData map = testing::random_planar_map(rng, shape);
+    const GridPlan plan = plan_grid(map);
+    ASSERT_GE(plan.levels, 3u);
+    SimplifyOptions options;
+    options.parallel_threshold = 0;
+    options.threads = 2;
+    options.stop = {Target::keep_points, static_cast<double>(map.vertices.size()) * 0.8};
+    const SimplifyResult whole = simplify(map, options);
+    ASSERT_GT(whole.stats.rounds, 1u);
+    auto run = [&](MapInParts& parts) {
+        while (parts.next_round()) {
+            std::vector<TileOutcome> outcomes;
+            for (std::vector<TileInput>& group : parts.tile_groups()) {
+                for (TileOutcome& outcome : run_tile_group(std::move(group), parts.plan(), options)) outcomes.push_back(std::move(outcome));
+            }
+            parts.finish_round(outcomes);
+        }
+        return parts.result();
+    };
+    for (const unsigned tile_level : {1u, plan.levels - 1, plan.levels + 5}) {
+        MapInParts parts(map, options, 0);
+        parts.set_tile_level(tile_level);
+        EXPECT_EQ(parts.tile_level(), std::min(tile_level, plan.levels));
+        expect_same(run(parts), whole, "tile level " + std::to_string(tile_level) + " set after");
+    }
+    MapInParts started(map, options, 1);
+    ASSERT_TRUE(started.next_round());
+    EXPECT_THROW(started.set_tile_level(2), std::logic_error);
+}
+
 // The first round by parts on what random maps lack: frozen chains (never simplified, yet in the
 // crossing search: here roads frozen over the map), chains of one vertex, and long segments
 // that pass through tiles holding none of their vertices.
