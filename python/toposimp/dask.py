@@ -90,6 +90,33 @@ def _run_groups(groups, plan, options):
     return [engine.run_tile_group(group, plan, options) for group in groups]
 
 
+def _given(value):
+    """`value`. A task's argument written `(_given, value)` is a task nested in it: Dask then sends
+    the whole task through its serializers, which carry numpy arrays out of band, as they are,
+    instead of pickling the arguments into one bytes object (a copy of every array, which Dask then
+    scans for `__main__`). With _tiles_uncompressed, GSHHG at 10 % on 2 workers: 4.36 -> 4.17 s
+    (medians of 6 alternating runs)."""
+    return value
+
+
+@contextlib.contextmanager
+def _tiles_uncompressed():
+    """Dask's compression of what this client sends off while a round's tiles go, unless the user
+    chose one (distributed.comm.compression is "auto" by default: lz4 where installed). Serialized
+    out of band (_given), the tiles' arrays would be compressed, and coordinates compress badly:
+    GSHHG's 217 MB of tiles to 166 MB, for 0.29 s of this process's CPU: about what sending the
+    difference takes over a 1 Gb/s network (0.4 s), far more than over 10 Gb/s or loopback. On a
+    slower network, set it (e.g. DASK_DISTRIBUTED__COMM__COMPRESSION=lz4)."""
+    import dask.config
+    import distributed  # noqa: F401 (its defaults loaded first: leaving dask.config.set removes the keys it added)
+
+    if dask.config.get("distributed.comm.compression") != "auto":
+        yield
+        return
+    with dask.config.set({"distributed.comm.compression": False}):
+        yield
+
+
 def _batches(points, workers):
     """The round's groups (their sizes in points) as tasks: the biggest first, so that the round
     does not wait at its end on one big task begun late; the small ones together, up to the
@@ -503,7 +530,7 @@ class _Tasks:
 
         # (A task's tiles travel with it by design: each is used once. Dask's advice to scatter
         # them first would only add a round trip; its warning must not reach the user's terminal.)
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _tiles_uncompressed():
             warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
             return self._run_round(groups, plan, options, round_number)
 
@@ -679,7 +706,7 @@ class _Tasks:
             batch = next(following, None)
             if batch is None:
                 return
-            future = _submit(client, _run_groups, [groups[k] for k in batch], plan=plan, options=options)
+            future = _submit(client, _run_groups, (_given, [groups[k] for k in batch]), plan=plan, options=options)
             place[future.key] = batch
             running.add(future)
 

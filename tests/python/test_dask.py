@@ -529,6 +529,25 @@ def test_quiet_local_cluster_after_a_killed_run(generated, binary, tmp_path):
     assert output.read_bytes() == reference.read_bytes()
 
 
+def test_tiles_go_uncompressed_unless_the_user_chose_a_compression():
+    """While a round's tiles are sent, Dask's default compression ("auto": lz4) is off; a
+    compression the user set is kept; the configuration is as it was afterwards."""
+    import dask.config
+
+    from toposimp import dask as toposimp_dask
+
+    before = dask.config.get("distributed.comm.compression")
+    assert before == "auto"
+    with toposimp_dask._tiles_uncompressed():
+        assert dask.config.get("distributed.comm.compression") is False
+    assert dask.config.get("distributed.comm.compression") == "auto"
+    with dask.config.set({"distributed.comm.compression": "zlib"}):
+        with toposimp_dask._tiles_uncompressed():
+            assert dask.config.get("distributed.comm.compression") == "zlib"
+    assert dask.config.get("distributed.comm.compression") == "auto"
+    assert toposimp_dask._given([1, 2]) == [1, 2]
+
+
 def test_worker_malloc_is_chosen_as_asked(monkeypatch):
     """--worker-malloc: 'auto' preloads jemalloc where it is installed and leaves glibc's malloc
     where not, 'jemalloc' where it is not installed is a usage error, and an LD_PRELOAD or
