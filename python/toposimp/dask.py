@@ -87,6 +87,8 @@ LOCAL_BUDGET = 4_000_000
 def _run_groups(groups, plan, options):
     """A Dask task: groups of tiles, each through the levels below the tile level in turn."""
     from toposimp import _toposimp as engine
+    if type(groups) is tuple and groups and groups[0] is _given:  # (a Dask that hands nested tasks over as they are)
+        groups = groups[1]
     return [engine.run_tile_group(group, plan, options) for group in groups]
 
 

@@ -51,6 +51,42 @@ def test_groups_built_when_asked_for(binary, tmp_path):
         rounds[0][0]
 
 
+def test_vertex_ids_travel_as_runs_while_they_are_consecutive(binary, tmp_path):
+    """A tile's whole-map vertex ids travel as (first, count) runs of consecutive ids where that takes
+    at most half the room (the first round: every vertex live, a piece of a chain is a run), one
+    by one where not (later rounds: the live vertices' ids have gaps); either way through a pickle,
+    the output is toposimp map's."""
+    import pickle
+    import subprocess
+
+    arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "-p", f"{DATA / 'nh_borders.gpkg'}:places", "--keep", "10%",
+                 *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    kinds = {}
+
+    def run_groups(groups, plan, options, round_number):
+        outcomes = []
+        for group in groups:
+            moved = pickle.loads(pickle.dumps(list(group)))
+            for tile in moved:
+                assert ("vertex_runs" in tile) != ("vertex_id" in tile)
+                if "vertex_runs" in tile:
+                    runs = tile["vertex_runs"]
+                    assert runs.ndim == 2 and runs.shape[1] == 2 and 4 * len(runs) <= len(tile["vertices"])
+                    assert int(runs[:, 1].sum()) == len(tile["vertices"])
+                kinds.setdefault(round_number, set()).add("vertex_runs" if "vertex_runs" in tile else "vertex_id")
+            outcomes.append(_toposimp.run_tile_group(moved, plan, options))
+        return outcomes
+
+    output = tmp_path / "parts.gpkg"
+    status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output)], run_groups, 2, 0, 0, None, False, False)
+    assert status == 0, err
+    assert kinds[1] == {"vertex_runs"}
+    assert "vertex_id" in set().union(*(kinds[r] for r in kinds if r > 1)), kinds
+    assert output.read_bytes() == reference.read_bytes()
+
+
 def test_outcomes_must_match_the_groups(tmp_path):
     """run_groups giving back the wrong number of outcomes stops the run with an error, no output."""
     arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "--max", "-o", str(tmp_path / "out.gpkg")]
@@ -85,7 +121,15 @@ def test_tasks_take_the_biggest_groups_first_and_small_ones_together():
     (lambda t: t.update(chains=t["chains"][1:]), "the chains do not"),
     (lambda t: t.update(waits=numpy.zeros(4, dtype=numpy.uint32)), "'waits' has the wrong shape"),
     (lambda t: t.update(state=t["state"][1:]), "vertex_id or state is not one per vertex"),
-    (lambda t: t.pop("vertex_id"), "no 'vertex_id'"),
+    (lambda t: t.pop("vertex_runs"), "no 'vertex_id'"),
+    (lambda t: t.update(vertex_runs=numpy.array([[0, len(t["vertices"]) + 1]], dtype=numpy.uint32)),
+     "the vertex id runs do not give one id per vertex"),
+    (lambda t: t.update(vertex_runs=numpy.array([[0, len(t["vertices"]) - 1]], dtype=numpy.uint32)),
+     "the vertex id runs do not give one id per vertex"),
+    (lambda t: t.update(vertex_runs=numpy.array([[2**32 - 1, len(t["vertices"])]], dtype=numpy.uint32)),
+     "the vertex id runs do not give one id per vertex"),
+    (lambda t: t.update(vertex_runs=numpy.array([[0, 0], [0, len(t["vertices"])]], dtype=numpy.uint32)),
+     "the vertex id runs do not give one id per vertex"),
 ])
 def test_a_malformed_tile_stops_the_run(tmp_path, damage, message):
     """A tile task given damaged data (what a worker of another version, or a corrupted transfer,
