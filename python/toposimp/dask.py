@@ -313,25 +313,34 @@ def _malloc_here():
 
 
 class _Connecting:
-    """distributed imported (a third of a second) and, given a scheduler's address, a Client made,
-    on a thread of its own while the engine reads the input without the GIL (0.3-0.4 s of every run
-    against a running scheduler that would otherwise wait for the input to be read); take() waits
-    for them."""
+    """distributed imported and, given a scheduler's address, a Client made, on a thread of its
+    own while the engine reads the input and sets up without the GIL (the 0.4 s they take then
+    overlap the engine's work: 0.1 s less a run on GSHHG, whose set-up keeps both cores busy);
+    take() waits for them. close() never waits: a run that stops first (bad input, Ctrl-C) must not
+    wait for an unreachable scheduler's connect timeout; a Client made after that is closed by the
+    thread that made it."""
 
     def __init__(self, scheduler):
         import threading
 
-        self.scheduler, self.client, self.error = scheduler, None, None
+        self.scheduler, self.client, self.error, self.abandoned = scheduler, None, None, False
+        self.lock = threading.Lock()
         self.thread = threading.Thread(target=self._run, name="toposimp.dask connect", daemon=True)
         self.thread.start()
 
     def _run(self):
+        client = None
         try:
             import distributed
             if self.scheduler:
-                self.client = distributed.Client(self.scheduler)
+                client = distributed.Client(self.scheduler)
         except Exception as error:  # (raised again by take(), where it is reported)
             self.error = error
+        with self.lock:
+            if not self.abandoned:
+                self.client, client = client, None
+        if client is not None:
+            client.close()
 
     def take(self):
         """The Client (the caller closes it), once made; raises what stopped it."""
@@ -342,15 +351,17 @@ class _Connecting:
             raise UsageError(f"cannot reach the Dask scheduler at {self.scheduler}: {self.error}") from None
         if self.error is not None:
             raise self.error
-        client, self.client = self.client, None
+        with self.lock:
+            client, self.client = self.client, None
         return client
 
     def close(self):
-        """The Client closed, if it was made and not taken."""
-        self.thread.join()
-        if self.client is not None:
-            self.client.close()
-            self.client = None
+        """The Client closed, if it was made and not taken; one still being made, once it is."""
+        with self.lock:
+            self.abandoned = True
+            client, self.client = self.client, None
+        if client is not None:
+            client.close()
 
 
 # What a worker holds besides its tiles (Python, Dask, numpy, this package: 115 MiB measured), and

@@ -297,6 +297,30 @@ def test_unreachable_scheduler_is_a_usage_error(tmp_path):
     assert not output.exists()
 
 
+def test_bad_input_does_not_wait_for_an_unreachable_scheduler(tmp_path):
+    """The command connects to --scheduler while the engine reads; a run that stops on its input
+    first reports that at once, without waiting out Dask's connect timeout (60 s here)."""
+    import socket
+
+    with socket.socket() as probe:  # a port nobody listens on (a host that never answers, as far as this run sees)
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+        probe.listen(0)  # (bound and listening, never accepting: the connect hangs until its timeout)
+        bad = tmp_path / "bad.geojson"
+        bad.write_text('{"type": "FeatureCollection", "features": [{"type": "Feature", "properties": {}, '
+                       '"geometry": {"type": "LineString", "coordinates": [[0, 0], [1]]}}]}')
+        output = tmp_path / "out.gpkg"
+        env = dict(os.environ, DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT="60s")
+        start = time.monotonic()
+        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", str(bad), "-o", str(output), "--keep", "10%",
+                               "--scheduler", f"tcp://127.0.0.1:{port}"], capture_output=True, text=True, timeout=120, env=env)
+        seconds = time.monotonic() - start
+    assert done.returncode != 0 and "Traceback" not in done.stderr, done.stderr
+    assert "bad.geojson" in done.stderr, done.stderr
+    assert seconds < 30, (seconds, done.stderr)
+    assert not output.exists()
+
+
 def test_levels_and_published_precision(cluster, generated, binary, tmp_path):
     """--levels (each level a run in parts on the previous one) and --decimals: the same files."""
     from toposimp import dask as toposimp_dask
