@@ -1,6 +1,7 @@
 """python3 -m toposimp.dask: the map engine's tiles as Dask tasks on a real scheduler and workers
 (separate processes, TCP on 127.0.0.1), the output byte for byte toposimp map's, also when a
 worker is killed in the middle."""
+import json
 import os
 import pathlib
 import signal
@@ -297,6 +298,22 @@ def test_unreachable_scheduler_is_a_usage_error(tmp_path):
     assert not output.exists()
 
 
+def test_the_command_ends_with_its_streams_flushed_and_atexit_run():
+    """The command ends without Python's teardown (toposimp.dask._exit): first the atexit handlers
+    run and what is left in the standard streams' buffers goes out, through pipes too; the status
+    is main()'s."""
+    script = ("import atexit, sys\n"
+              "from toposimp import dask\n"
+              "atexit.register(lambda: sys.stderr.write('atexit ran'))\n"
+              "sys.stdout.write('x' * 100)\n"
+              "dask._exit(3)\n")
+    buffered = {name: value for name, value in os.environ.items() if name != "PYTHONUNBUFFERED"}
+    done = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=120, env=buffered)
+    assert done.returncode == 3, done.stderr
+    assert done.stdout == "x" * 100
+    assert done.stderr.endswith("atexit ran"), done.stderr
+
+
 def test_bad_input_does_not_wait_for_an_unreachable_scheduler(tmp_path):
     """The command connects to --scheduler while the engine reads; a run that stops on its input
     first reports that at once, without waiting out Dask's connect timeout (60 s here)."""
@@ -351,7 +368,8 @@ def test_command_line(generated, binary, tmp_path):
                            "--tile-level", "2", "--local-budget", "0", "--json", "--first-round", "workers"],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
-    assert '"command":"map"' in done.stdout
+    report = json.loads(done.stdout)
+    assert report["command"] == "map" and report["vertices_out"] < report["vertices_in"]
     assert "round 2, tiles of level 2:" in done.stderr and "tasks done" in done.stderr
     assert "searching the tiles for crossings:" in done.stderr  # (the first round's stages on the workers)
     assert output.read_bytes() == reference.read_bytes()
