@@ -119,7 +119,7 @@ std::vector<map::Chain> consecutive_chains(const py::dict& dict, const char* key
 // A tile's whole-map vertex ids, as `vertex_runs`, (first id, count) pairs of consecutive ids,
 // where that takes at most half the room of `vertex_id`, an id a vertex: a piece of a chain is a
 // run of the whole map's vertices while they are all live (GSHHG's first round: 39 MB of ids in
-// 74 tiles, 1.4 MB as runs), and the ids of later rounds' live vertices have gaps.
+// 74 tiles, 37 kB as runs), and the ids of later rounds' live vertices have gaps.
 void put_vertex_ids(py::dict& dict, const std::vector<std::uint32_t>& ids) {
     std::vector<std::pair<std::uint32_t, std::uint32_t>> runs;
     for (std::size_t k = 0; k < ids.size() && 4 * runs.size() <= ids.size();) {
