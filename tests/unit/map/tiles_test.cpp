@@ -54,6 +54,27 @@ void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, un
     expect_same_but_predicates(simplify_by_parts(map, options, tile_level, 64), whole, what + ", by parts");
 }
 
+// A random map of 100 chains and 40 rings, 800 control points and `roads` roads crossing it.
+MapData small_random_map(std::uint64_t seed, int roads) {
+    std::mt19937_64 rng(seed);
+    testing::RandomMapOptions shape;
+    shape.chains = 100;
+    shape.max_steps = 50;
+    shape.rings = 40;
+    shape.control_points = 800;
+    shape.roads = roads;
+    return testing::random_planar_map(rng, shape);
+}
+
+// Options for `stop` on two threads, in parallel however small the map.
+SimplifyOptions on_two_threads(StopCriterion stop) {
+    SimplifyOptions options;
+    options.parallel_threshold = 0;
+    options.threads = 2;
+    options.stop = stop;
+    return options;
+}
+
 // Big enough random maps for 4–5 levels of blocks: every tile level from 0 (no level in tiles)
 // to the top (one tile, nothing above), the levels from the tile level up as one more tile; and
 // at each level one of the other ways in turn: those levels over the whole map's engine, small
@@ -126,19 +147,9 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
 // A count target that no run can reach runs as --max in every way of running in parts too: the
 // single process's result, which is --max's.
 TEST(MapTiles, ACountTargetNoRunCanReachRunsAsMaxInParts) {
-    std::mt19937_64 rng(5);
-    testing::RandomMapOptions shape;
-    shape.chains = 100;
-    shape.max_steps = 50;
-    shape.rings = 40;
-    shape.control_points = 800;
-    shape.roads = 4;
-    const MapData map = testing::random_planar_map(rng, shape);
+    const MapData map = small_random_map(5, 4);
     const GridPlan plan = plan_grid(map);
-    SimplifyOptions options;
-    options.parallel_threshold = 0;
-    options.threads = 2;
-    options.stop = {Target::max, 0};
+    SimplifyOptions options = on_two_threads({Target::max, 0});
     const SimplifyResult max = simplify(map, options);
     for (const StopCriterion stop : {StopCriterion{Target::keep_points, 0}, StopCriterion{Target::keep_fraction, 0.001}}) {
         options.stop = stop;
@@ -155,20 +166,10 @@ TEST(MapTiles, ACountTargetNoRunCanReachRunsAsMaxInParts) {
 // it from the workers while the set-up and the crossing search run) gives what building it at that
 // level gives, capped at the levels; once a round has started it can no longer change.
 TEST(MapTiles, TheTileLevelSetAfterTheSetUpIsTheOneBuiltWith) {
-    std::mt19937_64 rng(7);
-    testing::RandomMapOptions shape;
-    shape.chains = 100;
-    shape.max_steps = 50;
-    shape.rings = 40;
-    shape.control_points = 800;
-    shape.roads = 2;
-    const MapData map = testing::random_planar_map(rng, shape);
+    const MapData map = small_random_map(7, 2);
     const GridPlan plan = plan_grid(map);
     ASSERT_GE(plan.levels, 3u);
-    SimplifyOptions options;
-    options.parallel_threshold = 0;
-    options.threads = 2;
-    options.stop = {Target::keep_points, static_cast<double>(map.vertices.size()) * 0.8};
+    const SimplifyOptions options = on_two_threads({Target::keep_points, static_cast<double>(map.vertices.size()) * 0.8});
     const SimplifyResult whole = simplify(map, options);
     ASSERT_GT(whole.stats.rounds, 1u);
     auto run = [&](MapInParts& parts) {
