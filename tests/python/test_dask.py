@@ -129,6 +129,24 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
 
         monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_killing)
 
+    # The workers listen here, so each round's tiles go to them straight (_StraightSender): the
+    # killed worker's tasks are cancelled with their tiles, and sent again.
+    sent, lost = [], []
+    straight_submit, straight_lost = toposimp_dask._StraightSender.submit, toposimp_dask._StraightSender.lost
+
+    def counted_submit(self, *arguments):
+        sent.append(1)
+        return straight_submit(self, *arguments)
+
+    def counted_lost(self, future):
+        answer = straight_lost(self, future)
+        if answer:
+            lost.append(future.key)
+        return answer
+
+    monkeypatch.setattr(toposimp_dask._StraightSender, "submit", counted_submit)
+    monkeypatch.setattr(toposimp_dask._StraightSender, "lost", counted_lost)
+
     output = tmp_path / ("dask" + suffix)
     capsys.readouterr()
     status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0,
@@ -136,6 +154,9 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
     assert status == 0
     assert killed, "no worker had tasks under way after the first results"
     assert killed["tasks"] > 0
+    assert sent, "the rounds' tiles did not go to the workers straight"
+    if first_round == "here":  # (killed in a round: its tasks sent again)
+        assert lost, "no task was lost with the killed worker"
     if first_round == "workers":  # (killed in the first round: its tiles, held by the worker, are built again)
         assert any(key.startswith("_first_run") for key in killed["keys"]), killed["keys"]
     assert killed["address"] not in client.scheduler_info()["workers"]
@@ -569,6 +590,29 @@ def test_quiet_local_cluster_after_a_killed_run(generated, binary, tmp_path):
     assert not stale.exists()  # (purged: a new worker met it)
     assert done.stderr == ""
     assert output.read_bytes() == reference.read_bytes()
+
+
+def test_tiles_go_straight_only_to_workers_on_this_machine():
+    """The command sends a round's tiles to the workers itself only where it surely reaches them:
+    every worker on a loopback address or one of this host's; else through the scheduler."""
+    import socket
+    from toposimp import dask as toposimp_dask
+
+    class Client:
+        def __init__(self, *addresses):
+            self.addresses = addresses
+
+        def scheduler_info(self):
+            return {"workers": {address: {} for address in self.addresses}}
+
+    here = toposimp_dask._workers_here
+    assert here(Client("tcp://127.0.0.1:40001", "tcp://127.0.0.1:40002"))
+    assert here(Client("tcp://[::1]:40001"))
+    assert here(Client(f"tcp://{socket.gethostname()}:40001"))
+    assert not here(Client("tcp://127.0.0.1:40001", "tcp://192.0.2.7:40002"))  # (TEST-NET-1: never this host)
+    assert not here(Client("tcp://192.0.2.7:40002"))
+    assert not here(Client("inproc://10.0.0.1/1234/1"))
+    assert not here(Client())
 
 
 def test_tiles_go_uncompressed_unless_the_user_chose_a_compression():
