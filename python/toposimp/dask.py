@@ -33,7 +33,7 @@ from toposimp import _launch, _toposimp
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
                                    [--task-threads N] [--local-budget N] [--first-round WHERE]
-                                   [--send-input] [--worker-malloc WHICH]
+                                   [--send-input] [--worker-malloc WHICH] [--top-runs N]
 
 toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
 
@@ -71,6 +71,11 @@ Dask options:
                        (GSHHG at 10 % on 2 workers here: 7.4-7.5 s against 8.7-9.9 s). Workers started by
                        you (--scheduler) use what their environment says, e.g.
                        LD_PRELOAD=libjemalloc.so.2 MALLOC_CONF=thp:always dask worker ...
+  --top-runs N         the levels above the tiles over a small part of the live map, not all
+                       of it: runs of N live vertices on either side of their candidates, the
+                       points near them (N twice as long while they fall short; 0, the default:
+                       the whole live map). The same output; the step towards a live map that
+                       stays on the workers (docs/distributed.md)
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
@@ -174,6 +179,7 @@ def _split_arguments(argv):
     parser.add_argument("--first-round", choices=("workers", "here"), default="here")
     parser.add_argument("--send-input", action="store_true")
     parser.add_argument("--worker-malloc", choices=("auto", "jemalloc", "glibc"), default="auto")
+    parser.add_argument("--top-runs", type=int, default=0)
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
@@ -183,12 +189,14 @@ def _split_arguments(argv):
         parser.error("--tile-points must be at least 1")
     if options.local_budget < 0:
         parser.error("--local-budget must be 0 or more")
+    if not 0 <= options.top_runs < 2**31:
+        parser.error("--top-runs must be 0 or more")
     return options, rest
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
         local_budget=None, client=None, quiet=False, on_progress=None, first_round="here", send_input=False,
-        worker_malloc="auto"):
+        worker_malloc="auto", top_runs=0):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
@@ -202,7 +210,9 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     the same absolute path, unchanged, on every worker), and this process never holds the input's
     vertices; `send_input` sends them the parts from here instead. `worker_malloc`: the allocator
     of the LocalCluster's workers, "auto" (jemalloc where installed), "jemalloc" or "glibc"
-    (_worker_malloc)."""
+    (_worker_malloc). `top_runs` (> 0): the levels above the tiles run over a subset of the live
+    map, runs of that many vertices around their candidates (MapInParts::top_subset): the same
+    output."""
     if first_round not in ("workers", "here"):
         raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
     if local_budget is None:
@@ -243,7 +253,7 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                                      f"(--worker-malloc {worker_malloc})\n")
         return own["client"]
 
-    run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here")
+    run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here", top_runs=top_runs)
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
                                                  lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
@@ -525,9 +535,11 @@ class _Tasks:
     client `connected()` gives, their outcomes back in order; and the first round built on the
     workers (first_round), unless `first_here`."""
 
-    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True):
+    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0):
         self.connected, self.task_threads = connected, task_threads
         self.progress, self.on_progress = progress, on_progress
+        if top_runs > 0:
+            self.top_runs = top_runs  # (read by the engine: run_in_parts)
         self.checked = []  # the clients whose workers were checked
         if not first_here:
             self.first_round = self._first_round
@@ -847,8 +859,8 @@ def _submit(client, function, *arguments, **keywords):
         return client.submit(function, *arguments, pure=False, **keywords)
 
 
-def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True):
-    return _Tasks(connected, task_threads, progress, on_progress, first_here)
+def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0):
+    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs)
 
 
 class Tiles:
@@ -901,7 +913,7 @@ def main(argv=None):
         return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
                    tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
                    first_round=options.first_round, send_input=options.send_input,
-                   worker_malloc=options.worker_malloc, quiet=quiet)
+                   worker_malloc=options.worker_malloc, top_runs=options.top_runs, quiet=quiet)
     except KeyboardInterrupt:
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")
         return 128 + (ended_by[0] if ended_by else signal.SIGINT)

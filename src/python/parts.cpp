@@ -1178,15 +1178,24 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     unsigned level = tile_level >= 0 ? static_cast<unsigned>(tile_level) : 0;
     std::uint64_t budget = 1'000'000;  // (the first round's parts' size too; this if the tile level is given and tile_points is a callable)
     bool first_here = true;  // the first round's tiles built here (or on the workers: run_groups.first_round)
+    std::uint32_t top_runs = 0;  // the levels from the tile level up over a subset of the live map (run_groups.top_runs)
     {
         py::gil_scoped_acquire gil;
         first_here = !py::hasattr(run_groups, "first_round");
+        if (py::hasattr(run_groups, "top_runs")) top_runs = run_groups.attr("top_runs").cast<std::uint32_t>();
     }
     if (in_file && first_here) throw std::logic_error("a map's vertices left in its file, and its first round here");
     // Built here, the whole map's engine is set up and searched for crossings first: tile_points
     // may wait for the workers (toposimp.dask connects meanwhile), and the tile level is set after.
     std::unique_ptr<map::MapInParts> parts;
     if (first_here) parts = std::make_unique<map::MapInParts>(map, options, level, here_below);
+    const auto run_top = [&] {
+        if (top_runs == 0) {
+            parts->run_top_here();
+        } else {
+            map::run_top_over_subsets(*parts, options, top_runs);
+        }
+    };
     {
         py::gil_scoped_acquire gil;
         if (tile_level < 0) {
@@ -1289,7 +1298,7 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
             steps->close();
         }
         parts = steps->take();
-        parts->run_top_here();
+        run_top();
         ++round;
     }
     const double set_up = seconds(start);
@@ -1325,7 +1334,7 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
             parts->keep_live_only();
             whole = false;
         }
-        parts->run_top_here();
+        run_top();
     }
     map::SimplifyResult result = parts->result();
     // The phases: set-up and the crossing search; the rounds (tiles and the levels above).

@@ -231,11 +231,13 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
         arguments = [str(polygons_and_lines), "-p", str(places), *target, *SAME_DATE]
         reference = tmp_path / "reference.gpkg"
         subprocess.run([binary, "map", *arguments, "-o", str(reference), "--overwrite"], check=True, capture_output=True)
-        for level, first_round in ((0, "workers"), (2, "here"), (-1, "workers")):
+        # (top_runs: the levels above the tiles over a subset of the live map, its runs of 1 at
+        # first, too short somewhere, or of 4.)
+        for level, first_round, top_runs in ((0, "workers", 0), (2, "here", 0), (-1, "workers", 0), (2, "here", 1), (-1, "workers", 4)):
             output = tmp_path / f"level{level}.gpkg"
             assert toposimp_dask.run([*arguments, "-o", str(output), "--overwrite"], client=client, tile_level=level,
-                                     local_budget=0 if level != 2 else 2000, quiet=True, first_round=first_round) == 0
-            assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}, first round {first_round}"
+                                     local_budget=0 if level != 2 else 2000, quiet=True, first_round=first_round, top_runs=top_runs) == 0
+            assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}, first round {first_round}, top runs {top_runs}"
 
 
 def test_budget_selected_pass_by_pass_on_the_workers(cluster, generated, binary, tmp_path, monkeypatch):
@@ -386,7 +388,7 @@ def test_command_line(generated, binary, tmp_path):
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     output = tmp_path / "dask.gpkg"
     done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "2",
-                           "--tile-level", "2", "--local-budget", "0", "--json", "--first-round", "workers"],
+                           "--tile-level", "2", "--local-budget", "0", "--json", "--first-round", "workers", "--top-runs", "3"],
                           capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stderr
     report = json.loads(done.stdout)
@@ -395,7 +397,10 @@ def test_command_line(generated, binary, tmp_path):
     assert "searching the tiles for crossings:" in done.stderr  # (the first round's stages on the workers)
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
-    assert usage.returncode == 0 and all(option in usage.stdout for option in ("--scheduler", "--first-round", "--send-input"))
+    assert usage.returncode == 0 and all(option in usage.stdout for option in ("--scheduler", "--first-round", "--send-input", "--top-runs"))
+    negative = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--top-runs",
+                               "-1"], capture_output=True, text=True)
+    assert negative.returncode == 2 and "--top-runs" in negative.stderr and not (tmp_path / "no.gpkg").exists()
     wrong = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--first-round",
                             "nowhere"], capture_output=True, text=True)
     assert wrong.returncode == 2 and "--first-round" in wrong.stderr and not (tmp_path / "no.gpkg").exists()

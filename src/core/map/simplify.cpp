@@ -24,6 +24,7 @@
 #include <span>
 #include <stdexcept>
 #include <unordered_map>
+#include <unordered_set>
 
 namespace toposimp::map {
 
@@ -250,6 +251,20 @@ public:
     std::vector<std::pair<std::uint32_t, std::uint32_t>> all() {
         const std::lock_guard lock(mutex_);
         return {blocker_of_.begin(), blocker_of_.end()};
+    }
+
+    // The vertices waiting on `blocker`, in no order; their waits go on.
+    std::vector<std::uint32_t> waiting_on(std::uint32_t blocker) {
+        const std::lock_guard lock(mutex_);
+        const auto found = waiters_of_.find(blocker);
+        return found == waiters_of_.end() ? std::vector<std::uint32_t>{} : found->second;
+    }
+
+    // The vertex `waiter` waits on, or kNone.
+    std::uint32_t blocker_of(std::uint32_t waiter) {
+        const std::lock_guard lock(mutex_);
+        const auto found = blocker_of_.find(waiter);
+        return found == blocker_of_.end() ? kNone : found->second;
     }
 
     // The vertices waiting on `blocker`, in id order; their waits end.
@@ -508,6 +523,13 @@ public:
         slot_.assign(vertex_count_, kNone);
         initial_distinct_ = distinct_;
         initial_orientation_ = orientation_;
+        if (!tile.cut_end.empty()) {
+            cut_end_ = tile.cut_end;
+            for (std::uint32_t c = 0; c < map_.chains.size(); ++c) {
+                if (whole_level_[c] != kOpen) pieces_of_[tile.chain_id[c]].push_back(c);
+            }
+            for (std::size_t k = 0; k < tile.outside.size(); ++k) outside_at_[std::uint64_t{tile.outside[k].chain} << 8 | tile.outside[k].level] = k;
+        }
     }
 
     std::vector<RingLocations> open_rings(unsigned level) const {
@@ -558,6 +580,7 @@ public:
             }
         }
         out.stats = stats_;
+        out.exhausted = exhausted_.load(std::memory_order_relaxed);
         return out;
     }
 
@@ -1021,6 +1044,224 @@ public:
         input.bound_key = bound_.key;
         input.bound_id = bound_.id;
         return input;
+    }
+
+    // The levels from the tile level up as one more tile over a subset of the live vertices
+    // (docs/distributed.md, "What is left", item 4), instead of all of them (top_input):
+    // - runs of `runs` live vertices on either side of each candidate of those levels, and of
+    //   runs / 8 around each vertex waiting on a vertex of a run (a waiter let go there is judged
+    //   there); two runs one vertex apart join; a ring that may come down to its last 4
+    //   locations comes whole;
+    // - each run ends with a cut end, the live vertex beyond (fixed here: a removal next to one
+    //   exhausts the subset, finish_part_top_subset refuses it, and longer runs are the answer);
+    // - lone: the live vertices and control points in the runs' boxes, where every triangle the
+    //   top judges lies (its three corners are of one run), and the vertices the subset's
+    //   vertices wait on; a lone vertex at the location of a run's vertex or cut end comes with
+    //   its neighbours (as a run of one: the coincidence rule reads them);
+    // - per ring cut into runs, its fixed locations outside the runs at each level it is split at
+    //   (they do not change while the subset runs, or it is exhausted).
+    // The subset's vertices keep the whole map's order, so every tie breaks as before.
+    TileInput top_subset_input(std::uint32_t runs) {
+        ensure_grid();
+        const unsigned t = tile_level_;
+        std::unordered_set<std::uint32_t> in_run, whole_rings;
+        std::unordered_map<std::uint32_t, std::uint32_t> run_vertices_of;  // ring → its vertices in runs
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> seeds;  // (vertex, run length either side)
+        // A waiter's run: shorter (a waiter is judged here only if its blocker goes, and the runs
+        // around waiters of waiters would spread over the map), as long once runs hold any chain.
+        const std::uint32_t waiter_runs = runs >= (1u << 30) ? runs : runs / 8;
+        for (unsigned level = t; level < levels_; ++level) {
+            for (const std::uint32_t v : later_[level]) {
+                if (state_[v] == State::queued) seeds.emplace_back(v, runs);
+            }
+        }
+        const auto into_run = [&](std::uint32_t u) {
+            if (!in_run.insert(u).second) return;
+            for (const std::uint32_t w : waits_.waiting_on(u)) seeds.emplace_back(w, waiter_runs);
+            if (whole_level_[chain_of_[u]] != kOpen) ++run_vertices_of[chain_of_[u]];
+        };
+        std::unordered_set<std::uint32_t> cut, lone;
+        std::vector<std::uint32_t> control;  // indexes into indexed_points_
+        std::vector<std::uint32_t> sorted;
+        for (;;) {
+            while (!seeds.empty()) {
+                const auto [v, k] = seeds.back();
+                seeds.pop_back();
+                if (state_[v] == State::removed) continue;
+                into_run(v);
+                std::uint32_t u = v;
+                for (std::uint32_t i = 0; i < k && prev_[u] != kNone; ++i) into_run(u = prev_[u]);
+                u = v;
+                for (std::uint32_t i = 0; i < k && next_[u] != kNone; ++i) into_run(u = next_[u]);
+                if (!seeds.empty()) continue;
+                for (const auto& [c, count] : run_vertices_of) {
+                    if (distinct_[c] > 4 + count || !whole_rings.insert(c).second) continue;
+                    for (std::uint32_t w = map_.chains[c].first; w != kNone; w = next_[w]) seeds.emplace_back(w, 0);
+                }
+            }
+            sorted.assign(in_run.begin(), in_run.end());
+            std::sort(sorted.begin(), sorted.end());
+            for (const std::uint32_t u : sorted) {  // (a lone vertex between two runs)
+                const std::uint32_t n = next_[u];
+                if (n != kNone && !in_run.count(n) && next_[n] != kNone && in_run.count(next_[n])) seeds.emplace_back(n, 0);
+            }
+            if (!seeds.empty()) continue;
+            cut.clear();
+            lone.clear();
+            control.clear();
+            for (const std::uint32_t u : sorted) {
+                for (const std::uint32_t w : {prev_[u], next_[u]}) {
+                    if (w != kNone && !in_run.count(w)) cut.insert(w);
+                }
+            }
+            // Each run's box (with its cut ends): the live vertices and control points in it.
+            for (std::size_t i = 0; i < sorted.size();) {
+                std::size_t j = i + 1;
+                while (j < sorted.size() && next_[sorted[j - 1]] == sorted[j]) ++j;
+                Box box{map_.vertices[sorted[i]].x, map_.vertices[sorted[i]].y, map_.vertices[sorted[i]].x, map_.vertices[sorted[i]].y};
+                const auto widen = [&](std::uint32_t u) {
+                    if (u == kNone) return;
+                    const Point q = map_.vertices[u];
+                    box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
+                };
+                for (std::size_t k = i; k < j; ++k) widen(sorted[k]);
+                widen(prev_[sorted[i]]);
+                widen(next_[sorted[j - 1]]);
+                grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
+                    if (q.y < box.min_y || q.y > box.max_y) return false;
+                    if (id >= vertex_count_) {
+                        control.push_back(id - vertex_count_);
+                    } else if (!in_run.count(id) && !cut.count(id)) {
+                        lone.insert(id);
+                    }
+                    return false;
+                });
+                i = j;
+            }
+            // (The coincidence rule reads the neighbours of the vertices at the location of a
+            // run's vertex or cut end, where such a location is shared.)
+            std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> shared_here;  // by a hash of the location
+            const auto location_hash = [&](std::uint32_t u) {
+                const LocationKey key(map_.vertices[u]);
+                return key.x * 0x9e3779b97f4a7c15ull ^ key.y;
+            };
+            for (const std::uint32_t u : sorted) {
+                if (shared_[u]) shared_here[location_hash(u)].push_back(u);
+            }
+            for (const std::uint32_t u : cut) {
+                if (shared_[u]) shared_here[location_hash(u)].push_back(u);
+            }
+            for (const std::uint32_t u : lone) {
+                if (!shared_[u]) continue;
+                const auto there = shared_here.find(location_hash(u));
+                if (there == shared_here.end()) continue;
+                const Point q = map_.vertices[u];
+                if (std::any_of(there->second.begin(), there->second.end(), [&](std::uint32_t w) { return same_location(map_.vertices[w], q); })) {
+                    seeds.emplace_back(u, 1);
+                }
+            }
+            if (!seeds.empty()) continue;
+            // The vertices the subset's vertices wait on (lone, unless there), and so on.
+            std::vector<std::uint32_t> waiting(sorted);
+            waiting.insert(waiting.end(), lone.begin(), lone.end());
+            while (!waiting.empty()) {
+                const std::uint32_t b = waits_.blocker_of(waiting.back());
+                waiting.pop_back();
+                if (b != kNone && !in_run.count(b) && !cut.count(b) && lone.insert(b).second) waiting.push_back(b);
+            }
+            break;
+        }
+        // The subset in the whole map's order: each run with its cut ends a chain, each lone
+        // vertex one.
+        std::vector<std::uint32_t> all(sorted);
+        all.insert(all.end(), cut.begin(), cut.end());
+        all.insert(all.end(), lone.begin(), lone.end());
+        std::sort(all.begin(), all.end());
+        TileInput input;
+        input.level = levels_;
+        input.first_level = t;
+        const std::size_t n = all.size();
+        input.map.vertices.reserve(n);
+        input.vertex_id.reserve(n);
+        input.state.reserve(n);
+        input.cut_end.reserve(n);
+        const auto role = [&](std::uint32_t u) { return in_run.count(u) ? 2 : cut.count(u) ? 1 : 0; };  // run, cut end, lone
+        for (std::size_t i = 0; i < n; ++i) {
+            const std::uint32_t u = all[i];
+            const int here = role(u);
+            bool goes_on = false;  // u continues the chain of all[i − 1]
+            if (i > 0 && next_[all[i - 1]] == u) {
+                const int before = role(all[i - 1]);
+                goes_on = (before == 2 && here >= 1) || (before == 1 && here == 2);
+            }
+            if (!goes_on) {
+                if (i > 0) input.map.chains.back().last = static_cast<std::uint32_t>(i - 1);
+                const std::uint32_t c = chain_of_[u];
+                input.map.chains.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
+                input.chain_id.push_back(c);
+                const bool piece = here != 0 && whole_level_[c] != kOpen;
+                if (piece && whole_rings.count(c) && !resumed_) know_orientation_if_asked(c);
+                input.whole_level.push_back(piece ? whole_level_[c] : kOpenChain);
+                input.settled.push_back(0);
+                input.distinct.push_back(piece ? distinct_[c] : 0);
+                input.orientation.push_back(piece ? orientation_[c] : std::int8_t{2});
+            }
+            input.map.vertices.push_back(map_.vertices[u]);
+            input.vertex_id.push_back(global(u));
+            input.state.push_back(static_cast<std::uint8_t>(here == 1 ? State::fixed : state_[u]));
+            if (use_marks_) input.marked.push_back(here == 1 ? std::uint8_t{0} : marked_[u]);
+            input.cut_end.push_back(here == 1 ? 1 : 0);
+        }
+        if (n > 0) input.map.chains.back().last = static_cast<std::uint32_t>(n - 1);
+        std::sort(control.begin(), control.end());
+        control.erase(std::unique(control.begin(), control.end()), control.end());
+        for (const std::uint32_t k : control) input.map.control_points.push_back(indexed_points_[k]);
+        const auto local = [&](std::uint32_t v) { return static_cast<std::uint32_t>(std::lower_bound(all.begin(), all.end(), v) - all.begin()); };
+        subset_waiters_.clear();
+        for (const std::uint32_t u : all) {
+            if (role(u) == 1) continue;
+            subset_waiters_.push_back(u);
+            if (const std::uint32_t b = waits_.blocker_of(u); b != kNone) input.waits.emplace_back(local(u), local(b));
+        }
+        std::sort(input.waits.begin(), input.waits.end());
+        for (unsigned level = t; level < levels_; ++level) {
+            std::vector<std::uint32_t>& list = input.later.emplace_back();
+            for (const std::uint32_t v : later_[level]) {
+                if (state_[v] == State::queued) list.push_back(local(v));
+            }
+        }
+        input.marks = use_marks_;
+        input.bound_key = bound_.key;
+        input.bound_id = bound_.id;
+        // The rings cut into runs: their fixed locations outside the runs, level by level.
+        std::vector<std::uint32_t> cut_rings;
+        for (const auto& [c, count] : run_vertices_of) {
+            if (!whole_rings.count(c) && whole_level_[c] > t) cut_rings.push_back(c);
+        }
+        std::sort(cut_rings.begin(), cut_rings.end());
+        for (const std::uint32_t c : cut_rings) {
+            for (unsigned level = t; level < whole_level_[c]; ++level) {
+                FirstLocations<4> found;
+                for (std::uint32_t u = map_.chains[c].first; u != kNone && found.count < 4; u = next_[u]) {
+                    if (!in_run.count(u) && (state_[u] == State::fixed || level_of(u) > level)) found.add(map_.vertices[u]);
+                }
+                input.outside.push_back({c, level, std::vector<Point>(found.at, found.at + found.count)});
+            }
+        }
+        return input;
+    }
+
+    // The outcome of top_subset_input's tile into the whole map, the round then over; false
+    // (nothing taken) if its runs were too short.
+    bool finish_part_top_subset(const TileOutcome& top) {
+        if (top.exhausted) return false;
+        take_outcome(top);
+        for (const std::uint32_t u : subset_waiters_) waits_.remove(u);
+        for (const auto& [waiter, blocker] : top.waits) wait_on(local_id(waiter), local_id(blocker));
+        subset_waiters_.clear();
+        for (unsigned level = tile_level_; level < levels_; ++level) std::vector<std::uint32_t>().swap(later_[level]);
+        if (use_marks_) keep_undecided();
+        return true;
     }
 
     // The levels from the tile level up here, over the whole map (instead of top_input); the
@@ -1849,6 +2090,10 @@ public:
         for (std::ptrdiff_t i = 0; i < rings; ++i) {
             const std::uint32_t c = split[static_cast<std::size_t>(i)];
             if (whole_level_[c] <= level) continue;
+            if (!cut_end_.empty()) {
+                ring_clear_[c] = subset_ring_clear(c, level);
+                continue;
+            }
             if (split_over_tiles(c)) {
                 // A piece: its cut ends settle it, or the tiles' fixed locations together do.
                 ring_clear_[c] = tile_->settled[c] ||
@@ -1859,6 +2104,24 @@ public:
             for_each_fixed_location(c, level, 4, [&](Point) { ++count; });
             ring_clear_[c] = count >= 4;
         }
+    }
+
+    // A subset of the live map (top_subset_input): whether ring piece c's whole ring holds ≥ 4
+    // distinct locations at its fixed vertices at `level` — those of all its pieces here, cut
+    // ends left out (their neighbour beyond is not here), and those outside the runs, which the
+    // input lists (they do not change while the subset runs: a change would exhaust it).
+    bool subset_ring_clear(std::uint32_t c, unsigned level) const {
+        FirstLocations<4> found;
+        const std::uint32_t ring = tile_->chain_id[c];
+        if (const auto at = outside_at_.find(std::uint64_t{ring} << 8 | level); at != outside_at_.end()) {
+            for (const Point q : tile_->outside[at->second].locations) found.add(q);
+        }
+        for (const std::uint32_t piece : pieces_of_.at(ring)) {
+            for (std::uint32_t u = map_.chains[piece].first; u != kNone && found.count < 4; u = next_[u]) {
+                if (!cut_end_[u] && (state_[u] == State::fixed || level_of(u) > level)) found.add(map_.vertices[u]);
+            }
+        }
+        return found.count >= 4;
     }
 
     // Calls visit(q) for the first `most` distinct locations of chain c's fixed vertices at
@@ -2052,6 +2315,9 @@ public:
         grid_->remove(v);
         next_[p] = n;
         prev_[n] = p;
+        // A subset's runs too short: the cut end beyond would be queued again here, with a
+        // neighbour the subset lacks (top_subset_input).
+        if (!cut_end_.empty() && (cut_end_[p] | cut_end_[n])) exhausted_.store(true, std::memory_order_relaxed);
         ++worker.stats.removed;
         release_waiting_on(v, level, worker);
         requeue(p, level, worker);
@@ -2191,6 +2457,15 @@ public:
     const TileInput* tile_ = nullptr;  // a tile of a run in parts, with the whole map's plan
     const GridPlan* plan_ = nullptr;
     std::span<const std::uint32_t> outside_clear_;  // this level: split rings clear over all tiles
+    // A subset of the live map (top_subset_input): per vertex, a cut end; each ring's pieces; set
+    // when a vertex next to a cut end went.
+    std::vector<std::uint8_t> cut_end_;
+    std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> pieces_of_;
+    std::unordered_map<std::uint64_t, std::size_t> outside_at_;  // (ring << 8 | level) → its entry in the input's `outside`
+    std::atomic<bool> exhausted_{false};
+    // The whole map's side: the vertices whose waits a subset's outcome replaces (its runs' and
+    // lone vertices, not its cut ends).
+    std::vector<std::uint32_t> subset_waiters_;
     std::vector<std::uint32_t> initial_distinct_;  // a tile's distinct_ at the start
     std::vector<std::int8_t> initial_orientation_;  // a tile's orientation_ at the start
     bool resumed_ = false;            // a run in parts over the live vertices only (resume_parts)
@@ -2322,6 +2597,10 @@ void MapInParts::keep_live_only() {
 }
 
 TileInput MapInParts::top() { return engine_->top_input(); }
+
+TileInput MapInParts::top_subset(std::uint32_t runs) { return engine_->top_subset_input(runs); }
+
+bool MapInParts::finish_top_subset(const TileOutcome& outcome) { return engine_->finish_part_top_subset(outcome); }
 
 void MapInParts::finish_top(const TileOutcome& outcome) { engine_->finish_part_top(outcome); }
 

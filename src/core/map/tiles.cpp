@@ -2,6 +2,7 @@
 
 
 #include <algorithm>
+#include <limits>
 #include <map>
 
 namespace toposimp::map {
@@ -36,8 +37,17 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
     return outcomes;
 }
 
+unsigned run_top_over_subsets(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs) {
+    for (unsigned tries = 1;; ++tries) {
+        std::vector<TileInput> top;
+        top.push_back(parts.top_subset(runs));
+        if (parts.finish_top_subset(run_tile_group(std::move(top), parts.plan(), options).front())) return tries;
+        runs = runs >= (1u << 30) ? std::numeric_limits<std::uint32_t>::max() : 2 * runs;  // (no chain is longer: no cut end)
+    }
+}
+
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below,
-                                 bool top_here, bool live_only) {
+                                 bool top_here, bool live_only, std::uint32_t top_runs) {
     MapInParts parts(map, options, tile_level, here_below);
     bool whole = true;  // the whole map's engine still runs
     while (parts.next_round()) {
@@ -53,6 +63,8 @@ SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& opti
         }
         if (top_here) {
             parts.run_top_here();
+        } else if (top_runs > 0) {
+            run_top_over_subsets(parts, options, top_runs);
         } else {
             std::vector<TileInput> top;
             top.push_back(parts.top());

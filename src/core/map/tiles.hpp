@@ -69,6 +69,14 @@ GridPlan plan_grid(double min_x, double min_y, double max_x, double max_y, std::
 // What a vertex is doing (the engine's own states).
 enum class VertexState : std::uint8_t { fixed, queued, waiting, refused, removed };
 
+// A ring's fixed locations outside a subset of the live map at one level (up to 4 distinct):
+// MapInParts::top_subset.
+struct RingOutside {
+    std::uint32_t chain;  // the whole map's chain
+    unsigned level;
+    std::vector<Point> locations;
+};
+
 // One tile's share of a map in one round: everything a tile needs to run the levels below T.
 //
 // The levels from T up run as one more tile (MapInParts::top): the single block of the level
@@ -103,6 +111,11 @@ struct TileInput {
     bool marks = false;                    // count targets: only marked vertices go, up to the bound
     double bound_key = 0;                  // the round's bound: (area, whole-map id)
     std::uint32_t bound_id = 0;
+    // The levels from T up over a subset of the live map (MapInParts::top_subset); else empty.
+    // Per vertex: 1 for a cut end (the live vertex beyond a run, fixed here). The ring pieces'
+    // fixed locations outside the runs, per level from first_level below the ring's whole_level.
+    std::vector<std::uint8_t> cut_end;
+    std::vector<RingOutside> outside;
 };
 
 // A split ring's fixed locations in one tile at one level (up to 4 distinct).
@@ -121,6 +134,9 @@ struct TileOutcome {
     std::vector<std::uint32_t> oriented;                         // whole rings whose orientation the tile computed
     std::vector<std::int8_t> orientations;                       // and that orientation
     SimplifyStats stats;  // removals and refusals in the tile
+    // A subset of the live map whose runs were too short (a vertex next to a cut end went): the
+    // rest of this outcome must not be taken.
+    bool exhausted = false;
 };
 
 // Runs a tile, level by level.
@@ -209,6 +225,16 @@ public:
     bool finish_tiles(std::span<const TileOutcome> outcomes);
     TileInput top();
     void finish_top(const TileOutcome& outcome);
+    // Or the same tile over a subset of the live vertices, a small part of them (what the levels
+    // from T up read: docs/distributed.md, "What is left", item 4): runs of `runs` live vertices
+    // on either side of those levels' candidates (and of the vertices waiting on a vertex of a
+    // run), each with its cut ends, the live vertices and control points in the runs' boxes, the
+    // rings that may come down to their last locations whole. finish_top_subset takes its
+    // outcome and ends the round; or, if a vertex next to a cut end went (the runs were too
+    // short), takes nothing and returns false: then again with longer runs (with runs longer
+    // than any chain there is no cut end).
+    TileInput top_subset(std::uint32_t runs);
+    bool finish_top_subset(const TileOutcome& outcome);
     // The levels from T up here, after finish_tiles returned true.
     void run_top_here();
     // From here on, the run holds the live vertices only (and every control point): the whole
@@ -423,13 +449,19 @@ private:
     std::map<std::uint32_t, FirstTile> tiles_;  // by number
 };
 
+// The levels from T up (after finish_tiles returned true) as top_subset's tile, run here: runs
+// of `runs` vertices, twice as long each time they fall short. Returns the tiles it took.
+unsigned run_top_over_subsets(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs);
+
 // simplify() run in parts in this process, every group of tiles in turn (rounds with a budget
 // under `here_below` whole, as MapInParts says), and the levels from T up as one more tile (top)
 // or, with `top_here`, over the whole map's engine (finish_round). With `live_only`, the run keeps
-// only the live vertices from the first round's tiles on (keep_live_only). For tests and as the
+// only the live vertices from the first round's tiles on (keep_live_only). With `top_runs` (> 0,
+// without `top_here`), the levels from T up run over a subset of the live vertices (top_subset),
+// with runs of top_runs vertices, twice as long each time they fall short. For tests and as the
 // reference for a distributed run.
 SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint64_t here_below = 0,
-                                 bool top_here = false, bool live_only = false);
+                                 bool top_here = false, bool live_only = false, std::uint32_t top_runs = 0);
 // The same with the first round built by FirstRound from parts of about `part_vertices`
 // vertices (its crossing search's predicates counted as FirstRound says).
 SimplifyResult simplify_by_parts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,

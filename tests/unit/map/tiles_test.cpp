@@ -52,6 +52,9 @@ void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, un
     expect_same(simplify_in_tiles(map, options, tile_level, whole.stats.removed / 8, true, true), whole,
                 what + ", live only, small rounds and the levels above here");
     expect_same_but_predicates(simplify_by_parts(map, options, tile_level, 64), whole, what + ", by parts");
+    expect_same(simplify_in_tiles(map, options, tile_level, 0, false, false, 4), whole, what + ", the top over a subset");
+    expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true, 1), whole,
+                what + ", live only, the top over a subset with runs of 1 at first");
 }
 
 // A random map of 100 chains and 40 rings, 800 control points and `roads` roads crossing it.
@@ -110,6 +113,10 @@ TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
                 const std::string what = "seed " + std::to_string(seed) + ", target " + std::to_string(static_cast<int>(target)) +
                                          ", tile level " + std::to_string(tile_level);
                 expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
+                // The levels from the tile level up over a subset of the live vertices, its runs
+                // short (1, often too short) or not, over the whole map's engine or the live one.
+                expect_same(simplify_in_tiles(map, options, tile_level, 0, false, seed % 2 == 0, tile_level % 2 == 0 ? 1 : 4), whole,
+                            what + ", the top over a subset");
                 // And one of the other ways to run in parts, in turn (all of them at every level
                 // is too slow for a debug build).
                 const std::uint64_t small = whole.stats.removed / 8;
@@ -659,6 +666,78 @@ TEST(MapTiles, TheTopHoldsTheLiveVerticesAndThePointsNearTheirRuns) {
 
 // The tiles of a level partition the map's vertices and control points, and each piece ends
 // with its cut ends: the vertices beyond the tile's border.
+// Concentric wavy rings around the map's middle, each of `vertices` vertices (every level of
+// blocks cuts them), random control points between them, and straight roads across at the
+// quarters, eighths, … of the map (`roads` of them each way, where the block levels' seams
+// lie): the rings' vertices where they cross are pinned.
+MapData wavy_rings(std::uint64_t seed, int rings, int vertices, int points, int roads) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> wave(-1.5, 1.5), anywhere(0, 100);
+    MapData map;
+    for (int r = 0; r < rings; ++r) {
+        std::vector<Point> ring;
+        for (int k = 0; k < vertices; ++k) {
+            const double angle = 2 * M_PI * k / vertices, radius = 8 + 5.0 * r + wave(rng);
+            ring.push_back({50 + radius * std::cos(angle), 50 + radius * std::sin(angle)});
+        }
+        ring.push_back(ring.front());
+        map.add_chain(ring);
+    }
+    for (int k = 0; k < points; ++k) map.control_points.push_back({anywhere(rng), anywhere(rng)});
+    for (int k = 1; k <= roads; ++k) {
+        const double at = 100.0 * k / (roads + 1) + 0.01;
+        map.add_chain(std::vector<Point>{{at, 1}, {at, 99}});
+        map.add_chain(std::vector<Point>{{1, at}, {99, at}});
+    }
+    return map;
+}
+
+// The levels from the tile level up over a subset of the live vertices (MapInParts::top_subset)
+// on rings the top levels cut into runs — whether such a ring keeps 4 locations at its fixed
+// vertices at a level is then decided with those outside the runs — and with runs so short
+// that cascades of removals reach their cut ends (the subset then refuses its outcome, and
+// longer runs follow): simplify()'s result, every target, tile level and length of runs; and
+// the subset is a small part of the live map.
+TEST(MapTiles, TheTopOverASubsetOfTheLiveVerticesGivesTheSingleProcessResult) {
+    const MapData map = wavy_rings(7, 8, 1500, 4000, 7);
+    const GridPlan plan = plan_grid(map);
+    ASSERT_GE(plan.levels, 4u);
+    std::size_t exhausted = 0, outside = 0, subsets = 0, small = 0;
+    for (const StopCriterion stop : {StopCriterion{Target::max, 0}, StopCriterion{Target::keep_fraction, 0.1},
+                                     StopCriterion{Target::keep_points, 3000}}) {
+        SimplifyOptions options = on_two_threads(stop);
+        const SimplifyResult whole = simplify(map, options);
+        for (unsigned tile_level = 1; tile_level + 1 < plan.levels; ++tile_level) {
+            for (const std::uint32_t first_runs : {1u, 4u}) {
+                MapInParts parts(map, options, tile_level);
+                while (parts.next_round()) {
+                    std::vector<TileOutcome> outcomes;
+                    for (std::vector<TileInput>& group : parts.tile_groups()) {
+                        for (TileOutcome& outcome : run_tile_group(std::move(group), parts.plan(), options)) outcomes.push_back(std::move(outcome));
+                    }
+                    std::size_t live = map.vertices.size();
+                    if (!parts.finish_tiles(outcomes)) continue;
+                    for (std::uint32_t runs = first_runs;; runs *= 2) {
+                        std::vector<TileInput> top;
+                        top.push_back(parts.top_subset(runs));
+                        outside += top.front().outside.size();
+                        ++subsets;
+                        small += top.front().map.vertices.size() * 4 < live;
+                        if (parts.finish_top_subset(run_tile_group(std::move(top), parts.plan(), options).front())) break;
+                        ++exhausted;
+                    }
+                }
+                expect_same(parts.result(), whole,
+                            "target " + std::to_string(static_cast<int>(stop.target)) + ", tile level " + std::to_string(tile_level) +
+                                ", runs of " + std::to_string(first_runs) + " at first");
+            }
+        }
+    }
+    EXPECT_GT(exhausted, 0u) << "runs of 1 fall short somewhere";
+    EXPECT_GT(outside, 0u) << "rings cut into runs at the levels above the tiles";
+    EXPECT_GT(small * 2, subsets) << "most subsets hold under a quarter of the map";
+}
+
 TEST(MapTiles, TilesPartitionTheMap) {
     std::mt19937_64 rng(7);
     testing::RandomMapOptions shape;
