@@ -17,7 +17,8 @@ its workers first, on every host that should work (Dask's own commands):
     dask worker tcp://HOST:8786          # on each host (PYTHONPATH must reach this package)
 
 Only the tasks' data travels (numpy arrays, through Dask: straight to the workers where they run
-on this machine, else through the scheduler); the input and the output are read and written here. A worker that dies has its tasks rerun elsewhere by Dask; the result is the same.
+on this machine, else through the scheduler); the input and the output are read and written here.
+A worker that dies has its tasks rerun elsewhere; the result is the same.
 
 --levels runs each level in parts. Not yet: a map bigger than this process's memory (the reading
 and writing, each round's budget and the levels above the tiles run here).
@@ -190,7 +191,7 @@ def _split_arguments(argv):
     if options.local_budget < 0:
         parser.error("--local-budget must be 0 or more")
     if not 0 <= options.top_runs < 2**31:
-        parser.error("--top-runs must be 0 or more")
+        parser.error("--top-runs must be 0 or more, under 2^31")
     return options, rest
 
 
@@ -726,6 +727,11 @@ class _Tasks:
         # are dropped here once sent.
         window = 4 * workers
         sender = _StraightSender(client) if _workers_here(client) else None
+        # (A task lost with its worker more often than Dask lets a task kill one stops the run, as
+        # Dask's KilledWorker would: a tile that kills every worker it runs on.)
+        import dask.config
+        allowed = dask.config.get("distributed.scheduler.allowed-failures", 3)
+        losses = {}
         place = {}
         running = as_completed(with_results=True)
         following = iter(range(total))
@@ -754,6 +760,10 @@ class _Tasks:
             for future, result in running:
                 b = place.pop(future.key)
                 if sender is not None and sender.lost(future):
+                    losses[b] = losses.get(b, 0) + 1
+                    if losses[b] > allowed:
+                        raise UsageError(f"a task of round {round_number}'s tiles lost its Dask worker {losses[b]} times "
+                                         f"(the workers die running it: their memory limit?)")
                     submit(b)  # (its worker died with its tiles: built and sent again)
                     continue
                 for k, outcomes in zip(batches[b], result):

@@ -221,6 +221,33 @@ def test_input_changed_under_the_workers_stops_the_run(cluster, generated_shapef
     assert not output.exists()
 
 
+def test_a_task_whose_workers_keep_dying_stops_the_run(cluster, generated, tmp_path, monkeypatch):
+    """A round's task sent straight to a worker and lost with it is sent again, but not without end:
+    past Dask's allowed failures (distributed.scheduler.allowed-failures), the run stops with a
+    message (the command's exit status 2) and writes nothing, as Dask's KilledWorker stops a task
+    that kills its workers. (Every task counts as lost here; without the bound the run never ends.)"""
+    import dask.config
+    from toposimp import UsageError, dask as toposimp_dask
+
+    client, _ = cluster
+    polygons_and_lines, places = generated
+    sent = []
+    straight_submit = toposimp_dask._StraightSender.submit
+
+    def counted_submit(self, *arguments):
+        sent.append(1)
+        return straight_submit(self, *arguments)
+
+    monkeypatch.setattr(toposimp_dask._StraightSender, "submit", counted_submit)
+    monkeypatch.setattr(toposimp_dask._StraightSender, "lost", lambda self, future: True)
+    output = tmp_path / "never.gpkg"
+    with dask.config.set({"distributed.scheduler.allowed-failures": 2}), pytest.raises(UsageError, match="lost its Dask worker 3 times"):
+        toposimp_dask.run([str(polygons_and_lines), "-p", str(places), "--keep", "30%", "-o", str(output), "-q"],
+                          client=client, tile_level=1, local_budget=0)
+    assert not output.exists() and not list(tmp_path.iterdir())
+    assert len(sent) >= 3
+
+
 def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp_path):
     from toposimp import dask as toposimp_dask
 
