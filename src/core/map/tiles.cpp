@@ -38,6 +38,7 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 }
 
 unsigned run_top_over_subsets(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs) {
+    runs = std::max(runs, 1u);  // (runs of 0 would never grow)
     for (unsigned tries = 1;; ++tries) {
         std::vector<TileInput> top;
         top.push_back(parts.top_subset(runs));
