@@ -801,10 +801,11 @@ def _workers_here(client):
         except ValueError:
             pass
         if own is None:
+            own = {socket.gethostname()}
             try:
-                own = {info[4][0] for info in socket.getaddrinfo(socket.gethostname(), None)} | {socket.gethostname()}
+                own |= {info[4][0] for info in socket.getaddrinfo(socket.gethostname(), None)}
             except OSError:
-                own = set()
+                pass  # (the name alone, then)
         if split.hostname not in own:
             return False
     return True
