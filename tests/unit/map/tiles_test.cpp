@@ -82,74 +82,77 @@ SimplifyOptions on_two_threads(StopCriterion stop) {
 // to the top (one tile, nothing above), the levels from the tile level up as one more tile; and
 // at each level one of the other ways in turn: those levels over the whole map's engine, small
 // rounds run whole, the live vertices only from the first round's tiles on, the first round by
-// parts.
-TEST(MapTiles, EveryTileLevelGivesTheSingleProcessResult) {
-    for (const std::uint64_t seed : {1, 2, 3, 4}) {
-        std::mt19937_64 rng(seed);
-        testing::RandomMapOptions shape;
-        shape.chains = 150;
-        shape.max_steps = 60;
-        shape.rings = 60;
-        shape.control_points = 1500;
-        shape.roads = seed % 2 == 0 ? 6 : 0;
-        shape.origin_x = seed == 3 ? 1e6 : 0;
-        const MapData map = testing::random_planar_map(rng, shape);
-        const GridPlan plan = plan_grid(map);
-        ASSERT_GE(plan.levels, 3u) << "the map should have several levels of blocks";
-        // Count targets that rounds reach: removing 60 % or 30 % of what --max removes (the roads'
-        // crossings pin many vertices: 10 % of the vertices, say, no run could reach).
-        double most = 0;
-        for (const Target target : {Target::max, Target::max_area, Target::keep_fraction, Target::keep_points}) {
-            SimplifyOptions options;
-            const double all = static_cast<double>(map.vertices.size());
-            options.stop = {target, target == Target::keep_fraction ? 1 - 0.6 * most / all : target == Target::keep_points ? all - 0.3 * most : 2.0};
-            options.parallel_threshold = 0;
-            options.threads = 2;
-            const SimplifyResult whole = simplify(map, options);
-            ASSERT_GT(whole.stats.removed, 0u);
-            ASSERT_FALSE(whole.stats.swept_as_max) << "count targets here run in rounds";
-            if (target == Target::max) most = static_cast<double>(whole.stats.removed);
-            for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
-                const std::string what = "seed " + std::to_string(seed) + ", target " + std::to_string(static_cast<int>(target)) +
-                                         ", tile level " + std::to_string(tile_level);
-                expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
-                // The levels from the tile level up over a subset of the live vertices, its runs
-                // short (1, often too short) or not, over the whole map's engine or the live one.
-                expect_same(simplify_in_tiles(map, options, tile_level, 0, false, seed % 2 == 0, tile_level % 2 == 0 ? 1 : 4), whole,
-                            what + ", the top over a subset");
-                // And one of the other ways to run in parts, in turn (all of them at every level
-                // is too slow for a debug build).
-                const std::uint64_t small = whole.stats.removed / 8;
-                const std::size_t part = map.vertices.size() / 3;
-                switch ((seed + static_cast<std::uint64_t>(target) + tile_level) % 7) {
-                    case 0:  // the levels from the tile level up over the whole map's engine, not as one more tile
-                        expect_same(simplify_in_tiles(map, options, tile_level, 0, true), whole, what + ", the levels above here");
-                        break;
-                    case 1:  // small rounds here, big ones in tiles
-                        expect_same(simplify_in_tiles(map, options, tile_level, small), whole, what + ", small rounds here");
-                        break;
-                    case 2:  // the live vertices only from the first round's tiles on
-                        expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true), whole, what + ", live only");
-                        break;
-                    case 3:
-                        expect_same(simplify_in_tiles(map, options, tile_level, small, true, true), whole,
-                                    what + ", live only, small rounds and the levels above here");
-                        break;
-                    case 4:  // the first round built by parts: of one chain, a third of the map, all of it
-                        expect_same_but_predicates(simplify_by_parts(map, options, tile_level, 1), whole, what + ", by parts of 1");
-                        break;
-                    case 5:
-                        expect_same_but_predicates(simplify_by_parts(map, options, tile_level, part), whole, what + ", by thirds");
-                        break;
-                    default:
-                        expect_same_but_predicates(simplify_by_parts(map, options, tile_level, map.vertices.size(), small), whole,
-                                                   what + ", by parts, small rounds here");
-                        break;
-                }
+// parts. One test per map (seed), so that each stays well under a debug build's time limit.
+class MapTilesEveryLevel : public ::testing::TestWithParam<std::uint64_t> {};
+
+TEST_P(MapTilesEveryLevel, GivesTheSingleProcessResult) {
+    const std::uint64_t seed = GetParam();
+    std::mt19937_64 rng(seed);
+    testing::RandomMapOptions shape;
+    shape.chains = 150;
+    shape.max_steps = 60;
+    shape.rings = 60;
+    shape.control_points = 1500;
+    shape.roads = seed % 2 == 0 ? 6 : 0;
+    shape.origin_x = seed == 3 ? 1e6 : 0;
+    const MapData map = testing::random_planar_map(rng, shape);
+    const GridPlan plan = plan_grid(map);
+    ASSERT_GE(plan.levels, 3u) << "the map should have several levels of blocks";
+    // Count targets that rounds reach: removing 60 % or 30 % of what --max removes (the roads'
+    // crossings pin many vertices: 10 % of the vertices, say, no run could reach).
+    double most = 0;
+    for (const Target target : {Target::max, Target::max_area, Target::keep_fraction, Target::keep_points}) {
+        SimplifyOptions options;
+        const double all = static_cast<double>(map.vertices.size());
+        options.stop = {target, target == Target::keep_fraction ? 1 - 0.6 * most / all : target == Target::keep_points ? all - 0.3 * most : 2.0};
+        options.parallel_threshold = 0;
+        options.threads = 2;
+        const SimplifyResult whole = simplify(map, options);
+        ASSERT_GT(whole.stats.removed, 0u);
+        ASSERT_FALSE(whole.stats.swept_as_max) << "count targets here run in rounds";
+        if (target == Target::max) most = static_cast<double>(whole.stats.removed);
+        for (unsigned tile_level = 0; tile_level <= plan.levels; ++tile_level) {
+            const std::string what = "seed " + std::to_string(seed) + ", target " + std::to_string(static_cast<int>(target)) +
+                                     ", tile level " + std::to_string(tile_level);
+            expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
+            // The levels from the tile level up over a subset of the live vertices, its runs
+            // short (1, often too short) or not, over the whole map's engine or the live one.
+            expect_same(simplify_in_tiles(map, options, tile_level, 0, false, seed % 2 == 0, tile_level % 2 == 0 ? 1 : 4), whole,
+                        what + ", the top over a subset");
+            // And one of the other ways to run in parts, in turn (all of them at every level
+            // is too slow for a debug build).
+            const std::uint64_t small = whole.stats.removed / 8;
+            const std::size_t part = map.vertices.size() / 3;
+            switch ((seed + static_cast<std::uint64_t>(target) + tile_level) % 7) {
+                case 0:  // the levels from the tile level up over the whole map's engine, not as one more tile
+                    expect_same(simplify_in_tiles(map, options, tile_level, 0, true), whole, what + ", the levels above here");
+                    break;
+                case 1:  // small rounds here, big ones in tiles
+                    expect_same(simplify_in_tiles(map, options, tile_level, small), whole, what + ", small rounds here");
+                    break;
+                case 2:  // the live vertices only from the first round's tiles on
+                    expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true), whole, what + ", live only");
+                    break;
+                case 3:
+                    expect_same(simplify_in_tiles(map, options, tile_level, small, true, true), whole,
+                                what + ", live only, small rounds and the levels above here");
+                    break;
+                case 4:  // the first round built by parts: of one chain, a third of the map, all of it
+                    expect_same_but_predicates(simplify_by_parts(map, options, tile_level, 1), whole, what + ", by parts of 1");
+                    break;
+                case 5:
+                    expect_same_but_predicates(simplify_by_parts(map, options, tile_level, part), whole, what + ", by thirds");
+                    break;
+                default:
+                    expect_same_but_predicates(simplify_by_parts(map, options, tile_level, map.vertices.size(), small), whole,
+                                               what + ", by parts, small rounds here");
+                    break;
             }
         }
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(MapTiles, MapTilesEveryLevel, ::testing::Values(std::uint64_t{1}, 2, 3, 4));
 
 // A count target that no run can reach runs as --max in every way of running in parts too: the
 // single process's result, which is --max's.
