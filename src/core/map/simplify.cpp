@@ -2916,7 +2916,174 @@ TileInput FirstTile::run_input(bool marks, double bound_key, std::uint32_t bound
             if (std::pair{area, input.vertex_id[v]} <= last) in.marked[v] = 1;
         });
     }
+    if (!waits.empty()) {
+        // (By the tile's own vertices' indices; a wait names no cut end.)
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> own;  // (id, index)
+        for (std::uint32_t v = 0; v < in.vertex_id.size(); ++v) {
+            if (!cut_end[v]) own.emplace_back(in.vertex_id[v], v);
+        }
+        std::sort(own.begin(), own.end());
+        const auto index = [&](std::uint32_t id) { return std::lower_bound(own.begin(), own.end(), std::pair{id, std::uint32_t{0}})->second; };
+        for (const auto& [waiter, blocker] : waits) in.waits.emplace_back(index(waiter), index(blocker));
+        std::sort(in.waits.begin(), in.waits.end());
+    }
     return in;
+}
+
+FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const GridPlan& plan, bool marks, const Ranking& ranking) {
+    constexpr auto removed = static_cast<std::uint8_t>(VertexState::removed);
+    constexpr auto fixed = static_cast<std::uint8_t>(VertexState::fixed);
+    const TileInput& in = input;
+    const auto state_of = [&](std::uint32_t v) {
+        const std::uint32_t id = in.vertex_id[v];
+        const auto at = std::lower_bound(news.states.begin(), news.states.end(), std::pair{id, std::uint8_t{0}});
+        return at != news.states.end() && at->first == id ? at->second : in.state[v];
+    };
+    const auto unlinked = [&](std::uint32_t id) -> const Unlinked* {
+        const auto at = std::lower_bound(news.unlinked.begin(), news.unlinked.end(), id, [](const Unlinked& u, std::uint32_t i) { return u.id < i; });
+        return at != news.unlinked.end() && at->id == id ? &*at : nullptr;
+    };
+    const auto here = [&](Point p) { return plan.block_column(p, in.level) == in.column && plan.block_row(p, in.level) == in.row; };
+    // The pieces again: each piece's live vertices; a cut end that went (only the levels from T up
+    // remove one: its segment into the tile crosses the border) gives way to the live vertex
+    // beyond it, which, if in the tile, is the next piece's first (the two join).
+    TileInput out;
+    out.level = in.level;
+    out.column = in.column;
+    out.row = in.row;
+    std::vector<std::uint8_t> cuts, frozen_now;
+    const auto take = [&](std::uint32_t id, Point p, std::uint8_t state, bool cut) {
+        out.map.vertices.push_back(p);
+        out.vertex_id.push_back(id);
+        out.state.push_back(state);
+        cuts.push_back(cut ? 1 : 0);
+    };
+    const auto start = [&](std::uint32_t p) {
+        const auto first = static_cast<std::uint32_t>(out.vertex_id.size());
+        const std::uint32_t c = in.chain_id[p];
+        const bool whole = in.whole_level[p] != kOpenChain && in.whole_level[p] <= in.level;
+        out.map.chains.push_back({first, first});
+        out.chain_id.push_back(c);
+        out.whole_level.push_back(in.whole_level[p]);
+        out.settled.push_back(0);
+        out.distinct.push_back(whole ? news.distinct.at(c) : 0);
+        out.orientation.push_back(whole ? news.orientation.at(c) : std::int8_t{2});
+        frozen_now.push_back(frozen[p]);
+    };
+    const auto joined = [] { return std::logic_error("a kept tile's pieces do not join as their cut ends say"); };
+    Advanced done;
+    bool open = false;  // the last piece goes on into the next piece of its chain here
+    std::vector<std::uint32_t> live;
+    for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
+        const Chain piece = in.map.chains[p];
+        const bool before = cut_end[piece.first] != 0, after = cut_end[piece.last] != 0;
+        live.clear();
+        for (std::uint32_t v = piece.first + (before ? 1 : 0); v + (after ? 1 : 0) <= piece.last; ++v) {
+            if (state_of(v) != removed) live.push_back(v);
+        }
+        if (live.empty()) continue;  // (the pieces on either side have their cut ends past it)
+        if (before) {
+            const std::uint32_t c = in.vertex_id[piece.first];
+            const Unlinked* gone = unlinked(c);
+            if (gone != nullptr && here(gone->prev_point)) {
+                if (!open || out.vertex_id.back() != gone->prev || out.chain_id.back() != in.chain_id[p]) throw joined();
+                ++done.pieces_joined;
+            } else {
+                if (open) throw joined();
+                start(p);
+                if (gone != nullptr) {
+                    ++done.cut_ends_moved;
+                    take(gone->prev, gone->prev_point, fixed, true);
+                } else {
+                    take(c, in.map.vertices[piece.first], fixed, true);
+                }
+            }
+        } else {
+            if (open) throw joined();
+            start(p);
+        }
+        for (const std::uint32_t v : live) take(in.vertex_id[v], in.map.vertices[v], state_of(v), false);
+        open = false;
+        if (after) {
+            const std::uint32_t c = in.vertex_id[piece.last];
+            if (const Unlinked* gone = unlinked(c); gone == nullptr) {
+                take(c, in.map.vertices[piece.last], fixed, true);
+            } else if (here(gone->next_point)) {
+                open = true;
+            } else {
+                ++done.cut_ends_moved;
+                take(gone->next, gone->next_point, fixed, true);
+            }
+        }
+        if (!open) out.map.chains.back().last = static_cast<std::uint32_t>(out.vertex_id.size() - 1);
+    }
+    if (open) throw joined();
+    // The waits among its own vertices: its outcome's if it ran, then the top's for what the top
+    // judged; its outcome's on a vertex outside (a cut end) go to the lead.
+    std::vector<std::uint32_t> own;
+    for (std::size_t v = 0; v < out.vertex_id.size(); ++v) {
+        if (!cuts[v]) own.push_back(out.vertex_id[v]);
+    }
+    std::sort(own.begin(), own.end());
+    const auto mine = [&](std::uint32_t id) { return std::binary_search(own.begin(), own.end(), id); };
+    if (ran) {
+        waits.clear();
+        for (const auto& wait : news.tile_waits) {
+            if (!mine(wait.first)) continue;
+            (mine(wait.second) ? waits : done.across).push_back(wait);
+        }
+    }
+    std::erase_if(waits, [&](const auto& wait) { return std::binary_search(news.judged.begin(), news.judged.end(), wait.first); });
+    for (const auto& wait : news.top_waits) {
+        if (mine(wait.first) && mine(wait.second)) waits.push_back(wait);
+    }
+    std::sort(waits.begin(), waits.end());
+    input = std::move(out);
+    cut_end = std::move(cuts);
+    frozen = std::move(frozen_now);
+    std::vector<std::uint8_t>().swap(improper);
+    // A count target's keys: its queued vertices' ranks between their live neighbours now.
+    keys.clear();
+    if (marks) {
+        const Point* q = input.map.vertices.data();
+        for (std::uint32_t v = 0; v < input.state.size(); ++v) {
+            if (input.state[v] == static_cast<std::uint8_t>(VertexState::queued)) {
+                keys.push_back(std::bit_cast<std::uint64_t>(rank_of(q[v - 1], q[v], q[v + 1], ranking)));
+            }
+        }
+    }
+    return done;
+}
+
+std::vector<RingLocations> FirstTile::crossing_locations() const {
+    const TileInput& in = input;
+    std::vector<RingLocations> rings;
+    for (std::uint32_t p = 0; p < in.map.chains.size(); ++p) {
+        if (in.whole_level[p] == kOpenChain || in.whole_level[p] <= in.level) continue;
+        if (rings.empty() || rings.back().chain != in.chain_id[p]) rings.push_back({in.chain_id[p], {}});
+        std::vector<Point>& at = rings.back().locations;
+        const auto add = [&](std::uint32_t v) {
+            const Point q = in.map.vertices[v];
+            if (at.size() < 4 && std::none_of(at.begin(), at.end(), [&](Point e) { return same_location(e, q); })) at.push_back(q);
+        };
+        const Chain piece = in.map.chains[p];
+        if (cut_end[piece.first]) {
+            add(piece.first);
+            add(piece.first + 1);
+        }
+        if (cut_end[piece.last]) {
+            add(piece.last - 1);
+            add(piece.last);
+        }
+    }
+    return rings;
+}
+
+void FirstTile::settle(std::span<const std::uint32_t> settled) {
+    for (std::size_t p = 0; p < input.chain_id.size(); ++p) {
+        const bool split = input.whole_level[p] != kOpenChain && input.whole_level[p] > input.level;
+        input.settled[p] = split && std::binary_search(settled.begin(), settled.end(), input.chain_id[p]) ? 1 : 0;
+    }
 }
 
 std::vector<std::pair<std::uint32_t, std::uint8_t>> changed_states(std::span<const TileOutcome> outcomes) {
@@ -3069,15 +3236,7 @@ std::uint64_t FirstRoundLead::points_in(std::uint32_t tile) const {
 std::unique_ptr<MapInParts> FirstRoundLead::finish(std::vector<LiveVertices> live, std::span<const TileOutcome> outcomes,
                                                    std::uint64_t here_below) {
     SimplifyStats& stats = so_far_.stats;
-    for (const TileOutcome& outcome : outcomes) {
-        for (const auto& [chain, lost] : outcome.locations_lost) distinct_[chain] -= lost;
-        for (std::size_t k = 0; k < outcome.oriented.size(); ++k) orientation_[outcome.oriented[k]] = outcome.orientations[k];
-        stats.removed += outcome.stats.removed;
-        stats.blocked_by_point += outcome.stats.blocked_by_point;
-        stats.blocked_by_ring += outcome.stats.blocked_by_ring;
-        stats.blocked_by_coincidence += outcome.stats.blocked_by_coincidence;
-        stats.predicates += outcome.stats.predicates;
-    }
+    for (const TileOutcome& outcome : outcomes) take(outcome);
     // The tiles' live vertices merged by id (each tile's ascending, the tiles' disjoint).
     std::size_t count = 0;
     for (const LiveVertices& tile : live) count += tile.ids.size();
@@ -3143,6 +3302,17 @@ std::unique_ptr<MapInParts> FirstRoundLead::finish(std::vector<LiveVertices> liv
     top.bound_key = so_far_.bound_key;
     top.bound_id = so_far_.bound_id;
     return std::unique_ptr<MapInParts>(new MapInParts(std::move(top), vertices_, plan_, options_, t_, here_below, so_far_));
+}
+
+void FirstRoundLead::take(const TileOutcome& outcome) {
+    SimplifyStats& stats = so_far_.stats;
+    for (const auto& [chain, lost] : outcome.locations_lost) distinct_[chain] -= lost;
+    for (std::size_t k = 0; k < outcome.oriented.size(); ++k) orientation_[outcome.oriented[k]] = outcome.orientations[k];
+    stats.removed += outcome.stats.removed;
+    stats.blocked_by_point += outcome.stats.blocked_by_point;
+    stats.blocked_by_ring += outcome.stats.blocked_by_ring;
+    stats.blocked_by_coincidence += outcome.stats.blocked_by_coincidence;
+    stats.predicates += outcome.stats.predicates;
 }
 
 FirstRound::FirstRound(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices)
@@ -3229,6 +3399,170 @@ std::unique_ptr<MapInParts> FirstRound::finish(std::span<const TileOutcome> outc
     tiles_.clear();
     std::vector<std::pair<std::uint32_t, std::uint8_t>>().swap(changed);
     return lead_.finish(std::move(live), outcomes, here_below);
+}
+
+KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles) : lead_(lead), tiles_(std::move(tiles)) {
+    for (const std::vector<std::uint32_t>& group : lead_.groups()) running_.insert(running_.end(), group.begin(), group.end());
+    std::sort(running_.begin(), running_.end());
+}
+
+namespace {
+
+// What the levels from T up did (their tile `top` and its outcome), for the kept tiles: the
+// states they changed (into `states`), the vertices they removed with the live ones on either
+// side after them, what they judged, their waits.
+void add_top_news(const TileInput& top, const TileOutcome& outcome, TileNews& news, std::vector<std::pair<std::uint32_t, std::uint8_t>>& states) {
+    constexpr auto removed = static_cast<std::uint8_t>(VertexState::removed);
+    std::vector<std::uint8_t> state(top.state);
+    for (std::size_t k = 0; k < outcome.ids.size(); ++k) {
+        const auto at = std::lower_bound(top.vertex_id.begin(), top.vertex_id.end(), outcome.ids[k]);
+        if (at == top.vertex_id.end() || *at != outcome.ids[k]) throw std::invalid_argument("the top's outcome names a vertex it did not hold");
+        state[static_cast<std::size_t>(at - top.vertex_id.begin())] = outcome.states[k];
+        states.emplace_back(outcome.ids[k], outcome.states[k]);
+    }
+    for (const Chain& chain : top.map.chains) {
+        for (std::uint32_t i = chain.first; i <= chain.last; ++i) {
+            if (state[i] != removed) continue;
+            std::uint32_t before = i, after = i;
+            while (before > chain.first && state[before] == removed) --before;
+            while (after < chain.last && state[after] == removed) ++after;
+            if (state[before] == removed || state[after] == removed) throw std::logic_error("the top removed a vertex at the end of its run");
+            news.unlinked.push_back({top.vertex_id[i], top.vertex_id[before], top.vertex_id[after], top.map.vertices[before], top.map.vertices[after]});
+        }
+    }
+    std::sort(news.unlinked.begin(), news.unlinked.end(), [](const Unlinked& a, const Unlinked& b) { return a.id < b.id; });
+    for (std::size_t i = 0; i < top.vertex_id.size(); ++i) {
+        if (top.cut_end.empty() || !top.cut_end[i]) news.judged.push_back(top.vertex_id[i]);
+    }
+    std::sort(news.judged.begin(), news.judged.end());
+    news.top_waits = outcome.waits;
+    std::sort(news.top_waits.begin(), news.top_waits.end());
+}
+
+}  // namespace
+
+void KeptTiles::finish_round(std::span<const TileOutcome> outcomes, const TileInput* top, const TileOutcome* top_outcome) {
+    constexpr auto waiting = static_cast<std::uint8_t>(VertexState::waiting);
+    constexpr auto removed = static_cast<std::uint8_t>(VertexState::removed);
+    constexpr auto queued = static_cast<std::uint8_t>(VertexState::queued);
+    const GridPlan& plan = lead_.plan();
+    const unsigned t = lead_.tile_level();
+    TileNews news;
+    const std::vector<std::pair<std::uint32_t, std::uint8_t>> changed = changed_states(outcomes);
+    for (const TileOutcome& outcome : outcomes) {
+        lead_.take(outcome);
+        removed_ += outcome.stats.removed;
+        news.tile_waits.insert(news.tile_waits.end(), outcome.waits.begin(), outcome.waits.end());
+    }
+    std::sort(news.tile_waits.begin(), news.tile_waits.end());
+    const auto now = [&](std::uint32_t id, std::uint8_t before) {
+        const auto at = std::lower_bound(changed.begin(), changed.end(), std::pair{id, std::uint8_t{0}});
+        return at != changed.end() && at->first == id ? at->second : before;
+    };
+    // The waits across tiles, as MapInParts::finish_tiles keeps them: while the waiter still waits
+    // and its blocker is there; a waiter whose blocker went is queued again.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> across;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> top_across;  // the top's waits across tiles
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> after;  // states after the tiles': the waiters queued again, then the top's
+    for (const auto& [waiter, blocker] : cross_waits_) {
+        if (now(waiter, waiting) != waiting) continue;
+        if (now(blocker, queued) == removed) {
+            after.emplace_back(waiter, queued);
+            ++counts_.queued_again;
+        } else {
+            across.emplace_back(waiter, blocker);
+        }
+    }
+    if (top != nullptr) {
+        lead_.take(*top_outcome);
+        removed_ += top_outcome->stats.removed;
+        add_top_news(*top, *top_outcome, news, after);
+        // Each wait the top began between two tiles is the lead's.
+        const auto tile_of = [&](std::uint32_t id) {
+            const Point p = top->map.vertices[static_cast<std::size_t>(std::lower_bound(top->vertex_id.begin(), top->vertex_id.end(), id) - top->vertex_id.begin())];
+            return std::pair{plan.block_column(p, t), plan.block_row(p, t)};
+        };
+        for (const auto& [waiter, blocker] : news.top_waits) {
+            if (tile_of(waiter) != tile_of(blocker)) top_across.emplace_back(waiter, blocker);
+        }
+    }
+    // Every state the round changed, the last one per vertex.
+    news.states = changed;
+    news.states.insert(news.states.end(), after.begin(), after.end());
+    std::stable_sort(news.states.begin(), news.states.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> last;
+    for (std::size_t i = 0; i < news.states.size(); ++i) {
+        if (i + 1 < news.states.size() && news.states[i + 1].first == news.states[i].first) continue;
+        last.push_back(news.states[i]);
+    }
+    news.states = std::move(last);
+    news.distinct = lead_.distinct();
+    news.orientation = lead_.orientation();
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> from_tiles;  // waits of the tiles' outcomes on a cut end
+    for (auto at = tiles_.begin(); at != tiles_.end();) {
+        const bool ran = std::binary_search(running_.begin(), running_.end(), at->first);
+        const FirstTile::Advanced done = at->second.advance(news, ran, plan, lead_.marks(), lead_.options().ranking);
+        from_tiles.insert(from_tiles.end(), done.across.begin(), done.across.end());
+        counts_.cut_ends_moved += done.cut_ends_moved;
+        counts_.pieces_joined += done.pieces_joined;
+        at = at->second.input.vertex_id.empty() ? tiles_.erase(at) : std::next(at);
+    }
+    // What the top judged has the top's waits only.
+    across.insert(across.end(), from_tiles.begin(), from_tiles.end());
+    std::erase_if(across, [&](const auto& wait) { return std::binary_search(news.judged.begin(), news.judged.end(), wait.first); });
+    across.insert(across.end(), top_across.begin(), top_across.end());
+    std::sort(across.begin(), across.end());
+    across.erase(std::unique(across.begin(), across.end()), across.end());
+    cross_waits_ = std::move(across);
+    counts_.waits_across += cross_waits_.size();
+    running_.clear();
+}
+
+bool KeptTiles::next_round() {
+    if (!lead_.marks()) return false;
+    const std::uint64_t goal = lead_.goal();
+    if (!(removed_ < goal)) return false;
+    std::vector<FirstTile*> all;
+    std::uint64_t queued = 0;
+    for (auto& [k, tile] : tiles_) {
+        all.push_back(&tile);
+        queued += tile.queued();
+    }
+    if (queued == 0) return false;
+    lead_.bound(parallel::select_kth_by_digits(
+        all.size(), std::min(goal - removed_, queued),
+        [&](std::size_t part, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { all[part]->histogram(shift, high, counts); },
+        [&](std::size_t part, std::uint64_t key, std::vector<std::uint32_t>& ids) { all[part]->ids_at(key, ids); }));
+    // The split rings that their cut ends settle: ≥ 4 distinct locations over the tiles.
+    std::map<std::uint32_t, std::vector<Point>> ends;
+    for (const FirstTile* tile : all) {
+        for (const RingLocations& ring : tile->crossing_locations()) {
+            std::vector<Point>& at = ends[ring.chain];
+            for (const Point q : ring.locations) {
+                if (at.size() < 4 && std::none_of(at.begin(), at.end(), [&](Point e) { return same_location(e, q); })) at.push_back(q);
+            }
+        }
+    }
+    std::vector<std::uint32_t> settled;
+    for (const auto& [chain, at] : ends) {
+        if (at.size() == 4) settled.push_back(chain);
+    }
+    std::vector<FirstRoundLead::TileFacts> facts;
+    for (FirstTile* tile : all) {
+        tile->settle(settled);
+        facts.push_back({tile->number, tile->busy(lead_.bound_key(), lead_.bound_id()), tile->open_chains()});
+    }
+    for (const std::vector<std::uint32_t>& group : lead_.groups(std::move(facts))) running_.insert(running_.end(), group.begin(), group.end());
+    std::sort(running_.begin(), running_.end());
+    return true;
+}
+
+std::vector<TileInput> KeptTiles::group(std::size_t k) const {
+    std::vector<TileInput> out;
+    for (const std::uint32_t number : lead_.groups().at(k)) {
+        out.push_back(tiles_.at(number).run_input(lead_.marks(), lead_.bound_key(), lead_.bound_id(), lead_.points(number)));
+    }
+    return out;
 }
 
 }  // namespace toposimp::map

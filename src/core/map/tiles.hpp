@@ -290,8 +290,30 @@ struct ChainFacts {
     std::vector<std::uint8_t> frozen;        // (for the cut itself: the lead keeps the rest)
 };
 
+// A vertex the levels from T up removed, with the live vertices on either side of it once they
+// are over (KeptTiles: a tile's cut end that went is replaced by the next live vertex beyond).
+struct Unlinked {
+    std::uint32_t id;
+    std::uint32_t prev, next;  // whole-map ids
+    Point prev_point, next_point;
+};
+
+// What every kept tile learns when a round is over (KeptTiles::finish_round), beyond its own.
+struct TileNews {
+    // Every state the round changed, by id (one per id, the last one): the tiles' outcomes, the
+    // waiters the lead queued again, the levels from T up.
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> states;
+    std::vector<Unlinked> unlinked;                                   // sorted by id
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> tile_waits;  // the tiles' outcomes' waits (sorted)
+    std::vector<std::uint32_t> judged;                                // sorted: what the levels from T up held (not cut ends)
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> top_waits;   // their outcome's waits (sorted)
+    std::vector<std::uint32_t> distinct;                              // per whole-map chain, the lead's now
+    std::vector<std::int8_t> orientation;
+};
+
 // A tile of the first round: its chains' pieces (from one part, or from every part once added)
-// without states, then what the stages add.
+// without states, then what the stages add. Kept for the rounds after the first (KeptTiles), it
+// holds the tile's live vertices, each piece with its cut ends, and the waits among them.
 struct FirstTile {
     std::uint32_t number = 0;           // row-major among the blocks of level T
     TileInput input;                    // states (and marks) only after queue()
@@ -327,6 +349,24 @@ struct FirstTile {
     std::vector<std::uint32_t> open_chains() const;
     // The tile to run: marked up to the bound (count targets), with its control points.
     TileInput run_input(bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const;
+
+    // Kept for the next rounds (KeptTiles): (waiter, blocker) whole-map ids, both its own vertices.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
+    // A round over: the removed vertices out, the states now, a cut end that went replaced by the
+    // live vertex beyond it (two pieces joined where that one is in the tile), the waits now (its
+    // own outcome's if `ran`, the top's for what the top judged), its whole rings' counts from
+    // the lead; a count target's keys again (`marks`). Returns the waits of its own outcome on a
+    // vertex outside it (a cut end), which the lead holds, and what it did.
+    struct Advanced {
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> across;
+        std::size_t cut_ends_moved = 0, pieces_joined = 0;
+    };
+    Advanced advance(const TileNews& news, bool ran, const GridPlan& plan, bool marks, const Ranking& ranking);
+    // Per split ring it holds a piece of: up to 4 distinct locations among the ends of its segments
+    // that cross the tile's border (the lead's union over the tiles settles the ring, or not).
+    std::vector<RingLocations> crossing_locations() const;
+    // `settled`: the split rings that their cut ends settle, sorted.
+    void settle(std::span<const std::uint32_t> settled);
 };
 
 // A part's chains: their facts, and their pieces by tile (ascending numbers).
@@ -397,6 +437,14 @@ public:
     // run over the live vertices, its first round's levels from the tile level up next.
     std::unique_ptr<MapInParts> finish(std::vector<LiveVertices> live, std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
 
+    // For the rounds after the first (KeptTiles): a count target's removal goal (after wanted());
+    // an outcome (a tile's, or the levels from T up's) into the chains' facts and the counts; the
+    // rings' distinct locations and orientations now.
+    std::uint64_t goal() const { return so_far_.goal; }
+    void take(const TileOutcome& outcome);
+    const std::vector<std::uint32_t>& distinct() const { return distinct_; }
+    const std::vector<std::int8_t>& orientation() const { return orientation_; }
+
 private:
     GridPlan plan_;
     unsigned t_;
@@ -414,6 +462,56 @@ private:
     std::vector<std::vector<std::uint32_t>> groups_;
     PartsSoFar so_far_;
     bool marks_ = false;
+};
+
+// The rounds after the first from the first round's tiles, kept (docs/distributed.md, "What is
+// left", items 4 and 5), instead of built again from the live map each round: each tile told what
+// the round changed (TileNews: the states, the cut ends that went, the waits, the rings' counts),
+// its count target's keys its own again, each round's budget selected over them and its groups
+// found as in the first round (FirstRoundLead). What it holds beside the tiles is per chain, per
+// control point and per wait across tiles. Each round's tiles are MapInParts's, input for input.
+//
+//     FirstRound first(...);  ...  first.split();
+//     KeptTiles kept = first.keep();
+//     // the first round's groups run (outcomes); its levels from T up over MapInParts (top, top_outcome)
+//     kept.finish_round(outcomes, &top, &top_outcome);
+//     while (kept.next_round()) {
+//         // kept.group(k) for k < kept.groups() run; the levels from T up, if they have candidates
+//         kept.finish_round(outcomes, &top, &top_outcome);  // (or nullptr, nullptr)
+//     }
+class KeptTiles {
+public:
+    KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles);
+    // The round's tiles' outcomes (each tile's once, in any order) and, if the levels from T up ran,
+    // their tile's input and outcome (MapInParts::top's, or a top_subset's not exhausted).
+    void finish_round(std::span<const TileOutcome> outcomes, const TileInput* top, const TileOutcome* top_outcome);
+    // A count target's next round: its budget selected over the tiles' keys, the split rings
+    // settled or not, the groups that run; false when no round is left.
+    bool next_round();
+    std::size_t groups() const { return lead_.groups().size(); }
+    std::vector<TileInput> group(std::size_t k) const;
+    std::size_t tiles() const { return tiles_.size(); }
+    // What the news did so far: cut ends moved on, pieces joined, waits across tiles (summed over
+    // the rounds' ends), waiters queued again by the lead.
+    struct Counts {
+        std::size_t cut_ends_moved = 0, pieces_joined = 0, waits_across = 0, queued_again = 0;
+        Counts& operator+=(const Counts& more) {
+            cut_ends_moved += more.cut_ends_moved;
+            pieces_joined += more.pieces_joined;
+            waits_across += more.waits_across;
+            queued_again += more.queued_again;
+            return *this;
+        }
+    };
+    const Counts& counts() const { return counts_; }
+
+private:
+    FirstRoundLead lead_;
+    std::map<std::uint32_t, FirstTile> tiles_;                           // by number, those holding live vertices
+    std::vector<std::uint32_t> running_;                                 // the round's tiles that ran, sorted
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> cross_waits_;  // (waiter, blocker) in two tiles, sorted
+    std::uint64_t removed_ = 0;
+    Counts counts_;
 };
 
 // The stages in one process: the first round built from parts of the map, its groups run by the
@@ -443,6 +541,8 @@ public:
     // The groups' outcomes (each tile's once, in any order): the run over the live vertices, its
     // first round's levels from the tile level up next (run_top_here, or top and finish_top).
     std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
+    // After split() and before finish: the tiles and the lead copied, for the rounds after.
+    KeptTiles keep() const { return KeptTiles(lead_, tiles_); }
 
 private:
     FirstRoundLead lead_;

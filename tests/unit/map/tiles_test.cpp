@@ -57,15 +57,18 @@ void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, un
                 what + ", live only, the top over a subset with runs of 1 at first");
 }
 
-// A random map of 100 chains and 40 rings, 800 control points and `roads` roads crossing it.
-MapData small_random_map(std::uint64_t seed, int roads) {
+// A random map of 100 chains (up to 50 steps each) and 40 rings, 800 control points and `roads`
+// roads crossing it; `big`: 150 chains (60 steps), 60 rings, 1 500 points, for 4–5 levels of
+// blocks; from x = origin_x.
+MapData random_map(std::uint64_t seed, int roads, bool big = false, double origin_x = 0) {
     std::mt19937_64 rng(seed);
     testing::RandomMapOptions shape;
-    shape.chains = 100;
-    shape.max_steps = 50;
-    shape.rings = 40;
-    shape.control_points = 800;
+    shape.chains = big ? 150 : 100;
+    shape.max_steps = big ? 60 : 50;
+    shape.rings = big ? 60 : 40;
+    shape.control_points = big ? 1500 : 800;
     shape.roads = roads;
+    shape.origin_x = origin_x;
     return testing::random_planar_map(rng, shape);
 }
 
@@ -87,15 +90,7 @@ class MapTilesEveryLevel : public ::testing::TestWithParam<std::uint64_t> {};
 
 TEST_P(MapTilesEveryLevel, GivesTheSingleProcessResult) {
     const std::uint64_t seed = GetParam();
-    std::mt19937_64 rng(seed);
-    testing::RandomMapOptions shape;
-    shape.chains = 150;
-    shape.max_steps = 60;
-    shape.rings = 60;
-    shape.control_points = 1500;
-    shape.roads = seed % 2 == 0 ? 6 : 0;
-    shape.origin_x = seed == 3 ? 1e6 : 0;
-    const MapData map = testing::random_planar_map(rng, shape);
+    const MapData map = random_map(seed, seed % 2 == 0 ? 6 : 0, true, seed == 3 ? 1e6 : 0);
     const GridPlan plan = plan_grid(map);
     ASSERT_GE(plan.levels, 3u) << "the map should have several levels of blocks";
     // Count targets that rounds reach: removing 60 % or 30 % of what --max removes (the roads'
@@ -157,7 +152,7 @@ INSTANTIATE_TEST_SUITE_P(MapTiles, MapTilesEveryLevel, ::testing::Values(std::ui
 // A count target that no run can reach runs as --max in every way of running in parts too: the
 // single process's result, which is --max's.
 TEST(MapTiles, ACountTargetNoRunCanReachRunsAsMaxInParts) {
-    const MapData map = small_random_map(5, 4);
+    const MapData map = random_map(5, 4);
     const GridPlan plan = plan_grid(map);
     SimplifyOptions options = on_two_threads({Target::max, 0});
     const SimplifyResult max = simplify(map, options);
@@ -176,7 +171,7 @@ TEST(MapTiles, ACountTargetNoRunCanReachRunsAsMaxInParts) {
 // it from the workers while the set-up and the crossing search run) gives what building it at that
 // level gives, capped at the levels; once a round has started it can no longer change.
 TEST(MapTiles, TheTileLevelSetAfterTheSetUpIsTheOneBuiltWith) {
-    const MapData map = small_random_map(7, 2);
+    const MapData map = random_map(7, 2);
     const GridPlan plan = plan_grid(map);
     ASSERT_GE(plan.levels, 3u);
     const SimplifyOptions options = on_two_threads({Target::keep_points, static_cast<double>(map.vertices.size()) * 0.8});
@@ -797,6 +792,140 @@ TEST(MapTiles, TilesPartitionTheMap) {
             << "every vertex inside exactly one tile";
     }
 }
+
+// Two tiles' inputs, field by field.
+void expect_same_input(const TileInput& a, const TileInput& b, const std::string& what) {
+    EXPECT_EQ(a.level, b.level) << what;
+    EXPECT_EQ(a.column, b.column) << what;
+    EXPECT_EQ(a.row, b.row) << what;
+    EXPECT_EQ(a.first_level, b.first_level) << what;
+    ASSERT_EQ(a.map.vertices.size(), b.map.vertices.size()) << what;
+    for (std::size_t v = 0; v < a.map.vertices.size(); ++v) {
+        ASSERT_TRUE(a.map.vertices[v].x == b.map.vertices[v].x && a.map.vertices[v].y == b.map.vertices[v].y) << what << ", vertex " << v;
+    }
+    ASSERT_EQ(a.map.chains.size(), b.map.chains.size()) << what;
+    for (std::size_t c = 0; c < a.map.chains.size(); ++c) {
+        EXPECT_TRUE(a.map.chains[c].first == b.map.chains[c].first && a.map.chains[c].last == b.map.chains[c].last) << what << ", piece " << c;
+    }
+    ASSERT_EQ(a.map.control_points.size(), b.map.control_points.size()) << what;
+    for (std::size_t k = 0; k < a.map.control_points.size(); ++k) {
+        EXPECT_TRUE(a.map.control_points[k].x == b.map.control_points[k].x && a.map.control_points[k].y == b.map.control_points[k].y) << what;
+    }
+    EXPECT_EQ(a.map.frozen, b.map.frozen) << what;
+    EXPECT_EQ(a.vertex_id, b.vertex_id) << what;
+    EXPECT_EQ(a.state, b.state) << what;
+    EXPECT_EQ(a.marked, b.marked) << what;
+    EXPECT_EQ(a.chain_id, b.chain_id) << what;
+    EXPECT_EQ(a.whole_level, b.whole_level) << what;
+    EXPECT_EQ(a.settled, b.settled) << what;
+    EXPECT_EQ(a.distinct, b.distinct) << what;
+    EXPECT_EQ(a.orientation, b.orientation) << what;
+    EXPECT_EQ(a.waits, b.waits) << what;
+    EXPECT_EQ(a.later, b.later) << what;
+    EXPECT_EQ(a.marks, b.marks) << what;
+    EXPECT_EQ(a.bound_key, b.bound_key) << what;
+    EXPECT_EQ(a.bound_id, b.bound_id) << what;
+    EXPECT_EQ(a.cut_end, b.cut_end) << what;
+    EXPECT_TRUE(a.outside.empty() && b.outside.empty()) << what;
+}
+
+// The levels from T up over MapInParts, over the whole live map (runs = 0) or over subsets with
+// runs of `runs` at first: the tile that ran last and its outcome.
+std::pair<TileInput, TileOutcome> run_top(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs) {
+    for (;;) {
+        TileInput top = runs == 0 ? parts.top() : parts.top_subset(runs);
+        std::vector<TileInput> one{top};
+        TileOutcome outcome = run_tile_group(std::move(one), parts.plan(), options).front();
+        if (runs == 0) {
+            parts.finish_top(outcome);
+        } else if (!parts.finish_top_subset(outcome)) {
+            runs *= 2;
+            continue;
+        }
+        return {std::move(top), std::move(outcome)};
+    }
+}
+
+// The rounds after the first from the first round's tiles kept (KeptTiles), each told what its
+// round changed: every round's tiles are those MapInParts builds from the live map it holds, input
+// for input — pieces joined where the top removed the vertices between them, cut ends moved on,
+// waits, marks and settled rings —, and the result is simplify()'s. Random maps with rings and
+// roads (crossings pin vertices and leave waits across tiles), every count target, every tile
+// level with levels above, the top over the whole live map or over subsets (in turn, by tile
+// level). One test per map; map 35 has a wait across tiles whose blocker goes in its tile (the
+// lead queues the waiter again).
+class MapTilesKept : public ::testing::TestWithParam<std::uint64_t> {};
+
+TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
+    const std::uint64_t seed = GetParam();
+    const MapData map = random_map(seed, seed % 3 == 2 ? 0 : 6, true);
+    const GridPlan plan = plan_grid(map);
+    ASSERT_GE(plan.levels, 3u);
+    const double all = static_cast<double>(map.vertices.size());
+    KeptTiles::Counts counts;
+    std::size_t rounds = 0;
+    for (const StopCriterion stop : {StopCriterion{Target::keep_fraction, 0.1}, StopCriterion{Target::keep_fraction, 0.3},
+                                     StopCriterion{Target::keep_points, 0.75 * all}, StopCriterion{Target::remove_points, 0.2 * all},
+                                     StopCriterion{Target::max, 0}}) {
+        const SimplifyOptions options = on_two_threads(stop);
+        const SimplifyResult whole = simplify(map, options);
+        for (unsigned tile_level = 1; tile_level < plan.levels; ++tile_level) {
+            {
+                const std::uint32_t runs = tile_level % 2 == 0 ? 2 : 0;
+                const std::string what = "target " + std::to_string(static_cast<int>(stop.target)) + " " + std::to_string(stop.value) +
+                                         ", tile level " + std::to_string(tile_level) + ", runs " + std::to_string(runs);
+                FirstRound first(plan, tile_level, options, map.vertices.size());
+                first.add_chains(map, 0, 0);
+                first.add_control_points(map.control_points);
+                std::vector<TileOutcome> outcomes;
+                const std::size_t groups = first.split();
+                KeptTiles kept = first.keep();
+                for (std::size_t k = 0; k < groups; ++k) {
+                    for (TileOutcome& outcome : run_tile_group(first.group(k), plan, options)) outcomes.push_back(std::move(outcome));
+                }
+                std::unique_ptr<MapInParts> parts = first.finish(outcomes);
+                auto [top, top_outcome] = run_top(*parts, options, runs);
+                kept.finish_round(outcomes, &top, &top_outcome);
+                while (parts->next_round()) {
+                    ++rounds;
+                    const std::string here = what + ", round " + std::to_string(rounds);
+                    ASSERT_TRUE(kept.next_round()) << here;
+                    const std::size_t count = parts->split_round();
+                    ASSERT_EQ(kept.groups(), count) << here;
+                    outcomes.clear();
+                    for (std::size_t k = 0; k < count; ++k) {
+                        const std::vector<TileInput> expected = parts->group(k), given = kept.group(k);
+                        ASSERT_EQ(given.size(), expected.size()) << here;
+                        for (std::size_t i = 0; i < given.size(); ++i) {
+                            expect_same_input(given[i], expected[i], here + ", group " + std::to_string(k));
+                            if (HasFailure()) return;
+                        }
+                        for (TileOutcome& outcome : run_tile_group(given, plan, options)) outcomes.push_back(std::move(outcome));
+                    }
+                    if (parts->finish_tiles(outcomes)) {
+                        std::tie(top, top_outcome) = run_top(*parts, options, runs);
+                        kept.finish_round(outcomes, &top, &top_outcome);
+                    } else {
+                        kept.finish_round(outcomes, nullptr, nullptr);
+                    }
+                }
+                EXPECT_FALSE(kept.next_round()) << what;
+                expect_same_but_predicates(parts->result(), whole, what);
+                counts += kept.counts();
+            }
+        }
+    }
+    // What the news had to do, for the test to mean something.
+    EXPECT_GT(rounds, 20u);
+    EXPECT_GT(counts.cut_ends_moved, 0u);
+    EXPECT_GT(counts.pieces_joined, 0u);
+    EXPECT_GT(counts.waits_across, 0u);
+    if (seed == 35) {
+        EXPECT_GT(counts.queued_again, 0u);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(MapTiles, MapTilesKept, ::testing::Values(std::uint64_t{1}, 2, 3, 5, 6, 7, 35));
 
 }  // namespace
 }  // namespace toposimp::map
