@@ -473,18 +473,22 @@ private:
 //
 //     FirstRound first(...);  ...  first.split();
 //     KeptTiles kept = first.keep();
-//     // the first round's groups run (outcomes); its levels from T up over MapInParts (top, top_outcome)
-//     kept.finish_round(outcomes, &top, &top_outcome);
+//     // the first round's groups run (outcomes)
+//     kept.finish_tiles(outcomes);  // (the first round's levels from T up always run)
+//     kept.finish_top(top, top_outcome);
 //     while (kept.next_round()) {
-//         // kept.group(k) for k < kept.groups() run; the levels from T up, if they have candidates
-//         kept.finish_round(outcomes, &top, &top_outcome);  // (or nullptr, nullptr)
+//         // kept.group(k) for k < kept.groups() run (outcomes)
+//         if (kept.finish_tiles(outcomes)) kept.finish_top(top, top_outcome);
 //     }
 class KeptTiles {
 public:
     KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles);
-    // The round's tiles' outcomes (each tile's once, in any order) and, if the levels from T up ran,
-    // their tile's input and outcome (MapInParts::top's, or a top_subset's not exhausted).
-    void finish_round(std::span<const TileOutcome> outcomes, const TileInput* top, const TileOutcome* top_outcome);
+    // The round's tiles' outcomes (each tile's once, in any order); whether the levels from T up
+    // have candidates (else the round is over).
+    bool finish_tiles(std::span<const TileOutcome> outcomes);
+    // Then the levels from T up: their tile's input and outcome (MapInParts::top's, or a
+    // top_subset's not exhausted). The round is over.
+    void finish_top(const TileInput& top, const TileOutcome& outcome);
     // A count target's next round: its budget selected over the tiles' keys, the split rings
     // settled or not, the groups that run; false when no round is left.
     bool next_round();
@@ -511,7 +515,12 @@ private:
     std::vector<std::uint32_t> running_;                                 // the round's tiles that ran, sorted
     std::vector<std::pair<std::uint32_t, std::uint32_t>> cross_waits_;  // (waiter, blocker) in two tiles, sorted
     std::uint64_t removed_ = 0;
+    std::vector<std::vector<std::uint32_t>> later_;  // [level − T]: the candidates the tiles left for the levels from T up
     Counts counts_;
+
+    // Every tile told `news`; `across`: the waits across tiles now, but those the tiles' own
+    // outcomes begin on a cut end (advance adds them).
+    void advance(TileNews& news, std::vector<std::pair<std::uint32_t, std::uint32_t>>& across);
 };
 
 // The stages in one process: the first round built from parts of the map, its groups run by the

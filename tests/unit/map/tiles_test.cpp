@@ -884,8 +884,9 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
                     for (TileOutcome& outcome : run_tile_group(first.group(k), plan, options)) outcomes.push_back(std::move(outcome));
                 }
                 std::unique_ptr<MapInParts> parts = first.finish(outcomes);
+                kept.finish_tiles(outcomes);
                 auto [top, top_outcome] = run_top(*parts, options, runs);
-                kept.finish_round(outcomes, &top, &top_outcome);
+                kept.finish_top(top, top_outcome);
                 while (parts->next_round()) {
                     ++rounds;
                     const std::string here = what + ", round " + std::to_string(rounds);
@@ -902,11 +903,11 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
                         }
                         for (TileOutcome& outcome : run_tile_group(given, plan, options)) outcomes.push_back(std::move(outcome));
                     }
-                    if (parts->finish_tiles(outcomes)) {
+                    const bool above = parts->finish_tiles(outcomes);
+                    ASSERT_EQ(kept.finish_tiles(outcomes), above) << here;
+                    if (above) {
                         std::tie(top, top_outcome) = run_top(*parts, options, runs);
-                        kept.finish_round(outcomes, &top, &top_outcome);
-                    } else {
-                        kept.finish_round(outcomes, nullptr, nullptr);
+                        kept.finish_top(top, top_outcome);
                     }
                 }
                 EXPECT_FALSE(kept.next_round()) << what;
