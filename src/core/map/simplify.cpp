@@ -2951,12 +2951,13 @@ FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const Gri
     out.level = in.level;
     out.column = in.column;
     out.row = in.row;
-    std::vector<std::uint8_t> cuts, frozen_now;
-    const auto take = [&](std::uint32_t id, Point p, std::uint8_t state, bool cut) {
+    std::vector<std::uint8_t> cuts, frozen_now, marked_now;
+    const auto take = [&](std::uint32_t id, Point p, std::uint8_t state, bool cut, std::uint8_t mark = 0) {
         out.map.vertices.push_back(p);
         out.vertex_id.push_back(id);
         out.state.push_back(state);
         cuts.push_back(cut ? 1 : 0);
+        marked_now.push_back(mark);
     };
     const auto start = [&](std::uint32_t p) {
         const auto first = static_cast<std::uint32_t>(out.vertex_id.size());
@@ -3002,7 +3003,7 @@ FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const Gri
             if (open) throw joined();
             start(p);
         }
-        for (const std::uint32_t v : live) take(in.vertex_id[v], in.map.vertices[v], state_of(v), false);
+        for (const std::uint32_t v : live) take(in.vertex_id[v], in.map.vertices[v], state_of(v), false, marked.empty() ? 0 : marked[v]);
         open = false;
         if (after) {
             const std::uint32_t c = in.vertex_id[piece.last];
@@ -3041,6 +3042,7 @@ FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const Gri
     input = std::move(out);
     cut_end = std::move(cuts);
     frozen = std::move(frozen_now);
+    if (!marked.empty()) marked = std::move(marked_now);
     std::vector<std::uint8_t>().swap(improper);
     // A count target's keys: its queued vertices' ranks between their live neighbours now.
     keys.clear();
@@ -3053,6 +3055,14 @@ FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const Gri
         }
     }
     return done;
+}
+
+void FirstTile::mark(double bound_key, std::uint32_t bound_id) {
+    const std::pair last{std::bit_cast<std::uint64_t>(bound_key), bound_id};
+    marked.assign(input.vertex_id.size(), 0);
+    for_each_keyed(*this, [&](std::uint32_t v, std::uint64_t area) {
+        if (std::pair{area, input.vertex_id[v]} <= last) marked[v] = 1;
+    });
 }
 
 std::vector<RingLocations> FirstTile::crossing_locations() const {

@@ -350,8 +350,11 @@ struct FirstTile {
     // The tile to run: marked up to the bound (count targets), with its control points.
     TileInput run_input(bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const;
 
-    // Kept for the next rounds (KeptTiles): (waiter, blocker) whole-map ids, both its own vertices.
+    // Kept for the next rounds (KeptTiles): (waiter, blocker) whole-map ids, both its own vertices;
+    // per vertex, in the round's budget (a count target's, as marked when the round began).
     std::vector<std::pair<std::uint32_t, std::uint32_t>> waits;
+    std::vector<std::uint8_t> marked;
+    void mark(double bound_key, std::uint32_t bound_id);
     // A round over: the removed vertices out, the states now, a cut end that went replaced by the
     // live vertex beyond it (two pieces joined where that one is in the tile), the waits now (its
     // own outcome's if `ran`, the top's for what the top judged), its whole rings' counts from
@@ -444,6 +447,9 @@ public:
     void take(const TileOutcome& outcome);
     const std::vector<std::uint32_t>& distinct() const { return distinct_; }
     const std::vector<std::int8_t>& orientation() const { return orientation_; }
+    const std::vector<Chain>& chains_by_id() const { return chains_; }
+    const std::vector<std::uint8_t>& whole_level() const { return whole_level_; }
+    const std::vector<Point>& control_points() const { return control_points_; }
 
 private:
     GridPlan plan_;
@@ -494,6 +500,14 @@ public:
     bool next_round();
     std::size_t groups() const { return lead_.groups().size(); }
     std::vector<TileInput> group(std::size_t k) const;
+    // After finish_tiles returned true: the levels from T up over a subset of the live map, as
+    // MapInParts::top_subset builds it (input for input), gathered from the tiles — the pieces
+    // holding the vertices it walks, the live vertices in its runs' boxes, the rings' fixed
+    // locations outside its runs — and what the lead holds (control points, waits across tiles,
+    // the rings' counts). finish_top_subset takes its outcome, or nothing (false) if its runs were
+    // too short: then again with longer runs.
+    TileInput top_subset(std::uint32_t runs) const;
+    bool finish_top_subset(const TileInput& top, const TileOutcome& outcome);
     std::size_t tiles() const { return tiles_.size(); }
     // What the news did so far: cut ends moved on, pieces joined, waits across tiles (summed over
     // the rounds' ends), waiters queued again by the lead.

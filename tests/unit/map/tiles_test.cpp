@@ -826,34 +826,97 @@ void expect_same_input(const TileInput& a, const TileInput& b, const std::string
     EXPECT_EQ(a.bound_key, b.bound_key) << what;
     EXPECT_EQ(a.bound_id, b.bound_id) << what;
     EXPECT_EQ(a.cut_end, b.cut_end) << what;
-    EXPECT_TRUE(a.outside.empty() && b.outside.empty()) << what;
+    ASSERT_EQ(a.outside.size(), b.outside.size()) << what;
+    for (std::size_t k = 0; k < a.outside.size(); ++k) {
+        EXPECT_EQ(a.outside[k].chain, b.outside[k].chain) << what;
+        EXPECT_EQ(a.outside[k].level, b.outside[k].level) << what;
+        ASSERT_EQ(a.outside[k].locations.size(), b.outside[k].locations.size()) << what << ", ring " << a.outside[k].chain;
+        for (std::size_t i = 0; i < a.outside[k].locations.size(); ++i) {
+            EXPECT_TRUE(same_location(a.outside[k].locations[i], b.outside[k].locations[i])) << what << ", ring " << a.outside[k].chain;
+        }
+    }
 }
 
 // The levels from T up over MapInParts, over the whole live map (runs = 0) or over subsets with
-// runs of `runs` at first: the tile that ran last and its outcome.
-std::pair<TileInput, TileOutcome> run_top(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs) {
+// runs of `runs` at first, each subset gathered from the kept tiles too (KeptTiles::top_subset)
+// and checked against MapInParts's; their outcome to both.
+void run_top(MapInParts& parts, KeptTiles& kept, const SimplifyOptions& options, std::uint32_t runs, const std::string& what) {
     for (;;) {
         TileInput top = runs == 0 ? parts.top() : parts.top_subset(runs);
+        if (runs > 0) {
+            TileInput given = kept.top_subset(runs);
+            expect_same_input(given, top, what + ", the top over a subset of runs " + std::to_string(runs));
+            if (::testing::Test::HasFailure()) return;
+            top = std::move(given);
+        }
         std::vector<TileInput> one{top};
-        TileOutcome outcome = run_tile_group(std::move(one), parts.plan(), options).front();
+        const TileOutcome outcome = run_tile_group(std::move(one), parts.plan(), options).front();
         if (runs == 0) {
             parts.finish_top(outcome);
-        } else if (!parts.finish_top_subset(outcome)) {
-            runs *= 2;
-            continue;
+            kept.finish_top(top, outcome);
+            return;
         }
-        return {std::move(top), std::move(outcome)};
+        const bool taken = parts.finish_top_subset(outcome);
+        ASSERT_EQ(kept.finish_top_subset(top, outcome), taken) << what;
+        if (taken) return;
+        runs *= 2;
     }
+}
+
+// A run in parts of `map` from the first round by parts (FirstRound), the rounds after the first
+// from its tiles kept (KeptTiles) and checked against MapInParts's, round by round, group by group:
+// their tiles, and the levels from T up over subsets (runs > 0) gathered from the kept tiles. The
+// result must be simplify()'s; `counts` adds what the kept tiles' news did.
+void expect_kept_rounds(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::uint32_t runs,
+                        const SimplifyResult& whole, const std::string& what, KeptTiles::Counts& counts, std::size_t& rounds) {
+    const GridPlan plan = plan_grid(map);
+    FirstRound first(plan, tile_level, options, map.vertices.size());
+    first.add_chains(map, 0, 0);
+    first.add_control_points(map.control_points);
+    std::vector<TileOutcome> outcomes;
+    const std::size_t groups = first.split();
+    KeptTiles kept = first.keep();
+    for (std::size_t k = 0; k < groups; ++k) {
+        for (TileOutcome& outcome : run_tile_group(first.group(k), plan, options)) outcomes.push_back(std::move(outcome));
+    }
+    std::unique_ptr<MapInParts> parts = first.finish(outcomes);
+    kept.finish_tiles(outcomes);
+    run_top(*parts, kept, options, runs, what + ", round 1");
+    if (::testing::Test::HasFailure()) return;
+    while (parts->next_round()) {
+        ++rounds;
+        const std::string here = what + ", round " + std::to_string(rounds);
+        ASSERT_TRUE(kept.next_round()) << here;
+        const std::size_t count = parts->split_round();
+        ASSERT_EQ(kept.groups(), count) << here;
+        outcomes.clear();
+        for (std::size_t k = 0; k < count; ++k) {
+            const std::vector<TileInput> expected = parts->group(k), given = kept.group(k);
+            ASSERT_EQ(given.size(), expected.size()) << here;
+            for (std::size_t i = 0; i < given.size(); ++i) {
+                expect_same_input(given[i], expected[i], here + ", group " + std::to_string(k));
+                if (::testing::Test::HasFailure()) return;
+            }
+            for (TileOutcome& outcome : run_tile_group(given, plan, options)) outcomes.push_back(std::move(outcome));
+        }
+        const bool above = parts->finish_tiles(outcomes);
+        ASSERT_EQ(kept.finish_tiles(outcomes), above) << here;
+        if (above) run_top(*parts, kept, options, runs, here);
+        if (::testing::Test::HasFailure()) return;
+    }
+    EXPECT_FALSE(kept.next_round()) << what;
+    expect_same_but_predicates(parts->result(), whole, what);
+    counts += kept.counts();
 }
 
 // The rounds after the first from the first round's tiles kept (KeptTiles), each told what its
 // round changed: every round's tiles are those MapInParts builds from the live map it holds, input
 // for input — pieces joined where the top removed the vertices between them, cut ends moved on,
-// waits, marks and settled rings —, and the result is simplify()'s. Random maps with rings and
-// roads (crossings pin vertices and leave waits across tiles), every count target, every tile
-// level with levels above, the top over the whole live map or over subsets (in turn, by tile
-// level). One test per map; map 35 has a wait across tiles whose blocker goes in its tile (the
-// lead queues the waiter again).
+// waits, marks and settled rings —, and so is every subset of the live map for the levels from T
+// up gathered from the tiles (runs of 1 and 4, often too short); the result is simplify()'s.
+// Random maps with rings and roads (crossings pin vertices and leave waits across tiles), every
+// count target, every tile level with levels above. One test per map; map 35 has a wait across
+// tiles whose blocker goes in its tile (the lead queues the waiter again).
 class MapTilesKept : public ::testing::TestWithParam<std::uint64_t> {};
 
 TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
@@ -870,49 +933,12 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
         const SimplifyOptions options = on_two_threads(stop);
         const SimplifyResult whole = simplify(map, options);
         for (unsigned tile_level = 1; tile_level < plan.levels; ++tile_level) {
-            {
-                const std::uint32_t runs = tile_level % 2 == 0 ? 2 : 0;
-                const std::string what = "target " + std::to_string(static_cast<int>(stop.target)) + " " + std::to_string(stop.value) +
-                                         ", tile level " + std::to_string(tile_level) + ", runs " + std::to_string(runs);
-                FirstRound first(plan, tile_level, options, map.vertices.size());
-                first.add_chains(map, 0, 0);
-                first.add_control_points(map.control_points);
-                std::vector<TileOutcome> outcomes;
-                const std::size_t groups = first.split();
-                KeptTiles kept = first.keep();
-                for (std::size_t k = 0; k < groups; ++k) {
-                    for (TileOutcome& outcome : run_tile_group(first.group(k), plan, options)) outcomes.push_back(std::move(outcome));
-                }
-                std::unique_ptr<MapInParts> parts = first.finish(outcomes);
-                kept.finish_tiles(outcomes);
-                auto [top, top_outcome] = run_top(*parts, options, runs);
-                kept.finish_top(top, top_outcome);
-                while (parts->next_round()) {
-                    ++rounds;
-                    const std::string here = what + ", round " + std::to_string(rounds);
-                    ASSERT_TRUE(kept.next_round()) << here;
-                    const std::size_t count = parts->split_round();
-                    ASSERT_EQ(kept.groups(), count) << here;
-                    outcomes.clear();
-                    for (std::size_t k = 0; k < count; ++k) {
-                        const std::vector<TileInput> expected = parts->group(k), given = kept.group(k);
-                        ASSERT_EQ(given.size(), expected.size()) << here;
-                        for (std::size_t i = 0; i < given.size(); ++i) {
-                            expect_same_input(given[i], expected[i], here + ", group " + std::to_string(k));
-                            if (HasFailure()) return;
-                        }
-                        for (TileOutcome& outcome : run_tile_group(given, plan, options)) outcomes.push_back(std::move(outcome));
-                    }
-                    const bool above = parts->finish_tiles(outcomes);
-                    ASSERT_EQ(kept.finish_tiles(outcomes), above) << here;
-                    if (above) {
-                        std::tie(top, top_outcome) = run_top(*parts, options, runs);
-                        kept.finish_top(top, top_outcome);
-                    }
-                }
-                EXPECT_FALSE(kept.next_round()) << what;
-                expect_same_but_predicates(parts->result(), whole, what);
-                counts += kept.counts();
+            for (const std::uint32_t runs : {0u, 1u, 4u}) {
+                expect_kept_rounds(map, options, tile_level, runs, whole,
+                                   "target " + std::to_string(static_cast<int>(stop.target)) + " " + std::to_string(stop.value) + ", tile level " +
+                                       std::to_string(tile_level) + ", runs " + std::to_string(runs),
+                                   counts, rounds);
+                if (HasFailure()) return;
             }
         }
     }
@@ -927,6 +953,27 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
 }
 
 INSTANTIATE_TEST_SUITE_P(MapTiles, MapTilesKept, ::testing::Values(std::uint64_t{1}, 2, 3, 5, 6, 7, 35));
+
+// The same on the wavy rings that every level cuts (TheTopOverASubset…'s maps): subsets whose
+// rings are cut into runs take those rings' fixed locations outside the runs from the tiles.
+TEST(MapTiles, KeptTilesGiveTheSubsetsOfRingsEveryLevelCuts) {
+    KeptTiles::Counts counts;
+    std::size_t rounds = 0;
+    for (const MapData& map : {wavy_rings(7, 8, 1500, 4000, 7), wavy_rings(4, 14, 600, 2000, 0)}) {
+        const GridPlan plan = plan_grid(map);
+        for (const StopCriterion stop : {StopCriterion{Target::max, 0}, StopCriterion{Target::keep_fraction, 0.1}}) {
+            const SimplifyOptions options = on_two_threads(stop);
+            const SimplifyResult whole = simplify(map, options);
+            for (unsigned tile_level = 1; tile_level + 1 < plan.levels; ++tile_level) {
+                expect_kept_rounds(map, options, tile_level, 1, whole,
+                                   "target " + std::to_string(static_cast<int>(stop.target)) + ", tile level " + std::to_string(tile_level), counts,
+                                   rounds);
+                if (HasFailure()) return;
+            }
+        }
+    }
+    EXPECT_GT(counts.cut_ends_moved, 0u);
+}
 
 }  // namespace
 }  // namespace toposimp::map
