@@ -18,6 +18,25 @@ KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTi
     if (lead_.marks()) {
         for (auto& [k, tile] : tiles_) tile.mark(lead_.bound_key(), lead_.bound_id());
     }
+    gone_.assign(lead_.vertices(), 0);
+}
+
+void KeptTiles::note_removed(const TileOutcome& outcome) {
+    for (std::size_t k = 0; k < outcome.ids.size(); ++k) {
+        if (outcome.states[k] == static_cast<std::uint8_t>(VertexState::removed)) gone_.at(outcome.ids[k]) = 1;
+    }
+}
+
+SimplifyResult KeptTiles::result() const {
+    SimplifyResult result;
+    result.stats = lead_.stats();
+    SimplifyStats& stats = result.stats;
+    stats.vertices_in = lead_.vertices();
+    stats.vertices_out = stats.vertices_in - stats.removed;
+    if (lead_.marks() || stats.swept_as_max) stats.target_reached = stats.removed >= lead_.goal();
+    result.kept.resize(gone_.size());
+    for (std::size_t v = 0; v < gone_.size(); ++v) result.kept[v] = gone_[v] ? 0 : 1;
+    return result;
 }
 
 namespace {
@@ -97,6 +116,7 @@ bool KeptTiles::finish_tiles(std::span<const TileOutcome> outcomes) {
     later_.assign(levels - t, {});
     for (const TileOutcome& outcome : outcomes) {
         lead_.take(outcome);
+        note_removed(outcome);
         removed_ += outcome.stats.removed;
         news.tile_waits.insert(news.tile_waits.end(), outcome.waits.begin(), outcome.waits.end());
         for (std::size_t k = 0; k < outcome.later.size() && t + k < levels; ++k) {
@@ -132,6 +152,7 @@ void KeptTiles::finish_top(const TileInput& top, const TileOutcome& outcome) {
     const GridPlan& plan = lead_.plan();
     const unsigned t = lead_.tile_level();
     lead_.take(outcome);
+    note_removed(outcome);
     removed_ += outcome.stats.removed;
     TileNews news;
     std::vector<std::pair<std::uint32_t, std::uint8_t>> states;
@@ -165,7 +186,7 @@ bool KeptTiles::next_round() {
         queued += tile.queued();
     }
     if (queued == 0) return false;
-    lead_.bound(parallel::select_kth_by_digits(
+    lead_.next_bound(parallel::select_kth_by_digits(
         all.size(), std::min(goal - removed_, queued),
         [&](std::size_t part, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { all[part]->histogram(shift, high, counts); },
         [&](std::size_t part, std::uint64_t key, std::vector<std::uint32_t>& ids) { all[part]->ids_at(key, ids); }));

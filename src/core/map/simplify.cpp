@@ -3205,6 +3205,12 @@ void FirstRoundLead::bound(parallel::KeyedSelection selection) {
     so_far_.stats.rounds = 1;
 }
 
+void FirstRoundLead::next_bound(parallel::KeyedSelection selection) {
+    so_far_.bound_key = std::bit_cast<double>(selection.key);
+    so_far_.bound_id = selection.id;
+    ++so_far_.stats.rounds;
+}
+
 const std::vector<std::vector<std::uint32_t>>& FirstRoundLead::groups(std::vector<TileFacts> tiles) {
     // Tiles joined by the split rings their cut ends do not settle, in the order of their first
     // tiles; those without a busy tile sit the round out.

@@ -75,6 +75,42 @@ SimplifyResult simplify_in_tiles(const MapData& map, const SimplifyOptions& opti
     return parts.result();
 }
 
+SimplifyResult simplify_with_kept_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,
+                                        std::uint32_t runs) {
+    const GridPlan plan = plan_grid(map);
+    FirstRound first(plan, tile_level, options, map.vertices.size());
+    const auto chains = static_cast<std::uint32_t>(map.chains.size());
+    for (std::uint32_t c = 0; c < chains;) {
+        // The next chains, about part_vertices vertices of them, as a map of their own.
+        MapData part;
+        const std::uint32_t first_chain = c, first_vertex = map.chains[c].first;
+        while (c < chains && (part.vertices.empty() || part.vertices.size() < part_vertices)) {
+            const Chain& chain = map.chains[c];
+            const std::uint32_t own = part.add_chain(std::span<const Point>(map.vertices.data() + chain.first, chain.last - chain.first + 1));
+            if (map.is_frozen(c)) part.freeze(own);
+            ++c;
+        }
+        first.add_chains(part, first_vertex, first_chain);
+    }
+    first.add_control_points(map.control_points);
+    first.split();
+    KeptTiles kept = std::move(first).kept();
+    runs = std::max(runs, 1u);
+    do {
+        std::vector<TileOutcome> outcomes;
+        for (std::size_t k = 0; k < kept.groups(); ++k) {
+            for (TileOutcome& outcome : run_tile_group(kept.group(k), plan, options)) outcomes.push_back(std::move(outcome));
+        }
+        if (!kept.finish_tiles(outcomes)) continue;
+        for (std::uint32_t length = runs;; length = length >= (1u << 30) ? std::numeric_limits<std::uint32_t>::max() : 2 * length) {
+            TileInput top = kept.top_subset(length);
+            std::vector<TileInput> one{top};
+            if (kept.finish_top_subset(top, run_tile_group(std::move(one), plan, options).front())) break;
+        }
+    } while (kept.next_round());
+    return kept.result();
+}
+
 SimplifyResult simplify_by_parts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,
                                  std::uint64_t here_below) {
     const GridPlan plan = plan_grid(map);

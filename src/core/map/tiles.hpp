@@ -422,6 +422,10 @@ public:
     // (--max, --max-area; a count target with nothing to go, or run as --max).
     std::uint64_t wanted();
     void bound(parallel::KeyedSelection selection);
+    // A later round's (KeptTiles): its bound, one more round.
+    void next_bound(parallel::KeyedSelection selection);
+    const SimplifyStats& stats() const { return so_far_.stats; }
+    std::uint64_t vertices() const { return vertices_; }
     double bound_key() const { return so_far_.bound_key; }
     std::uint32_t bound_id() const { return so_far_.bound_id; }
     // Every tile holding vertices: its number, whether busy, its open chains (open_chains());
@@ -508,6 +512,8 @@ public:
     // too short: then again with longer runs.
     TileInput top_subset(std::uint32_t runs) const;
     bool finish_top_subset(const TileInput& top, const TileOutcome& outcome);
+    // When no round is left: simplify()'s result, every vertex kept but those the outcomes removed.
+    SimplifyResult result() const;
     std::size_t tiles() const { return tiles_.size(); }
     // What the news did so far: cut ends moved on, pieces joined, waits across tiles (summed over
     // the rounds' ends), waiters queued again by the lead.
@@ -529,9 +535,11 @@ private:
     std::vector<std::uint32_t> running_;                                 // the round's tiles that ran, sorted
     std::vector<std::pair<std::uint32_t, std::uint32_t>> cross_waits_;  // (waiter, blocker) in two tiles, sorted
     std::uint64_t removed_ = 0;
+    std::vector<std::uint8_t> gone_;  // per vertex of the map: removed
     std::vector<std::vector<std::uint32_t>> later_;  // [level − T]: the candidates the tiles left for the levels from T up
     Counts counts_;
 
+    void note_removed(const TileOutcome& outcome);
     // Every tile told `news`; `across`: the waits across tiles now, but those the tiles' own
     // outcomes begin on a cut end (advance adds them).
     void advance(TileNews& news, std::vector<std::pair<std::uint32_t, std::uint32_t>>& across);
@@ -566,6 +574,8 @@ public:
     std::unique_ptr<MapInParts> finish(std::span<const TileOutcome> outcomes, std::uint64_t here_below = 0);
     // After split() and before finish: the tiles and the lead copied, for the rounds after.
     KeptTiles keep() const { return KeptTiles(lead_, tiles_); }
+    // Or moved (this is then spent): the first round's groups run from KeptTiles::group too.
+    KeptTiles kept() && { return KeptTiles(lead_, std::move(tiles_)); }
 
 private:
     FirstRoundLead lead_;
@@ -575,6 +585,13 @@ private:
 // The levels from T up (after finish_tiles returned true) as top_subset's tile, run here: runs
 // of `runs` vertices, twice as long each time they fall short. Returns the tiles it took.
 unsigned run_top_over_subsets(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs);
+
+// simplify() run in parts in this process with nothing over the whole map's vertices: the first
+// round built from parts of about `part_vertices` vertices (FirstRound), every round's tiles kept
+// (KeptTiles), the levels from T up over subsets gathered from them, with runs of `runs` at first.
+// The reference for a distributed run whose lead holds no live map (docs/distributed.md).
+SimplifyResult simplify_with_kept_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,
+                                        std::uint32_t runs);
 
 // simplify() run in parts in this process, every group of tiles in turn (rounds with a budget
 // under `here_below` whole, as MapInParts says), and the levels from T up as one more tile (top)

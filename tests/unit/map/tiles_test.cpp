@@ -44,7 +44,7 @@ void expect_same_but_predicates(const SimplifyResult& parts, const SimplifyResul
 
 // simplify_in_tiles as it is, and keeping the live vertices only from the first round's tiles on
 // (then also with the levels above the tiles and the small rounds run by that engine itself), and
-// with the first round built by parts.
+// with the first round built by parts, and with nothing over the whole map (kept tiles alone).
 void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, unsigned tile_level, const SimplifyResult& whole,
                           const std::string& what) {
     expect_same(simplify_in_tiles(map, options, tile_level), whole, what);
@@ -55,6 +55,7 @@ void expect_same_in_tiles(const MapData& map, const SimplifyOptions& options, un
     expect_same(simplify_in_tiles(map, options, tile_level, 0, false, false, 4), whole, what + ", the top over a subset");
     expect_same(simplify_in_tiles(map, options, tile_level, 0, false, true, 1), whole,
                 what + ", live only, the top over a subset with runs of 1 at first");
+    expect_same_but_predicates(simplify_with_kept_tiles(map, options, tile_level, 64, 1), whole, what + ", kept tiles alone");
 }
 
 // A random map of 100 chains (up to 50 steps each) and 40 rings, 800 control points and `roads`
@@ -934,6 +935,10 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
         const SimplifyResult whole = simplify(map, options);
         for (unsigned tile_level = 1; tile_level < plan.levels; ++tile_level) {
             for (const std::uint32_t runs : {0u, 1u, 4u}) {
+                if (runs > 0) {
+                    expect_same_but_predicates(simplify_with_kept_tiles(map, options, tile_level, map.vertices.size() / 3, runs), whole,
+                                               "kept tiles alone, tile level " + std::to_string(tile_level));
+                }
                 expect_kept_rounds(map, options, tile_level, runs, whole,
                                    "target " + std::to_string(static_cast<int>(stop.target)) + " " + std::to_string(stop.value) + ", tile level " +
                                        std::to_string(tile_level) + ", runs " + std::to_string(runs),
