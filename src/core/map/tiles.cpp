@@ -7,6 +7,28 @@
 
 namespace toposimp::map {
 
+namespace {
+
+// `map` into `first`, its chains a part of about part_vertices vertices at a time, each part a
+// map of its own; then its control points.
+void add_by_parts(FirstRound& first, const MapData& map, std::size_t part_vertices) {
+    const auto chains = static_cast<std::uint32_t>(map.chains.size());
+    for (std::uint32_t c = 0; c < chains;) {
+        MapData part;
+        const std::uint32_t first_chain = c, first_vertex = map.chains[c].first;
+        while (c < chains && (part.vertices.empty() || part.vertices.size() < part_vertices)) {
+            const Chain& chain = map.chains[c];
+            const std::uint32_t own = part.add_chain(std::span<const Point>(map.vertices.data() + chain.first, chain.last - chain.first + 1));
+            if (map.is_frozen(c)) part.freeze(own);
+            ++c;
+        }
+        first.add_chains(part, first_vertex, first_chain);
+    }
+    first.add_control_points(map.control_points);
+}
+
+}  // namespace
+
 std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const GridPlan& plan, const SimplifyOptions& options) {
     if (group.empty()) return {};
     const unsigned tile_level = group.front().level, first_level = group.front().first_level;
@@ -79,20 +101,7 @@ SimplifyResult simplify_with_kept_tiles(const MapData& map, const SimplifyOption
                                         std::uint32_t runs) {
     const GridPlan plan = plan_grid(map);
     FirstRound first(plan, tile_level, options, map.vertices.size());
-    const auto chains = static_cast<std::uint32_t>(map.chains.size());
-    for (std::uint32_t c = 0; c < chains;) {
-        // The next chains, about part_vertices vertices of them, as a map of their own.
-        MapData part;
-        const std::uint32_t first_chain = c, first_vertex = map.chains[c].first;
-        while (c < chains && (part.vertices.empty() || part.vertices.size() < part_vertices)) {
-            const Chain& chain = map.chains[c];
-            const std::uint32_t own = part.add_chain(std::span<const Point>(map.vertices.data() + chain.first, chain.last - chain.first + 1));
-            if (map.is_frozen(c)) part.freeze(own);
-            ++c;
-        }
-        first.add_chains(part, first_vertex, first_chain);
-    }
-    first.add_control_points(map.control_points);
+    add_by_parts(first, map, part_vertices);
     first.split();
     KeptTiles kept = std::move(first).kept();
     runs = std::max(runs, 1u);
@@ -115,20 +124,7 @@ SimplifyResult simplify_by_parts(const MapData& map, const SimplifyOptions& opti
                                  std::uint64_t here_below) {
     const GridPlan plan = plan_grid(map);
     FirstRound first(plan, tile_level, options, map.vertices.size());
-    const auto chains = static_cast<std::uint32_t>(map.chains.size());
-    for (std::uint32_t c = 0; c < chains;) {
-        // The next chains, about part_vertices vertices of them, as a map of their own.
-        MapData part;
-        const std::uint32_t first_chain = c, first_vertex = map.chains[c].first;
-        while (c < chains && (part.vertices.empty() || part.vertices.size() < part_vertices)) {
-            const Chain& chain = map.chains[c];
-            const std::uint32_t own = part.add_chain(std::span<const Point>(map.vertices.data() + chain.first, chain.last - chain.first + 1));
-            if (map.is_frozen(c)) part.freeze(own);
-            ++c;
-        }
-        first.add_chains(part, first_vertex, first_chain);
-    }
-    first.add_control_points(map.control_points);
+    add_by_parts(first, map, part_vertices);
     std::vector<TileOutcome> outcomes;
     const std::size_t groups = first.split();
     for (std::size_t k = 0; k < groups; ++k) {
