@@ -12,12 +12,13 @@
 
 namespace toposimp::map {
 
-KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles) : lead_(lead), tiles_(std::move(tiles)) {
+KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles) : lead_(lead) {
     for (const std::vector<std::uint32_t>& group : lead_.groups()) running_.insert(running_.end(), group.begin(), group.end());
     std::sort(running_.begin(), running_.end());
     if (lead_.marks()) {
-        for (auto& [k, tile] : tiles_) tile.mark(lead_.bound_key(), lead_.bound_id());
+        for (auto& [k, tile] : tiles) tile.mark(lead_.bound_key(), lead_.bound_id());
     }
+    tiles_ = KeptBatch(std::move(tiles));
     gone_.assign(lead_.vertices(), 0);
 }
 
@@ -92,15 +93,10 @@ std::vector<std::pair<std::uint32_t, std::uint8_t>> last_states(std::vector<std:
 void KeptTiles::advance(TileNews& news, std::vector<std::pair<std::uint32_t, std::uint32_t>>& across) {
     news.distinct = lead_.distinct();
     news.orientation = lead_.orientation();
-    const GridPlan& plan = lead_.plan();
-    for (auto at = tiles_.begin(); at != tiles_.end();) {
-        const bool ran = std::binary_search(running_.begin(), running_.end(), at->first);
-        const FirstTile::Advanced done = at->second.advance(news, ran, plan, lead_.marks(), lead_.options().ranking);
-        across.insert(across.end(), done.across.begin(), done.across.end());
-        counts_.cut_ends_moved += done.cut_ends_moved;
-        counts_.pieces_joined += done.pieces_joined;
-        at = at->second.input.vertex_id.empty() ? tiles_.erase(at) : std::next(at);
-    }
+    const FirstTile::Advanced done = tiles_.advance(news, running_, lead_.plan(), lead_.marks(), lead_.options().ranking);
+    across.insert(across.end(), done.across.begin(), done.across.end());
+    counts_.cut_ends_moved += done.cut_ends_moved;
+    counts_.pieces_joined += done.pieces_joined;
     std::sort(across.begin(), across.end());
     across.erase(std::unique(across.begin(), across.end()), across.end());
     cross_waits_ = std::move(across);
@@ -179,59 +175,113 @@ bool KeptTiles::next_round() {
     if (!lead_.marks()) return false;
     const std::uint64_t goal = lead_.goal();
     if (!(removed_ < goal)) return false;
-    std::vector<FirstTile*> all;
-    std::uint64_t queued = 0;
-    for (auto& [k, tile] : tiles_) {
-        all.push_back(&tile);
-        queued += tile.queued();
-    }
+    const std::uint64_t queued = tiles_.queued();
     if (queued == 0) return false;
     lead_.next_bound(parallel::select_kth_by_digits(
-        all.size(), std::min(goal - removed_, queued),
-        [&](std::size_t part, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { all[part]->histogram(shift, high, counts); },
-        [&](std::size_t part, std::uint64_t key, std::vector<std::uint32_t>& ids) { all[part]->ids_at(key, ids); }));
+        1, std::min(goal - removed_, queued),
+        [&](std::size_t, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { tiles_.histogram(shift, high, counts); },
+        [&](std::size_t, std::uint64_t key, std::vector<std::uint32_t>& ids) { tiles_.ids_at(key, ids); }));
     // The split rings that their cut ends settle: ≥ 4 distinct locations over the tiles.
     std::map<std::uint32_t, std::vector<Point>> ends;
-    for (const FirstTile* tile : all) {
-        for (const RingLocations& ring : tile->crossing_locations()) {
-            std::vector<Point>& at = ends[ring.chain];
-            for (const Point q : ring.locations) {
-                if (at.size() < 4 && std::none_of(at.begin(), at.end(), [&](Point e) { return same_location(e, q); })) at.push_back(q);
-            }
+    for (const RingLocations& ring : tiles_.crossing_locations()) {
+        std::vector<Point>& at = ends[ring.chain];
+        for (const Point q : ring.locations) {
+            if (at.size() < 4 && std::none_of(at.begin(), at.end(), [&](Point e) { return same_location(e, q); })) at.push_back(q);
         }
     }
     std::vector<std::uint32_t> settled;
     for (const auto& [chain, at] : ends) {
         if (at.size() == 4) settled.push_back(chain);
     }
-    std::vector<FirstRoundLead::TileFacts> facts;
-    for (FirstTile* tile : all) {
-        tile->mark(lead_.bound_key(), lead_.bound_id());
-        tile->settle(settled);
-        facts.push_back({tile->number, tile->busy(lead_.bound_key(), lead_.bound_id()), tile->open_chains()});
-    }
+    std::vector<FirstRoundLead::TileFacts> facts = tiles_.begin_round(settled, lead_.marks(), lead_.bound_key(), lead_.bound_id());
     for (const std::vector<std::uint32_t>& group : lead_.groups(std::move(facts))) running_.insert(running_.end(), group.begin(), group.end());
     std::sort(running_.begin(), running_.end());
     return true;
+}
+
+// ---- the tiles' side (KeptBatch) -------------------------------------------------------------
+
+FirstTile::Advanced KeptBatch::advance(const TileNews& news, std::span<const std::uint32_t> ran, const GridPlan& plan, bool marks,
+                                       const Ranking& ranking) {
+    index_.reset();
+    FirstTile::Advanced all;
+    for (auto at = tiles_.begin(); at != tiles_.end();) {
+        FirstTile::Advanced done = at->second.advance(news, std::binary_search(ran.begin(), ran.end(), at->first), plan, marks, ranking);
+        all.across.insert(all.across.end(), done.across.begin(), done.across.end());
+        all.cut_ends_moved += done.cut_ends_moved;
+        all.pieces_joined += done.pieces_joined;
+        at = at->second.input.vertex_id.empty() ? tiles_.erase(at) : std::next(at);
+    }
+    return all;
+}
+
+std::uint64_t KeptBatch::queued() const {
+    std::uint64_t count = 0;
+    for (const auto& [k, tile] : tiles_) count += tile.queued();
+    return count;
+}
+
+void KeptBatch::histogram(int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) const {
+    for (const auto& [k, tile] : tiles_) tile.histogram(shift, high, counts);
+}
+
+void KeptBatch::ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const {
+    for (const auto& [k, tile] : tiles_) tile.ids_at(key, ids);
+}
+
+std::vector<RingLocations> KeptBatch::crossing_locations() const {
+    std::vector<RingLocations> all;
+    for (const auto& [k, tile] : tiles_) {
+        for (RingLocations& ring : tile.crossing_locations()) all.push_back(std::move(ring));
+    }
+    return all;
+}
+
+std::vector<FirstRoundLead::TileFacts> KeptBatch::begin_round(std::span<const std::uint32_t> settled, bool marks, double bound_key,
+                                                              std::uint32_t bound_id) {
+    std::vector<FirstRoundLead::TileFacts> facts;
+    for (auto& [k, tile] : tiles_) {
+        if (marks) tile.mark(bound_key, bound_id);
+        tile.settle(settled);
+        facts.push_back({tile.number, marks && tile.busy(bound_key, bound_id), tile.open_chains()});
+    }
+    return facts;
+}
+
+TileInput KeptBatch::input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const {
+    return tiles_.at(number).run_input(marks, bound_key, bound_id, std::move(points));
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> KeptBatch::waits() const {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> all;
+    for (const auto& [k, tile] : tiles_) all.insert(all.end(), tile.waits.begin(), tile.waits.end());
+    return all;
 }
 
 namespace {
 
 constexpr std::uint32_t kNoVertex = std::numeric_limits<std::uint32_t>::max();
 
-// What a top_subset learns of a live vertex from the tiles.
-struct Learnt {
-    Point point;
-    std::uint32_t chain = 0;
-    std::uint32_t prev = kNoVertex, next = kNoVertex;  // (kNoVertex at a chain's end)
-    std::uint8_t state = 0, marked = 0;
-    bool shared = false;    // another live vertex is at its location
-    bool whole = false;     // learnt from its own tile (else a cut end or a point in a box: no neighbours)
-};
+}  // namespace
 
-// A kept tile's answers to a top_subset (the requests a distributed lead would send it): the
-// pieces holding given vertices, the pieces of a ring, its vertices in a box, a ring's fixed
-// locations outside the subset's runs.
+// ---- a top_subset's questions, answered by the tiles ------------------------------------------
+
+void SubsetAnswer::add(SubsetAnswer&& more) {
+    const auto append = [](auto& to, auto& from) { to.insert(to.end(), from.begin(), from.end()); };
+    append(ids, more.ids);
+    append(chain, more.chain);
+    append(prev, more.prev);
+    append(next, more.next);
+    append(points, more.points);
+    append(state, more.state);
+    append(marked, more.marked);
+    append(flags, more.flags);
+    append(in_boxes, more.in_boxes);
+    for (Outside& piece : more.outside) outside.push_back(std::move(piece));
+}
+
+// A kept tile's answers (KeptBatch::answer): its own vertices by id and by (x, y), and whether
+// another of them is at a vertex's location.
 class TileAnswers {
 public:
     TileAnswers(const FirstTile& tile, const GridPlan& plan) : tile_(tile), plan_(plan) {
@@ -254,76 +304,26 @@ public:
         }
     }
 
-    // The piece holding own vertex `id`, if any (its index).
-    std::uint32_t piece_of(std::uint32_t id) const {
-        const auto at = std::lower_bound(own_.begin(), own_.end(), id, [](const Own& o, std::uint32_t i) { return o.id < i; });
-        return at != own_.end() && at->id == id ? at->piece : kNoVertex;
-    }
-    std::vector<std::uint32_t> pieces_of_chain(std::uint32_t chain) const {
-        std::vector<std::uint32_t> out;
-        for (std::uint32_t p = 0; p < tile_.input.chain_id.size(); ++p) {
-            if (tile_.input.chain_id[p] == chain) out.push_back(p);
-        }
-        return out;
-    }
-    // Piece p's vertices into `learnt`: its own whole, its cut ends as points.
-    void learn_piece(std::uint32_t p, std::unordered_map<std::uint32_t, Learnt>& learnt) const {
+    void answer(const SubsetAsk& ask, unsigned tile_level, SubsetAnswer& out) const {
         const TileInput& in = tile_.input;
-        const Chain piece = in.map.chains[p];
-        for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
-            Learnt& at = learnt[in.vertex_id[v]];
-            if (at.whole) continue;
-            at.point = in.map.vertices[v];
-            at.chain = in.chain_id[p];
-            if (tile_.cut_end[v]) continue;
-            at.prev = v > piece.first ? in.vertex_id[v - 1] : kNoVertex;
-            at.next = v < piece.last ? in.vertex_id[v + 1] : kNoVertex;
-            learn_own(v, at);
-            at.whole = true;
+        std::vector<std::uint32_t> pieces;
+        for (const std::uint32_t id : ask.ids) {
+            if (const std::uint32_t p = piece_of(id); p != kNoVertex) pieces.push_back(p);
         }
-    }
-    // Its own live vertices in the closed box (lone points: no neighbours), but those in `skip`.
-    template <class Skip>
-    void in_box(const Box& box, Skip&& skip, std::unordered_map<std::uint32_t, Learnt>& learnt, std::vector<std::uint32_t>& found) const {
-        const TileInput& in = tile_.input;
-        auto at = std::lower_bound(by_x_.begin(), by_x_.end(), box.min_x, [&](std::uint32_t v, double x) { return in.map.vertices[v].x < x; });
-        for (; at != by_x_.end() && in.map.vertices[*at].x <= box.max_x; ++at) {
-            const Point q = in.map.vertices[*at];
-            if (q.y < box.min_y || q.y > box.max_y) continue;
-            const std::uint32_t id = in.vertex_id[*at];
-            if (skip(id)) continue;
-            found.push_back(id);
-            Learnt& here = learnt[id];
-            if (here.whole) continue;
-            here.point = q;
-            here.chain = in.chain_id[piece_at(*at)];
-            learn_own(*at, here);  // (no neighbours: not whole)
+        for (std::uint32_t p = 0; p < in.chain_id.size(); ++p) {
+            if (std::binary_search(ask.rings.begin(), ask.rings.end(), in.chain_id[p])) pieces.push_back(p);
         }
-    }
-    // Ring `chain`'s first 4 distinct locations at each level in [from, to) among its pieces here
-    // (in chain order, keyed by each piece's first own id): its vertices not in runs that are
-    // fixed or above the level.
-    template <class InRun>
-    void outside(std::uint32_t chain, unsigned from, unsigned to, InRun&& in_run,
-                 std::vector<std::pair<std::uint32_t, std::vector<std::vector<Point>>>>& pieces) const {
-        const TileInput& in = tile_.input;
-        for (const std::uint32_t p : pieces_of_chain(chain)) {
-            const Chain piece = in.map.chains[p];
-            const std::uint32_t first = piece.first + (tile_.cut_end[piece.first] ? 1 : 0);
-            const std::uint32_t last = piece.last - (tile_.cut_end[piece.last] ? 1 : 0);
-            std::vector<std::vector<Point>> levels(to - from);
-            for (unsigned level = from; level < to; ++level) {
-                std::vector<Point>& found = levels[level - from];
-                for (std::uint32_t v = first; v <= last && found.size() < 4; ++v) {
-                    if (in_run(in.vertex_id[v])) continue;
-                    const bool fixed = in.state[v] == static_cast<std::uint8_t>(VertexState::fixed);
-                    if (!fixed && level_of(v) <= level) continue;
-                    const Point q = in.map.vertices[v];
-                    if (std::none_of(found.begin(), found.end(), [&](Point e) { return same_location(e, q); })) found.push_back(q);
-                }
-            }
-            pieces.emplace_back(in.vertex_id[first], std::move(levels));
+        std::sort(pieces.begin(), pieces.end());
+        pieces.erase(std::unique(pieces.begin(), pieces.end()), pieces.end());
+        for (const std::uint32_t p : pieces) learn_piece(p, out);
+        for (const Box& box : ask.boxes) {
+            const bool meets = plan_.block_column({box.min_x, box.min_y}, tile_level) <= in.column &&
+                               in.column <= plan_.block_column({box.max_x, box.max_y}, tile_level) &&
+                               plan_.block_row({box.min_x, box.min_y}, tile_level) <= in.row &&
+                               in.row <= plan_.block_row({box.max_x, box.max_y}, tile_level);
+            if (meets) in_box(box, ask.skip, out);
         }
+        for (const std::uint32_t c : ask.outside_rings) outside(c, ask.from_level, ask.runs, out);
     }
 
 private:
@@ -336,11 +336,74 @@ private:
     std::vector<std::uint32_t> by_x_;  // own vertices by (x, y)
     std::vector<std::uint8_t> shared_;
 
-    std::uint32_t piece_at(std::uint32_t v) const { return piece_of(tile_.input.vertex_id[v]); }
-    void learn_own(std::uint32_t v, Learnt& at) const {
-        at.state = tile_.input.state[v];
-        at.marked = tile_.marked.empty() ? 0 : tile_.marked[v];
-        at.shared = shared_[v] != 0;
+    // The piece holding own vertex `id`, if any.
+    std::uint32_t piece_of(std::uint32_t id) const {
+        const auto at = std::lower_bound(own_.begin(), own_.end(), id, [](const Own& o, std::uint32_t i) { return o.id < i; });
+        return at != own_.end() && at->id == id ? at->piece : kNoVertex;
+    }
+    void add(std::uint32_t v, std::uint32_t chain, std::uint32_t prev, std::uint32_t next, std::uint8_t flags, SubsetAnswer& out) const {
+        const bool own = (flags & SubsetAnswer::own) != 0;
+        out.ids.push_back(tile_.input.vertex_id[v]);
+        out.points.push_back(tile_.input.map.vertices[v]);
+        out.chain.push_back(chain);
+        out.prev.push_back(prev);
+        out.next.push_back(next);
+        out.state.push_back(own ? tile_.input.state[v] : std::uint8_t{0});
+        out.marked.push_back(own && !tile_.marked.empty() ? tile_.marked[v] : std::uint8_t{0});
+        out.flags.push_back(static_cast<std::uint8_t>(flags | (own && shared_[v] ? SubsetAnswer::shared : 0)));
+    }
+    // Piece p: its own vertices whole (with their neighbours), its cut ends as points.
+    void learn_piece(std::uint32_t p, SubsetAnswer& out) const {
+        const TileInput& in = tile_.input;
+        const Chain piece = in.map.chains[p];
+        for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
+            if (tile_.cut_end[v]) {
+                add(v, in.chain_id[p], kNoVertex, kNoVertex, 0, out);
+            } else {
+                add(v, in.chain_id[p], v > piece.first ? in.vertex_id[v - 1] : kNoVertex, v < piece.last ? in.vertex_id[v + 1] : kNoVertex,
+                    SubsetAnswer::whole | SubsetAnswer::own, out);
+            }
+        }
+    }
+    // Its own live vertices in the closed box, but those in `skip` (sorted): points without their
+    // neighbours.
+    void in_box(const Box& box, std::span<const std::uint32_t> skip, SubsetAnswer& out) const {
+        const TileInput& in = tile_.input;
+        auto at = std::lower_bound(by_x_.begin(), by_x_.end(), box.min_x, [&](std::uint32_t v, double x) { return in.map.vertices[v].x < x; });
+        for (; at != by_x_.end() && in.map.vertices[*at].x <= box.max_x; ++at) {
+            const Point q = in.map.vertices[*at];
+            if (q.y < box.min_y || q.y > box.max_y) continue;
+            const std::uint32_t id = in.vertex_id[*at];
+            if (std::binary_search(skip.begin(), skip.end(), id)) continue;
+            out.in_boxes.push_back(id);
+            add(*at, in.chain_id[piece_of(id)], kNoVertex, kNoVertex, SubsetAnswer::own, out);
+        }
+    }
+    // Ring `chain`'s pieces here: per level from `from` below the ring's whole level, the first 4
+    // distinct locations, in chain order, of its own vertices not in `runs` (sorted) that are fixed
+    // or above the level.
+    void outside(std::uint32_t chain, unsigned from, std::span<const std::uint32_t> runs, SubsetAnswer& out) const {
+        const TileInput& in = tile_.input;
+        for (std::uint32_t p = 0; p < in.chain_id.size(); ++p) {
+            if (in.chain_id[p] != chain) continue;
+            const Chain piece = in.map.chains[p];
+            const std::uint32_t first = piece.first + (tile_.cut_end[piece.first] ? 1 : 0);
+            const std::uint32_t last = piece.last - (tile_.cut_end[piece.last] ? 1 : 0);
+            const unsigned to = in.whole_level[p];
+            SubsetAnswer::Outside& at = out.outside.emplace_back();
+            at.chain = chain;
+            at.first = in.vertex_id[first];
+            for (unsigned level = from; level < to; ++level) {
+                std::vector<Point>& found = at.levels.emplace_back();
+                for (std::uint32_t v = first; v <= last && found.size() < 4; ++v) {
+                    if (std::binary_search(runs.begin(), runs.end(), in.vertex_id[v])) continue;
+                    const bool fixed = in.state[v] == static_cast<std::uint8_t>(VertexState::fixed);
+                    if (!fixed && level_of(v) <= level) continue;
+                    const Point q = in.map.vertices[v];
+                    if (std::none_of(found.begin(), found.end(), [&](Point e) { return same_location(e, q); })) found.push_back(q);
+                }
+            }
+        }
     }
     // The level own vertex v (not a chain's end) is removable at, given its live neighbours.
     unsigned level_of(std::uint32_t v) const {
@@ -353,6 +416,39 @@ private:
     }
 };
 
+struct KeptBatch::Index {
+    std::map<std::uint32_t, TileAnswers> tiles;
+};
+
+KeptBatch::KeptBatch(std::map<std::uint32_t, FirstTile> tiles) : tiles_(std::move(tiles)) {}
+KeptBatch::KeptBatch() = default;
+KeptBatch::~KeptBatch() = default;
+KeptBatch::KeptBatch(KeptBatch&&) noexcept = default;
+KeptBatch& KeptBatch::operator=(KeptBatch&&) noexcept = default;
+
+SubsetAnswer KeptBatch::answer(const SubsetAsk& ask, const GridPlan& plan) const {
+    if (!index_) {
+        index_ = std::make_unique<Index>();
+        for (const auto& [k, tile] : tiles_) index_->tiles.try_emplace(k, tile, plan);
+    }
+    SubsetAnswer out;
+    for (const auto& [k, tile] : index_->tiles) tile.answer(ask, tiles_.at(k).input.level, out);
+    return out;
+}
+
+namespace {
+
+// What a top_subset learns of a live vertex from the tiles.
+struct Learnt {
+    Point point;
+    std::uint32_t chain = 0;
+    std::uint32_t prev = kNoVertex, next = kNoVertex;  // (kNoVertex at a chain's end)
+    std::uint8_t state = 0, marked = 0;
+    bool shared = false;  // another live vertex is at its location
+    bool own = false;     // state, marked and shared told by its own tile
+    bool whole = false;   // and its neighbours: learnt from its own piece
+};
+
 }  // namespace
 
 TileInput KeptTiles::top_subset(std::uint32_t runs) const {
@@ -362,18 +458,6 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
     const unsigned t = lead_.tile_level(), levels = plan.levels;
     const std::vector<std::uint8_t>& whole_level = lead_.whole_level();
     const std::vector<std::uint32_t>& distinct = lead_.distinct();
-    std::vector<TileAnswers> answers;
-    std::vector<std::uint32_t> numbers;
-    for (const auto& [k, tile] : tiles_) {
-        answers.emplace_back(tile, plan);
-        numbers.push_back(k);
-    }
-    const auto columns = ((plan.grid.base_columns - 1) >> (plan.shift + t)) + 1;
-    const auto tile_at = [&](Point p) -> std::size_t {  // (an index into answers, or none)
-        const std::uint32_t k = plan.block_row(p, t) * columns + plan.block_column(p, t);
-        const auto at = std::lower_bound(numbers.begin(), numbers.end(), k);
-        return at != numbers.end() && *at == k ? static_cast<std::size_t>(at - numbers.begin()) : answers.size();
-    };
     // The waits: the tiles' own and the lead's across tiles.
     std::unordered_map<std::uint32_t, std::uint32_t> blocker_of;
     std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> waiters_of;
@@ -381,48 +465,53 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
         blocker_of[waiter] = blocker;
         waiters_of[blocker].push_back(waiter);
     };
-    for (const auto& [k, tile] : tiles_) {
-        for (const auto& [waiter, blocker] : tile.waits) wait(waiter, blocker);
-    }
+    for (const auto& [waiter, blocker] : tiles_.waits()) wait(waiter, blocker);
     for (const auto& [waiter, blocker] : cross_waits_) wait(waiter, blocker);
     const auto blocker = [&](std::uint32_t u) {
         const auto at = blocker_of.find(u);
         return at == blocker_of.end() ? kNoVertex : at->second;
     };
-    // What the tiles told, asked for in waves: the pieces holding vertices (where a vertex's tile
-    // is not known, every tile is asked), a ring's pieces.
+    // What the tiles told, asked in waves.
     std::unordered_map<std::uint32_t, Learnt> learnt;
-    std::set<std::pair<std::size_t, std::uint32_t>> pieces_learnt;  // (tile, piece)
+    const auto learn = [&](SubsetAnswer&& answer) {
+        for (std::size_t k = 0; k < answer.ids.size(); ++k) {
+            Learnt& at = learnt[answer.ids[k]];
+            if (at.whole) continue;
+            at.point = answer.points[k];
+            at.chain = answer.chain[k];
+            if (answer.flags[k] & SubsetAnswer::own) {
+                at.own = true;
+                at.state = answer.state[k];
+                at.marked = answer.marked[k];
+                at.shared = (answer.flags[k] & SubsetAnswer::shared) != 0;
+            }
+            if (answer.flags[k] & SubsetAnswer::whole) {
+                at.prev = answer.prev[k];
+                at.next = answer.next[k];
+                at.whole = true;
+            }
+        }
+        return std::move(answer);
+    };
     const auto whole = [&](std::uint32_t id) {
         const auto at = learnt.find(id);
         return at != learnt.end() && at->second.whole;
     };
     std::vector<std::uint32_t> gone;  // asked for and held by no tile: removed
-    const auto ask = [&](std::vector<std::uint32_t> ids) {
+    const auto ask_ids = [&](std::vector<std::uint32_t> ids) {
+        std::erase_if(ids, [&](std::uint32_t id) { return whole(id); });
+        if (ids.empty()) return;
         std::sort(ids.begin(), ids.end());
         ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
+        SubsetAsk question;
+        question.ids = ids;
+        learn(ask(question));
         for (const std::uint32_t id : ids) {
-            const auto at = learnt.find(id);
-            const std::size_t only = at != learnt.end() ? tile_at(at->second.point) : answers.size();
-            bool found = false;
-            for (std::size_t i = only < answers.size() ? only : 0; i < (only < answers.size() ? only + 1 : answers.size()); ++i) {
-                const std::uint32_t p = answers[i].piece_of(id);
-                if (p == kNoVertex) continue;
-                found = true;
-                if (pieces_learnt.insert({i, p}).second) answers[i].learn_piece(p, learnt);
-            }
-            if (!found) gone.push_back(id);
+            if (!whole(id)) gone.push_back(id);
         }
         std::sort(gone.begin(), gone.end());
     };
     const auto is_gone = [&](std::uint32_t id) { return std::binary_search(gone.begin(), gone.end(), id); };
-    const auto ask_ring = [&](std::uint32_t chain) {
-        for (std::size_t i = 0; i < answers.size(); ++i) {
-            for (const std::uint32_t p : answers[i].pieces_of_chain(chain)) {
-                if (pieces_learnt.insert({i, p}).second) answers[i].learn_piece(p, learnt);
-            }
-        }
-    };
     const auto prev = [&](std::uint32_t u) { return learnt.at(u).prev; };
     const auto next = [&](std::uint32_t u) { return learnt.at(u).next; };
 
@@ -433,7 +522,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
     {
         std::vector<std::uint32_t> later;
         for (const std::vector<std::uint32_t>& list : later_) later.insert(later.end(), list.begin(), list.end());
-        ask(later);
+        ask_ids(later);
         for (const std::vector<std::uint32_t>& list : later_) {
             for (const std::uint32_t v : list) {
                 if (whole(v) && learnt.at(v).state == queued) seeds.emplace_back(v, runs);
@@ -455,7 +544,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
     for (;;) {
         while (!seeds.empty() || !deferred.empty()) {
             if (seeds.empty()) {
-                ask(needed);
+                ask_ids(std::move(needed));
                 needed.clear();
                 seeds.swap(deferred);
             }
@@ -492,30 +581,32 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
                 if (stopped) {
                     needed.push_back(u);
                     deferred.emplace_back(v, k);
-                    continue;
                 }
-                if (!seeds.empty()) continue;
-                for (const auto& [c, count] : run_vertices_of) {
-                    if (distinct[c] > 4 + count || whole_rings.count(c)) continue;
-                    whole_rings.insert(c);
-                    ask_ring(c);
-                    for (std::uint32_t w = lead_.chains_by_id()[c].first; w != kNoVertex; w = next(w)) seeds.emplace_back(w, 0);
-                }
+            }
+            if (!deferred.empty()) continue;
+            // The rings that may come down to their last 4 locations, whole.
+            SubsetAsk rings;
+            for (const auto& [c, count] : run_vertices_of) {
+                if (distinct[c] <= 4 + count && whole_rings.insert(c).second) rings.rings.push_back(c);
+            }
+            if (rings.rings.empty()) continue;
+            std::sort(rings.rings.begin(), rings.rings.end());
+            learn(ask(rings));
+            for (const std::uint32_t c : rings.rings) {
+                for (std::uint32_t w = lead_.chains_by_id()[c].first; w != kNoVertex; w = next(w)) seeds.emplace_back(w, 0);
             }
         }
         // Every vertex of the runs, and those beyond them, learnt whole.
         needed.clear();
-        for (const std::uint32_t u : in_run) {
-            if (!whole(u)) needed.push_back(u);
-        }
-        ask(needed);
+        for (const std::uint32_t u : in_run) needed.push_back(u);
+        ask_ids(std::move(needed));
         needed.clear();
         for (const std::uint32_t u : in_run) {
             for (const std::uint32_t w : {prev(u), next(u)}) {
-                if (w != kNoVertex && !whole(w)) needed.push_back(w);
+                if (w != kNoVertex) needed.push_back(w);
             }
         }
-        ask(needed);
+        ask_ids(std::move(needed));
         needed.clear();
         sorted.assign(in_run.begin(), in_run.end());
         std::sort(sorted.begin(), sorted.end());
@@ -533,8 +624,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             }
         }
         // Each run's box (with its cut ends): the live vertices and control points in it.
-        const auto skip = [&](std::uint32_t id) { return in_run.count(id) != 0 || cut.count(id) != 0; };
-        const std::vector<Point>& points = lead_.control_points();
+        SubsetAsk boxes;
         for (std::size_t i = 0; i < sorted.size();) {
             std::size_t j = i + 1;
             while (j < sorted.size() && next(sorted[j - 1]) == sorted[j]) ++j;
@@ -548,25 +638,25 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             for (std::size_t k = i; k < j; ++k) widen(sorted[k]);
             widen(prev(sorted[i]));
             widen(next(sorted[j - 1]));
-            std::vector<std::uint32_t> found;
-            for (std::uint32_t row = plan.block_row({box.min_x, box.min_y}, t); row <= plan.block_row({box.max_x, box.max_y}, t); ++row) {
-                for (std::uint32_t column = plan.block_column({box.min_x, box.min_y}, t); column <= plan.block_column({box.max_x, box.max_y}, t);
-                     ++column) {
-                    const auto at = std::lower_bound(numbers.begin(), numbers.end(), row * columns + column);
-                    if (at != numbers.end() && *at == row * columns + column) {
-                        answers[static_cast<std::size_t>(at - numbers.begin())].in_box(box, skip, learnt, found);
-                    }
-                }
-            }
-            lone.insert(found.begin(), found.end());
-            for (std::uint32_t k = 0; k < points.size(); ++k) {
-                const Point q = points[k];
-                if (q.x >= box.min_x && q.x <= box.max_x && q.y >= box.min_y && q.y <= box.max_y) control.push_back(k);
-            }
+            boxes.boxes.push_back(box);
             i = j;
+        }
+        boxes.skip.assign(sorted.begin(), sorted.end());
+        boxes.skip.insert(boxes.skip.end(), cut.begin(), cut.end());
+        std::sort(boxes.skip.begin(), boxes.skip.end());
+        {
+            const SubsetAnswer found = learn(ask(boxes));
+            lone.insert(found.in_boxes.begin(), found.in_boxes.end());
+        }
+        const std::vector<Point>& points = lead_.control_points();
+        for (const Box& box : boxes.boxes) {
+            for (std::uint32_t k = 0; k < points.size(); ++k) {
+                if (box_contains(box, points[k])) control.push_back(k);
+            }
         }
         // (The coincidence rule reads the neighbours of the vertices at the location of a run's
         // vertex or cut end, where such a location is shared.)
+        const auto before = [](Point a, Point b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
         std::vector<Point> shared_here;
         for (const std::uint32_t u : sorted) {
             if (learnt.at(u).shared) shared_here.push_back(learnt.at(u).point);
@@ -574,13 +664,10 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
         for (const std::uint32_t u : cut) {
             if (learnt.at(u).shared) shared_here.push_back(learnt.at(u).point);
         }
-        std::sort(shared_here.begin(), shared_here.end(), [](Point a, Point b) { return a.x < b.x || (a.x == b.x && a.y < b.y); });
+        std::sort(shared_here.begin(), shared_here.end(), before);
         for (const std::uint32_t u : lone) {
             const Learnt& at = learnt.at(u);
-            if (!at.shared) continue;
-            if (std::binary_search(shared_here.begin(), shared_here.end(), at.point, [](Point a, Point b) { return a.x < b.x || (a.x == b.x && a.y < b.y); })) {
-                seeds.emplace_back(u, 1);
-            }
+            if (at.shared && std::binary_search(shared_here.begin(), shared_here.end(), at.point, before)) seeds.emplace_back(u, 1);
         }
         if (!seeds.empty()) continue;
         // The vertices the subset's vertices wait on (lone, unless there), and so on.
@@ -592,7 +679,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
                 const std::uint32_t b = blocker(u);
                 if (b != kNoVertex && !in_run.count(b) && !cut.count(b) && lone.insert(b).second) fresh.push_back(b);
             }
-            ask(fresh);
+            ask_ids(fresh);
             waiting = std::move(fresh);
         }
         break;
@@ -654,24 +741,29 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
     input.bound_id = lead_.bound_id();
     // The rings cut into runs: their fixed locations outside the runs, level by level, over
     // their pieces in every tile, in chain order.
-    std::vector<std::uint32_t> cut_rings;
+    SubsetAsk rings;
     for (const auto& [c, count] : run_vertices_of) {
-        if (!whole_rings.count(c) && whole_level[c] > t) cut_rings.push_back(c);
+        if (!whole_rings.count(c) && whole_level[c] > t) rings.outside_rings.push_back(c);
     }
-    std::sort(cut_rings.begin(), cut_rings.end());
-    const auto running = [&](std::uint32_t id) { return in_run.count(id) != 0; };
-    for (const std::uint32_t c : cut_rings) {
-        std::vector<std::pair<std::uint32_t, std::vector<std::vector<Point>>>> pieces;
-        for (const TileAnswers& tile : answers) tile.outside(c, t, whole_level[c], running, pieces);
-        std::sort(pieces.begin(), pieces.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
-        for (unsigned level = t; level < whole_level[c]; ++level) {
-            std::vector<Point> found;
-            for (const auto& [first, at_levels] : pieces) {
-                for (const Point q : at_levels[level - t]) {
-                    if (found.size() < 4 && std::none_of(found.begin(), found.end(), [&](Point e) { return same_location(e, q); })) found.push_back(q);
+    if (!rings.outside_rings.empty()) {
+        std::sort(rings.outside_rings.begin(), rings.outside_rings.end());
+        rings.runs = sorted;
+        rings.from_level = t;
+        SubsetAnswer answer = ask(rings);
+        std::sort(answer.outside.begin(), answer.outside.end(), [](const auto& a, const auto& b) { return std::pair{a.chain, a.first} < std::pair{b.chain, b.first}; });
+        std::size_t k = 0;
+        for (const std::uint32_t c : rings.outside_rings) {
+            const std::size_t from = k;
+            while (k < answer.outside.size() && answer.outside[k].chain == c) ++k;
+            for (unsigned level = t; level < whole_level[c]; ++level) {
+                std::vector<Point> found;
+                for (std::size_t i = from; i < k; ++i) {
+                    for (const Point q : answer.outside[i].levels[level - t]) {
+                        if (found.size() < 4 && std::none_of(found.begin(), found.end(), [&](Point e) { return same_location(e, q); })) found.push_back(q);
+                    }
                 }
+                input.outside.push_back({c, level, std::move(found)});
             }
-            input.outside.push_back({c, level, std::move(found)});
         }
     }
     return input;
@@ -686,7 +778,7 @@ bool KeptTiles::finish_top_subset(const TileInput& top, const TileOutcome& outco
 std::vector<TileInput> KeptTiles::group(std::size_t k) const {
     std::vector<TileInput> out;
     for (const std::uint32_t number : lead_.groups().at(k)) {
-        out.push_back(tiles_.at(number).run_input(lead_.marks(), lead_.bound_key(), lead_.bound_id(), lead_.points(number)));
+        out.push_back(tiles_.input(number, lead_.marks(), lead_.bound_key(), lead_.bound_id(), lead_.points(number)));
     }
     return out;
 }

@@ -1085,15 +1085,16 @@ public:
         std::vector<std::uint32_t> sorted;
         for (;;) {
             while (!seeds.empty()) {
-                const auto [v, k] = seeds.back();
-                seeds.pop_back();
-                if (state_[v] == State::removed) continue;
-                into_run(v);
-                std::uint32_t u = v;
-                for (std::uint32_t i = 0; i < k && prev_[u] != kNone; ++i) into_run(u = prev_[u]);
-                u = v;
-                for (std::uint32_t i = 0; i < k && next_[u] != kNone; ++i) into_run(u = next_[u]);
-                if (!seeds.empty()) continue;
+                while (!seeds.empty()) {
+                    const auto [v, k] = seeds.back();
+                    seeds.pop_back();
+                    if (state_[v] == State::removed) continue;
+                    into_run(v);
+                    std::uint32_t u = v;
+                    for (std::uint32_t i = 0; i < k && prev_[u] != kNone; ++i) into_run(u = prev_[u]);
+                    u = v;
+                    for (std::uint32_t i = 0; i < k && next_[u] != kNone; ++i) into_run(u = next_[u]);
+                }
                 for (const auto& [c, count] : run_vertices_of) {
                     if (distinct_[c] > 4 + count || !whole_rings.insert(c).second) continue;
                     for (std::uint32_t w = map_.chains[c].first; w != kNone; w = next_[w]) seeds.emplace_back(w, 0);

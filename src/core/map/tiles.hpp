@@ -474,6 +474,78 @@ private:
     bool marks_ = false;
 };
 
+// A top_subset's questions to the kept tiles, a wave of them: the pieces holding `ids` (their
+// vertices learnt whole, their cut ends as points); every piece of `rings`; the own live vertices
+// in `boxes` but those in `skip`; per ring in `outside_rings`, the fixed locations of its pieces
+// outside the runs (`runs`), at each level from `from_level` below its whole level.
+struct SubsetAsk {
+    std::vector<std::uint32_t> ids, rings;
+    std::vector<Box> boxes;
+    std::vector<std::uint32_t> skip;           // sorted
+    std::vector<std::uint32_t> outside_rings;  // sorted
+    std::vector<std::uint32_t> runs;           // sorted
+    unsigned from_level = 0;
+    bool empty() const { return ids.empty() && rings.empty() && boxes.empty() && outside_rings.empty(); }
+};
+
+// The tiles' answers to a SubsetAsk.
+struct SubsetAnswer {
+    // Vertices learnt: whole (from their own tile: their neighbours, state, mark, whether another
+    // live vertex is at their location), or a cut end's point and chain only, or a point in a box
+    // (no neighbours).
+    enum Flags : std::uint8_t { shared = 1, own = 2, whole = 4 };  // (own: state, marked and shared told; whole: and neighbours)
+    std::vector<std::uint32_t> ids, chain, prev, next;  // (prev, next: kNone at a chain's end or not known)
+    std::vector<Point> points;
+    std::vector<std::uint8_t> state, marked, flags;
+    std::vector<std::uint32_t> in_boxes;  // the ids found in the boxes
+    // Per piece of an outside ring (keyed by its first own id): per level, its first 4 distinct
+    // fixed locations outside the runs, in chain order.
+    struct Outside {
+        std::uint32_t chain, first;
+        std::vector<std::vector<Point>> levels;
+    };
+    std::vector<Outside> outside;
+    void add(SubsetAnswer&& more);
+};
+
+// Kept tiles where they are (KeptTiles's own in this process; a batch of them on a distributed
+// run's worker): what the lead asks of them, round after round.
+class KeptBatch {
+public:
+    KeptBatch();
+    explicit KeptBatch(std::map<std::uint32_t, FirstTile> tiles);
+    ~KeptBatch();
+    KeptBatch(KeptBatch&&) noexcept;
+    KeptBatch& operator=(KeptBatch&&) noexcept;
+    // A round's end: every tile told `news`, those among `ran` (sorted) having run; the tiles left
+    // without vertices go. The waits their own outcomes begin on a cut end (the lead's), and counts.
+    FirstTile::Advanced advance(const TileNews& news, std::span<const std::uint32_t> ran, const GridPlan& plan, bool marks,
+                                const Ranking& ranking);
+    // A count target's next round: its queued vertices, their keys (the budget selected over the
+    // batches: select_kth_by_digits's histogram and ids_at).
+    std::uint64_t queued() const;
+    void histogram(int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) const;
+    void ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const;
+    // Per split ring it holds pieces of: up to 4 distinct locations at the ends of its segments
+    // across tile borders.
+    std::vector<RingLocations> crossing_locations() const;
+    // The round begun: its marks (count targets), its settled rings (sorted); each tile's facts.
+    std::vector<FirstRoundLead::TileFacts> begin_round(std::span<const std::uint32_t> settled, bool marks, double bound_key,
+                                                       std::uint32_t bound_id);
+    // Tile `number`'s input for the round, with its control points.
+    TileInput input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const;
+    bool holds(std::uint32_t number) const { return tiles_.count(number) != 0; }
+    std::size_t tiles() const { return tiles_.size(); }
+    // Every wait among its tiles' vertices.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits() const;
+    SubsetAnswer answer(const SubsetAsk& ask, const GridPlan& plan) const;
+
+private:
+    std::map<std::uint32_t, FirstTile> tiles_;  // by number, those holding live vertices
+    struct Index;                               // (for answer: built at the first question after a change)
+    mutable std::unique_ptr<Index> index_;
+};
+
 // The rounds after the first from the first round's tiles, kept (docs/distributed.md, "What is
 // left", items 4 and 5), instead of built again from the live map each round: each tile told what
 // the round changed (TileNews: the states, the cut ends that went, the waits, the rings' counts),
@@ -514,7 +586,7 @@ public:
     bool finish_top_subset(const TileInput& top, const TileOutcome& outcome);
     // When no round is left: simplify()'s result, every vertex kept but those the outcomes removed.
     SimplifyResult result() const;
-    std::size_t tiles() const { return tiles_.size(); }
+    std::size_t tiles() const { return tiles_.tiles(); }
     // What the news did so far: cut ends moved on, pieces joined, waits across tiles (summed over
     // the rounds' ends), waiters queued again by the lead.
     struct Counts {
@@ -531,7 +603,7 @@ public:
 
 private:
     FirstRoundLead lead_;
-    std::map<std::uint32_t, FirstTile> tiles_;                           // by number, those holding live vertices
+    KeptBatch tiles_;
     std::vector<std::uint32_t> running_;                                 // the round's tiles that ran, sorted
     std::vector<std::pair<std::uint32_t, std::uint32_t>> cross_waits_;  // (waiter, blocker) in two tiles, sorted
     std::uint64_t removed_ = 0;
@@ -543,6 +615,8 @@ private:
     // Every tile told `news`; `across`: the waits across tiles now, but those the tiles' own
     // outcomes begin on a cut end (advance adds them).
     void advance(TileNews& news, std::vector<std::pair<std::uint32_t, std::uint32_t>>& across);
+    // A top_subset's questions, answered by the tiles.
+    SubsetAnswer ask(const SubsetAsk& ask) const { return tiles_.answer(ask, lead_.plan()); }
 };
 
 // The stages in one process: the first round built from parts of the map, its groups run by the
