@@ -306,16 +306,24 @@ public:
 
     void answer(const SubsetAsk& ask, unsigned tile_level, SubsetAnswer& out) const {
         const TileInput& in = tile_.input;
-        std::vector<std::uint32_t> pieces;
+        // (Around each vertex asked for, `reach` vertices of its piece either side; where two
+        // windows meet or overlap, one.)
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> windows;  // [from, to] in the tile's vertices
         for (const std::uint32_t id : ask.ids) {
-            if (const std::uint32_t p = piece_of(id); p != kNoVertex) pieces.push_back(p);
+            const auto at = std::lower_bound(own_.begin(), own_.end(), id, [](const Own& o, std::uint32_t i) { return o.id < i; });
+            if (at == own_.end() || at->id != id) continue;
+            const Chain piece = in.map.chains[at->piece];
+            windows.emplace_back(at->v - std::min(at->v - piece.first, ask.reach), at->v + std::min(piece.last - at->v, ask.reach));
         }
         for (std::uint32_t p = 0; p < in.chain_id.size(); ++p) {
-            if (std::binary_search(ask.rings.begin(), ask.rings.end(), in.chain_id[p])) pieces.push_back(p);
+            if (std::binary_search(ask.rings.begin(), ask.rings.end(), in.chain_id[p])) windows.emplace_back(in.map.chains[p].first, in.map.chains[p].last);
         }
-        std::sort(pieces.begin(), pieces.end());
-        pieces.erase(std::unique(pieces.begin(), pieces.end()), pieces.end());
-        for (const std::uint32_t p : pieces) learn_piece(p, out);
+        std::sort(windows.begin(), windows.end());
+        for (std::size_t i = 0; i < windows.size();) {
+            auto [from, to] = windows[i];
+            for (++i; i < windows.size() && windows[i].first <= to + 1; ++i) to = std::max(to, windows[i].second);
+            learn_window(from, to, out);
+        }
         for (const Box& box : ask.boxes) {
             const bool meets = plan_.block_column({box.min_x, box.min_y}, tile_level) <= in.column &&
                                in.column <= plan_.block_column({box.max_x, box.max_y}, tile_level) &&
@@ -352,18 +360,28 @@ private:
         out.marked.push_back(own && !tile_.marked.empty() ? tile_.marked[v] : std::uint8_t{0});
         out.flags.push_back(static_cast<std::uint8_t>(flags | (own && shared_[v] ? SubsetAnswer::shared : 0)));
     }
-    // Piece p: its own vertices whole (with their neighbours), its cut ends as points.
-    void learn_piece(std::uint32_t p, SubsetAnswer& out) const {
+    // The tile's vertices [from, to] (of one piece, or of consecutive pieces): its own whole, with
+    // their neighbours, and those neighbours beyond the window as points; its cut ends as points.
+    void learn_window(std::uint32_t from, std::uint32_t to, SubsetAnswer& out) const {
         const TileInput& in = tile_.input;
-        const Chain piece = in.map.chains[p];
-        for (std::uint32_t v = piece.first; v <= piece.last; ++v) {
+        std::uint32_t p = piece_at(from);
+        for (std::uint32_t v = from; v <= to; ++v) {
+            while (in.map.chains[p].last < v) ++p;
+            const Chain piece = in.map.chains[p];
             if (tile_.cut_end[v]) {
                 add(v, in.chain_id[p], kNoVertex, kNoVertex, 0, out);
-            } else {
-                add(v, in.chain_id[p], v > piece.first ? in.vertex_id[v - 1] : kNoVertex, v < piece.last ? in.vertex_id[v + 1] : kNoVertex,
-                    SubsetAnswer::whole | SubsetAnswer::own, out);
+                continue;
             }
+            if (v == from && v > piece.first) add(v - 1, in.chain_id[p], kNoVertex, kNoVertex, 0, out);
+            add(v, in.chain_id[p], v > piece.first ? in.vertex_id[v - 1] : kNoVertex, v < piece.last ? in.vertex_id[v + 1] : kNoVertex,
+                SubsetAnswer::whole | SubsetAnswer::own, out);
+            if (v == to && v < piece.last) add(v + 1, in.chain_id[p], kNoVertex, kNoVertex, 0, out);
         }
+    }
+    // The piece holding the tile's vertex v (own or cut end).
+    std::uint32_t piece_at(std::uint32_t v) const {
+        const std::vector<Chain>& pieces = tile_.input.map.chains;
+        return static_cast<std::uint32_t>(std::partition_point(pieces.begin(), pieces.end(), [&](const Chain& c) { return c.last < v; }) - pieces.begin());
     }
     // Its own live vertices in the closed box, but those in `skip` (sorted): points without their
     // neighbours.
@@ -505,6 +523,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
         ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
         SubsetAsk question;
         question.ids = ids;
+        question.reach = runs >= (1u << 30) ? runs : std::max(runs, 2u) + 1;  // (a run, its cut end and the vertex beyond)
         learn(ask(question));
         for (const std::uint32_t id : ids) {
             if (!whole(id)) gone.push_back(id);
@@ -649,9 +668,15 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             lone.insert(found.in_boxes.begin(), found.in_boxes.end());
         }
         const std::vector<Point>& points = lead_.control_points();
+        if (points_by_x_.size() != points.size()) {
+            points_by_x_.resize(points.size());
+            for (std::uint32_t k = 0; k < points.size(); ++k) points_by_x_[k] = k;
+            std::sort(points_by_x_.begin(), points_by_x_.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].x < points[b].x; });
+        }
         for (const Box& box : boxes.boxes) {
-            for (std::uint32_t k = 0; k < points.size(); ++k) {
-                if (box_contains(box, points[k])) control.push_back(k);
+            auto at = std::lower_bound(points_by_x_.begin(), points_by_x_.end(), box.min_x, [&](std::uint32_t k, double x) { return points[k].x < x; });
+            for (; at != points_by_x_.end() && points[*at].x <= box.max_x; ++at) {
+                if (box_contains(box, points[*at])) control.push_back(*at);
             }
         }
         // (The coincidence rule reads the neighbours of the vertices at the location of a run's

@@ -3223,17 +3223,17 @@ const std::vector<std::vector<std::uint32_t>>& FirstRoundLead::groups(std::vecto
     for (std::vector<std::uint32_t>& group : groups_) {
         for (std::uint32_t& i : group) i = tiles[i].number;
     }
-    // Control points to their tiles (those holding vertices).
-    const auto columns = ((plan_.grid.base_columns - 1) >> (plan_.shift + t_)) + 1;
-    std::vector<std::uint32_t> numbers;
-    for (const TileFacts& tile : tiles) numbers.push_back(tile.number);
-    point_tiles_.clear();
-    for (std::uint32_t j = 0; j < control_points_.size(); ++j) {
-        const Point p = control_points_[j];
-        const std::uint32_t k = plan_.block_row(p, t_) * columns + plan_.block_column(p, t_);
-        if (std::binary_search(numbers.begin(), numbers.end(), k)) point_tiles_.emplace_back(k, j);
+    // Control points to their tiles, once (only those of tiles holding vertices are asked for).
+    if (point_tiles_.size() != control_points_.size()) {
+        const auto columns = ((plan_.grid.base_columns - 1) >> (plan_.shift + t_)) + 1;
+        point_tiles_.clear();
+        point_tiles_.reserve(control_points_.size());
+        for (std::uint32_t j = 0; j < control_points_.size(); ++j) {
+            const Point p = control_points_[j];
+            point_tiles_.emplace_back(plan_.block_row(p, t_) * columns + plan_.block_column(p, t_), j);
+        }
+        std::sort(point_tiles_.begin(), point_tiles_.end());
     }
-    std::sort(point_tiles_.begin(), point_tiles_.end());
     return groups_;
 }
 

@@ -474,12 +474,13 @@ private:
     bool marks_ = false;
 };
 
-// A top_subset's questions to the kept tiles, a wave of them: the pieces holding `ids` (their
-// vertices learnt whole, their cut ends as points); every piece of `rings`; the own live vertices
+// A top_subset's questions to the kept tiles, a wave of them: the vertices around `ids` in their
+// pieces (learnt whole; the cut ends and the vertices beyond as points); every piece of `rings`; the own live vertices
 // in `boxes` but those in `skip`; per ring in `outside_rings`, the fixed locations of its pieces
 // outside the runs (`runs`), at each level from `from_level` below its whole level.
 struct SubsetAsk {
     std::vector<std::uint32_t> ids, rings;
+    std::uint32_t reach = 0;  // around each of `ids`, this many vertices of its piece either side
     std::vector<Box> boxes;
     std::vector<std::uint32_t> skip;           // sorted
     std::vector<std::uint32_t> outside_rings;  // sorted
@@ -609,6 +610,7 @@ private:
     std::uint64_t removed_ = 0;
     std::vector<std::uint8_t> gone_;  // per vertex of the map: removed
     std::vector<std::vector<std::uint32_t>> later_;  // [level − T]: the candidates the tiles left for the levels from T up
+    mutable std::vector<std::uint32_t> points_by_x_;  // the control points' indices by x (top_subset's boxes)
     Counts counts_;
 
     void note_removed(const TileOutcome& outcome);
