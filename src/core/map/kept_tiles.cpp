@@ -5,6 +5,7 @@
 #include <bit>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 #include <stdexcept>
 #include <unordered_map>
@@ -12,14 +13,82 @@
 
 namespace toposimp::map {
 
+namespace {
+
+// The tiles in this process.
+class LocalStore : public KeptStore {
+public:
+    LocalStore(KeptBatch tiles, const GridPlan& plan, const SimplifyOptions& options) : tiles_(std::move(tiles)), plan_(plan), options_(options) {}
+
+    FirstTile::Advanced advance(const TileNews& news, std::span<const std::uint32_t> ran) override {
+        return tiles_.advance(news, ran, plan_, marks_, options_.ranking);
+    }
+    std::uint64_t queued() override { return tiles_.queued(); }
+    parallel::KeyedSelection select(std::uint64_t wanted) override {
+        return parallel::select_kth_by_digits(
+            1, wanted, [&](std::size_t, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { tiles_.histogram(shift, high, counts); },
+            [&](std::size_t, std::uint64_t key, std::vector<std::uint32_t>& ids) { tiles_.ids_at(key, ids); });
+    }
+    std::vector<RingLocations> crossing_locations() override { return tiles_.crossing_locations(); }
+    std::vector<FirstRoundLead::TileFacts> begin_round(std::span<const std::uint32_t> settled, bool marks, double bound_key,
+                                                       std::uint32_t bound_id) override {
+        return tiles_.begin_round(settled, marks, bound_key, bound_id);
+    }
+    std::vector<TileOutcome> run(const std::vector<std::vector<std::uint32_t>>& groups, std::vector<std::vector<Point>> points, bool marks,
+                                 double bound_key, std::uint32_t bound_id) override {
+        std::vector<TileOutcome> outcomes;
+        std::size_t k = 0;
+        for (const std::vector<std::uint32_t>& group : groups) {
+            std::vector<TileInput> inputs;
+            for (const std::uint32_t number : group) inputs.push_back(tiles_.input(number, marks, bound_key, bound_id, std::move(points.at(k++))));
+            for (TileOutcome& outcome : run_tile_group(std::move(inputs), plan_, options_)) outcomes.push_back(std::move(outcome));
+        }
+        return outcomes;
+    }
+    TileInput input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) override {
+        return tiles_.input(number, marks, bound_key, bound_id, std::move(points));
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits() override { return tiles_.waits(); }
+    SubsetAnswer answer(const SubsetAsk& ask) override { return tiles_.answer(ask, plan_); }
+    std::size_t tiles() override { return tiles_.tiles(); }
+
+    bool marks_ = false;  // the lead's: a count target's keys kept (not one run as --max)
+
+private:
+    KeptBatch tiles_;
+    GridPlan plan_;
+    const SimplifyOptions& options_;
+};
+
+}  // namespace
+
 KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles) : lead_(lead) {
-    for (const std::vector<std::uint32_t>& group : lead_.groups()) running_.insert(running_.end(), group.begin(), group.end());
-    std::sort(running_.begin(), running_.end());
     if (lead_.marks()) {
         for (auto& [k, tile] : tiles) tile.mark(lead_.bound_key(), lead_.bound_id());
     }
-    tiles_ = KeptBatch(std::move(tiles));
+    auto store = std::make_unique<LocalStore>(KeptBatch(std::move(tiles)), lead_.plan(), lead_.options());
+    store->marks_ = lead_.marks();
+    tiles_ = std::move(store);
+    for (const std::vector<std::uint32_t>& group : lead_.groups()) running_.insert(running_.end(), group.begin(), group.end());
+    std::sort(running_.begin(), running_.end());
     gone_.assign(lead_.vertices(), 0);
+}
+
+KeptTiles::KeptTiles(const FirstRoundLead& lead, std::unique_ptr<KeptStore> tiles) : lead_(lead), tiles_(std::move(tiles)) {
+    for (const std::vector<std::uint32_t>& group : lead_.groups()) running_.insert(running_.end(), group.begin(), group.end());
+    std::sort(running_.begin(), running_.end());
+    gone_.assign(lead_.vertices(), 0);
+}
+
+KeptTiles::~KeptTiles() = default;
+KeptTiles::KeptTiles(KeptTiles&&) noexcept = default;
+
+std::vector<TileOutcome> KeptTiles::run_groups() {
+    std::vector<std::vector<Point>> points;
+    for (const std::vector<std::uint32_t>& group : lead_.groups()) {
+        for (const std::uint32_t number : group) points.push_back(lead_.points(number));
+    }
+    return tiles_->run(lead_.groups(), std::move(points), lead_.marks(), lead_.bound_key(), lead_.bound_id());
 }
 
 void KeptTiles::note_removed(const TileOutcome& outcome) {
@@ -93,7 +162,7 @@ std::vector<std::pair<std::uint32_t, std::uint8_t>> last_states(std::vector<std:
 void KeptTiles::advance(TileNews& news, std::vector<std::pair<std::uint32_t, std::uint32_t>>& across) {
     news.distinct = lead_.distinct();
     news.orientation = lead_.orientation();
-    const FirstTile::Advanced done = tiles_.advance(news, running_, lead_.plan(), lead_.marks(), lead_.options().ranking);
+    const FirstTile::Advanced done = tiles_->advance(news, running_);
     across.insert(across.end(), done.across.begin(), done.across.end());
     counts_.cut_ends_moved += done.cut_ends_moved;
     counts_.pieces_joined += done.pieces_joined;
@@ -175,15 +244,12 @@ bool KeptTiles::next_round() {
     if (!lead_.marks()) return false;
     const std::uint64_t goal = lead_.goal();
     if (!(removed_ < goal)) return false;
-    const std::uint64_t queued = tiles_.queued();
+    const std::uint64_t queued = tiles_->queued();
     if (queued == 0) return false;
-    lead_.next_bound(parallel::select_kth_by_digits(
-        1, std::min(goal - removed_, queued),
-        [&](std::size_t, int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) { tiles_.histogram(shift, high, counts); },
-        [&](std::size_t, std::uint64_t key, std::vector<std::uint32_t>& ids) { tiles_.ids_at(key, ids); }));
+    lead_.next_bound(tiles_->select(std::min(goal - removed_, queued)));
     // The split rings that their cut ends settle: ≥ 4 distinct locations over the tiles.
     std::map<std::uint32_t, std::vector<Point>> ends;
-    for (const RingLocations& ring : tiles_.crossing_locations()) {
+    for (const RingLocations& ring : tiles_->crossing_locations()) {
         std::vector<Point>& at = ends[ring.chain];
         for (const Point q : ring.locations) {
             if (at.size() < 4 && std::none_of(at.begin(), at.end(), [&](Point e) { return same_location(e, q); })) at.push_back(q);
@@ -193,7 +259,7 @@ bool KeptTiles::next_round() {
     for (const auto& [chain, at] : ends) {
         if (at.size() == 4) settled.push_back(chain);
     }
-    std::vector<FirstRoundLead::TileFacts> facts = tiles_.begin_round(settled, lead_.marks(), lead_.bound_key(), lead_.bound_id());
+    std::vector<FirstRoundLead::TileFacts> facts = tiles_->begin_round(settled, lead_.marks(), lead_.bound_key(), lead_.bound_id());
     for (const std::vector<std::uint32_t>& group : lead_.groups(std::move(facts))) running_.insert(running_.end(), group.begin(), group.end());
     std::sort(running_.begin(), running_.end());
     return true;
@@ -483,7 +549,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
         blocker_of[waiter] = blocker;
         waiters_of[blocker].push_back(waiter);
     };
-    for (const auto& [waiter, blocker] : tiles_.waits()) wait(waiter, blocker);
+    for (const auto& [waiter, blocker] : tiles_->waits()) wait(waiter, blocker);
     for (const auto& [waiter, blocker] : cross_waits_) wait(waiter, blocker);
     const auto blocker = [&](std::uint32_t u) {
         const auto at = blocker_of.find(u);
@@ -803,7 +869,7 @@ bool KeptTiles::finish_top_subset(const TileInput& top, const TileOutcome& outco
 std::vector<TileInput> KeptTiles::group(std::size_t k) const {
     std::vector<TileInput> out;
     for (const std::uint32_t number : lead_.groups().at(k)) {
-        out.push_back(tiles_.input(number, lead_.marks(), lead_.bound_key(), lead_.bound_id(), lead_.points(number)));
+        out.push_back(tiles_->input(number, lead_.marks(), lead_.bound_key(), lead_.bound_id(), lead_.points(number)));
     }
     return out;
 }

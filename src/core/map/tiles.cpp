@@ -106,11 +106,7 @@ SimplifyResult simplify_with_kept_tiles(const MapData& map, const SimplifyOption
     KeptTiles kept = std::move(first).kept();
     runs = std::max(runs, 1u);
     do {
-        std::vector<TileOutcome> outcomes;
-        for (std::size_t k = 0; k < kept.groups(); ++k) {
-            for (TileOutcome& outcome : run_tile_group(kept.group(k), plan, options)) outcomes.push_back(std::move(outcome));
-        }
-        if (!kept.finish_tiles(outcomes)) continue;
+        if (!kept.finish_tiles(kept.run_groups())) continue;
         for (std::uint32_t length = runs;; length = length >= (1u << 30) ? std::numeric_limits<std::uint32_t>::max() : 2 * length) {
             TileInput top = kept.top_subset(length);
             std::vector<TileInput> one{top};

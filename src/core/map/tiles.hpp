@@ -547,6 +547,28 @@ private:
     mutable std::unique_ptr<Index> index_;
 };
 
+// Where KeptTiles's tiles are: a KeptBatch in this process (KeptTiles's own), or batches of them on
+// a distributed run's workers (toposimp.dask). What the lead asks of them, as KeptBatch answers it.
+class KeptStore {
+public:
+    virtual ~KeptStore() = default;
+    virtual FirstTile::Advanced advance(const TileNews& news, std::span<const std::uint32_t> ran) = 0;
+    virtual std::uint64_t queued() = 0;
+    // The wanted-th smallest (key, id) over the tiles' queued vertices.
+    virtual parallel::KeyedSelection select(std::uint64_t wanted) = 0;
+    virtual std::vector<RingLocations> crossing_locations() = 0;
+    virtual std::vector<FirstRoundLead::TileFacts> begin_round(std::span<const std::uint32_t> settled, bool marks, double bound_key,
+                                                               std::uint32_t bound_id) = 0;
+    // The round's groups (tile numbers) run where their tiles are, with their tiles' control
+    // points (`points`, tile after tile): the outcomes, group after group, tile after tile.
+    virtual std::vector<TileOutcome> run(const std::vector<std::vector<std::uint32_t>>& groups, std::vector<std::vector<Point>> points,
+                                         bool marks, double bound_key, std::uint32_t bound_id) = 0;
+    virtual TileInput input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) = 0;
+    virtual std::vector<std::pair<std::uint32_t, std::uint32_t>> waits() = 0;
+    virtual SubsetAnswer answer(const SubsetAsk& ask) = 0;
+    virtual std::size_t tiles() = 0;
+};
+
 // The rounds after the first from the first round's tiles, kept (docs/distributed.md, "What is
 // left", items 4 and 5), instead of built again from the live map each round: each tile told what
 // the round changed (TileNews: the states, the cut ends that went, the waits, the rings' counts),
@@ -565,7 +587,12 @@ private:
 //     }
 class KeptTiles {
 public:
+    // The tiles here (marked for the first round's budget).
     KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles);
+    // Or elsewhere, marked.
+    KeptTiles(const FirstRoundLead& lead, std::unique_ptr<KeptStore> tiles);
+    ~KeptTiles();
+    KeptTiles(KeptTiles&&) noexcept;
     // The round's tiles' outcomes (each tile's once, in any order); whether the levels from T up
     // have candidates (else the round is over).
     bool finish_tiles(std::span<const TileOutcome> outcomes);
@@ -577,6 +604,8 @@ public:
     bool next_round();
     std::size_t groups() const { return lead_.groups().size(); }
     std::vector<TileInput> group(std::size_t k) const;
+    // Or every group run where its tiles are: the outcomes, group after group.
+    std::vector<TileOutcome> run_groups();
     // After finish_tiles returned true: the levels from T up over a subset of the live map, as
     // MapInParts::top_subset builds it (input for input), gathered from the tiles — the pieces
     // holding the vertices it walks, the live vertices in its runs' boxes, the rings' fixed
@@ -587,7 +616,7 @@ public:
     bool finish_top_subset(const TileInput& top, const TileOutcome& outcome);
     // When no round is left: simplify()'s result, every vertex kept but those the outcomes removed.
     SimplifyResult result() const;
-    std::size_t tiles() const { return tiles_.tiles(); }
+    std::size_t tiles() const { return tiles_->tiles(); }
     // What the news did so far: cut ends moved on, pieces joined, waits across tiles (summed over
     // the rounds' ends), waiters queued again by the lead.
     struct Counts {
@@ -604,7 +633,7 @@ public:
 
 private:
     FirstRoundLead lead_;
-    KeptBatch tiles_;
+    std::unique_ptr<KeptStore> tiles_;
     std::vector<std::uint32_t> running_;                                 // the round's tiles that ran, sorted
     std::vector<std::pair<std::uint32_t, std::uint32_t>> cross_waits_;  // (waiter, blocker) in two tiles, sorted
     std::uint64_t removed_ = 0;
@@ -618,7 +647,7 @@ private:
     // outcomes begin on a cut end (advance adds them).
     void advance(TileNews& news, std::vector<std::pair<std::uint32_t, std::uint32_t>>& across);
     // A top_subset's questions, answered by the tiles.
-    SubsetAnswer ask(const SubsetAsk& ask) const { return tiles_.answer(ask, lead_.plan()); }
+    SubsetAnswer ask(const SubsetAsk& ask) const { return tiles_->answer(ask); }
 };
 
 // The stages in one process: the first round built from parts of the map, its groups run by the
