@@ -34,7 +34,7 @@ from toposimp import _launch, _toposimp
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
                                    [--task-threads N] [--local-budget N] [--first-round WHERE]
-                                   [--send-input] [--worker-malloc WHICH] [--top-runs N]
+                                   [--send-input] [--worker-malloc WHICH] [--top-runs N] [--kept-tiles]
 
 toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
 
@@ -77,6 +77,11 @@ Dask options:
                        points near them (N twice as long while they fall short; 0, the default:
                        the whole live map). The same output; the step towards a live map that
                        stays on the workers (docs/distributed.md)
+  --kept-tiles         with --first-round workers: the first round's tiles stay on the workers
+                       for the rounds after, told what each round changed, and the levels above
+                       the tiles run over subsets gathered from them: this process never holds
+                       the live map (a byte a vertex for the result). The same output. Not yet:
+                       a worker lost in a later round may stop the run (no output written)
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
@@ -181,6 +186,7 @@ def _split_arguments(argv):
     parser.add_argument("--send-input", action="store_true")
     parser.add_argument("--worker-malloc", choices=("auto", "jemalloc", "glibc"), default="auto")
     parser.add_argument("--top-runs", type=int, default=0)
+    parser.add_argument("--kept-tiles", action="store_true")
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
@@ -192,12 +198,14 @@ def _split_arguments(argv):
         parser.error("--local-budget must be 0 or more")
     if not 0 <= options.top_runs < 2**31:
         parser.error("--top-runs must be 0 or more, under 2^31")
+    if options.kept_tiles and options.first_round != "workers":
+        parser.error("--kept-tiles needs --first-round workers")
     return options, rest
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
         local_budget=None, client=None, quiet=False, on_progress=None, first_round="here", send_input=False,
-        worker_malloc="auto", top_runs=0):
+        worker_malloc="auto", top_runs=0, kept_tiles=False):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
@@ -213,9 +221,13 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     of the LocalCluster's workers, "auto" (jemalloc where installed), "jemalloc" or "glibc"
     (_worker_malloc). `top_runs` (> 0): the levels above the tiles run over a subset of the live
     map, runs of that many vertices around their candidates (MapInParts::top_subset): the same
-    output."""
+    output. `kept_tiles` (with first_round="workers"): the first round's tiles stay on the
+    workers for the rounds after, and this process never holds the live map (map::KeptTiles): the
+    same output."""
     if first_round not in ("workers", "here"):
         raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
+    if kept_tiles and first_round != "workers":
+        raise ValueError("kept_tiles needs first_round='workers'")
     if local_budget is None:
         local_budget = LOCAL_BUDGET
     malloc = _worker_malloc(worker_malloc, os.environ) if client is None and not scheduler else {}
@@ -254,7 +266,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                                      f"(--worker-malloc {worker_malloc})\n")
         return own["client"]
 
-    run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here", top_runs=top_runs)
+    run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here", top_runs=top_runs,
+                        kept=kept_tiles)
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
                                                  lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
@@ -516,19 +529,197 @@ def _first_ids_at(queued, key):
     return engine.first_ids_at(queued[0], key)
 
 
-def _first_run(queued, groups, points, marks, bound, plan, options):
+def _first_run(queued, groups, points, marks, bound, plan, options, live=True):
     """A batch's busy groups run (each a list of its tiles' places in the batch, with their control
-    points), its other tiles' live vertices → (outcomes, live vertices)."""
+    points), its other tiles' live vertices → (outcomes, live vertices); without `live`, the
+    outcomes only (the tiles are kept: _kept_batch)."""
     from toposimp import _toposimp as engine
     tiles = queued[0]
-    outcomes, live, running = [], [], set()
+    outcomes, lives, running = [], [], set()
     for group, inside in zip(groups, points):
-        done, lives = engine.first_run([tiles[i] for i in group], inside, marks, bound, plan, options)
+        done, those = engine.first_run([tiles[i] for i in group], inside, marks, bound, plan, options, live)
         outcomes.extend(done)
-        live.extend(lives)
+        lives.extend(those)
         running.update(group)
-    live.extend(engine.first_live(tile, marks, bound) for i, tile in enumerate(tiles) if i not in running and tile.vertices > 0)
-    return outcomes, live
+    if live:
+        lives.extend(engine.first_live(tile, marks, bound) for i, tile in enumerate(tiles) if i not in running and tile.vertices > 0)
+    return outcomes, lives
+
+
+# The rounds after the first from the first round's tiles kept on the workers (--kept-tiles;
+# src/python/parts.cpp: kept_batch and the rest; map::KeptTiles here). Every task is pure: one
+# that changes a batch makes a new one, so that Dask's lineage can build a lost one again.
+def _kept_batch(queued, marks, bound):
+    from toposimp import _toposimp as engine
+    return engine.kept_batch(queued[0], marks, bound)
+
+
+def _kept_advance(batch, news, ran, plan, marks, options):
+    from toposimp import _toposimp as engine
+    return engine.kept_advance(batch, news, ran, plan, marks, options)
+
+
+def _kept_begin(batch, settled, marks, bound):
+    """(A new batch, marked and settled for the round; its tiles' facts.)"""
+    from toposimp import _toposimp as engine
+    return engine.kept_begin_round(batch, settled, marks, bound)
+
+
+def _kept_call(batch, name, *arguments):
+    from toposimp import _toposimp as engine
+    return getattr(engine, name)(batch, *arguments)
+
+
+def _kept_run(batch, groups, points, marks, bound, plan, options):
+    """A batch's groups (tile numbers) run, each with its tiles' control points → the outcomes,
+    group after group."""
+    from toposimp import _toposimp as engine
+    outcomes = []
+    for group, inside in zip(groups, points):
+        outcomes.extend(engine.run_tile_group(engine.kept_inputs(batch, list(group), marks, bound, inside), plan, options))
+    return outcomes
+
+
+def _kept_run_gathered(inputs, plan, options):
+    """A group whose tiles lie in several batches: their inputs (lists, in the group's order) run."""
+    from toposimp import _toposimp as engine
+    return engine.run_tile_group([tile for part in inputs for tile in part], plan, options)
+
+
+class _KeptStore:
+    """map::KeptTiles's questions to the first round's tiles, kept on the workers in batches (one
+    per first-round batch): each a task per batch (src/python/parts.cpp: PythonStore)."""
+
+    def __init__(self, tasks, client, batches, numbers, plan, options, marks):
+        self.tasks, self.client, self.batches = tasks, client, batches
+        self.where = {int(number): b for b, held in enumerate(numbers) for number in held}
+        self.plan, self.options, self.marks = plan, options, marks
+        self.round = 1
+
+    def _gather(self, futures, what):
+        from toposimp import UsageError
+
+        results = self.tasks._gather(self.client, futures, what)
+        if any(isinstance(result, BaseException) for result in results):
+            # (Dask forgets a task once what it made is made: a batch lost with its worker cannot
+            # be built again from the rounds before. docs/distributed.md, item 4.)
+            raise UsageError("a Dask worker holding kept tiles was lost; --kept-tiles cannot build them again yet "
+                             "(run again, or without --kept-tiles)")
+        return results
+
+    def _each(self, name, *arguments, what="the kept tiles"):
+        return self._gather([_submit(self.client, _kept_call, b, name, *arguments) for b in self.batches], what)
+
+    def advance(self, news, ran):
+        import numpy
+
+        # (Sent once, as a task's result rather than scattered, so that Dask can build a lost batch
+        # again from its lineage: scattered data has none.)
+        news = _submit(self.client, _given, news)
+        done = [_submit(self.client, _kept_advance, b, news, ran, self.plan, self.marks, self.options) for b in self.batches]
+        self.batches = [_submit(self.client, _item, d, 0) for d in done]
+        answers = self._gather([_submit(self.client, _item, d, 1) for d in done], "telling the kept tiles what the round changed")
+        across = [a["across"] for a in answers if len(a["across"])]
+        return {"across": numpy.concatenate(across) if across else numpy.zeros((0, 2), dtype=numpy.uint32),
+                "moved": sum(a["moved"] for a in answers), "joined": sum(a["joined"] for a in answers)}
+
+    def queued(self):
+        return sum(self._each("kept_queued"))
+
+    def select(self, wanted):
+        import numpy
+
+        def dense(histograms):
+            total = numpy.zeros(1 << 16, dtype=numpy.uint64)
+            for histogram in histograms:
+                numpy.add.at(total, histogram["digits"], histogram["counts"])
+            return total
+
+        what = "selecting the round's budget"
+        selector = _toposimp.DigitSelector(wanted)
+        total = dense(self._each("kept_histogram", 48, 0, what=what))
+        selector.counted(total)
+        while selector.counting and int(total[selector.high & 0xffff]) > PAIRS_GATHERED:
+            total = dense(self._each("kept_histogram", selector.shift, selector.high, what=what))
+            selector.counted(total)
+        if selector.counting:
+            pairs = self._each("kept_pairs_in", selector.shift + 16, selector.high, what=what)
+            return selector.choose_among(numpy.concatenate([p["keys"] for p in pairs]), numpy.concatenate([p["ids"] for p in pairs]))
+        return selector.choose(numpy.concatenate(self._each("kept_ids_at", selector.key, what=what)))
+
+    def crossings(self):
+        return [ring for rings in self._each("kept_crossings") for ring in rings]
+
+    def begin_round(self, settled, marks, bound):
+        self.round += 1
+        begun = [_submit(self.client, _kept_begin, b, settled, marks, bound) for b in self.batches]
+        self.batches = [_submit(self.client, _item, d, 0) for d in begun]
+        return [fact for facts in self._gather([_submit(self.client, _item, d, 1) for d in begun], "starting the round") for fact in facts]
+
+    def run(self, groups, points, marks, bound):
+        # A group whose tiles are all in one batch runs where that batch is, with the batch's other
+        # such groups; one spread over batches gathers its tiles' inputs into a task of its own.
+        at = 0
+        mine = [[] for _ in self.batches]
+        spread = []
+        for k, group in enumerate(groups):
+            inside = points[at:at + len(group)]
+            at += len(group)
+            held = {self.where[int(number)] for number in group}
+            if len(held) == 1:
+                mine[held.pop()].append((k, group, inside))
+            else:
+                spread.append((k, group, inside))
+        tasks, order = [], []
+        for b, runs in enumerate(mine):
+            if runs:
+                tasks.append(_submit(self.client, _kept_run, self.batches[b], [g for _, g, _ in runs], [p for _, _, p in runs], marks, bound,
+                                     self.plan, self.options))
+                order.append([k for k, _, _ in runs])
+        for k, group, inside in spread:
+            parts = []
+            for number, one in zip(group, inside):
+                parts.append(_submit(self.client, _kept_call, self.batches[self.where[int(number)]], "kept_inputs", [int(number)], marks, bound, [one]))
+            tasks.append(_submit(self.client, _kept_run_gathered, parts, self.plan, self.options))
+            order.append([k])
+        results = self._gather(tasks, f"round {self.round}, tiles of level {self.plan.get('tile_level', 0)}")
+        by_group = {}
+        for ks, outcomes in zip(order, results):
+            for k in ks:
+                count = len(groups[k])
+                by_group[k], outcomes = outcomes[:count], outcomes[count:]
+        return [outcome for k in range(len(groups)) for outcome in by_group[k]]
+
+    def input(self, number, marks, bound, points):
+        [tiles] = self._gather([_submit(self.client, _kept_call, self.batches[self.where[int(number)]], "kept_inputs", [int(number)], marks,
+                                        bound, [points])], "a kept tile")
+        return tiles[0]
+
+    def waits(self):
+        import numpy
+
+        waits = [w for w in self._each("kept_waits") if len(w)]
+        return numpy.concatenate(waits) if waits else numpy.zeros((0, 2), dtype=numpy.uint32)
+
+    def answer(self, ask):
+        import numpy
+
+        answers = self._each("kept_answer", ask, self.plan, what="gathering the levels above the tiles")
+        merged = {key: numpy.concatenate([a[key] for a in answers]) for key in ("ids", "chain", "prev", "next", "points", "state", "marked",
+                                                                               "flags", "in_boxes")}
+        merged["outside"] = [piece for a in answers for piece in a["outside"]]
+        return merged
+
+    def tiles(self):
+        return sum(self._gather([_submit(self.client, _kept_tiles, b) for b in self.batches], "the kept tiles"))
+
+
+def _kept_tiles(batch):
+    return batch.tiles
+
+
+def _kept_numbers(batch):
+    return batch.numbers
 
 
 class _Tasks:
@@ -536,8 +727,9 @@ class _Tasks:
     client `connected()` gives, their outcomes back in order; and the first round built on the
     workers (first_round), unless `first_here`."""
 
-    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0):
+    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False):
         self.connected, self.task_threads = connected, task_threads
+        self.kept = kept
         self.progress, self.on_progress = progress, on_progress
         if top_runs > 0:
             self.top_runs = top_runs  # (read by the engine: run_in_parts)
@@ -702,8 +894,17 @@ class _Tasks:
         for group in groups:
             busy[place[group[0]][0]].append(group)
         runs = [submit(_first_run, q, [[place[number][1] for number in group] for group in mine],
-                       [[steps.points(number) for number in group] for group in mine], marks, bound, plan, options)
+                       [[steps.points(number) for number in group] for group in mine], marks, bound, plan, options, not self.kept)
                 for q, mine in zip(queued, busy)]
+        if self.kept:
+            # The tiles stay on the workers, batch by batch, for the rounds after (_KeptStore).
+            batches = [submit(_kept_batch, q, marks, bound) for q in queued]
+            del queued
+            self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
+                         each=lambda result: steps.add([], result[0]))
+            numbers = self._gather(client, [submit(_kept_numbers, b) for b in batches], "keeping the tiles")
+            steps.keep(_KeptStore(self, client, batches, numbers, plan, options, marks))
+            return
         del queued
         self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
                      each=lambda result: steps.add(result[1], result[0]))
@@ -870,8 +1071,8 @@ def _submit(client, function, *arguments, **keywords):
         return client.submit(function, *arguments, pure=False, **keywords)
 
 
-def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0):
-    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs)
+def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False):
+    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs, kept)
 
 
 class Tiles:
@@ -924,7 +1125,7 @@ def main(argv=None):
         return run(rest, scheduler=options.scheduler, workers=options.workers, tile_level=options.tile_level,
                    tile_points=options.tile_points, task_threads=options.task_threads, local_budget=options.local_budget,
                    first_round=options.first_round, send_input=options.send_input,
-                   worker_malloc=options.worker_malloc, top_runs=options.top_runs, quiet=quiet)
+                   worker_malloc=options.worker_malloc, top_runs=options.top_runs, kept_tiles=options.kept_tiles, quiet=quiet)
     except KeyboardInterrupt:
         sys.stderr.write("toposimp.dask: interrupted; no output written\n")
         return 128 + (ended_by[0] if ended_by else signal.SIGINT)

@@ -12,6 +12,7 @@
 #include "io/map/shapefile.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
@@ -656,6 +657,8 @@ py::dict first_tile_dict(const map::FirstTile& tile) {
     dict["passing_id"] = array_of(tile.passing_id);
     dict["improper"] = array_of(tile.improper);
     dict["keys"] = array_of(tile.keys);
+    dict["waits"] = pairs_array(tile.waits);
+    dict["marked"] = array_of(tile.marked);
     return dict;
 }
 
@@ -671,7 +674,10 @@ map::FirstTile first_tile_of(const py::dict& dict) {
     tile.passing_id = flat<std::uint32_t>(dict, "passing_id");
     tile.improper = flat<std::uint8_t>(dict, "improper");
     tile.keys = flat<std::uint64_t>(dict, "keys");
+    tile.waits = pairs_of(dict, "waits");
+    tile.marked = flat<std::uint8_t>(dict, "marked");
     const std::size_t n = in.vertex_id.size();
+    if (!tile.marked.empty() && tile.marked.size() != n) malformed("marked is not one per vertex");
     if (tile.cut_end.size() != n) malformed("cut_end is not one per vertex");
     if (!tile.improper.empty() && tile.improper.size() != n) malformed("improper is not one per vertex");
     if (tile.frozen.size() != in.map.chains.size()) malformed("frozen is not one per chain");
@@ -900,6 +906,11 @@ void FirstSteps::finish() {
     lead_.reset();
 }
 
+void FirstSteps::keep(py::object store) {
+    lead();  // (open)
+    kept_store_ = std::move(store);
+}
+
 std::unique_ptr<map::MapInParts> FirstSteps::take() {
     if (parts_ == nullptr) malformed("the first round did not finish");
     return std::move(parts_);
@@ -1039,7 +1050,7 @@ py::dict first_pairs_in(const py::list& tiles, int shift, std::uint64_t prefix) 
 
 // A group of queued tiles run, with their control points → (their outcomes, their live vertices).
 py::tuple first_run(const py::list& tiles, const py::list& points, bool marks, std::pair<double, std::uint32_t> bound, const py::dict& plan,
-                    const py::dict& options) {
+                    const py::dict& options, bool live_too) {
     const std::vector<const map::FirstTile*> group = tiles_in(tiles);
     if (points.size() != group.size()) malformed("not one list of control points per tile");
     std::vector<std::vector<Point>> inside;
@@ -1063,8 +1074,10 @@ py::tuple first_run(const py::list& tiles, const py::list& points, bool marks, s
         std::vector<map::TileInput> inputs;
         for (std::size_t k = 0; k < group.size(); ++k) inputs.push_back(group[k]->run_input(marks, bound.first, bound.second, std::move(inside[k])));
         outcomes = map::run_tile_group(std::move(inputs), grid, simplify);
-        const auto changed = map::changed_states(outcomes);
-        for (const map::FirstTile* tile : group) live.push_back(map::live_vertices(*tile, changed, marks, bound.first, bound.second));
+        if (live_too) {
+            const auto changed = map::changed_states(outcomes);
+            for (const map::FirstTile* tile : group) live.push_back(map::live_vertices(*tile, changed, marks, bound.first, bound.second));
+        }
 #ifdef __GLIBC__
         malloc_trim(0);
 #endif
@@ -1081,7 +1094,307 @@ py::dict first_live(const map::FirstTile& tile, bool marks, std::pair<double, st
     return live_dict(map::live_vertices(tile, {}, marks, bound.first, bound.second));
 }
 
+// ---- the rounds after the first from kept tiles (map::KeptTiles): a batch's tasks, and the lead's
+// questions as dicts of arrays.
+
+py::dict news_dict(const map::TileNews& news) {
+    py::dict dict;
+    std::vector<std::uint32_t> ids, prev, next;
+    std::vector<std::uint8_t> states;
+    std::vector<Point> points;
+    for (const auto& [id, state] : news.states) {
+        ids.push_back(id);
+        states.push_back(state);
+    }
+    dict["state_ids"] = array_of(ids);
+    dict["states"] = array_of(states);
+    ids.clear();
+    for (const map::Unlinked& u : news.unlinked) {
+        ids.push_back(u.id);
+        prev.push_back(u.prev);
+        next.push_back(u.next);
+        points.push_back(u.prev_point);
+        points.push_back(u.next_point);
+    }
+    dict["unlinked"] = array_of(ids);
+    dict["unlinked_prev"] = array_of(prev);
+    dict["unlinked_next"] = array_of(next);
+    dict["unlinked_points"] = points_array(points);
+    dict["tile_waits"] = pairs_array(news.tile_waits);
+    dict["judged"] = array_of(news.judged);
+    dict["top_waits"] = pairs_array(news.top_waits);
+    dict["distinct"] = array_of(news.distinct);
+    dict["orientation"] = array_of(news.orientation);
+    return dict;
+}
+
+map::TileNews news_of(const py::dict& dict) {
+    map::TileNews news;
+    const std::vector<std::uint32_t> ids = flat<std::uint32_t>(dict, "state_ids");
+    const std::vector<std::uint8_t> states = flat<std::uint8_t>(dict, "states");
+    if (ids.size() != states.size()) malformed("news: not one state per id");
+    for (std::size_t k = 0; k < ids.size(); ++k) {
+        if (k > 0 && ids[k] <= ids[k - 1]) malformed("news: states not by id");
+        news.states.emplace_back(ids[k], states[k]);
+    }
+    const std::vector<std::uint32_t> gone = flat<std::uint32_t>(dict, "unlinked"), prev = flat<std::uint32_t>(dict, "unlinked_prev"),
+                                     next = flat<std::uint32_t>(dict, "unlinked_next");
+    const std::vector<Point> points = points_of(dict, "unlinked_points");
+    if (prev.size() != gone.size() || next.size() != gone.size() || points.size() != 2 * gone.size()) malformed("news: unlinked vertices");
+    for (std::size_t k = 0; k < gone.size(); ++k) news.unlinked.push_back({gone[k], prev[k], next[k], points[2 * k], points[2 * k + 1]});
+    news.tile_waits = pairs_of(dict, "tile_waits");
+    news.judged = flat<std::uint32_t>(dict, "judged");
+    news.top_waits = pairs_of(dict, "top_waits");
+    news.distinct = flat<std::uint32_t>(dict, "distinct");
+    news.orientation = flat<std::int8_t>(dict, "orientation");
+    return news;
+}
+
+py::dict ask_dict(const map::SubsetAsk& ask) {
+    py::dict dict;
+    dict["ids"] = array_of(ask.ids);
+    dict["rings"] = array_of(ask.rings);
+    dict["reach"] = ask.reach;
+    std::vector<Point> corners;
+    for (const Box& box : ask.boxes) {
+        corners.push_back({box.min_x, box.min_y});
+        corners.push_back({box.max_x, box.max_y});
+    }
+    dict["boxes"] = points_array(corners);
+    dict["skip"] = array_of(ask.skip);
+    dict["outside_rings"] = array_of(ask.outside_rings);
+    dict["runs"] = array_of(ask.runs);
+    dict["from_level"] = ask.from_level;
+    return dict;
+}
+
+map::SubsetAsk ask_of(const py::dict& dict) {
+    map::SubsetAsk ask;
+    ask.ids = flat<std::uint32_t>(dict, "ids");
+    ask.rings = flat<std::uint32_t>(dict, "rings");
+    ask.reach = item(dict, "reach").cast<std::uint32_t>();
+    const std::vector<Point> corners = points_of(dict, "boxes");
+    if (corners.size() % 2 != 0) malformed("a box is not two corners");
+    for (std::size_t k = 0; k < corners.size(); k += 2) ask.boxes.push_back({corners[k].x, corners[k].y, corners[k + 1].x, corners[k + 1].y});
+    ask.skip = flat<std::uint32_t>(dict, "skip");
+    ask.outside_rings = flat<std::uint32_t>(dict, "outside_rings");
+    ask.runs = flat<std::uint32_t>(dict, "runs");
+    ask.from_level = item(dict, "from_level").cast<unsigned>();
+    return ask;
+}
+
+py::dict answer_dict(const map::SubsetAnswer& answer) {
+    py::dict dict;
+    dict["ids"] = array_of(answer.ids);
+    dict["chain"] = array_of(answer.chain);
+    dict["prev"] = array_of(answer.prev);
+    dict["next"] = array_of(answer.next);
+    dict["points"] = points_array(answer.points);
+    dict["state"] = array_of(answer.state);
+    dict["marked"] = array_of(answer.marked);
+    dict["flags"] = array_of(answer.flags);
+    dict["in_boxes"] = array_of(answer.in_boxes);
+    py::list outside;
+    for (const map::SubsetAnswer::Outside& piece : answer.outside) {
+        py::list levels;
+        for (const std::vector<Point>& level : piece.levels) levels.append(points_array(level));
+        outside.append(py::make_tuple(piece.chain, piece.first, levels));
+    }
+    dict["outside"] = outside;
+    return dict;
+}
+
+map::SubsetAnswer answer_of(const py::dict& dict) {
+    map::SubsetAnswer answer;
+    answer.ids = flat<std::uint32_t>(dict, "ids");
+    answer.chain = flat<std::uint32_t>(dict, "chain");
+    answer.prev = flat<std::uint32_t>(dict, "prev");
+    answer.next = flat<std::uint32_t>(dict, "next");
+    answer.points = points_of(dict, "points");
+    answer.state = flat<std::uint8_t>(dict, "state");
+    answer.marked = flat<std::uint8_t>(dict, "marked");
+    answer.flags = flat<std::uint8_t>(dict, "flags");
+    answer.in_boxes = flat<std::uint32_t>(dict, "in_boxes");
+    const std::size_t n = answer.ids.size();
+    if (answer.chain.size() != n || answer.prev.size() != n || answer.next.size() != n || answer.points.size() != n ||
+        answer.state.size() != n || answer.marked.size() != n || answer.flags.size() != n) {
+        malformed("a subset's answer is not one of each per vertex");
+    }
+    for (const py::handle one : item(dict, "outside").cast<py::list>()) {
+        const auto piece = one.cast<py::tuple>();
+        map::SubsetAnswer::Outside& at = answer.outside.emplace_back();
+        at.chain = piece[0].cast<std::uint32_t>();
+        at.first = piece[1].cast<std::uint32_t>();
+        for (const py::handle level : piece[2].cast<py::list>()) {
+            py::dict holder;
+            holder["points"] = level;
+            at.levels.push_back(points_of(holder, "points"));
+        }
+    }
+    return answer;
+}
+
+// The tiles of a first-round batch, queued and run, kept (marked for the first round's budget).
+map::KeptBatch kept_batch(const py::list& tiles, bool marks, std::pair<double, std::uint32_t> bound) {
+    std::map<std::uint32_t, map::FirstTile> kept;
+    for (const map::FirstTile* tile : tiles_in(tiles)) {
+        if (tile->input.vertex_id.empty()) continue;
+        map::FirstTile& at = kept[tile->number] = *tile;
+        at.improper = {};
+        at.passing = {};
+        at.passing_id = {};
+        if (marks) at.mark(bound.first, bound.second);
+    }
+    return map::KeptBatch(std::move(kept));
+}
+
+// A batch told a round's news → (the batch after it: a new one, so that the task is pure, its
+// waits on a cut end, its cut ends moved and pieces joined).
+py::tuple kept_advance(const map::KeptBatch& batch, const py::dict& news, const py::object& ran, const py::dict& plan, bool marks,
+                       const py::dict& options) {
+    const map::TileNews told = news_of(news);
+    py::dict holder;
+    holder["ran"] = ran;
+    const std::vector<std::uint32_t> running = flat<std::uint32_t>(holder, "ran");
+    const map::GridPlan grid = plan_of(plan);
+    const map::SimplifyOptions simplify = options_of(options);
+    map::KeptBatch after;
+    map::FirstTile::Advanced done;
+    {
+        py::gil_scoped_release release;
+        after = batch.clone();
+        done = after.advance(told, running, grid, marks, simplify.ranking);
+    }
+    py::dict dict;
+    dict["across"] = pairs_array(done.across);
+    dict["moved"] = done.cut_ends_moved;
+    dict["joined"] = done.pieces_joined;
+    return py::make_tuple(py::cast(std::move(after)), dict);
+}
+
+// A batch begun on a round: (a new batch, marked and settled, so that the task is pure; its tiles' facts).
+py::tuple kept_begin_round(const map::KeptBatch& batch, const py::object& settled, bool marks, std::pair<double, std::uint32_t> bound) {
+    py::dict holder;
+    holder["settled"] = settled;
+    const std::vector<std::uint32_t> chains = flat<std::uint32_t>(holder, "settled");
+    map::KeptBatch begun = batch.clone();
+    py::list facts;
+    for (const map::FirstRoundLead::TileFacts& tile : begun.begin_round(chains, marks, bound.first, bound.second)) {
+        facts.append(py::make_tuple(tile.number, tile.busy, array_of(tile.open_chains)));
+    }
+    return py::make_tuple(py::cast(std::move(begun)), facts);
+}
+
+py::list kept_inputs(const map::KeptBatch& batch, const py::list& numbers, bool marks, std::pair<double, std::uint32_t> bound, const py::list& points) {
+    if (numbers.size() != points.size()) malformed("not one list of control points per tile");
+    py::list tiles;
+    for (std::size_t k = 0; k < numbers.size(); ++k) {
+        py::dict holder;
+        holder["points"] = points[k];
+        tiles.append(tile_dict(batch.input(numbers[k].cast<std::uint32_t>(), marks, bound.first, bound.second, points_of(holder, "points"))));
+    }
+    return tiles;
+}
+
+py::list kept_crossings(const map::KeptBatch& batch) {
+    py::list rings;
+    for (const map::RingLocations& ring : batch.crossing_locations()) rings.append(py::make_tuple(ring.chain, points_array(ring.locations)));
+    return rings;
+}
+
 }  // namespace
+
+// The lead's side of a distributed run's kept tiles: its questions to `store`, a Python object
+// whose methods run them as tasks over the batches (python/toposimp/dask.py, _KeptStore).
+class PythonStore : public map::KeptStore {
+public:
+    PythonStore(py::object store, std::uint32_t vertices, std::uint32_t chains) : store_(std::move(store)), vertices_(vertices), chains_(chains) {}
+    ~PythonStore() override {
+        py::gil_scoped_acquire gil;
+        store_ = py::object();
+    }
+
+    map::FirstTile::Advanced advance(const map::TileNews& news, std::span<const std::uint32_t> ran) override {
+        py::gil_scoped_acquire gil;
+        const py::dict done = store_.attr("advance")(news_dict(news), array_of(std::vector<std::uint32_t>(ran.begin(), ran.end())));
+        map::FirstTile::Advanced out;
+        out.across = pairs_of(done, "across");
+        out.cut_ends_moved = item(done, "moved").cast<std::size_t>();
+        out.pieces_joined = item(done, "joined").cast<std::size_t>();
+        return out;
+    }
+    std::uint64_t queued() override {
+        py::gil_scoped_acquire gil;
+        return store_.attr("queued")().cast<std::uint64_t>();
+    }
+    parallel::KeyedSelection select(std::uint64_t wanted) override {
+        py::gil_scoped_acquire gil;
+        const auto [key, id] = store_.attr("select")(wanted).cast<std::pair<std::uint64_t, std::uint32_t>>();
+        return {key, id};
+    }
+    std::vector<map::RingLocations> crossing_locations() override {
+        py::gil_scoped_acquire gil;
+        std::vector<map::RingLocations> rings;
+        for (const py::handle one : store_.attr("crossings")().cast<py::list>()) {
+            const auto ring = one.cast<py::tuple>();
+            py::dict holder;
+            holder["points"] = ring[1];
+            rings.push_back({ring[0].cast<std::uint32_t>(), points_of(holder, "points")});
+        }
+        return rings;
+    }
+    std::vector<map::FirstRoundLead::TileFacts> begin_round(std::span<const std::uint32_t> settled, bool marks, double bound_key,
+                                                            std::uint32_t bound_id) override {
+        py::gil_scoped_acquire gil;
+        std::vector<map::FirstRoundLead::TileFacts> facts;
+        const py::list answers = store_.attr("begin_round")(array_of(std::vector<std::uint32_t>(settled.begin(), settled.end())), marks,
+                                                            py::make_tuple(bound_key, bound_id));
+        for (const py::handle one : answers) {
+            const auto tile = one.cast<py::tuple>();
+            py::dict holder;
+            holder["open"] = tile[2];
+            facts.push_back({tile[0].cast<std::uint32_t>(), tile[1].cast<bool>(), flat<std::uint32_t>(holder, "open")});
+        }
+        return facts;
+    }
+    std::vector<map::TileOutcome> run(const std::vector<std::vector<std::uint32_t>>& groups, std::vector<std::vector<Point>> points, bool marks,
+                                      double bound_key, std::uint32_t bound_id) override {
+        py::gil_scoped_acquire gil;
+        py::list group_list, point_list;
+        for (const std::vector<std::uint32_t>& group : groups) group_list.append(array_of(group));
+        for (const std::vector<Point>& inside : points) point_list.append(points_array(inside));
+        std::vector<map::TileOutcome> outcomes;
+        for (const py::handle one : store_.attr("run")(group_list, point_list, marks, py::make_tuple(bound_key, bound_id)).cast<py::list>()) {
+            outcomes.push_back(outcome_of(one.cast<py::dict>(), vertices_, chains_));
+        }
+        std::size_t tiles = 0;
+        for (const std::vector<std::uint32_t>& group : groups) tiles += group.size();
+        if (outcomes.size() != tiles) malformed("not one outcome per tile of the round's groups");
+        return outcomes;
+    }
+    map::TileInput input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) override {
+        py::gil_scoped_acquire gil;
+        return tile_of(store_.attr("input")(number, marks, py::make_tuple(bound_key, bound_id), points_array(points)).cast<py::dict>());
+    }
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> waits() override {
+        py::gil_scoped_acquire gil;
+        py::dict holder;
+        holder["waits"] = store_.attr("waits")();
+        return pairs_of(holder, "waits");
+    }
+    map::SubsetAnswer answer(const map::SubsetAsk& ask) override {
+        py::gil_scoped_acquire gil;
+        return answer_of(store_.attr("answer")(ask_dict(ask)).cast<py::dict>());
+    }
+    std::size_t tiles() override {
+        py::gil_scoped_acquire gil;
+        return store_.attr("tiles")().cast<std::size_t>();
+    }
+
+private:
+    py::object store_;
+    std::uint32_t vertices_, chains_;
+};
 
 void bind_parts(py::module_& module) {
     py::class_<RoundGroups>(module, "RoundGroups",
@@ -1106,7 +1419,8 @@ void bind_parts(py::module_& module) {
         .def("points", &FirstSteps::points, py::arg("tile"))
         .def("points_in", &FirstSteps::points_in, py::arg("tile"))
         .def("add", &FirstSteps::add, py::arg("live"), py::arg("outcomes"))
-        .def("finish", &FirstSteps::finish);
+        .def("finish", &FirstSteps::finish)
+        .def("keep", &FirstSteps::keep, py::arg("store"));
     py::class_<parallel::DigitSelector>(module, "DigitSelector", "The k-th smallest (key, id) by a histogram of 16-bit digits a pass")
         .def(py::init<std::uint64_t>(), py::arg("k"))
         .def_property_readonly("counting", &parallel::DigitSelector::counting)
@@ -1166,8 +1480,70 @@ void bind_parts(py::module_& module) {
     module.def("first_ids_at", &first_ids_at, py::arg("tiles"), py::arg("key"));
     module.def("first_pairs_in", &first_pairs_in, py::arg("tiles"), py::arg("shift"), py::arg("prefix"));
     module.def("first_run", &first_run, py::arg("tiles"), py::arg("points"), py::arg("marks"), py::arg("bound"), py::arg("plan"),
-               py::arg("options"));
+               py::arg("options"), py::arg("live") = true);
     module.def("first_live", &first_live, py::arg("tile"), py::arg("marks"), py::arg("bound"));
+    // The rounds after the first from kept tiles: a batch of them and its tasks.
+    py::class_<map::KeptBatch>(module, "KeptBatch", "Kept tiles of a run in parts, a batch of them (core/map/tiles.hpp)")
+        .def_property_readonly("tiles", &map::KeptBatch::tiles)
+        .def_property_readonly("numbers", [](const map::KeptBatch& batch) {
+            std::vector<std::uint32_t> numbers;
+            for (const auto& [k, tile] : batch.all()) numbers.push_back(k);
+            return array_of(numbers);
+        })
+        .def(py::pickle(
+            [](const map::KeptBatch& batch) {
+                py::list tiles;
+                for (const auto& [k, tile] : batch.all()) tiles.append(first_tile_dict(tile));
+                return tiles;
+            },
+            [](const py::list& tiles) {
+                std::map<std::uint32_t, map::FirstTile> kept;
+                for (const py::handle one : tiles) {
+                    map::FirstTile tile = first_tile_of(one.cast<py::dict>());
+                    const std::uint32_t number = tile.number;
+                    kept.emplace(number, std::move(tile));
+                }
+                return map::KeptBatch(std::move(kept));
+            }));
+    module.def("kept_batch", &kept_batch, py::arg("tiles"), py::arg("marks"), py::arg("bound"));
+    module.def("kept_advance", &kept_advance, py::arg("batch"), py::arg("news"), py::arg("ran"), py::arg("plan"), py::arg("marks"),
+               py::arg("options"));
+    module.def("kept_queued", [](const map::KeptBatch& batch) { return batch.queued(); }, py::arg("batch"));
+    module.def("kept_histogram", [](const map::KeptBatch& batch, int shift, std::uint64_t high) {
+        if (shift < 0 || shift > 48 || shift % 16 != 0) malformed("a histogram's digit is not one");
+        std::vector<std::uint64_t> counts(std::size_t{1} << 16, 0);
+        batch.histogram(shift, high, counts);
+        return sparse_histogram(counts);
+    }, py::arg("batch"), py::arg("shift"), py::arg("high"));
+    module.def("kept_ids_at", [](const map::KeptBatch& batch, std::uint64_t key) {
+        std::vector<std::uint32_t> ids;
+        batch.ids_at(key, ids);
+        return array_of(ids);
+    }, py::arg("batch"), py::arg("key"));
+    module.def("kept_pairs_in", [](const map::KeptBatch& batch, int shift, std::uint64_t prefix) {
+        if (shift < 0 || shift > 48 || shift % 16 != 0) malformed("a bucket's digit is not one");
+        std::vector<std::uint64_t> keys;
+        std::vector<std::uint32_t> ids;
+        batch.pairs_in(shift, prefix, keys, ids);
+        py::dict dict;
+        dict["keys"] = array_of(keys);
+        dict["ids"] = array_of(ids);
+        return dict;
+    }, py::arg("batch"), py::arg("shift"), py::arg("prefix"));
+    module.def("kept_crossings", &kept_crossings, py::arg("batch"));
+    module.def("kept_begin_round", &kept_begin_round, py::arg("batch"), py::arg("settled"), py::arg("marks"), py::arg("bound"));
+    module.def("kept_inputs", &kept_inputs, py::arg("batch"), py::arg("numbers"), py::arg("marks"), py::arg("bound"), py::arg("points"));
+    module.def("kept_waits", [](const map::KeptBatch& batch) { return pairs_array(batch.waits()); }, py::arg("batch"));
+    module.def("kept_answer", [](const map::KeptBatch& batch, const py::dict& ask, const py::dict& plan) {
+        const map::SubsetAsk question = ask_of(ask);
+        const map::GridPlan grid = plan_of(plan);
+        map::SubsetAnswer answer;
+        {
+            py::gil_scoped_release release;
+            answer = batch.answer(question, grid);
+        }
+        return answer_dict(answer);
+    }, py::arg("batch"), py::arg("ask"), py::arg("plan"));
 }
 
 map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOptions& options, const py::object& run_groups,
@@ -1296,6 +1672,34 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
                 throw;
             }
             steps->close();
+        }
+        if (steps->kept_store_) {
+            // The rounds after the first from the tiles kept on the workers: nothing over the
+            // whole map's vertices here but a byte each for the result.
+            std::unique_ptr<map::KeptTiles> kept;
+            std::vector<map::TileOutcome> outcomes;
+            {
+                py::gil_scoped_acquire gil;
+                kept = std::make_unique<map::KeptTiles>(std::move(*steps->lead_), std::make_unique<PythonStore>(steps->kept_store_, vertices, chains_of(map)));
+                steps->kept_store_ = py::object();
+                steps->lead_.reset();
+                outcomes = std::move(steps->outcomes_);
+            }
+            const double set_up = seconds(start);
+            const auto rounds_start = Clock::now();
+            for (;;) {
+                if (kept->finish_tiles(outcomes)) map::run_kept_top(*kept, grid, options, std::max(top_runs, 4u));
+                if (!kept->next_round()) break;
+                outcomes = kept->run_groups();
+            }
+            map::SimplifyResult result = kept->result();
+            {
+                py::gil_scoped_acquire gil;
+                kept.reset();
+            }
+            result.stats.seconds_crossings = set_up;
+            result.stats.seconds_sweep = seconds(rounds_start);
+            return result;
         }
         parts = steps->take();
         run_top();

@@ -64,6 +64,9 @@ public:
     // and each outcome once); then finish, once every tile's came.
     void add(const py::list& live, const py::list& outcomes);
     void finish();
+    // Or, the first round's tiles kept where they are (every outcome added, no live vertices):
+    // the rounds after go on from them (map::KeptTiles), `store` asked what they answer.
+    void keep(py::object store);
     std::unique_ptr<map::MapInParts> take();  // (after close)
     void close() { open_ = false; }
 
@@ -86,6 +89,7 @@ private:
     std::vector<map::LiveVertices> live_;
     std::vector<map::TileOutcome> outcomes_;
     std::unique_ptr<map::MapInParts> parts_;
+    py::object kept_store_;
     bool open_ = true;
     friend map::SimplifyResult run_in_parts(const map::MapData&, const map::SimplifyOptions&, const py::object&, int, const py::object&,
                                             std::uint64_t, const io::VerticesInFile*);

@@ -191,6 +191,54 @@ def test_a_folder_of_layers_read_by_parts_on_the_workers(cluster, generated_shap
     assert output.read_bytes() == reference.read_bytes()
 
 
+def test_killed_worker_with_kept_tiles_is_never_wrong(cluster, generated, binary, tmp_path, monkeypatch):
+    """The first round's tiles kept on the workers for the rounds after (kept_tiles): a worker
+    killed in the second round loses the batches of tiles it held. Where Dask still knows the
+    tasks that made them it builds them again (the same bytes); where it has forgotten them (it
+    forgets a task once what it made is made) the run stops with a message and leaves no output
+    (not yet the same bytes every time: docs/distributed.md, item 4)."""
+    from toposimp import UsageError
+    from toposimp import dask as toposimp_dask
+
+    client, workers = cluster
+    lines, places = generated
+    arguments = [str(lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    pids = client.run(os.getpid)
+    killed = {}
+    gather = toposimp_dask._Tasks._gather
+
+    def gather_killing(self, client_, futures, what, on_progress=None, each=None):
+        if not killed and what.startswith("round 2"):
+            held = client_.has_what()  # (the kept batches among what the workers hold)
+            for address, pid in pids.items():
+                if pid in [w.pid for w in workers] and held.get(address):
+                    killed["address"] = address
+                    os.kill(pid, signal.SIGKILL)
+                    break
+        return gather(self, client_, futures, what, on_progress, each)
+
+    monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_killing)
+    output = tmp_path / "kept.gpkg"
+    try:
+        status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, local_budget=0, quiet=True,
+                                   first_round="workers", kept_tiles=True)
+        assert status == 0 and output.read_bytes() == reference.read_bytes()
+    except UsageError as error:
+        assert "a Dask worker holding kept tiles was lost" in str(error)
+        assert not output.exists() and {p.name for p in tmp_path.iterdir()} == {"reference.gpkg"}
+    assert killed, "no worker held anything in the second round"
+    workers.append(client.start_worker())  # (three again for the tests after)
+    client.wait_for_workers(3, timeout=60)
+    # And with every worker alive, the same bytes.
+    output.unlink(missing_ok=True)
+    assert toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, local_budget=0, quiet=True,
+                             first_round="workers", kept_tiles=True) == 0
+    assert output.read_bytes() == reference.read_bytes()
+
+
 def test_input_changed_under_the_workers_stops_the_run(cluster, generated_shapefiles, tmp_path, monkeypatch, capsys):
     """The input changed after the command read it, before the workers read their parts: the run
     stops with the reason (exit 2, the command line's message), nothing written."""
@@ -259,12 +307,17 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
         reference = tmp_path / "reference.gpkg"
         subprocess.run([binary, "map", *arguments, "-o", str(reference), "--overwrite"], check=True, capture_output=True)
         # (top_runs: the levels above the tiles over a subset of the live map, its runs of 1 at
-        # first, too short somewhere, or of 4.)
-        for level, first_round, top_runs in ((0, "workers", 0), (2, "here", 0), (-1, "workers", 0), (2, "here", 1), (-1, "workers", 4)):
+        # first, too short somewhere, or of 4; kept: the first round's tiles kept on the workers,
+        # the rounds after from them, the subsets gathered from them.)
+        for level, first_round, top_runs, kept in ((0, "workers", 0, False), (2, "here", 0, False), (-1, "workers", 0, False),
+                                                   (2, "here", 1, False), (-1, "workers", 4, False), (1, "workers", 1, True),
+                                                   (2, "workers", 0, True)):
             output = tmp_path / f"level{level}.gpkg"
             assert toposimp_dask.run([*arguments, "-o", str(output), "--overwrite"], client=client, tile_level=level,
-                                     local_budget=0 if level != 2 else 2000, quiet=True, first_round=first_round, top_runs=top_runs) == 0
-            assert output.read_bytes() == reference.read_bytes(), f"{target}, tile level {level}, first round {first_round}, top runs {top_runs}"
+                                     local_budget=0 if level != 2 else 2000, quiet=True, first_round=first_round, top_runs=top_runs,
+                                     kept_tiles=kept) == 0
+            assert output.read_bytes() == reference.read_bytes(), \
+                f"{target}, tile level {level}, first round {first_round}, top runs {top_runs}, kept tiles {kept}"
 
 
 def test_budget_selected_pass_by_pass_on_the_workers(cluster, generated, binary, tmp_path, monkeypatch):

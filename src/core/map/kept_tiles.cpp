@@ -62,7 +62,7 @@ private:
 
 }  // namespace
 
-KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles) : lead_(lead) {
+KeptTiles::KeptTiles(FirstRoundLead lead, std::map<std::uint32_t, FirstTile> tiles) : lead_(std::move(lead)) {
     if (lead_.marks()) {
         for (auto& [k, tile] : tiles) tile.mark(lead_.bound_key(), lead_.bound_id());
     }
@@ -74,7 +74,7 @@ KeptTiles::KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTi
     gone_.assign(lead_.vertices(), 0);
 }
 
-KeptTiles::KeptTiles(const FirstRoundLead& lead, std::unique_ptr<KeptStore> tiles) : lead_(lead), tiles_(std::move(tiles)) {
+KeptTiles::KeptTiles(FirstRoundLead lead, std::unique_ptr<KeptStore> tiles) : lead_(std::move(lead)), tiles_(std::move(tiles)) {
     for (const std::vector<std::uint32_t>& group : lead_.groups()) running_.insert(running_.end(), group.begin(), group.end());
     std::sort(running_.begin(), running_.end());
     gone_.assign(lead_.vertices(), 0);
@@ -293,6 +293,10 @@ void KeptBatch::histogram(int shift, std::uint64_t high, std::vector<std::uint64
 
 void KeptBatch::ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const {
     for (const auto& [k, tile] : tiles_) tile.ids_at(key, ids);
+}
+
+void KeptBatch::pairs_in(int shift, std::uint64_t prefix, std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& ids) const {
+    for (const auto& [k, tile] : tiles_) tile.pairs_in(shift, prefix, keys, ids);
 }
 
 std::vector<RingLocations> KeptBatch::crossing_locations() const {

@@ -104,16 +104,20 @@ SimplifyResult simplify_with_kept_tiles(const MapData& map, const SimplifyOption
     add_by_parts(first, map, part_vertices);
     first.split();
     KeptTiles kept = std::move(first).kept();
-    runs = std::max(runs, 1u);
     do {
-        if (!kept.finish_tiles(kept.run_groups())) continue;
-        for (std::uint32_t length = runs;; length = length >= (1u << 30) ? std::numeric_limits<std::uint32_t>::max() : 2 * length) {
-            TileInput top = kept.top_subset(length);
-            std::vector<TileInput> one{top};
-            if (kept.finish_top_subset(top, run_tile_group(std::move(one), plan, options).front())) break;
-        }
+        if (kept.finish_tiles(kept.run_groups())) run_kept_top(kept, plan, options, runs);
     } while (kept.next_round());
     return kept.result();
+}
+
+unsigned run_kept_top(KeptTiles& kept, const GridPlan& plan, const SimplifyOptions& options, std::uint32_t runs) {
+    runs = std::max(runs, 1u);  // (runs of 0 would never grow)
+    for (unsigned tries = 1;; ++tries) {
+        TileInput top = kept.top_subset(runs);
+        std::vector<TileInput> one{top};
+        if (kept.finish_top_subset(top, run_tile_group(std::move(one), plan, options).front())) return tries;
+        runs = runs >= (1u << 30) ? std::numeric_limits<std::uint32_t>::max() : 2 * runs;  // (no chain is longer: no cut end)
+    }
 }
 
 SimplifyResult simplify_by_parts(const MapData& map, const SimplifyOptions& options, unsigned tile_level, std::size_t part_vertices,

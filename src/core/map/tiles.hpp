@@ -402,6 +402,8 @@ public:
     // `vertices`: the whole map's. `options` outlives this and the MapInParts it makes.
     FirstRoundLead(const GridPlan& plan, unsigned tile_level, const SimplifyOptions& options, std::uint64_t vertices);
     ~FirstRoundLead();
+    FirstRoundLead(const FirstRoundLead&) = default;
+    FirstRoundLead(FirstRoundLead&&) = default;
     const GridPlan& plan() const { return plan_; }
     unsigned tile_level() const { return t_; }
     const SimplifyOptions& options() const { return options_; }
@@ -527,6 +529,7 @@ public:
     std::uint64_t queued() const;
     void histogram(int shift, std::uint64_t high, std::vector<std::uint64_t>& counts) const;
     void ids_at(std::uint64_t key, std::vector<std::uint32_t>& ids) const;
+    void pairs_in(int shift, std::uint64_t prefix, std::vector<std::uint64_t>& keys, std::vector<std::uint32_t>& ids) const;
     // Per split ring it holds pieces of: up to 4 distinct locations at the ends of its segments
     // across tile borders.
     std::vector<RingLocations> crossing_locations() const;
@@ -537,6 +540,8 @@ public:
     TileInput input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const;
     bool holds(std::uint32_t number) const { return tiles_.count(number) != 0; }
     std::size_t tiles() const { return tiles_.size(); }
+    const std::map<std::uint32_t, FirstTile>& all() const { return tiles_; }
+    KeptBatch clone() const { return KeptBatch(tiles_); }
     // Every wait among its tiles' vertices.
     std::vector<std::pair<std::uint32_t, std::uint32_t>> waits() const;
     SubsetAnswer answer(const SubsetAsk& ask, const GridPlan& plan) const;
@@ -588,9 +593,9 @@ public:
 class KeptTiles {
 public:
     // The tiles here (marked for the first round's budget).
-    KeptTiles(const FirstRoundLead& lead, std::map<std::uint32_t, FirstTile> tiles);
+    KeptTiles(FirstRoundLead lead, std::map<std::uint32_t, FirstTile> tiles);
     // Or elsewhere, marked.
-    KeptTiles(const FirstRoundLead& lead, std::unique_ptr<KeptStore> tiles);
+    KeptTiles(FirstRoundLead lead, std::unique_ptr<KeptStore> tiles);
     ~KeptTiles();
     KeptTiles(KeptTiles&&) noexcept;
     // The round's tiles' outcomes (each tile's once, in any order); whether the levels from T up
@@ -680,7 +685,7 @@ public:
     // After split() and before finish: the tiles and the lead copied, for the rounds after.
     KeptTiles keep() const { return KeptTiles(lead_, tiles_); }
     // Or moved (this is then spent): the first round's groups run from KeptTiles::group too.
-    KeptTiles kept() && { return KeptTiles(lead_, std::move(tiles_)); }
+    KeptTiles kept() && { return KeptTiles(std::move(lead_), std::move(tiles_)); }
 
 private:
     FirstRoundLead lead_;
@@ -690,6 +695,11 @@ private:
 // The levels from T up (after finish_tiles returned true) as top_subset's tile, run here: runs
 // of `runs` vertices, twice as long each time they fall short. Returns the tiles it took.
 unsigned run_top_over_subsets(MapInParts& parts, const SimplifyOptions& options, std::uint32_t runs);
+
+// The levels from T up of a round of `kept` (after finish_tiles returned true) over subsets of the
+// live map gathered from its tiles, run here: runs of `runs` vertices (at least 1), twice as long
+// each time they fall short. Returns the subsets it took.
+unsigned run_kept_top(KeptTiles& kept, const GridPlan& plan, const SimplifyOptions& options, std::uint32_t runs);
 
 // simplify() run in parts in this process with nothing over the whole map's vertices: the first
 // round built from parts of about `part_vertices` vertices (FirstRound), every round's tiles kept
