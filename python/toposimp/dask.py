@@ -554,9 +554,12 @@ def _kept_batch(queued, marks, bound):
     return engine.kept_batch(queued[0], marks, bound)
 
 
-def _kept_advance(batch, news, ran, plan, marks, options):
+def _kept_advance(batch, news, ran, plan, marks, options, *own):
+    """(`own`: after the tiles' levels, the outcome lists of the groups that ran where this batch's
+    tiles are: their states and waits are not sent through this process again.)"""
     from toposimp import _toposimp as engine
-    return engine.kept_advance(batch, news, ran, plan, marks, options)
+    return engine.kept_advance(batch, news, ran, plan, marks, options, [outcomes[0] if type(outcomes) is tuple else outcomes
+                                                                        for outcomes in own])
 
 
 def _kept_begin(batch, settled, marks, bound):
@@ -590,16 +593,17 @@ class _KeptStore:
     """map::KeptTiles's questions to the first round's tiles, kept on the workers in batches (one
     per first-round batch): each a task per batch (src/python/parts.cpp: PythonStore)."""
 
-    def __init__(self, tasks, client, batches, numbers, plan, options, marks):
+    def __init__(self, tasks, client, batches, numbers, plan, options, marks, own):
         self.tasks, self.client, self.batches = tasks, client, batches
+        self.own = own  # per batch: the futures of the outcome lists of the groups run where its tiles are
         self.where = {int(number): b for b, held in enumerate(numbers) for number in held}
         self.plan, self.options, self.marks = plan, options, marks
         self.round = 1
 
-    def _gather(self, futures, what):
+    def _gather(self, futures, what, release=True):
         from toposimp import UsageError
 
-        results = self.tasks._gather(self.client, futures, what)
+        results = self.tasks._gather(self.client, futures, what, release=release)
         if any(isinstance(result, BaseException) for result in results):
             # (Dask forgets a task once what it made is made: a batch lost with its worker cannot
             # be built again from the rounds before. docs/distributed.md, item 4.)
@@ -613,10 +617,19 @@ class _KeptStore:
     def advance(self, news, ran):
         import numpy
 
+        news_after_tiles = bool(news["after_tiles"])
         # (Sent once, as a task's result rather than scattered, so that Dask can build a lost batch
         # again from its lineage: scattered data has none.)
-        news = _submit(self.client, _given, news)
-        done = [_submit(self.client, _kept_advance, b, news, ran, self.plan, self.marks, self.options) for b in self.batches]
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
+            news = _submit(self.client, _given, news)
+        own = self.own if news_after_tiles else [[] for _ in self.batches]
+        done = [_submit(self.client, _kept_advance, b, news, ran, self.plan, self.marks, self.options, *mine)
+                for b, mine in zip(self.batches, own)]
+        if news_after_tiles:
+            self.own = [[] for _ in self.batches]
         self.batches = [_submit(self.client, _item, d, 0) for d in done]
         answers = self._gather([_submit(self.client, _item, d, 1) for d in done], "telling the kept tiles what the round changed")
         across = [a["across"] for a in answers if len(a["across"])]
@@ -676,13 +689,16 @@ class _KeptStore:
                 tasks.append(_submit(self.client, _kept_run, self.batches[b], [g for _, g, _ in runs], [p for _, _, p in runs], marks, bound,
                                      self.plan, self.options))
                 order.append([k for k, _, _ in runs])
+                self.own[b].append(tasks[-1])
         for k, group, inside in spread:
             parts = []
             for number, one in zip(group, inside):
                 parts.append(_submit(self.client, _kept_call, self.batches[self.where[int(number)]], "kept_inputs", [int(number)], marks, bound, [one]))
             tasks.append(_submit(self.client, _kept_run_gathered, parts, self.plan, self.options))
             order.append([k])
-        results = self._gather(tasks, f"round {self.round}, tiles of level {self.plan.get('tile_level', 0)}")
+            for b in {self.where[int(number)] for number in group}:
+                self.own[b].append(tasks[-1])
+        results = self._gather(tasks, f"round {self.round}, tiles of level {self.plan.get('tile_level', 0)}", release=False)
         by_group = {}
         for ks, outcomes in zip(order, results):
             for k in ks:
@@ -758,9 +774,9 @@ class _Tasks:
         if self.progress is not None:
             self.progress.stage(what, done, total)
 
-    def _gather(self, client, futures, what, on_progress=None, each=None):
+    def _gather(self, client, futures, what, on_progress=None, each=None, release=True):
         """The futures' results in order, with progress; or, with `each`, each(result) as they come,
-        none kept."""
+        none kept. Each future is released once its result came, unless not `release`."""
         from distributed import as_completed
         from toposimp import UsageError
 
@@ -773,7 +789,8 @@ class _Tasks:
                     results[place[future.key]] = result
                 else:
                     each(result)
-                future.release()
+                if release:
+                    future.release()
                 self._stage(what, done, len(futures))
                 if on_progress is not None:
                     on_progress(done, len(futures))
@@ -900,10 +917,11 @@ class _Tasks:
             # The tiles stay on the workers, batch by batch, for the rounds after (_KeptStore).
             batches = [submit(_kept_batch, q, marks, bound) for q in queued]
             del queued
+            own = [[run] for run in runs]  # (each batch's groups' outcomes stay there for its first news)
             self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
-                         each=lambda result: steps.add([], result[0]))
+                         each=lambda result: steps.add([], result[0]), release=False)
             numbers = self._gather(client, [submit(_kept_numbers, b) for b in batches], "keeping the tiles")
-            steps.keep(_KeptStore(self, client, batches, numbers, plan, options, marks))
+            steps.keep(_KeptStore(self, client, batches, numbers, plan, options, marks, own))
             return
         del queued
         self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,

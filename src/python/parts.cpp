@@ -1097,6 +1097,8 @@ py::dict first_live(const map::FirstTile& tile, bool marks, std::pair<double, st
 // ---- the rounds after the first from kept tiles (map::KeptTiles): a batch's tasks, and the lead's
 // questions as dicts of arrays.
 
+// A round's news without the tiles' own outcomes (the batches take those from where their groups
+// ran: kept_advance's `own`).
 py::dict news_dict(const map::TileNews& news) {
     py::dict dict;
     std::vector<std::uint32_t> ids, prev, next;
@@ -1106,6 +1108,7 @@ py::dict news_dict(const map::TileNews& news) {
         ids.push_back(id);
         states.push_back(state);
     }
+    dict["after_tiles"] = news.after_tiles;
     dict["state_ids"] = array_of(ids);
     dict["states"] = array_of(states);
     ids.clear();
@@ -1120,7 +1123,6 @@ py::dict news_dict(const map::TileNews& news) {
     dict["unlinked_prev"] = array_of(prev);
     dict["unlinked_next"] = array_of(next);
     dict["unlinked_points"] = points_array(points);
-    dict["tile_waits"] = pairs_array(news.tile_waits);
     dict["judged"] = array_of(news.judged);
     dict["top_waits"] = pairs_array(news.top_waits);
     dict["distinct"] = array_of(news.distinct);
@@ -1142,7 +1144,7 @@ map::TileNews news_of(const py::dict& dict) {
     const std::vector<Point> points = points_of(dict, "unlinked_points");
     if (prev.size() != gone.size() || next.size() != gone.size() || points.size() != 2 * gone.size()) malformed("news: unlinked vertices");
     for (std::size_t k = 0; k < gone.size(); ++k) news.unlinked.push_back({gone[k], prev[k], next[k], points[2 * k], points[2 * k + 1]});
-    news.tile_waits = pairs_of(dict, "tile_waits");
+    news.after_tiles = item(dict, "after_tiles").cast<bool>();
     news.judged = flat<std::uint32_t>(dict, "judged");
     news.top_waits = pairs_of(dict, "top_waits");
     news.distinct = flat<std::uint32_t>(dict, "distinct");
@@ -1248,11 +1250,24 @@ map::KeptBatch kept_batch(const py::list& tiles, bool marks, std::pair<double, s
     return map::KeptBatch(std::move(kept));
 }
 
-// A batch told a round's news → (the batch after it: a new one, so that the task is pure, its
-// waits on a cut end, its cut ends moved and pieces joined).
+// A batch told a round's news, and after the tiles' levels the outcomes of the groups that ran
+// (`own`: lists of outcome dicts, those of its tiles among them) → (the batch after it: a new one,
+// so that the task is pure; its waits on a cut end, its cut ends moved and pieces joined).
 py::tuple kept_advance(const map::KeptBatch& batch, const py::dict& news, const py::object& ran, const py::dict& plan, bool marks,
-                       const py::dict& options) {
-    const map::TileNews told = news_of(news);
+                       const py::dict& options, const py::list& own) {
+    map::TileNews told = news_of(news);
+    for (const py::handle list : own) {
+        for (const py::handle one : list.cast<py::list>()) {
+            const auto outcome = one.cast<py::dict>();
+            const std::vector<std::uint32_t> ids = flat<std::uint32_t>(outcome, "ids");
+            const std::vector<std::uint8_t> states = flat<std::uint8_t>(outcome, "states");
+            if (ids.size() != states.size()) malformed("an outcome's states are not one per id");
+            for (std::size_t k = 0; k < ids.size(); ++k) told.outcome_states.emplace_back(ids[k], states[k]);
+            for (const auto& wait : pairs_of(outcome, "waits")) told.tile_waits.push_back(wait);
+        }
+    }
+    std::sort(told.outcome_states.begin(), told.outcome_states.end());
+    std::sort(told.tile_waits.begin(), told.tile_waits.end());
     py::dict holder;
     holder["ran"] = ran;
     const std::vector<std::uint32_t> running = flat<std::uint32_t>(holder, "ran");
@@ -1507,7 +1522,7 @@ void bind_parts(py::module_& module) {
             }));
     module.def("kept_batch", &kept_batch, py::arg("tiles"), py::arg("marks"), py::arg("bound"));
     module.def("kept_advance", &kept_advance, py::arg("batch"), py::arg("news"), py::arg("ran"), py::arg("plan"), py::arg("marks"),
-               py::arg("options"));
+               py::arg("options"), py::arg("own"));
     module.def("kept_queued", [](const map::KeptBatch& batch) { return batch.queued(); }, py::arg("batch"));
     module.def("kept_histogram", [](const map::KeptBatch& batch, int shift, std::uint64_t high) {
         if (shift < 0 || shift > 48 || shift % 16 != 0) malformed("a histogram's digit is not one");

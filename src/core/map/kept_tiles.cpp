@@ -206,8 +206,10 @@ bool KeptTiles::finish_tiles(std::span<const TileOutcome> outcomes) {
             across.emplace_back(waiter, blocker);
         }
     }
-    changed.insert(changed.end(), queued_again.begin(), queued_again.end());
-    news.states = last_states(std::move(changed));
+    // (The tiles' own outcomes' states apart: a store may have them where the tiles are.)
+    news.outcome_states = std::move(changed);
+    news.states = last_states(std::move(queued_again));
+    news.after_tiles = true;
     advance(news, across);  // (with the tiles' outcomes' waits on a cut end)
     running_.clear();
     return std::any_of(later_.begin(), later_.end(), [](const auto& list) { return !list.empty(); });

@@ -2937,8 +2937,11 @@ FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const Gri
     const TileInput& in = input;
     const auto state_of = [&](std::uint32_t v) {
         const std::uint32_t id = in.vertex_id[v];
-        const auto at = std::lower_bound(news.states.begin(), news.states.end(), std::pair{id, std::uint8_t{0}});
-        return at != news.states.end() && at->first == id ? at->second : in.state[v];
+        for (const auto* states : {&news.states, &news.outcome_states}) {
+            const auto at = std::lower_bound(states->begin(), states->end(), std::pair{id, std::uint8_t{0}});
+            if (at != states->end() && at->first == id) return at->second;
+        }
+        return in.state[v];
     };
     const auto unlinked = [&](std::uint32_t id) -> const Unlinked* {
         const auto at = std::lower_bound(news.unlinked.begin(), news.unlinked.end(), id, [](const Unlinked& u, std::uint32_t i) { return u.id < i; });

@@ -300,8 +300,13 @@ struct Unlinked {
 
 // What every kept tile learns when a round is over (KeptTiles::finish_round), beyond its own.
 struct TileNews {
-    // Every state the round changed, by id (one per id, the last one): the tiles' outcomes, the
-    // waiters the lead queued again, the levels from T up.
+    // After the tiles' levels: the tiles' own outcomes' states (`outcome_states`, by id) and waits
+    // (`tile_waits`); a store whose tiles are elsewhere may take those from the outcomes where the
+    // tiles ran instead.
+    bool after_tiles = false;
+    std::vector<std::pair<std::uint32_t, std::uint8_t>> outcome_states;
+    // The states the lead changed (the waiters it queued again) or the levels from T up, by id, one
+    // per id; over outcome_states.
     std::vector<std::pair<std::uint32_t, std::uint8_t>> states;
     std::vector<Unlinked> unlinked;                                   // sorted by id
     std::vector<std::pair<std::uint32_t, std::uint32_t>> tile_waits;  // the tiles' outcomes' waits (sorted)
