@@ -603,12 +603,20 @@ class _KeptStore:
     def _gather(self, futures, what, release=True):
         from toposimp import UsageError
 
+        import asyncio
+        import concurrent.futures
+
         results = self.tasks._gather(self.client, futures, what, release=release)
-        if any(isinstance(result, BaseException) for result in results):
-            # (Dask forgets a task once what it made is made: a batch lost with its worker cannot
-            # be built again from the rounds before. docs/distributed.md, item 4.)
-            raise UsageError("a Dask worker holding kept tiles was lost; --kept-tiles cannot build them again yet "
-                             "(run again, or without --kept-tiles)")
+        for result in results:
+            # (A task cancelled: its data lost with a worker. distributed's own kind of it, where
+            # it has one, derives from concurrent.futures'.)
+            if isinstance(result, (concurrent.futures.CancelledError, asyncio.CancelledError)):
+                # (Dask forgets a task once what it made is made: a batch lost with its worker
+                # cannot always be built again from the rounds before. docs/distributed.md, item 4.)
+                raise UsageError("a Dask worker holding kept tiles was lost; --kept-tiles cannot build them again yet "
+                                 "(run again, or without --kept-tiles)")
+            if isinstance(result, BaseException):
+                raise result
         return results
 
     def _each(self, name, *arguments, what="the kept tiles"):

@@ -298,7 +298,7 @@ struct Unlinked {
     Point prev_point, next_point;
 };
 
-// What every kept tile learns when a round is over (KeptTiles::finish_round), beyond its own.
+// What every kept tile learns at a round's end (KeptTiles::finish_tiles, finish_top).
 struct TileNews {
     // After the tiles' levels: the tiles' own outcomes' states (`outcome_states`, by id) and waits
     // (`tile_waits`); a store whose tiles are elsewhere may take those from the outcomes where the
