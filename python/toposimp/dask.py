@@ -20,8 +20,11 @@ Only the tasks' data travels (numpy arrays, through Dask: straight to the worker
 on this machine, else through the scheduler); the input and the output are read and written here.
 A worker that dies has its tasks rerun elsewhere; the result is the same.
 
---levels runs each level in parts. Not yet: a map bigger than this process's memory (the reading
-and writing, each round's budget and the levels above the tiles run here).
+--levels runs each level in parts. With --first-round workers --kept-tiles, the live map stays on
+the workers after the first round (each round's budget is selected there, and the levels above the
+tiles run here over small subsets of it). Not yet: a map bigger than this process's memory in
+every case (the writing runs here), and a worker lost after the first round of a --kept-tiles run
+may stop it.
 """
 import argparse
 import contextlib
