@@ -1,6 +1,8 @@
 // The rounds after the first from the first round's tiles kept (KeptTiles: core/map/tiles.hpp).
 #include "core/map/tiles.hpp"
 
+#include <omp.h>
+
 #include <algorithm>
 #include <bit>
 #include <limits>
@@ -103,6 +105,7 @@ SimplifyResult KeptTiles::result() const {
     SimplifyStats& stats = result.stats;
     stats.vertices_in = lead_.vertices();
     stats.vertices_out = stats.vertices_in - stats.removed;
+    stats.threads = lead_.options().threads > 0 ? lead_.options().threads : omp_get_max_threads();  // (as the engine says it)
     if (lead_.marks() || stats.swept_as_max) stats.target_reached = stats.removed >= lead_.goal();
     result.kept.resize(gone_.size());
     for (std::size_t v = 0; v < gone_.size(); ++v) result.kept[v] = gone_[v] ? 0 : 1;
