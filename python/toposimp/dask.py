@@ -604,10 +604,10 @@ class _KeptStore:
         self.round = 1
 
     def _gather(self, futures, what, release=True):
-        from toposimp import UsageError
-
         import asyncio
         import concurrent.futures
+
+        from toposimp import UsageError
 
         results = self.tasks._gather(self.client, futures, what, release=release)
         for result in results:
@@ -626,13 +626,13 @@ class _KeptStore:
         return self._gather([_submit(self.client, _kept_call, b, name, *arguments) for b in self.batches], what)
 
     def advance(self, news, ran):
+        import warnings
+
         import numpy
 
         news_after_tiles = bool(news["after_tiles"])
         # (Sent once, as a task's result rather than scattered, so that Dask can build a lost batch
         # again from its lineage: scattered data has none.)
-        import warnings
-
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
             news = _submit(self.client, _given, news)
