@@ -472,13 +472,17 @@ def test_command_line(generated, binary, tmp_path):
     assert "searching the tiles for crossings:" in done.stderr  # (the first round's stages on the workers)
     assert output.read_bytes() == reference.read_bytes()
     usage = subprocess.run([sys.executable, "-m", "toposimp.dask", "--help"], capture_output=True, text=True)
-    assert usage.returncode == 0 and all(option in usage.stdout for option in ("--scheduler", "--first-round", "--send-input", "--top-runs"))
+    assert usage.returncode == 0 and all(option in usage.stdout for option in ("--scheduler", "--first-round", "--send-input", "--top-runs",
+                                                                               "--kept-tiles"))
     negative = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--top-runs",
                                "-1"], capture_output=True, text=True)
     assert negative.returncode == 2 and "--top-runs" in negative.stderr and not (tmp_path / "no.gpkg").exists()
     wrong = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--first-round",
                             "nowhere"], capture_output=True, text=True)
     assert wrong.returncode == 2 and "--first-round" in wrong.stderr and not (tmp_path / "no.gpkg").exists()
+    here = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--kept-tiles"],
+                          capture_output=True, text=True)
+    assert here.returncode == 2 and "--kept-tiles needs --first-round workers" in here.stderr and not (tmp_path / "no.gpkg").exists()
 
 
 def test_command_line_asks_for_huge_pages(generated, tmp_path):
