@@ -482,9 +482,10 @@ private:
 };
 
 // A top_subset's questions to the kept tiles, a wave of them: the vertices around `ids` in their
-// pieces (learnt whole; the cut ends and the vertices beyond as points); every piece of `rings`; the own live vertices
-// in `boxes` but those in `skip`; per ring in `outside_rings`, the fixed locations of its pieces
-// outside the runs (`runs`), at each level from `from_level` below its whole level.
+// pieces (learnt whole; the cut ends and the vertices beyond as points); every piece of `rings`;
+// the own live vertices in `boxes` but those in `skip`; per ring in `outside_rings`, the fixed
+// locations of its pieces outside the runs (`runs`), at each level from `from_level` below its
+// whole level.
 struct SubsetAsk {
     std::vector<std::uint32_t> ids, rings;
     std::uint32_t reach = 0;  // around each of `ids`, this many vertices of its piece either side
@@ -493,7 +494,6 @@ struct SubsetAsk {
     std::vector<std::uint32_t> outside_rings;  // sorted
     std::vector<std::uint32_t> runs;           // sorted
     unsigned from_level = 0;
-    bool empty() const { return ids.empty() && rings.empty() && boxes.empty() && outside_rings.empty(); }
 };
 
 // The tiles' answers to a SubsetAsk.
@@ -543,7 +543,6 @@ public:
                                                        std::uint32_t bound_id);
     // Tile `number`'s input for the round, with its control points.
     TileInput input(std::uint32_t number, bool marks, double bound_key, std::uint32_t bound_id, std::vector<Point> points) const;
-    bool holds(std::uint32_t number) const { return tiles_.count(number) != 0; }
     std::size_t tiles() const { return tiles_.size(); }
     const std::map<std::uint32_t, FirstTile>& all() const { return tiles_; }
     KeptBatch clone() const { return KeptBatch(tiles_); }
@@ -588,13 +587,11 @@ public:
 //
 //     FirstRound first(...);  ...  first.split();
 //     KeptTiles kept = first.keep();
-//     // the first round's groups run (outcomes)
-//     kept.finish_tiles(outcomes);  // (the first round's levels from T up always run)
-//     kept.finish_top(top, top_outcome);
-//     while (kept.next_round()) {
-//         // kept.group(k) for k < kept.groups() run (outcomes)
-//         if (kept.finish_tiles(outcomes)) kept.finish_top(top, top_outcome);
-//     }
+//     do {
+//         // the round's groups run: kept.run_groups(), or kept.group(k) for k < kept.groups() (outcomes)
+//         if (kept.finish_tiles(outcomes)) run_kept_top(kept, plan, options, runs);  // (top_subset, finish_top_subset)
+//     } while (kept.next_round());
+//     SimplifyResult result = kept.result();
 class KeptTiles {
 public:
     // The tiles here (marked for the first round's budget).
