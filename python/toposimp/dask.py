@@ -552,9 +552,36 @@ def _first_run(queued, groups, points, marks, bound, plan, options, live=True):
 # The rounds after the first from the first round's tiles kept on the workers (--kept-tiles;
 # src/python/parts.cpp: kept_batch and the rest; map::KeptTiles here). Every task is pure: one
 # that changes a batch makes a new one, so that Dask's lineage can build a lost one again.
-def _kept_batch(queued, marks, bound):
+KEPT_PER_WORKER = 4  # kept batches per worker (_kept_chunks)
+
+
+def _kept_batch(marks, bound, *queued):
     from toposimp import _toposimp as engine
-    return engine.kept_batch(queued[0], marks, bound)
+    return engine.kept_batch([tile for q in queued for tile in q[0]], marks, bound)
+
+
+def _kept_chunks(who_has, keys, sizes):
+    """The first round's batches (`keys`, their `sizes` in vertices) kept together by the worker
+    that holds them (`who_has`: key → addresses), in up to KEPT_PER_WORKER chunks a worker, each of
+    about a share of its vertices: [(address or None, [batch indices])], in a fixed order. Not one
+    chunk a worker: a task that changes a kept batch makes a new one beside the old (_kept_advance),
+    so a worker holds its largest chunk twice for a moment."""
+    by_worker = {}
+    for b, key in enumerate(keys):
+        held = sorted(who_has.get(key, ()))
+        by_worker.setdefault(held[0] if held else None, []).append(b)
+    chunks = []
+    for where, batches in sorted(by_worker.items(), key=lambda item: (item[0] is None, item[0] or "")):
+        share = -(-sum(sizes[b] for b in batches) // KEPT_PER_WORKER)
+        current, size = [], 0
+        for b in batches:
+            if current and size + sizes[b] > share:
+                chunks.append((where, current))
+                current, size = [], 0
+            current.append(b)
+            size += sizes[b]
+        chunks.append((where, current))
+    return chunks
 
 
 def _kept_advance(batch, news, ran, plan, marks, options, *own):
@@ -576,6 +603,15 @@ def _kept_call(batch, name, *arguments):
     return getattr(engine, name)(batch, *arguments)
 
 
+def _items(k, *values):
+    return [value[k] for value in values]
+
+
+def _kept_each(name, arguments, *batches):
+    from toposimp import _toposimp as engine
+    return [getattr(engine, name)(batch, *arguments) for batch in batches]
+
+
 def _kept_run(batch, groups, points, marks, bound, plan, options):
     """A batch's groups (tile numbers) run, each with its tiles' control points → the outcomes,
     group after group."""
@@ -593,11 +629,13 @@ def _kept_run_gathered(inputs, plan, options):
 
 
 class _KeptStore:
-    """map::KeptTiles's questions to the first round's tiles, kept on the workers in batches (one
-    per first-round batch): each a task per batch (src/python/parts.cpp: PythonStore)."""
+    """map::KeptTiles's questions to the first round's tiles, kept on the workers in batches (a few
+    per worker: _kept_chunks): a question that changes nothing a task per worker, one that makes new
+    batches a task per batch (src/python/parts.cpp: PythonStore)."""
 
-    def __init__(self, tasks, client, batches, numbers, plan, options, marks, own):
+    def __init__(self, tasks, client, batches, homes, numbers, plan, options, marks, own):
         self.tasks, self.client, self.batches = tasks, client, batches
+        self.homes = homes  # per batch: the worker it was made on (None: any), where its tasks go
         self.own = own  # per batch: the futures of the outcome lists of the groups run where its tiles are
         self.where = {int(number): b for b, held in enumerate(numbers) for number in held}
         self.plan, self.options, self.marks = plan, options, marks
@@ -614,16 +652,36 @@ class _KeptStore:
             # (A task cancelled: its data lost with a worker. distributed's own kind of it, where
             # it has one, derives from concurrent.futures'.)
             if isinstance(result, (concurrent.futures.CancelledError, asyncio.CancelledError)):
-                # (Dask forgets a task once what it made is made: a batch lost with its worker
-                # cannot always be built again from the rounds before. docs/distributed.md, item 4.)
-                raise UsageError("a Dask worker holding kept tiles was lost; --kept-tiles cannot build them again yet "
+                # (Dask keeps how every kept batch was made while the batch made from it is wanted,
+                # and builds a lost one again from the input up, round by round: a cancelled task
+                # means that Dask itself gave up, e.g. a scheduler restarted under the run.)
+                raise UsageError("a Dask worker holding kept tiles was lost and Dask cancelled the tasks that would build them again "
                                  "(run again, or without --kept-tiles)")
             if isinstance(result, BaseException):
                 raise result
         return results
 
+    def _at(self, b):
+        """Where batch b's tasks go: its worker, or any other when that one is gone."""
+        return {"workers": [self.homes[b]], "allow_other_workers": True} if self.homes[b] else {}
+
     def _each(self, name, *arguments, what="the kept tiles"):
-        return self._gather([_submit(self.client, _kept_call, b, name, *arguments) for b in self.batches], what)
+        """engine.name(batch, *arguments) for every batch, in order: a task per worker, over the
+        batches made there (Dask's cost is per task, and these come in waves, one after another)."""
+        return self._by_home(lambda *batches, **at: _submit(self.client, _kept_each, name, arguments, *batches, **at), self.batches, what)
+
+    def _by_home(self, task, futures, what):
+        """task(*futures of one worker's batches) → its list of results, one per batch; all the
+        results in the batches' order."""
+        by_home = {}
+        for b, home in enumerate(self.homes):
+            by_home.setdefault(home, []).append(b)
+        order = list(by_home.values())
+        results = [None] * len(futures)
+        for held, answers in zip(order, self._gather([task(*[futures[b] for b in held], **self._at(held[0])) for held in order], what)):
+            for b, answer in zip(held, answers):
+                results[b] = answer
+        return results
 
     def advance(self, news, ran):
         import warnings
@@ -637,12 +695,13 @@ class _KeptStore:
             warnings.filterwarnings("ignore", message="Large object of size", category=UserWarning)
             news = _submit(self.client, _given, news)
         own = self.own if news_after_tiles else [[] for _ in self.batches]
-        done = [_submit(self.client, _kept_advance, b, news, ran, self.plan, self.marks, self.options, *mine)
-                for b, mine in zip(self.batches, own)]
+        done = [_submit(self.client, _kept_advance, b, news, ran, self.plan, self.marks, self.options, *mine, **self._at(k))
+                for k, (b, mine) in enumerate(zip(self.batches, own))]
         if news_after_tiles:
             self.own = [[] for _ in self.batches]
-        self.batches = [_submit(self.client, _item, d, 0) for d in done]
-        answers = self._gather([_submit(self.client, _item, d, 1) for d in done], "telling the kept tiles what the round changed")
+        self.batches = [_submit(self.client, _item, d, 0, **self._at(k)) for k, d in enumerate(done)]
+        answers = self._by_home(lambda *made, **at: _submit(self.client, _items, 1, *made, **at), done,
+                                "telling the kept tiles what the round changed")
         across = [a["across"] for a in answers if len(a["across"])]
         return {"across": numpy.concatenate(across) if across else numpy.zeros((0, 2), dtype=numpy.uint32),
                 "moved": sum(a["moved"] for a in answers), "joined": sum(a["joined"] for a in answers)}
@@ -676,9 +735,10 @@ class _KeptStore:
 
     def begin_round(self, settled, marks, bound):
         self.round += 1
-        begun = [_submit(self.client, _kept_begin, b, settled, marks, bound) for b in self.batches]
-        self.batches = [_submit(self.client, _item, d, 0) for d in begun]
-        return [fact for facts in self._gather([_submit(self.client, _item, d, 1) for d in begun], "starting the round") for fact in facts]
+        begun = [_submit(self.client, _kept_begin, b, settled, marks, bound, **self._at(k)) for k, b in enumerate(self.batches)]
+        self.batches = [_submit(self.client, _item, d, 0, **self._at(k)) for k, d in enumerate(begun)]
+        return [fact for facts in self._by_home(lambda *made, **at: _submit(self.client, _items, 1, *made, **at), begun, "starting the round")
+                for fact in facts]
 
     def run(self, groups, points, marks, bound):
         # A group whose tiles are all in one batch runs where that batch is, with the batch's other
@@ -698,7 +758,7 @@ class _KeptStore:
         for b, runs in enumerate(mine):
             if runs:
                 tasks.append(_submit(self.client, _kept_run, self.batches[b], [g for _, g, _ in runs], [p for _, _, p in runs], marks, bound,
-                                     self.plan, self.options))
+                                     self.plan, self.options, **self._at(b)))
                 order.append([k for k, _, _ in runs])
                 self.own[b].append(tasks[-1])
         for k, group, inside in spread:
@@ -829,8 +889,8 @@ class _Tasks:
         workers = max(1, len(client.scheduler_info()["workers"]))
         check_first_round_fits(client, sum(steps.part_vertices(k) for k in range(len(steps))))
 
-        def submit(*arguments):
-            return _submit(client, *arguments)
+        def submit(*arguments, **keywords):
+            return _submit(client, *arguments, **keywords)
 
         # Cut: each part's facts here, its tiles' pieces stay on the workers (a part of an input
         # read by parts is read there too).
@@ -925,14 +985,19 @@ class _Tasks:
                        [[steps.points(number) for number in group] for group in mine], marks, bound, plan, options, not self.kept)
                 for q, mine in zip(queued, busy)]
         if self.kept:
-            # The tiles stay on the workers, batch by batch, for the rounds after (_KeptStore).
-            batches = [submit(_kept_batch, q, marks, bound) for q in queued]
-            del queued
-            own = [[run] for run in runs]  # (each batch's groups' outcomes stay there for its first news)
             self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
                          each=lambda result: steps.add([], result[0]), release=False)
+            # The tiles stay on the workers for the rounds after (_KeptStore), the batches on each
+            # worker together in a few (_kept_chunks): every question of the rounds after is a
+            # task per kept batch, and Dask's cost per task (about a millisecond) is paid per wave.
+            chunks = _kept_chunks(client.who_has(queued), [q.key for q in queued], [sum(sizes[n] for n in batch) for batch in batches])
+            batches = [submit(_kept_batch, marks, bound, *[queued[b] for b in chunk], **({"workers": [where_], "allow_other_workers": True}
+                                                                                          if where_ else {}))
+                       for where_, chunk in chunks]
+            del queued
+            own = [[runs[b] for b in chunk] for _, chunk in chunks]  # (the groups' outcomes stay there for the first news)
             numbers = self._gather(client, [submit(_kept_numbers, b) for b in batches], "keeping the tiles")
-            steps.keep(_KeptStore(self, client, batches, numbers, plan, options, marks, own))
+            steps.keep(_KeptStore(self, client, batches, [where_ for where_, _ in chunks], numbers, plan, options, marks, own))
             return
         del queued
         self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
