@@ -2931,16 +2931,50 @@ TileInput FirstTile::run_input(bool marks, double bound_key, std::uint32_t bound
     return in;
 }
 
+namespace {
+
+// Searches of a list sorted by id for ids that mostly come in ascending order (a piece's vertex
+// ids are its chain's, ascending but at a ring's start): each search gallops on from where the
+// last one ended, so a tile reads the round's news, millions of states early on, near where it
+// read last instead of a binary search's cache misses (most of an advance's time on GSHHG).
+class SortedWalk {
+public:
+    explicit SortedWalk(std::span<const std::pair<std::uint32_t, std::uint8_t>> list) : list_(list) {}
+    // The entry for `id`, or none.
+    const std::pair<std::uint32_t, std::uint8_t>* find(std::uint32_t id) {
+        const auto below = [](const std::pair<std::uint32_t, std::uint8_t>& e, std::uint32_t i) { return e.first < i; };
+        const std::size_t n = list_.size();
+        std::size_t lo = 0, hi = n;  // the first entry ≥ id is in [lo, hi]
+        if (at_ > 0 && list_[at_ - 1].first >= id) {
+            hi = at_ - 1;
+        } else {
+            lo = at_;
+            hi = std::min(n, lo + 1);
+            for (std::size_t step = 1; lo + step <= n && list_[lo + step - 1].first < id; step *= 2) {
+                lo += step;  // (all before it are below id; the next look is at lo + 2 step − 1)
+                hi = std::min(n, lo + 2 * step);
+            }
+        }
+        at_ = static_cast<std::size_t>(std::lower_bound(list_.begin() + static_cast<std::ptrdiff_t>(lo), list_.begin() + static_cast<std::ptrdiff_t>(hi), id, below) - list_.begin());
+        return at_ < n && list_[at_].first == id ? &list_[at_] : nullptr;
+    }
+
+private:
+    std::span<const std::pair<std::uint32_t, std::uint8_t>> list_;
+    std::size_t at_ = 0;
+};
+
+}  // namespace
+
 FirstTile::Advanced FirstTile::advance(const TileNews& news, bool ran, const GridPlan& plan, bool marks, const Ranking& ranking) {
     constexpr auto removed = static_cast<std::uint8_t>(VertexState::removed);
     constexpr auto fixed = static_cast<std::uint8_t>(VertexState::fixed);
     const TileInput& in = input;
+    SortedWalk states(news.states), outcome_states(news.outcome_states);
     const auto state_of = [&](std::uint32_t v) {
         const std::uint32_t id = in.vertex_id[v];
-        for (const auto* states : {&news.states, &news.outcome_states}) {
-            const auto at = std::lower_bound(states->begin(), states->end(), std::pair{id, std::uint8_t{0}});
-            if (at != states->end() && at->first == id) return at->second;
-        }
+        if (const auto* at = states.find(id)) return at->second;
+        if (const auto* at = outcome_states.find(id)) return at->second;
         return in.state[v];
     };
     const auto unlinked = [&](std::uint32_t id) -> const Unlinked* {
