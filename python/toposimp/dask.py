@@ -607,6 +607,12 @@ def _items(k, *values):
     return [value[k] for value in values]
 
 
+def _kept_many(calls, *batches):
+    """Per batch, engine.name(batch, *arguments) for each (name, arguments) of `calls`."""
+    from toposimp import _toposimp as engine
+    return [[getattr(engine, name)(batch, *arguments) for name, arguments in calls] for batch in batches]
+
+
 def _kept_each(name, arguments, *batches):
     from toposimp import _toposimp as engine
     return [getattr(engine, name)(batch, *arguments) for batch in batches]
@@ -640,6 +646,7 @@ class _KeptStore:
         self.where = {int(number): b for b, held in enumerate(numbers) for number in held}
         self.plan, self.options, self.marks = plan, options, marks
         self.round = 1
+        self._ahead = {}  # answers asked for ahead (queued)
 
     def _gather(self, futures, what, release=True):
         import asyncio
@@ -689,6 +696,7 @@ class _KeptStore:
         import numpy
 
         news_after_tiles = bool(news["after_tiles"])
+        self._ahead = {}
         # (Sent once, as a task's result rather than scattered, so that Dask can build a lost batch
         # again from its lineage: scattered data has none.)
         with warnings.catch_warnings():
@@ -707,7 +715,13 @@ class _KeptStore:
                 "moved": sum(a["moved"] for a in answers), "joined": sum(a["joined"] for a in answers)}
 
     def queued(self):
-        return sum(self._each("kept_queued"))
+        # (With the count come the budget's first histogram, whose counts add up to it, and the
+        # rings' locations at the tiles' borders: KeptTiles::next_round asks for the three in a
+        # row, with no change to the tiles between. One wave instead of three.)
+        calls = [("kept_histogram", (48, 0)), ("kept_crossings", ())]
+        answers = self._by_home(lambda *batches, **at: _submit(self.client, _kept_many, calls, *batches, **at), self.batches, "the kept tiles")
+        self._ahead = {"histogram": [a[0] for a in answers], "crossings": [a[1] for a in answers]}
+        return sum(int(a[0]["counts"].sum()) for a in answers)
 
     def select(self, wanted):
         import numpy
@@ -720,7 +734,8 @@ class _KeptStore:
 
         what = "selecting the round's budget"
         selector = _toposimp.DigitSelector(wanted)
-        total = dense(self._each("kept_histogram", 48, 0, what=what))
+        ahead = self._ahead.pop("histogram", None)
+        total = dense(ahead if ahead is not None else self._each("kept_histogram", 48, 0, what=what))
         selector.counted(total)
         while selector.counting and int(total[selector.high & 0xffff]) > PAIRS_GATHERED:
             total = dense(self._each("kept_histogram", selector.shift, selector.high, what=what))
@@ -731,10 +746,12 @@ class _KeptStore:
         return selector.choose(numpy.concatenate(self._each("kept_ids_at", selector.key, what=what)))
 
     def crossings(self):
-        return [ring for rings in self._each("kept_crossings") for ring in rings]
+        ahead = self._ahead.pop("crossings", None)
+        return [ring for rings in (ahead if ahead is not None else self._each("kept_crossings")) for ring in rings]
 
     def begin_round(self, settled, marks, bound):
         self.round += 1
+        self._ahead = {}
         begun = [_submit(self.client, _kept_begin, b, settled, marks, bound, **self._at(k)) for k, b in enumerate(self.batches)]
         self.batches = [_submit(self.client, _item, d, 0, **self._at(k)) for k, d in enumerate(begun)]
         return [fact for facts in self._by_home(lambda *made, **at: _submit(self.client, _items, 1, *made, **at), begun, "starting the round")

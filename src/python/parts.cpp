@@ -1523,7 +1523,6 @@ void bind_parts(py::module_& module) {
     module.def("kept_batch", &kept_batch, py::arg("tiles"), py::arg("marks"), py::arg("bound"));
     module.def("kept_advance", &kept_advance, py::arg("batch"), py::arg("news"), py::arg("ran"), py::arg("plan"), py::arg("marks"),
                py::arg("options"), py::arg("own"));
-    module.def("kept_queued", [](const map::KeptBatch& batch) { return batch.queued(); }, py::arg("batch"));
     module.def("kept_histogram", [](const map::KeptBatch& batch, int shift, std::uint64_t high) {
         if (shift < 0 || shift > 48 || shift % 16 != 0) malformed("a histogram's digit is not one");
         std::vector<std::uint64_t> counts(std::size_t{1} << 16, 0);
