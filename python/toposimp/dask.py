@@ -22,9 +22,9 @@ A worker that dies has its tasks rerun elsewhere; the result is the same.
 
 --levels runs each level in parts. With --first-round workers --kept-tiles, the live map stays on
 the workers after the first round (each round's budget is selected there, and the levels above the
-tiles run here over small subsets of it). Not yet: a map bigger than this process's memory in
-every case (the writing runs here), and a worker lost after the first round of a --kept-tiles run
-may stop it.
+tiles run here over small subsets of it); a worker lost then has its tiles built again by Dask
+from the input and the rounds' news. Not yet: a map bigger than this process's memory in every case
+(the writing runs here); --kept-tiles by default (it is slower: 4.3x the single process on GSHHG).
 """
 import argparse
 import contextlib
@@ -83,8 +83,9 @@ Dask options:
   --kept-tiles         with --first-round workers: the first round's tiles stay on the workers
                        for the rounds after, told what each round changed, and the levels above
                        the tiles run over subsets gathered from them: this process never holds
-                       the live map (a byte a vertex for the result). The same output. Not yet:
-                       a worker lost in a later round may stop the run (no output written)
+                       the live map (a byte a vertex for the result). The same output, also
+                       when a worker is lost (Dask builds its tiles again); slower (GSHHG at
+                       10 % on 2 workers: 12.8 s against 5.3 s without it)
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
