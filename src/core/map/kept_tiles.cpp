@@ -1,5 +1,6 @@
 // The rounds after the first from the first round's tiles kept (KeptTiles: core/map/tiles.hpp).
 #include "core/map/tiles.hpp"
+#include "core/map/top_subset.hpp"
 
 #include <omp.h>
 
@@ -545,328 +546,142 @@ struct Learnt {
 }  // namespace
 
 TileInput KeptTiles::top_subset(std::uint32_t runs) const {
-    constexpr auto fixed = static_cast<std::uint8_t>(VertexState::fixed);
-    constexpr auto queued = static_cast<std::uint8_t>(VertexState::queued);
-    const GridPlan& plan = lead_.plan();
-    const unsigned t = lead_.tile_level(), levels = plan.levels;
-    const std::vector<std::uint8_t>& whole_level = lead_.whole_level();
-    const std::vector<std::uint32_t>& distinct = lead_.distinct();
-    // The waits: the tiles' own and the lead's across tiles.
-    std::unordered_map<std::uint32_t, std::uint32_t> blocker_of;
-    std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> waiters_of;
-    const auto wait = [&](std::uint32_t waiter, std::uint32_t blocker) {
-        blocker_of[waiter] = blocker;
-        waiters_of[blocker].push_back(waiter);
-    };
-    for (const auto& [waiter, blocker] : tiles_->waits()) wait(waiter, blocker);
-    for (const auto& [waiter, blocker] : cross_waits_) wait(waiter, blocker);
-    const auto blocker = [&](std::uint32_t u) {
-        const auto at = blocker_of.find(u);
-        return at == blocker_of.end() ? kNoVertex : at->second;
-    };
-    // What the tiles told, asked in waves.
-    std::unordered_map<std::uint32_t, Learnt> learnt;
-    const auto learn = [&](SubsetAnswer&& answer) {
-        for (std::size_t k = 0; k < answer.ids.size(); ++k) {
-            Learnt& at = learnt[answer.ids[k]];
-            if (at.whole) continue;
-            at.point = answer.points[k];
-            at.chain = answer.chain[k];
-            if (answer.flags[k] & SubsetAnswer::own) {
-                at.own = true;
-                at.state = answer.state[k];
-                at.marked = answer.marked[k];
-                at.shared = (answer.flags[k] & SubsetAnswer::shared) != 0;
-            }
-            if (answer.flags[k] & SubsetAnswer::whole) {
-                at.prev = answer.prev[k];
-                at.next = answer.next[k];
-                at.whole = true;
-            }
+    // The subset (top_subset.hpp) over what the tiles tell, asked in waves: windows of `reach`
+    // live vertices around the vertices asked for, whole rings, the live vertices in boxes, the
+    // rings' fixed locations outside the runs.
+    class Told {
+    public:
+        Told(const KeptTiles& kept, std::uint32_t runs) : kept_(kept), runs_(runs) {
+            for (const auto& [waiter, blocker] : kept.tiles_->waits()) wait(waiter, blocker);
+            for (const auto& [waiter, blocker] : kept.cross_waits_) wait(waiter, blocker);
         }
-        return std::move(answer);
-    };
-    const auto whole = [&](std::uint32_t id) {
-        const auto at = learnt.find(id);
-        return at != learnt.end() && at->second.whole;
-    };
-    std::vector<std::uint32_t> gone;  // asked for and held by no tile: removed
-    const auto ask_ids = [&](std::vector<std::uint32_t> ids) {
-        std::erase_if(ids, [&](std::uint32_t id) { return whole(id); });
-        if (ids.empty()) return;
-        std::sort(ids.begin(), ids.end());
-        ids.erase(std::unique(ids.begin(), ids.end()), ids.end());
-        SubsetAsk question;
-        question.ids = ids;
-        question.reach = runs >= (1u << 30) ? runs : std::max(runs, 2u) + 1;  // (a run, its cut end and the vertex beyond)
-        learn(ask(question));
-        for (const std::uint32_t id : ids) {
-            if (!whole(id)) gone.push_back(id);
+        bool known(std::uint32_t id) const {
+            const auto at = learnt_.find(id);
+            return at != learnt_.end() && at->second.whole;
         }
-        std::sort(gone.begin(), gone.end());
-    };
-    const auto is_gone = [&](std::uint32_t id) { return std::binary_search(gone.begin(), gone.end(), id); };
-    const auto prev = [&](std::uint32_t u) { return learnt.at(u).prev; };
-    const auto next = [&](std::uint32_t u) { return learnt.at(u).next; };
-
-    std::unordered_set<std::uint32_t> in_run, whole_rings;
-    std::unordered_map<std::uint32_t, std::uint32_t> run_vertices_of;
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> seeds, deferred;
-    const std::uint32_t waiter_runs = runs >= (1u << 30) ? runs : runs / 8;
-    {
-        std::vector<std::uint32_t> later;
-        for (const std::vector<std::uint32_t>& list : later_) later.insert(later.end(), list.begin(), list.end());
-        ask_ids(later);
-        for (const std::vector<std::uint32_t>& list : later_) {
-            for (const std::uint32_t v : list) {
-                if (whole(v) && learnt.at(v).state == queued) seeds.emplace_back(v, runs);
+        void learn(std::vector<std::uint32_t> ids) {
+            SubsetAsk question;
+            question.ids = std::move(ids);
+            question.reach = runs_ >= (1u << 30) ? runs_ : std::max(runs_, 2u) + 1;  // (a run, its cut end and the vertex beyond)
+            take(kept_.ask(question));
+            for (const std::uint32_t id : question.ids) {
+                if (!known(id)) gone_.push_back(id);
             }
+            std::sort(gone_.begin(), gone_.end());
         }
-    }
-    const auto into_run = [&](std::uint32_t u) {
-        if (!in_run.insert(u).second) return;
-        if (const auto at = waiters_of.find(u); at != waiters_of.end()) {
-            for (const std::uint32_t w : at->second) seeds.emplace_back(w, waiter_runs);
+        bool gone(std::uint32_t id) const { return std::binary_search(gone_.begin(), gone_.end(), id); }
+        std::uint32_t prev(std::uint32_t u) const { return learnt_.at(u).prev; }
+        std::uint32_t next(std::uint32_t u) const { return learnt_.at(u).next; }
+        std::uint32_t chain(std::uint32_t u) const { return learnt_.at(u).chain; }
+        Point point(std::uint32_t u) const { return learnt_.at(u).point; }
+        std::uint8_t state(std::uint32_t u) const { return learnt_.at(u).state; }
+        std::uint8_t marked(std::uint32_t u) const { return learnt_.at(u).marked; }
+        bool shared(std::uint32_t u) const { return learnt_.at(u).shared; }
+        std::uint32_t blocker(std::uint32_t u) const {
+            const auto at = blocker_of_.find(u);
+            return at == blocker_of_.end() ? kNoVertex : at->second;
         }
-        const std::uint32_t c = learnt.at(u).chain;
-        if (whole_level[c] != kOpenChain) ++run_vertices_of[c];
-    };
-    std::unordered_set<std::uint32_t> cut, lone;
-    std::vector<std::uint32_t> control;
-    std::vector<std::uint32_t> sorted;
-    std::vector<std::uint32_t> needed;
-    for (;;) {
-        while (!seeds.empty() || !deferred.empty()) {
-            if (seeds.empty()) {
-                ask_ids(std::move(needed));
-                needed.clear();
-                seeds.swap(deferred);
+        std::vector<std::uint32_t> waiters(std::uint32_t u) const {
+            const auto at = waiters_of_.find(u);
+            return at == waiters_of_.end() ? std::vector<std::uint32_t>{} : at->second;
+        }
+        std::uint8_t whole_level(std::uint32_t c) const { return kept_.lead_.whole_level()[c]; }
+        std::uint32_t distinct(std::uint32_t c) const { return kept_.lead_.distinct()[c]; }
+        std::int8_t orientation(std::uint32_t c) const { return kept_.lead_.orientation()[c]; }
+        void learn_rings(const std::vector<std::uint32_t>& rings) {
+            SubsetAsk question;
+            question.rings = rings;
+            take(kept_.ask(question));
+        }
+        std::uint32_t ring_first(std::uint32_t c) const { return kept_.lead_.chains_by_id()[c].first; }
+        const std::vector<std::uint32_t>& later(unsigned k) const { return kept_.later_[k]; }
+        void in_boxes(const std::vector<Box>& boxes, const std::vector<std::uint32_t>& skip, std::unordered_set<std::uint32_t>& lone,
+                      std::vector<std::uint32_t>& control) {
+            SubsetAsk question;
+            question.boxes = boxes;
+            question.skip = skip;
+            const SubsetAnswer found = take(kept_.ask(question));
+            lone.insert(found.in_boxes.begin(), found.in_boxes.end());
+            const std::vector<Point>& points = kept_.lead_.control_points();
+            std::vector<std::uint32_t>& by_x = kept_.points_by_x_;
+            if (by_x.size() != points.size()) {
+                by_x.resize(points.size());
+                for (std::uint32_t k = 0; k < points.size(); ++k) by_x[k] = k;
+                std::sort(by_x.begin(), by_x.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].x < points[b].x; });
             }
-            while (!seeds.empty()) {
-                const auto [v, k] = seeds.back();
-                seeds.pop_back();
-                if (is_gone(v)) continue;
-                if (!whole(v)) {
-                    needed.push_back(v);
-                    deferred.emplace_back(v, k);
-                    continue;
+            for (const Box& box : boxes) {
+                auto at = std::lower_bound(by_x.begin(), by_x.end(), box.min_x, [&](std::uint32_t k, double x) { return points[k].x < x; });
+                for (; at != by_x.end() && points[*at].x <= box.max_x; ++at) {
+                    if (box_contains(box, points[*at])) control.push_back(*at);
                 }
-                // (A walk that reaches a vertex not learnt whole waits for it: walked again.)
-                bool stopped = false;
-                into_run(v);
-                std::uint32_t u = v;
-                for (std::uint32_t i = 0; i < k && prev(u) != kNoVertex; ++i) {
-                    into_run(u = prev(u));
-                    if (i + 1 < k && !whole(u)) {
-                        stopped = true;
-                        break;
-                    }
-                }
-                if (!stopped) {
-                    u = v;
-                    for (std::uint32_t i = 0; i < k && next(u) != kNoVertex; ++i) {
-                        into_run(u = next(u));
-                        if (i + 1 < k && !whole(u)) {
-                            stopped = true;
-                            break;
+            }
+        }
+        Point control_point(std::uint32_t k) const { return kept_.lead_.control_points()[k]; }
+        std::uint32_t id(std::uint32_t u) const { return u; }
+        void ring_piece(std::uint32_t) const {}
+        // The rings' fixed locations outside the runs, level by level, over their pieces in
+        // every tile, in chain order.
+        void outside(const std::vector<std::uint32_t>& rings, const std::vector<std::uint32_t>& runs, unsigned t, TileInput& input) const {
+            SubsetAsk question;
+            question.outside_rings = rings;
+            question.runs = runs;
+            question.from_level = t;
+            SubsetAnswer answer = kept_.ask(question);
+            std::sort(answer.outside.begin(), answer.outside.end(), [](const auto& a, const auto& b) { return std::pair{a.chain, a.first} < std::pair{b.chain, b.first}; });
+            std::size_t k = 0;
+            for (const std::uint32_t c : rings) {
+                const std::size_t from = k;
+                while (k < answer.outside.size() && answer.outside[k].chain == c) ++k;
+                for (unsigned level = t; level < whole_level(c); ++level) {
+                    std::vector<Point> found;
+                    for (std::size_t i = from; i < k; ++i) {
+                        for (const Point q : answer.outside[i].levels[level - t]) {
+                            if (found.size() < 4 && std::none_of(found.begin(), found.end(), [&](Point e) { return same_location(e, q); })) found.push_back(q);
                         }
                     }
-                }
-                if (stopped) {
-                    needed.push_back(u);
-                    deferred.emplace_back(v, k);
+                    input.outside.push_back({c, level, std::move(found)});
                 }
             }
-            if (!deferred.empty()) continue;
-            // The rings that may come down to their last 4 locations, whole.
-            SubsetAsk rings;
-            for (const auto& [c, count] : run_vertices_of) {
-                if (distinct[c] <= 4 + count && whole_rings.insert(c).second) rings.rings.push_back(c);
-            }
-            if (rings.rings.empty()) continue;
-            std::sort(rings.rings.begin(), rings.rings.end());
-            learn(ask(rings));
-            for (const std::uint32_t c : rings.rings) {
-                for (std::uint32_t w = lead_.chains_by_id()[c].first; w != kNoVertex; w = next(w)) seeds.emplace_back(w, 0);
-            }
         }
-        // Every vertex of the runs, and those beyond them, learnt whole.
-        needed.clear();
-        for (const std::uint32_t u : in_run) needed.push_back(u);
-        ask_ids(std::move(needed));
-        needed.clear();
-        for (const std::uint32_t u : in_run) {
-            for (const std::uint32_t w : {prev(u), next(u)}) {
-                if (w != kNoVertex) needed.push_back(w);
-            }
+        bool marks() const { return kept_.lead_.marks(); }
+        double bound_key() const { return kept_.lead_.bound_key(); }
+        std::uint32_t bound_id() const { return kept_.lead_.bound_id(); }
+
+    private:
+        void wait(std::uint32_t waiter, std::uint32_t blocker) {
+            blocker_of_[waiter] = blocker;
+            waiters_of_[blocker].push_back(waiter);
         }
-        ask_ids(std::move(needed));
-        needed.clear();
-        sorted.assign(in_run.begin(), in_run.end());
-        std::sort(sorted.begin(), sorted.end());
-        for (const std::uint32_t u : sorted) {  // (a lone vertex between two runs)
-            const std::uint32_t n = next(u);
-            if (n != kNoVertex && !in_run.count(n) && next(n) != kNoVertex && in_run.count(next(n))) seeds.emplace_back(n, 0);
-        }
-        if (!seeds.empty()) continue;
-        cut.clear();
-        lone.clear();
-        control.clear();
-        for (const std::uint32_t u : sorted) {
-            for (const std::uint32_t w : {prev(u), next(u)}) {
-                if (w != kNoVertex && !in_run.count(w)) cut.insert(w);
-            }
-        }
-        // Each run's box (with its cut ends): the live vertices and control points in it.
-        SubsetAsk boxes;
-        for (std::size_t i = 0; i < sorted.size();) {
-            std::size_t j = i + 1;
-            while (j < sorted.size() && next(sorted[j - 1]) == sorted[j]) ++j;
-            const Point p0 = learnt.at(sorted[i]).point;
-            Box box{p0.x, p0.y, p0.x, p0.y};
-            const auto widen = [&](std::uint32_t u) {
-                if (u == kNoVertex) return;
-                const Point q = learnt.at(u).point;
-                box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
-            };
-            for (std::size_t k = i; k < j; ++k) widen(sorted[k]);
-            widen(prev(sorted[i]));
-            widen(next(sorted[j - 1]));
-            boxes.boxes.push_back(box);
-            i = j;
-        }
-        boxes.skip.assign(sorted.begin(), sorted.end());
-        boxes.skip.insert(boxes.skip.end(), cut.begin(), cut.end());
-        std::sort(boxes.skip.begin(), boxes.skip.end());
-        {
-            const SubsetAnswer found = learn(ask(boxes));
-            lone.insert(found.in_boxes.begin(), found.in_boxes.end());
-        }
-        const std::vector<Point>& points = lead_.control_points();
-        if (points_by_x_.size() != points.size()) {
-            points_by_x_.resize(points.size());
-            for (std::uint32_t k = 0; k < points.size(); ++k) points_by_x_[k] = k;
-            std::sort(points_by_x_.begin(), points_by_x_.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].x < points[b].x; });
-        }
-        for (const Box& box : boxes.boxes) {
-            auto at = std::lower_bound(points_by_x_.begin(), points_by_x_.end(), box.min_x, [&](std::uint32_t k, double x) { return points[k].x < x; });
-            for (; at != points_by_x_.end() && points[*at].x <= box.max_x; ++at) {
-                if (box_contains(box, points[*at])) control.push_back(*at);
-            }
-        }
-        // (The coincidence rule reads the neighbours of the vertices at the location of a run's
-        // vertex or cut end, where such a location is shared.)
-        const auto before = [](Point a, Point b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
-        std::vector<Point> shared_here;
-        for (const std::uint32_t u : sorted) {
-            if (learnt.at(u).shared) shared_here.push_back(learnt.at(u).point);
-        }
-        for (const std::uint32_t u : cut) {
-            if (learnt.at(u).shared) shared_here.push_back(learnt.at(u).point);
-        }
-        std::sort(shared_here.begin(), shared_here.end(), before);
-        for (const std::uint32_t u : lone) {
-            const Learnt& at = learnt.at(u);
-            if (at.shared && std::binary_search(shared_here.begin(), shared_here.end(), at.point, before)) seeds.emplace_back(u, 1);
-        }
-        if (!seeds.empty()) continue;
-        // The vertices the subset's vertices wait on (lone, unless there), and so on.
-        std::vector<std::uint32_t> waiting(sorted);
-        waiting.insert(waiting.end(), lone.begin(), lone.end());
-        while (!waiting.empty()) {
-            std::vector<std::uint32_t> fresh;
-            for (const std::uint32_t u : waiting) {
-                const std::uint32_t b = blocker(u);
-                if (b != kNoVertex && !in_run.count(b) && !cut.count(b) && lone.insert(b).second) fresh.push_back(b);
-            }
-            ask_ids(fresh);
-            waiting = std::move(fresh);
-        }
-        break;
-    }
-    // The subset in the whole map's order: each run with its cut ends a chain, each lone vertex one.
-    std::vector<std::uint32_t> all(sorted);
-    all.insert(all.end(), cut.begin(), cut.end());
-    all.insert(all.end(), lone.begin(), lone.end());
-    std::sort(all.begin(), all.end());
-    TileInput input;
-    input.level = levels;
-    input.first_level = t;
-    const bool marks = lead_.marks();
-    const auto role = [&](std::uint32_t u) { return in_run.count(u) ? 2 : cut.count(u) ? 1 : 0; };
-    for (std::size_t i = 0; i < all.size(); ++i) {
-        const std::uint32_t u = all[i];
-        const Learnt& at = learnt.at(u);
-        const int here = role(u);
-        bool goes_on = false;
-        if (i > 0 && role(all[i - 1]) != 0 && next(all[i - 1]) == u) {
-            const int before = role(all[i - 1]);
-            goes_on = (before == 2 && here >= 1) || (before == 1 && here == 2);
-        }
-        if (!goes_on) {
-            if (i > 0) input.map.chains.back().last = static_cast<std::uint32_t>(i - 1);
-            const std::uint32_t c = at.chain;
-            input.map.chains.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
-            input.chain_id.push_back(c);
-            const bool piece = here != 0 && whole_level[c] != kOpenChain;
-            input.whole_level.push_back(piece ? whole_level[c] : kOpenChain);
-            input.settled.push_back(0);
-            input.distinct.push_back(piece ? distinct[c] : 0);
-            input.orientation.push_back(piece ? lead_.orientation()[c] : std::int8_t{2});
-        }
-        input.map.vertices.push_back(at.point);
-        input.vertex_id.push_back(u);
-        input.state.push_back(here == 1 ? fixed : at.state);
-        if (marks) input.marked.push_back(here == 1 ? std::uint8_t{0} : at.marked);
-        input.cut_end.push_back(here == 1 ? 1 : 0);
-    }
-    if (!all.empty()) input.map.chains.back().last = static_cast<std::uint32_t>(all.size() - 1);
-    std::sort(control.begin(), control.end());
-    control.erase(std::unique(control.begin(), control.end()), control.end());
-    for (const std::uint32_t k : control) input.map.control_points.push_back(lead_.control_points()[k]);
-    const auto local = [&](std::uint32_t v) { return static_cast<std::uint32_t>(std::lower_bound(all.begin(), all.end(), v) - all.begin()); };
-    for (const std::uint32_t u : all) {
-        if (role(u) == 1) continue;
-        if (const std::uint32_t b = blocker(u); b != kNoVertex) input.waits.emplace_back(local(u), local(b));
-    }
-    std::sort(input.waits.begin(), input.waits.end());
-    for (unsigned level = t; level < levels; ++level) {
-        std::vector<std::uint32_t>& list = input.later.emplace_back();
-        for (const std::uint32_t v : later_[level - t]) {
-            if (!is_gone(v) && whole(v) && learnt.at(v).state == queued) list.push_back(local(v));
-        }
-    }
-    input.marks = marks;
-    input.bound_key = lead_.bound_key();
-    input.bound_id = lead_.bound_id();
-    // The rings cut into runs: their fixed locations outside the runs, level by level, over
-    // their pieces in every tile, in chain order.
-    SubsetAsk rings;
-    for (const auto& [c, count] : run_vertices_of) {
-        if (!whole_rings.count(c) && whole_level[c] > t) rings.outside_rings.push_back(c);
-    }
-    if (!rings.outside_rings.empty()) {
-        std::sort(rings.outside_rings.begin(), rings.outside_rings.end());
-        rings.runs = sorted;
-        rings.from_level = t;
-        SubsetAnswer answer = ask(rings);
-        std::sort(answer.outside.begin(), answer.outside.end(), [](const auto& a, const auto& b) { return std::pair{a.chain, a.first} < std::pair{b.chain, b.first}; });
-        std::size_t k = 0;
-        for (const std::uint32_t c : rings.outside_rings) {
-            const std::size_t from = k;
-            while (k < answer.outside.size() && answer.outside[k].chain == c) ++k;
-            for (unsigned level = t; level < whole_level[c]; ++level) {
-                std::vector<Point> found;
-                for (std::size_t i = from; i < k; ++i) {
-                    for (const Point q : answer.outside[i].levels[level - t]) {
-                        if (found.size() < 4 && std::none_of(found.begin(), found.end(), [&](Point e) { return same_location(e, q); })) found.push_back(q);
-                    }
+        SubsetAnswer take(SubsetAnswer&& answer) {
+            for (std::size_t k = 0; k < answer.ids.size(); ++k) {
+                Learnt& at = learnt_[answer.ids[k]];
+                if (at.whole) continue;
+                at.point = answer.points[k];
+                at.chain = answer.chain[k];
+                if (answer.flags[k] & SubsetAnswer::own) {
+                    at.own = true;
+                    at.state = answer.state[k];
+                    at.marked = answer.marked[k];
+                    at.shared = (answer.flags[k] & SubsetAnswer::shared) != 0;
                 }
-                input.outside.push_back({c, level, std::move(found)});
+                if (answer.flags[k] & SubsetAnswer::whole) {
+                    at.prev = answer.prev[k];
+                    at.next = answer.next[k];
+                    at.whole = true;
+                }
             }
+            return std::move(answer);
         }
-    }
-    return input;
+
+        const KeptTiles& kept_;
+        std::uint32_t runs_;
+        std::unordered_map<std::uint32_t, Learnt> learnt_;
+        std::vector<std::uint32_t> gone_;  // asked for and held by no tile: removed
+        std::unordered_map<std::uint32_t, std::uint32_t> blocker_of_;  // the tiles' own waits and the lead's across tiles
+        std::unordered_map<std::uint32_t, std::vector<std::uint32_t>> waiters_of_;
+    };
+    Told told(*this, runs);
+    return subset::build(told, runs, lead_.tile_level(), lead_.plan().levels);
 }
 
 bool KeptTiles::finish_top_subset(const TileInput& top, const TileOutcome& outcome) {

@@ -1,5 +1,6 @@
 #include "core/map/simplify.hpp"
 #include "core/map/tiles.hpp"
+#include "core/map/top_subset.hpp"
 
 #include "core/cancel.hpp"
 #include "core/fill_later.hpp"
@@ -1047,209 +1048,74 @@ public:
     }
 
     // The levels from the tile level up as one more tile over a subset of the live vertices
-    // (docs/distributed.md, "What is left", item 4), instead of all of them (top_input):
-    // - runs of `runs` live vertices on either side of each candidate of those levels, and of
-    //   runs / 8 around each vertex waiting on a vertex of a run (a waiter let go there is judged
-    //   there); two runs one vertex apart join; a ring that may come down to its last 4
-    //   locations comes whole;
-    // - each run ends with a cut end, the live vertex beyond (fixed here: a removal next to one
-    //   exhausts the subset, finish_part_top_subset refuses it, and longer runs are the answer);
-    // - lone: the live vertices and control points in the runs' boxes, where every triangle the
-    //   top judges lies (its three corners are of one run), and the vertices the subset's
-    //   vertices wait on; a lone vertex at the location of a run's vertex or cut end comes with
-    //   its neighbours (as a run of one: the coincidence rule reads them);
-    // - per ring cut into runs, its fixed locations outside the runs at each level it is split at
-    //   (they do not change while the subset runs, or it is exhausted).
-    // The subset's vertices keep the whole map's order, so every tie breaks as before.
+    // (top_subset.hpp), instead of all of them (top_input).
     TileInput top_subset_input(std::uint32_t runs) {
         ensure_grid();
-        const unsigned t = tile_level_;
-        std::unordered_set<std::uint32_t> in_run, whole_rings;
-        std::unordered_map<std::uint32_t, std::uint32_t> run_vertices_of;  // ring → its vertices in runs
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> seeds;  // (vertex, run length either side)
-        // A waiter's run: shorter (a waiter is judged here only if its blocker goes, and the runs
-        // around waiters of waiters would spread over the map), as long once runs hold any chain.
-        const std::uint32_t waiter_runs = runs >= (1u << 30) ? runs : runs / 8;
-        for (unsigned level = t; level < levels_; ++level) {
-            for (const std::uint32_t v : later_[level]) {
-                if (state_[v] == State::queued) seeds.emplace_back(v, runs);
-            }
-        }
-        const auto into_run = [&](std::uint32_t u) {
-            if (!in_run.insert(u).second) return;
-            for (const std::uint32_t w : waits_.waiting_on(u)) seeds.emplace_back(w, waiter_runs);
-            if (whole_level_[chain_of_[u]] != kOpen) ++run_vertices_of[chain_of_[u]];
-        };
-        std::unordered_set<std::uint32_t> cut, lone;
-        std::vector<std::uint32_t> control;  // indexes into indexed_points_
-        std::vector<std::uint32_t> sorted;
-        for (;;) {
-            while (!seeds.empty()) {
-                while (!seeds.empty()) {
-                    const auto [v, k] = seeds.back();
-                    seeds.pop_back();
-                    if (state_[v] == State::removed) continue;
-                    into_run(v);
-                    std::uint32_t u = v;
-                    for (std::uint32_t i = 0; i < k && prev_[u] != kNone; ++i) into_run(u = prev_[u]);
-                    u = v;
-                    for (std::uint32_t i = 0; i < k && next_[u] != kNone; ++i) into_run(u = next_[u]);
-                }
-                for (const auto& [c, count] : run_vertices_of) {
-                    if (distinct_[c] > 4 + count || !whole_rings.insert(c).second) continue;
-                    for (std::uint32_t w = map_.chains[c].first; w != kNone; w = next_[w]) seeds.emplace_back(w, 0);
-                }
-            }
-            sorted.assign(in_run.begin(), in_run.end());
-            std::sort(sorted.begin(), sorted.end());
-            for (const std::uint32_t u : sorted) {  // (a lone vertex between two runs)
-                const std::uint32_t n = next_[u];
-                if (n != kNone && !in_run.count(n) && next_[n] != kNone && in_run.count(next_[n])) seeds.emplace_back(n, 0);
-            }
-            if (!seeds.empty()) continue;
-            cut.clear();
-            lone.clear();
-            control.clear();
-            for (const std::uint32_t u : sorted) {
-                for (const std::uint32_t w : {prev_[u], next_[u]}) {
-                    if (w != kNone && !in_run.count(w)) cut.insert(w);
+        // The live map as the subset's source: every live vertex known.
+        class Live {
+        public:
+            explicit Live(Simplifier& s) : s_(s) {}
+            bool known(std::uint32_t) const { return true; }
+            void learn(std::vector<std::uint32_t>) const {}
+            bool gone(std::uint32_t u) const { return s_.state_[u] == State::removed; }
+            std::uint32_t prev(std::uint32_t u) const { return s_.prev_[u]; }
+            std::uint32_t next(std::uint32_t u) const { return s_.next_[u]; }
+            std::uint32_t chain(std::uint32_t u) const { return s_.chain_of_[u]; }
+            Point point(std::uint32_t u) const { return s_.map_.vertices[u]; }
+            std::uint8_t state(std::uint32_t u) const { return static_cast<std::uint8_t>(s_.state_[u]); }
+            std::uint8_t marked(std::uint32_t u) const { return s_.marked_[u]; }
+            bool shared(std::uint32_t u) const { return s_.shared_[u] != 0; }
+            std::uint32_t blocker(std::uint32_t u) const { return s_.waits_.blocker_of(u); }
+            std::vector<std::uint32_t> waiters(std::uint32_t u) const { return s_.waits_.waiting_on(u); }
+            std::uint8_t whole_level(std::uint32_t c) const { return s_.whole_level_[c]; }
+            std::uint32_t distinct(std::uint32_t c) const { return s_.distinct_[c]; }
+            std::int8_t orientation(std::uint32_t c) const { return s_.orientation_[c]; }
+            void learn_rings(const std::vector<std::uint32_t>&) const {}
+            std::uint32_t ring_first(std::uint32_t c) const { return s_.map_.chains[c].first; }
+            const std::vector<std::uint32_t>& later(unsigned k) const { return s_.later_[s_.tile_level_ + k]; }
+            void in_boxes(const std::vector<Box>& boxes, const std::vector<std::uint32_t>& skip, std::unordered_set<std::uint32_t>& lone,
+                          std::vector<std::uint32_t>& control) const {
+                for (const Box& box : boxes) {
+                    s_.grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
+                        if (q.y < box.min_y || q.y > box.max_y) return false;
+                        if (id >= s_.vertex_count_) {
+                            control.push_back(id - s_.vertex_count_);
+                        } else if (!std::binary_search(skip.begin(), skip.end(), id)) {
+                            lone.insert(id);
+                        }
+                        return false;
+                    });
                 }
             }
-            // Each run's box (with its cut ends): the live vertices and control points in it.
-            for (std::size_t i = 0; i < sorted.size();) {
-                std::size_t j = i + 1;
-                while (j < sorted.size() && next_[sorted[j - 1]] == sorted[j]) ++j;
-                Box box{map_.vertices[sorted[i]].x, map_.vertices[sorted[i]].y, map_.vertices[sorted[i]].x, map_.vertices[sorted[i]].y};
-                const auto widen = [&](std::uint32_t u) {
-                    if (u == kNone) return;
-                    const Point q = map_.vertices[u];
-                    box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
-                };
-                for (std::size_t k = i; k < j; ++k) widen(sorted[k]);
-                widen(prev_[sorted[i]]);
-                widen(next_[sorted[j - 1]]);
-                grid_->any_in_cells(box, [&](std::uint32_t id, Point q) {
-                    if (q.y < box.min_y || q.y > box.max_y) return false;
-                    if (id >= vertex_count_) {
-                        control.push_back(id - vertex_count_);
-                    } else if (!in_run.count(id) && !cut.count(id)) {
-                        lone.insert(id);
+            Point control_point(std::uint32_t k) const { return s_.indexed_points_[k]; }
+            std::uint32_t id(std::uint32_t u) const { return s_.global(u); }
+            void ring_piece(std::uint32_t c) const {
+                if (!s_.resumed_) s_.know_orientation_if_asked(c);
+            }
+            // A cut ring's fixed locations outside the runs, walked.
+            void outside(const std::vector<std::uint32_t>& rings, const std::vector<std::uint32_t>& runs, unsigned t, TileInput& input) const {
+                for (const std::uint32_t c : rings) {
+                    for (unsigned level = t; level < s_.whole_level_[c]; ++level) {
+                        FirstLocations<4> found;
+                        for (std::uint32_t u = s_.map_.chains[c].first; u != kNone && found.count < 4; u = s_.next_[u]) {
+                            if (!std::binary_search(runs.begin(), runs.end(), u) && (s_.state_[u] == State::fixed || s_.level_of(u) > level)) {
+                                found.add(s_.map_.vertices[u]);
+                            }
+                        }
+                        input.outside.push_back({c, level, std::vector<Point>(found.at, found.at + found.count)});
                     }
-                    return false;
-                });
-                i = j;
-            }
-            // (The coincidence rule reads the neighbours of the vertices at the location of a
-            // run's vertex or cut end, where such a location is shared.)
-            std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> shared_here;  // by a hash of the location
-            const auto location_hash = [&](std::uint32_t u) {
-                const LocationKey key(map_.vertices[u]);
-                return key.x * 0x9e3779b97f4a7c15ull ^ key.y;
-            };
-            for (const std::uint32_t u : sorted) {
-                if (shared_[u]) shared_here[location_hash(u)].push_back(u);
-            }
-            for (const std::uint32_t u : cut) {
-                if (shared_[u]) shared_here[location_hash(u)].push_back(u);
-            }
-            for (const std::uint32_t u : lone) {
-                if (!shared_[u]) continue;
-                const auto there = shared_here.find(location_hash(u));
-                if (there == shared_here.end()) continue;
-                const Point q = map_.vertices[u];
-                if (std::any_of(there->second.begin(), there->second.end(), [&](std::uint32_t w) { return same_location(map_.vertices[w], q); })) {
-                    seeds.emplace_back(u, 1);
                 }
             }
-            if (!seeds.empty()) continue;
-            // The vertices the subset's vertices wait on (lone, unless there), and so on.
-            std::vector<std::uint32_t> waiting(sorted);
-            waiting.insert(waiting.end(), lone.begin(), lone.end());
-            while (!waiting.empty()) {
-                const std::uint32_t b = waits_.blocker_of(waiting.back());
-                waiting.pop_back();
-                if (b != kNone && !in_run.count(b) && !cut.count(b) && lone.insert(b).second) waiting.push_back(b);
-            }
-            break;
-        }
-        // The subset in the whole map's order: each run with its cut ends a chain, each lone
-        // vertex one.
-        std::vector<std::uint32_t> all(sorted);
-        all.insert(all.end(), cut.begin(), cut.end());
-        all.insert(all.end(), lone.begin(), lone.end());
-        std::sort(all.begin(), all.end());
-        TileInput input;
-        input.level = levels_;
-        input.first_level = t;
-        const std::size_t n = all.size();
-        input.map.vertices.reserve(n);
-        input.vertex_id.reserve(n);
-        input.state.reserve(n);
-        input.cut_end.reserve(n);
-        const auto role = [&](std::uint32_t u) { return in_run.count(u) ? 2 : cut.count(u) ? 1 : 0; };  // run, cut end, lone
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::uint32_t u = all[i];
-            const int here = role(u);
-            bool goes_on = false;  // u continues the chain of all[i − 1]
-            if (i > 0 && next_[all[i - 1]] == u) {
-                const int before = role(all[i - 1]);
-                goes_on = (before == 2 && here >= 1) || (before == 1 && here == 2);
-            }
-            if (!goes_on) {
-                if (i > 0) input.map.chains.back().last = static_cast<std::uint32_t>(i - 1);
-                const std::uint32_t c = chain_of_[u];
-                input.map.chains.push_back({static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(i)});
-                input.chain_id.push_back(c);
-                const bool piece = here != 0 && whole_level_[c] != kOpen;
-                if (piece && whole_rings.count(c) && !resumed_) know_orientation_if_asked(c);
-                input.whole_level.push_back(piece ? whole_level_[c] : kOpenChain);
-                input.settled.push_back(0);
-                input.distinct.push_back(piece ? distinct_[c] : 0);
-                input.orientation.push_back(piece ? orientation_[c] : std::int8_t{2});
-            }
-            input.map.vertices.push_back(map_.vertices[u]);
-            input.vertex_id.push_back(global(u));
-            input.state.push_back(static_cast<std::uint8_t>(here == 1 ? State::fixed : state_[u]));
-            if (use_marks_) input.marked.push_back(here == 1 ? std::uint8_t{0} : marked_[u]);
-            input.cut_end.push_back(here == 1 ? 1 : 0);
-        }
-        if (n > 0) input.map.chains.back().last = static_cast<std::uint32_t>(n - 1);
-        std::sort(control.begin(), control.end());
-        control.erase(std::unique(control.begin(), control.end()), control.end());
-        for (const std::uint32_t k : control) input.map.control_points.push_back(indexed_points_[k]);
-        const auto local = [&](std::uint32_t v) { return static_cast<std::uint32_t>(std::lower_bound(all.begin(), all.end(), v) - all.begin()); };
+            bool marks() const { return s_.use_marks_; }
+            double bound_key() const { return s_.bound_.key; }
+            std::uint32_t bound_id() const { return s_.bound_.id; }
+
+        private:
+            Simplifier& s_;
+        };
+        Live live(*this);
         subset_waiters_.clear();
-        for (const std::uint32_t u : all) {
-            if (role(u) == 1) continue;
-            subset_waiters_.push_back(u);
-            if (const std::uint32_t b = waits_.blocker_of(u); b != kNone) input.waits.emplace_back(local(u), local(b));
-        }
-        std::sort(input.waits.begin(), input.waits.end());
-        for (unsigned level = t; level < levels_; ++level) {
-            std::vector<std::uint32_t>& list = input.later.emplace_back();
-            for (const std::uint32_t v : later_[level]) {
-                if (state_[v] == State::queued) list.push_back(local(v));
-            }
-        }
-        input.marks = use_marks_;
-        input.bound_key = bound_.key;
-        input.bound_id = bound_.id;
-        // The rings cut into runs: their fixed locations outside the runs, level by level.
-        std::vector<std::uint32_t> cut_rings;
-        for (const auto& [c, count] : run_vertices_of) {
-            if (!whole_rings.count(c) && whole_level_[c] > t) cut_rings.push_back(c);
-        }
-        std::sort(cut_rings.begin(), cut_rings.end());
-        for (const std::uint32_t c : cut_rings) {
-            for (unsigned level = t; level < whole_level_[c]; ++level) {
-                FirstLocations<4> found;
-                for (std::uint32_t u = map_.chains[c].first; u != kNone && found.count < 4; u = next_[u]) {
-                    if (!in_run.count(u) && (state_[u] == State::fixed || level_of(u) > level)) found.add(map_.vertices[u]);
-                }
-                input.outside.push_back({c, level, std::vector<Point>(found.at, found.at + found.count)});
-            }
-        }
-        return input;
+        return subset::build(live, runs, tile_level_, levels_, &subset_waiters_);
     }
 
     // The outcome of top_subset_input's tile into the whole map, the round then over; false
