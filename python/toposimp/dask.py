@@ -551,7 +551,7 @@ def _first_run(queued, groups, points, marks, bound, plan, options, live=True):
 
 
 # The rounds after the first from the first round's tiles kept on the workers (--kept-tiles;
-# src/python/parts.cpp: kept_batch and the rest; map::KeptTiles here). Every task is pure: one
+# src/python/kept.cpp: kept_batch and the rest; map::KeptTiles here). Every task is pure: one
 # that changes a batch makes a new one, so that Dask's lineage can build a lost one again.
 KEPT_PER_WORKER = 4  # kept batches per worker (_kept_chunks)
 
@@ -638,7 +638,7 @@ def _kept_run_gathered(inputs, plan, options):
 class _KeptStore:
     """map::KeptTiles's questions to the first round's tiles, kept on the workers in batches (a few
     per worker: _kept_chunks): a question that changes nothing a task per worker, one that makes new
-    batches a task per batch (src/python/parts.cpp: PythonStore)."""
+    batches a task per batch (src/python/kept.cpp: PythonStore)."""
 
     def __init__(self, tasks, client, batches, homes, numbers, plan, options, marks, own):
         self.tasks, self.client, self.batches = tasks, client, batches

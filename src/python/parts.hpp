@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 
 #include <cstdint>
+#include <memory>
 
 namespace toposimp::python {
 
@@ -95,8 +96,15 @@ private:
                                             std::uint64_t, const io::VerticesInFile*);
 };
 
-// RoundGroups, FirstSteps, map::FirstTile and the first round's tasks for Python.
+// RoundGroups, FirstSteps, map::FirstTile and the first round's tasks for Python (and
+// bind_kept's).
 void bind_parts(py::module_& module);
+
+// The rounds after the first from kept tiles (kept.cpp): map::KeptBatch and its tasks for Python;
+// the lead's store over `store`, a Python object whose methods ask the batches (dask.py,
+// _KeptStore), for a map of `vertices` vertices and `chains` chains.
+void bind_kept(py::module_& module);
+std::unique_ptr<map::KeptStore> python_store(py::object store, std::uint32_t vertices, std::uint32_t chains);
 
 // Runs the map in parts (map::MapInParts): each round's tile groups go to
 // `run_groups(groups, plan, options, round) -> outcomes` (RoundGroups in, a list per group of
