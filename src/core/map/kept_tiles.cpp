@@ -5,6 +5,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cmath>
 #include <bit>
 #include <limits>
 #include <map>
@@ -545,6 +546,46 @@ struct Learnt {
 
 }  // namespace
 
+std::uint32_t KeptTiles::PointCells::column(double x) const {
+    const double at = (x - min_x) * scale_x;  // (monotone in x: a point in a box is in its cells)
+    return at <= 0 ? 0 : at >= columns - 1 ? columns - 1 : static_cast<std::uint32_t>(at);
+}
+
+std::uint32_t KeptTiles::PointCells::row(double y) const {
+    const double at = (y - min_y) * scale_y;
+    return at <= 0 ? 0 : at >= rows - 1 ? rows - 1 : static_cast<std::uint32_t>(at);
+}
+
+KeptTiles::PointCells KeptTiles::PointCells::of(const std::vector<Point>& points) {
+    PointCells cells;
+    cells.columns = cells.rows = 1;
+    if (!points.empty()) {
+        double max_x = points[0].x, max_y = points[0].y;
+        cells.min_x = points[0].x;
+        cells.min_y = points[0].y;
+        for (const Point p : points) {
+            cells.min_x = std::min(cells.min_x, p.x);
+            cells.min_y = std::min(cells.min_y, p.y);
+            max_x = std::max(max_x, p.x);
+            max_y = std::max(max_y, p.y);
+        }
+        const auto side = static_cast<std::uint32_t>(std::clamp(std::sqrt(static_cast<double>(points.size()) / 4), 1.0, 4096.0));
+        cells.columns = max_x > cells.min_x ? side : 1;
+        cells.rows = max_y > cells.min_y ? side : 1;
+        cells.scale_x = max_x > cells.min_x ? cells.columns / (max_x - cells.min_x) : 0;
+        cells.scale_y = max_y > cells.min_y ? cells.rows / (max_y - cells.min_y) : 0;
+    }
+    const std::size_t count = std::size_t{cells.columns} * cells.rows;
+    cells.start.assign(count + 1, 0);
+    const auto cell = [&](Point p) { return std::size_t{cells.row(p.y)} * cells.columns + cells.column(p.x); };
+    for (const Point p : points) ++cells.start[cell(p) + 1];
+    for (std::size_t c = 0; c < count; ++c) cells.start[c + 1] += cells.start[c];
+    cells.order.resize(points.size());
+    std::vector<std::uint32_t> next(cells.start.begin(), cells.start.end() - 1);
+    for (std::uint32_t k = 0; k < points.size(); ++k) cells.order[next[cell(points[k])]++] = k;
+    return cells;
+}
+
 TileInput KeptTiles::top_subset(std::uint32_t runs) const {
     // The subset (top_subset.hpp) over what the tiles tell, asked in waves: windows of `reach`
     // live vertices around the vertices asked for, whole rings, the live vertices in boxes, the
@@ -603,16 +644,17 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             const SubsetAnswer found = take(kept_.ask(question));
             lone.insert(found.in_boxes.begin(), found.in_boxes.end());
             const std::vector<Point>& points = kept_.lead_.control_points();
-            std::vector<std::uint32_t>& by_x = kept_.points_by_x_;
-            if (by_x.size() != points.size()) {
-                by_x.resize(points.size());
-                for (std::uint32_t k = 0; k < points.size(); ++k) by_x[k] = k;
-                std::sort(by_x.begin(), by_x.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].x < points[b].x; });
-            }
+            PointCells& cells = kept_.point_cells_;
+            if (cells.start.empty()) cells = PointCells::of(points);
             for (const Box& box : boxes) {
-                auto at = std::lower_bound(by_x.begin(), by_x.end(), box.min_x, [&](std::uint32_t k, double x) { return points[k].x < x; });
-                for (; at != by_x.end() && points[*at].x <= box.max_x; ++at) {
-                    if (box_contains(box, points[*at])) control.push_back(*at);
+                if (points.empty()) break;
+                const std::uint32_t c0 = cells.column(box.min_x), c1 = cells.column(box.max_x);
+                for (std::uint32_t r = cells.row(box.min_y), r1 = cells.row(box.max_y);; ++r) {
+                    const std::size_t from = std::size_t{r} * cells.columns;
+                    for (std::uint32_t k = cells.start[from + c0]; k < cells.start[from + c1 + 1]; ++k) {
+                        if (box_contains(box, points[cells.order[k]])) control.push_back(cells.order[k]);
+                    }
+                    if (r == r1) break;
                 }
             }
         }
