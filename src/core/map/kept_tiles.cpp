@@ -548,12 +548,12 @@ struct Learnt {
 
 std::uint32_t KeptTiles::PointCells::column(double x) const {
     const double at = (x - min_x) * scale_x;  // (monotone in x: a point in a box is in its cells)
-    return at <= 0 ? 0 : at >= columns - 1 ? columns - 1 : static_cast<std::uint32_t>(at);
+    return !(at > 0) ? 0 : at >= columns - 1 ? columns - 1 : static_cast<std::uint32_t>(at);  // (not a number: 0)
 }
 
 std::uint32_t KeptTiles::PointCells::row(double y) const {
     const double at = (y - min_y) * scale_y;
-    return at <= 0 ? 0 : at >= rows - 1 ? rows - 1 : static_cast<std::uint32_t>(at);
+    return !(at > 0) ? 0 : at >= rows - 1 ? rows - 1 : static_cast<std::uint32_t>(at);
 }
 
 KeptTiles::PointCells KeptTiles::PointCells::of(const std::vector<Point>& points) {
