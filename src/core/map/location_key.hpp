@@ -34,4 +34,8 @@ inline std::size_t hash_words(std::initializer_list<std::uint64_t> words) {
     return static_cast<std::size_t>(h);
 }
 
+struct LocationKeyHash {
+    std::size_t operator()(const LocationKey& k) const { return hash_words({k.x, k.y}); }
+};
+
 }  // namespace toposimp::map

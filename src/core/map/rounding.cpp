@@ -202,7 +202,7 @@ private:
     // Kept vertices by location, locations numbered in input order.
     void group_locations() {
         location_.assign(map_.vertices.size(), kNone);
-        std::unordered_map<LocationKey, std::uint32_t, LocationHash> ids;
+        std::unordered_map<LocationKey, std::uint32_t, LocationKeyHash> ids;
         std::vector<std::uint32_t> count;
         for (std::uint32_t v = 0; v < kept_.size(); ++v) {
             if (!kept_[v]) continue;
@@ -443,10 +443,6 @@ private:
         }
         return exact::ring_area_sign(ring, predicates_) == ring_sign_[chain];
     }
-
-    struct LocationHash {
-        std::size_t operator()(const LocationKey& k) const { return hash_words({k.x, k.y}); }
-    };
 
     const MapData& map_;
     RoundingOptions options_;

@@ -21,6 +21,7 @@
 // it holds is a closure (every seed's run, every run vertex's waiters, ...): the order in which a
 // source answers does not change it.
 #include "core/geometry.hpp"
+#include "core/map/location_key.hpp"
 #include "core/map/tiles.hpp"
 
 #include <algorithm>
@@ -88,8 +89,10 @@ TileInput build(Source& source, std::uint32_t runs, unsigned t, unsigned levels,
             }
         }
     }
+    std::vector<std::uint32_t> fresh;  // the run vertices added since the last pass over the runs' boxes
     const auto into_run = [&](std::uint32_t u) {
         if (!in_run.insert(u).second) return;
+        fresh.push_back(u);
         for (const std::uint32_t w : source.waiters(u)) seeds.emplace_back(w, waiter_runs);
         const std::uint32_t c = source.chain(u);
         if (source.whole_level(c) != kOpenChain) ++run_vertices_of[c];
@@ -98,6 +101,8 @@ TileInput build(Source& source, std::uint32_t runs, unsigned t, unsigned levels,
     std::vector<std::uint32_t> control;  // the control points' numbers
     std::vector<std::uint32_t> sorted;   // the runs' vertices
     std::vector<std::uint32_t> needed;   // to learn before the deferred seeds walk again
+    std::unordered_set<LocationKey, LocationKeyHash> shared_here;  // of the runs' vertices and cut ends
+    std::unordered_map<LocationKey, std::vector<std::uint32_t>, LocationKeyHash> lone_at;  // the shared lone vertices
     for (;;) {
         while (!seeds.empty() || !deferred.empty()) {
             if (seeds.empty()) {
@@ -153,82 +158,96 @@ TileInput build(Source& source, std::uint32_t runs, unsigned t, unsigned levels,
                 for (std::uint32_t w = source.ring_first(c); w != kNoVertex; w = source.next(w)) seeds.emplace_back(w, 0);
             }
         }
-        // Every vertex of the runs, and those beyond them, known.
-        needed.assign(in_run.begin(), in_run.end());
-        learn(std::move(needed));
-        needed.clear();
-        for (const std::uint32_t u : in_run) {
+        // Every new run vertex, and those beyond it, known.
+        learn(fresh);
+        for (const std::uint32_t u : fresh) {
             for (const std::uint32_t w : {source.prev(u), source.next(u)}) {
                 if (w != kNoVertex) needed.push_back(w);
             }
         }
         learn(std::move(needed));
         needed.clear();
-        sorted.assign(in_run.begin(), in_run.end());
-        std::sort(sorted.begin(), sorted.end());
-        for (const std::uint32_t u : sorted) {  // (a lone vertex between two runs)
-            const std::uint32_t n = source.next(u);
+        for (const std::uint32_t u : fresh) {  // (a lone vertex between two runs)
+            const std::uint32_t p = source.prev(u), n = source.next(u);
             if (n != kNoVertex && !in_run.count(n) && source.next(n) != kNoVertex && in_run.count(source.next(n))) seeds.emplace_back(n, 0);
+            if (p != kNoVertex && !in_run.count(p) && source.prev(p) != kNoVertex && in_run.count(source.prev(p))) seeds.emplace_back(p, 0);
         }
         if (!seeds.empty()) continue;
-        cut.clear();
-        lone.clear();
-        control.clear();
-        for (const std::uint32_t u : sorted) {
+        // The cut ends, and the shared locations of the new run vertices and cut ends (the
+        // coincidence rule reads the neighbours of the lone vertices there).
+        std::vector<LocationKey> new_here;
+        const auto here = [&](std::uint32_t u) {
+            if (source.shared(u) && shared_here.emplace(source.point(u)).second) new_here.emplace_back(source.point(u));
+        };
+        for (const std::uint32_t u : fresh) {
+            cut.erase(u);
+            here(u);
+        }
+        for (const std::uint32_t u : fresh) {
             for (const std::uint32_t w : {source.prev(u), source.next(u)}) {
-                if (w != kNoVertex && !in_run.count(w)) cut.insert(w);
+                if (w != kNoVertex && !in_run.count(w) && cut.insert(w).second) here(w);
             }
         }
-        // Each run's box (with its cut ends): the live vertices and control points in it.
+        // The box of each run with a new vertex (with its cut ends): the live vertices and control
+        // points in it. (Its old box is in it: what was found there is kept.)
         std::vector<Box> boxes;
-        for (std::size_t i = 0; i < sorted.size();) {
-            std::size_t j = i + 1;
-            while (j < sorted.size() && source.next(sorted[j - 1]) == sorted[j]) ++j;
-            const Point p0 = source.point(sorted[i]);
-            Box box{p0.x, p0.y, p0.x, p0.y};
-            const auto widen = [&](std::uint32_t u) {
-                if (u == kNoVertex) return;
-                const Point q = source.point(u);
-                box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
-            };
-            for (std::size_t k = i; k < j; ++k) widen(sorted[k]);
-            widen(source.prev(sorted[i]));
-            widen(source.next(sorted[j - 1]));
-            boxes.push_back(box);
-            i = j;
-        }
+        std::vector<std::uint32_t> skip;
         {
-            std::vector<std::uint32_t> skip(sorted);
-            skip.insert(skip.end(), cut.begin(), cut.end());
-            std::sort(skip.begin(), skip.end());
-            source.in_boxes(boxes, skip, lone, control);
+            std::unordered_set<std::uint32_t> walked;
+            for (const std::uint32_t u : fresh) {
+                if (walked.count(u)) continue;
+                std::uint32_t first = u, last = u;
+                while (source.prev(first) != kNoVertex && in_run.count(source.prev(first))) first = source.prev(first);
+                while (source.next(last) != kNoVertex && in_run.count(source.next(last))) last = source.next(last);
+                const Point p0 = source.point(first);
+                Box box{p0.x, p0.y, p0.x, p0.y};
+                const auto widen = [&](std::uint32_t w) {
+                    if (w == kNoVertex) return;
+                    const Point q = source.point(w);
+                    box = {std::min(box.min_x, q.x), std::min(box.min_y, q.y), std::max(box.max_x, q.x), std::max(box.max_y, q.y)};
+                    skip.push_back(w);
+                };
+                for (std::uint32_t w = first;; w = source.next(w)) {
+                    walked.insert(w);
+                    widen(w);
+                    if (w == last) break;
+                }
+                widen(source.prev(first));
+                widen(source.next(last));
+                boxes.push_back(box);
+            }
         }
-        // (The coincidence rule reads the neighbours of the vertices at the location of a run's
-        // vertex or cut end, where such a location is shared.)
-        const auto before = [](Point a, Point b) { return a.x < b.x || (a.x == b.x && a.y < b.y); };
-        std::vector<Point> shared_here;
-        for (const std::uint32_t u : sorted) {
-            if (source.shared(u)) shared_here.push_back(source.point(u));
+        fresh.clear();
+        std::sort(skip.begin(), skip.end());
+        std::unordered_set<std::uint32_t> found;
+        source.in_boxes(boxes, skip, found, control);
+        // A lone vertex at a shared location of a run's vertex or cut end comes as a run of one.
+        // (A location comes in with a box that holds it: by then every vertex there was found.)
+        for (const std::uint32_t u : found) {
+            if (lone.insert(u).second && source.shared(u)) lone_at[LocationKey(source.point(u))].push_back(u);
         }
-        for (const std::uint32_t u : cut) {
-            if (source.shared(u)) shared_here.push_back(source.point(u));
-        }
-        std::sort(shared_here.begin(), shared_here.end(), before);
-        for (const std::uint32_t u : lone) {
-            if (source.shared(u) && std::binary_search(shared_here.begin(), shared_here.end(), source.point(u), before)) seeds.emplace_back(u, 1);
+        for (const LocationKey key : new_here) {
+            if (const auto at = lone_at.find(key); at != lone_at.end()) {
+                for (const std::uint32_t u : at->second) {
+                    if (!in_run.count(u) && !cut.count(u)) seeds.emplace_back(u, 1);
+                }
+            }
         }
         if (!seeds.empty()) continue;
+        std::erase_if(lone, [&](std::uint32_t u) { return in_run.count(u) || cut.count(u); });
+        sorted.assign(in_run.begin(), in_run.end());
+        std::sort(sorted.begin(), sorted.end());
         // The vertices the subset's vertices wait on (lone, unless there), and so on.
         std::vector<std::uint32_t> waiting(sorted);
         waiting.insert(waiting.end(), lone.begin(), lone.end());
         while (!waiting.empty()) {
-            std::vector<std::uint32_t> fresh;
+            std::vector<std::uint32_t> fresh_lone;
             for (const std::uint32_t u : waiting) {
                 const std::uint32_t b = source.blocker(u);
-                if (b != kNoVertex && !in_run.count(b) && !cut.count(b) && lone.insert(b).second) fresh.push_back(b);
+                if (b != kNoVertex && !in_run.count(b) && !cut.count(b) && lone.insert(b).second) fresh_lone.push_back(b);
             }
-            learn(fresh);
-            waiting = std::move(fresh);
+            learn(fresh_lone);
+            waiting = std::move(fresh_lone);
         }
         break;
     }

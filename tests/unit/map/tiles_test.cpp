@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <map>
 #include <random>
 #include <string>
 
@@ -692,6 +693,36 @@ MapData wavy_rings(std::uint64_t seed, int rings, int vertices, int points, int 
     return map;
 }
 
+std::size_t coincidences_checked = 0;  // run vertices and cut ends at a shared location, checked
+
+// The subset's coincidence rule is closed: every live vertex at the location of one of the
+// subset's run vertices or cut ends, where more than one live vertex is, is in the subset and in a
+// run or a cut end (the rule reads its neighbours), not lone. `live`: MapInParts::top, every live
+// vertex.
+void expect_coincidences_in_runs(const TileInput& live, const TileInput& subset, const std::string& what) {
+    std::map<std::pair<double, double>, std::vector<std::uint32_t>> at;  // location → live vertices' ids
+    for (std::size_t i = 0; i < live.vertex_id.size(); ++i) at[{live.map.vertices[i].x, live.map.vertices[i].y}].push_back(live.vertex_id[i]);
+    std::map<std::uint32_t, bool> in_run;  // the subset's vertices: in a run or a cut end
+    for (const Chain& chain : subset.map.chains) {
+        for (std::uint32_t i = chain.first; i <= chain.last; ++i) in_run[subset.vertex_id[i]] = chain.last > chain.first || subset.cut_end[i] != 0;
+    }
+    std::size_t checked = 0;
+    for (const Chain& chain : subset.map.chains) {
+        if (chain.last == chain.first && subset.cut_end[chain.first] == 0) continue;
+        for (std::uint32_t i = chain.first; i <= chain.last; ++i) {
+            const std::vector<std::uint32_t>& here = at[{subset.map.vertices[i].x, subset.map.vertices[i].y}];
+            if (here.size() < 2) continue;
+            ++checked;
+            for (const std::uint32_t id : here) {
+                const auto found = in_run.find(id);
+                EXPECT_TRUE(found != in_run.end() && found->second) << what << ": vertex " << id << " at the location of run vertex "
+                                                                    << subset.vertex_id[i] << (found == in_run.end() ? " is not in the subset" : " is lone");
+            }
+        }
+    }
+    coincidences_checked += checked;
+}
+
 // The levels from the tile level up over a subset of the live vertices (MapInParts::top_subset)
 // on rings the top levels cut into runs — whether such a ring keeps 4 locations at its fixed
 // vertices at a level is then decided with those outside the runs — and with runs so short
@@ -720,7 +751,9 @@ TEST(MapTiles, TheTopOverASubsetOfTheLiveVerticesGivesTheSingleProcessResult) {
                         if (!parts.finish_tiles(outcomes)) continue;
                         for (std::uint32_t runs = first_runs;; runs *= 2) {
                             std::vector<TileInput> top;
+                            const TileInput live = parts.top();
                             top.push_back(parts.top_subset(runs));
+                            expect_coincidences_in_runs(live, top.front(), "runs of " + std::to_string(runs));
                             outside += top.front().outside.size();
                             ++subsets;
                             small += top.front().map.vertices.size() * 4 < map.vertices.size();
@@ -736,6 +769,7 @@ TEST(MapTiles, TheTopOverASubsetOfTheLiveVerticesGivesTheSingleProcessResult) {
         }
     }
     EXPECT_GT(exhausted, 0u) << "runs of 1 fall short somewhere";
+    EXPECT_GT(coincidences_checked, 0u) << "runs at shared locations";
     EXPECT_GT(outside, 0u) << "rings cut into runs at the levels above the tiles";
     EXPECT_GT(small * 2, subsets) << "most subsets hold under a quarter of the map";
 }
@@ -846,6 +880,7 @@ void run_top(MapInParts& parts, KeptTiles& kept, const SimplifyOptions& options,
     for (;;) {
         TileInput top = runs == 0 ? parts.top() : parts.top_subset(runs);
         if (runs > 0) {
+            expect_coincidences_in_runs(parts.top(), top, what + ", runs of " + std::to_string(runs));
             TileInput given = kept.top_subset(runs);
             expect_same_input(given, top, what + ", the top over a subset of runs " + std::to_string(runs));
             if (::testing::Test::HasFailure()) return;
@@ -929,6 +964,7 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
     const double all = static_cast<double>(map.vertices.size());
     KeptTiles::Counts counts;
     std::size_t rounds = 0;
+    const std::size_t coincidences_before = coincidences_checked;
     for (const StopCriterion stop : {StopCriterion{Target::keep_fraction, 0.1}, StopCriterion{Target::keep_fraction, 0.3},
                                      StopCriterion{Target::keep_points, 0.75 * all}, StopCriterion{Target::remove_points, 0.2 * all},
                                      StopCriterion{Target::max, 0}}) {
@@ -956,6 +992,7 @@ TEST_P(MapTilesKept, GiveEachRoundTheTilesTheLiveMapGives) {
     EXPECT_GT(counts.cut_ends_moved, 0u);
     EXPECT_GT(counts.pieces_joined, 0u);
     EXPECT_GT(counts.waits_across, 0u);
+    EXPECT_GT(coincidences_checked, coincidences_before) << "runs at shared locations";
     if (seed == 35) {
         EXPECT_GT(counts.queued_again, 0u);
     }
