@@ -23,8 +23,9 @@ A worker that dies has its tasks rerun elsewhere; the result is the same.
 --levels runs each level in parts. With --first-round workers --kept-tiles, the live map stays on
 the workers after the first round (each round's budget is selected there, and the levels above the
 tiles run here over small subsets of it); a worker lost then has its tiles built again by Dask
-from the input and the rounds' news. Not yet: a map bigger than this process's memory in every case
-(the writing runs here); --kept-tiles by default (it is slower: 4.3x the single process on GSHHG).
+from the input and the rounds' news; with --first-round workers, that is chosen by itself when the
+live map would not fit here. Not yet: a map bigger than this process's memory in every case (the
+writing runs here).
 """
 import argparse
 import contextlib
@@ -37,7 +38,7 @@ from toposimp import _launch, _toposimp
 USAGE = """usage: python3 -m toposimp.dask map INPUT -o OUTPUT [toposimp map options]
                                    [--scheduler ADDRESS] [--workers N] [--tile-level T] [--tile-points N]
                                    [--task-threads N] [--local-budget N] [--first-round WHERE]
-                                   [--send-input] [--worker-malloc WHICH] [--top-runs N] [--kept-tiles]
+                                   [--send-input] [--worker-malloc WHICH] [--top-runs N] [--kept-tiles [WHEN]]
 
 toposimp map's simplification run as Dask tasks, the output identical to toposimp map's.
 
@@ -80,12 +81,17 @@ Dask options:
                        points near them (N twice as long while they fall short; 0, the default:
                        the whole live map). The same output; the step towards a live map that
                        stays on the workers (docs/distributed.md)
-  --kept-tiles         with --first-round workers: the first round's tiles stay on the workers
+  --kept-tiles [WHEN]  with --first-round workers: the first round's tiles stay on the workers
                        for the rounds after, told what each round changed, and the levels above
                        the tiles run over subsets gathered from them: this process never holds
                        the live map (a byte a vertex for the result). The same output, also
                        when a worker is lost (Dask builds its tiles again); slower (GSHHG at
-                       10 % on 2 workers: 12.8 s against 5.3 s without it)
+                       10 % on 2 workers: 12.8 s against 5.3 s without it). WHEN: 'yes' (the
+                       default of --kept-tiles alone), 'no', or 'auto' (the default without
+                       it): yes when the live map after the first round could take more than
+                       half the memory this process may still take (at most every vertex of the
+                       map, about 100 bytes each; the machine's available memory, or less under
+                       a cgroup limit; -v says what it found)
 
 Every other option is toposimp map's: run 'toposimp map --help' (or man toposimp).
 """
@@ -190,7 +196,7 @@ def _split_arguments(argv):
     parser.add_argument("--send-input", action="store_true")
     parser.add_argument("--worker-malloc", choices=("auto", "jemalloc", "glibc"), default="auto")
     parser.add_argument("--top-runs", type=int, default=0)
-    parser.add_argument("--kept-tiles", action="store_true")
+    parser.add_argument("--kept-tiles", nargs="?", choices=("yes", "no", "auto"), const="yes", default="auto")
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
@@ -202,14 +208,15 @@ def _split_arguments(argv):
         parser.error("--local-budget must be 0 or more")
     if not 0 <= options.top_runs < 2**31:
         parser.error("--top-runs must be 0 or more, under 2^31")
-    if options.kept_tiles and options.first_round != "workers":
+    if options.kept_tiles == "yes" and options.first_round != "workers":
         parser.error("--kept-tiles needs --first-round workers")
+    options.kept_tiles = {"yes": True, "no": False, "auto": "auto"}[options.kept_tiles]
     return options, rest
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
         local_budget=None, client=None, quiet=False, on_progress=None, first_round="here", send_input=False,
-        worker_malloc="auto", top_runs=0, kept_tiles=False):
+        worker_malloc="auto", top_runs=0, kept_tiles="auto"):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
     `client`: a distributed.Client to use (else one is made from `scheduler`, or a LocalCluster
@@ -225,12 +232,16 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     of the LocalCluster's workers, "auto" (jemalloc where installed), "jemalloc" or "glibc"
     (_worker_malloc). `top_runs` (> 0): the levels above the tiles run over a subset of the live
     map, runs of that many vertices around their candidates (MapInParts::top_subset): the same
-    output. `kept_tiles` (with first_round="workers"): the first round's tiles stay on the
+    output. `kept_tiles` (with first_round="workers"): True, the first round's tiles stay on the
     workers for the rounds after, and this process never holds the live map (map::KeptTiles): the
-    same output."""
+    same output; "auto" (default), so when the live map after the first round could take more
+    than half the memory this process may still take (_memory_here, _Tasks._keep_tiles); False,
+    never."""
     if first_round not in ("workers", "here"):
         raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
-    if kept_tiles and first_round != "workers":
+    if kept_tiles not in (True, False, "auto"):
+        raise ValueError(f"kept_tiles must be True, False or 'auto', not {kept_tiles!r}")
+    if kept_tiles is True and first_round != "workers":
         raise ValueError("kept_tiles needs first_round='workers'")
     if local_budget is None:
         local_budget = LOCAL_BUDGET
@@ -271,7 +282,7 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
         return own["client"]
 
     run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here", top_runs=top_runs,
-                        kept=kept_tiles)
+                        kept=kept_tiles, verbose=verbose)
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
                                                  lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
@@ -426,6 +437,50 @@ def fitting_tile_points(client, wanted, timeout=120):
 # its stages (every tile's pieces, states, keys and flags, and a stage's copy of a batch: 31 to 54
 # bytes measured on the 45 M-vertex map and on GSHHG; taken with room to spare).
 FIRST_ROUND_BYTES_PER_VERTEX = 64
+
+
+# What the command holds per live vertex once the first round's live map comes here (MapInParts):
+# 91 bytes measured on GSHHG at 90 % (session 50: the command's peak 1 066 MiB, against 309 with
+# the tiles kept on the workers, for 8.75 M live vertices), taken with a little room.
+LIVE_BYTES_PER_VERTEX = 100
+
+
+def _memory_here(root="/"):
+    """The bytes this process may still take: the machine's available memory (MemAvailable), or
+    less where a cgroup (v2, or v1's memory controller) limits this process; None where none of them
+    can be read. (`root`: where /proc and /sys are, for the tests.)"""
+    room = None
+    try:
+        with open(os.path.join(root, "proc/meminfo")) as meminfo:
+            for line in meminfo:
+                if line.startswith("MemAvailable:"):
+                    room = int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        with open(os.path.join(root, "proc/self/cgroup")) as cgroup:
+            lines = cgroup.read().splitlines()
+    except OSError:
+        lines = []
+    for line in lines:
+        number, controllers, path = (line.split(":", 2) + ["", ""])[:3]
+        if number == "0" and controllers == "":
+            folder, files = os.path.join(root, "sys/fs/cgroup" + path.rstrip("/")), ("memory.max", "memory.current")
+        elif "memory" in controllers.split(","):
+            folder, files = os.path.join(root, "sys/fs/cgroup/memory" + path.rstrip("/")), ("memory.limit_in_bytes", "memory.usage_in_bytes")
+        else:
+            continue
+        try:
+            with open(f"{folder}/{files[0]}") as limit_file:
+                limit = limit_file.read().strip()
+            if limit == "max" or int(limit) >= 2**60:  # (v1's "no limit" is a page short of 2^63)
+                continue
+            with open(f"{folder}/{files[1]}") as current_file:
+                left = max(0, int(limit) - int(current_file.read()))
+        except (OSError, ValueError):
+            continue
+        room = left if room is None else min(room, left)
+    return room
 
 
 def check_first_round_fits(client, vertices):
@@ -832,9 +887,9 @@ class _Tasks:
     client `connected()` gives, their outcomes back in order; and the first round built on the
     workers (first_round), unless `first_here`."""
 
-    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False):
+    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False):
         self.connected, self.task_threads = connected, task_threads
-        self.kept = kept
+        self.kept, self.verbose = kept, verbose  # (kept: True, False or "auto": _keep_tiles)
         self.progress, self.on_progress = progress, on_progress
         if top_runs > 0:
             self.top_runs = top_runs  # (read by the engine: run_in_parts)
@@ -994,15 +1049,16 @@ class _Tasks:
                                    for batch in answers for a in batch if a["vertices"] > 0])
         del answers
         bound = steps.bound_now
+        kept = self._keep_tiles(sum(sizes.values()))
         # Run: each batch's busy groups where its tiles are, and its other tiles' live vertices.
         place = {number: (b, i) for b, batch in enumerate(batches) for i, number in enumerate(batch)}
         busy = [[] for _ in batches]
         for group in groups:
             busy[place[group[0]][0]].append(group)
         runs = [submit(_first_run, q, [[place[number][1] for number in group] for group in mine],
-                       [[steps.points(number) for number in group] for group in mine], marks, bound, plan, options, not self.kept)
+                       [[steps.points(number) for number in group] for group in mine], marks, bound, plan, options, not kept)
                 for q, mine in zip(queued, busy)]
-        if self.kept:
+        if kept:
             self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
                          each=lambda result: steps.add([], result[0]), release=False)
             # The tiles stay on the workers for the rounds after (_KeptStore), the batches on each
@@ -1021,6 +1077,22 @@ class _Tasks:
         self._gather(client, runs, f"round 1, tiles of level {plan.get('tile_level', 0)}", self.on_progress,
                      each=lambda result: steps.add(result[1], result[0]))
         steps.finish()
+
+    def _keep_tiles(self, vertices):
+        """Whether the first round's tiles stay on the workers (self.kept; "auto": when the live map
+        after the first round, at most the map's `vertices` (how many the round removes is known
+        only once it ran), could take more than half the memory this process may still take)."""
+        if self.kept != "auto":
+            return self.kept
+        room = _memory_here()
+        needed = vertices * LIVE_BYTES_PER_VERTEX
+        kept = room is not None and needed > 0.5 * room
+        if self.verbose:
+            sys.stderr.write(f"toposimp.dask: debug: the live map after the first round, at most {vertices} vertices, could take up to "
+                             f"{needed / 2**20:.0f} MiB here, "
+                             + ("with no measure of the memory left here" if room is None else f"{room / 2**20:.0f} MiB left")
+                             + (": its tiles stay on the workers (--kept-tiles)\n" if kept else ": it comes here\n"))
+        return kept
 
     def _run_round(self, groups, plan, options, round_number):
         from distributed import as_completed
@@ -1183,8 +1255,8 @@ def _submit(client, function, *arguments, **keywords):
         return client.submit(function, *arguments, pure=False, **keywords)
 
 
-def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False):
-    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs, kept)
+def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False):
+    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs, kept, verbose)
 
 
 class Tiles:

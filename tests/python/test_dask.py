@@ -313,6 +313,72 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
                 f"{target}, tile level {level}, first round {first_round}, top runs {top_runs}, kept tiles {kept}"
 
 
+def test_kept_tiles_chosen_by_the_memory_here(cluster, generated, binary, tmp_path, monkeypatch, capsys):
+    """--first-round workers without --kept-tiles: the first round's tiles stay on the workers when
+    the live map after it would take more than half the memory left here, else the live map comes
+    here (-v says which, and why); the same bytes either way."""
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    stages = []
+    gather = toposimp_dask._Tasks._gather
+
+    def gather_seen(self, client_, futures, what, on_progress=None, each=None, release=True):
+        stages.append(what)
+        return gather(self, client_, futures, what, on_progress, each, release)
+
+    monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_seen)
+    for room, kept in ((2**20, True), (2**45, False), (None, False)):
+        monkeypatch.setattr(toposimp_dask, "_memory_here", lambda: room)
+        stages.clear()
+        output = tmp_path / f"auto{kept}{room}.gpkg"
+        assert toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, quiet=True,
+                                 first_round="workers") == 0
+        err = capsys.readouterr().err
+        assert ("its tiles stay on the workers (--kept-tiles)" in err) == kept, err
+        assert ("it comes here" in err) == (not kept), err
+        assert ("no measure of the memory left here" in err) == (room is None)
+        assert ("keeping the tiles" in stages) == kept, stages
+        assert output.read_bytes() == reference.read_bytes(), f"memory left {room}"
+
+
+def test_memory_here_reads_the_machine_and_its_cgroup_limits(tmp_path):
+    """_memory_here: the machine's MemAvailable, or less where a cgroup v2 or v1 limit leaves less;
+    no limit ("max", or v1's number near 2^63) changes nothing; nothing readable, None."""
+    from toposimp import dask as toposimp_dask
+
+    def machine(name, available_kib, cgroup, files):
+        root = tmp_path / name
+        (root / "proc/self").mkdir(parents=True)
+        if available_kib is not None:
+            (root / "proc/meminfo").write_text(f"MemTotal:       24000000 kB\nMemAvailable:   {available_kib} kB\n")
+        (root / "proc/self/cgroup").write_text(cgroup)
+        for path, text in files.items():
+            (root / path).parent.mkdir(parents=True, exist_ok=True)
+            (root / path).write_text(text)
+        return str(root)
+
+    gib = 2**30
+    assert toposimp_dask._memory_here(machine("none", 8 * 2**20, "0::/\n", {"sys/fs/cgroup/memory.max": "max\n"})) == 8 * gib
+    assert toposimp_dask._memory_here(machine("v2", 8 * 2**20, "0::/job/7\n", {
+        "sys/fs/cgroup/job/7/memory.max": f"{3 * gib}\n", "sys/fs/cgroup/job/7/memory.current": f"{gib}\n"})) == 2 * gib
+    assert toposimp_dask._memory_here(machine("v1", 8 * 2**20, "4:memory:/slurm/job1\n1:cpu:/\n0::/\n", {
+        "sys/fs/cgroup/memory/slurm/job1/memory.limit_in_bytes": f"{5 * gib}\n",
+        "sys/fs/cgroup/memory/slurm/job1/memory.usage_in_bytes": f"{4 * gib}\n"})) == gib
+    assert toposimp_dask._memory_here(machine("v1free", 8 * 2**20, "4:memory:/x\n", {
+        "sys/fs/cgroup/memory/x/memory.limit_in_bytes": "9223372036854771712\n",
+        "sys/fs/cgroup/memory/x/memory.usage_in_bytes": "6011252736\n"})) == 8 * gib
+    assert toposimp_dask._memory_here(machine("above", 1 * 2**20, "0::/a\n", {
+        "sys/fs/cgroup/a/memory.max": f"{3 * gib}\n", "sys/fs/cgroup/a/memory.current": "0\n"})) == gib
+    assert toposimp_dask._memory_here(machine("cgroup only", None, "0::/a\n", {
+        "sys/fs/cgroup/a/memory.max": f"{3 * gib}\n", "sys/fs/cgroup/a/memory.current": "0\n"})) == 3 * gib
+    assert toposimp_dask._memory_here(str(tmp_path / "nothing")) is None
+
+
 def test_budget_selected_pass_by_pass_on_the_workers(cluster, generated, binary, tmp_path, monkeypatch):
     """--first-round workers with no bucket small enough to gather: the bound found by every
     pass over the tiles' keys and the ids at the key, the same bytes."""
