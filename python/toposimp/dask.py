@@ -23,9 +23,9 @@ A worker that dies has its tasks rerun elsewhere; the result is the same.
 --levels runs each level in parts. With --first-round workers --kept-tiles, the live map stays on
 the workers after the first round (each round's budget is selected there, and the levels above the
 tiles run here over small subsets of it); a worker lost then has its tiles built again by Dask
-from the input and the rounds' news; with --first-round workers, that is chosen by itself when the
-live map would not fit here. Not yet: a map bigger than this process's memory in every case (the
-writing runs here).
+from the input and the rounds' news. Both are chosen by themselves (--first-round auto, --kept-tiles
+auto) when the map, then the live map, could not be held here. Not yet: a map bigger than this
+process's memory in every case (the writing runs here).
 """
 import argparse
 import contextlib
@@ -53,10 +53,14 @@ Dask options:
   --local-budget N     a round of a count target that removes fewer than N vertices runs here,
                        whole, not as tasks (default 4000000, about a second of one core here,
                        less than cutting the live map into tiles again; 0: every round as tasks)
-  --first-round WHERE  where the first round's tiles are built: 'here' (default: by the whole
-                       map's engine in this process) or 'workers' (the map cut into tiles,
-                       searched for crossings, queued and its budget selected on the workers;
-                       this process never holds an engine over the whole map). With 'workers',
+  --first-round WHERE  where the first round's tiles are built: 'here' (by the whole map's engine
+                       in this process), 'workers' (the map cut into tiles, searched for
+                       crossings, queued and its budget selected on the workers; this process
+                       never holds an engine over the whole map), or 'auto' (default): 'workers'
+                       where the input is read by parts (below) and, read here whole, could take
+                       more than half the memory this process may still take (about 5 times its
+                       size on disk: a file's, or a folder's files'; -v says what it found), else
+                       'here'. With 'workers',
                        Shapefiles (a .shp, or a folder of them) of PolyLines or of polygons,
                        GeoPackages and FlatGeobufs (a .fgb or a folder of them,
                        with their index of features) of (Multi)LineString and (Multi)Polygon
@@ -192,7 +196,7 @@ def _split_arguments(argv):
     parser.add_argument("--tile-points", type=int, default=1_000_000)
     parser.add_argument("--task-threads", type=int, default=1)
     parser.add_argument("--local-budget", type=int, default=LOCAL_BUDGET)
-    parser.add_argument("--first-round", choices=("workers", "here"), default="here")
+    parser.add_argument("--first-round", choices=("workers", "here", "auto"), default="auto")
     parser.add_argument("--send-input", action="store_true")
     parser.add_argument("--worker-malloc", choices=("auto", "jemalloc", "glibc"), default="auto")
     parser.add_argument("--top-runs", type=int, default=0)
@@ -208,14 +212,14 @@ def _split_arguments(argv):
         parser.error("--local-budget must be 0 or more")
     if not 0 <= options.top_runs < 2**31:
         parser.error("--top-runs must be 0 or more, under 2^31")
-    if options.kept_tiles == "yes" and options.first_round != "workers":
+    if options.kept_tiles == "yes" and options.first_round == "here":
         parser.error("--kept-tiles needs --first-round workers")
     options.kept_tiles = {"yes": True, "no": False, "auto": "auto"}[options.kept_tiles]
     return options, rest
 
 
 def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
-        local_budget=None, client=None, quiet=False, on_progress=None, first_round="here", send_input=False,
+        local_budget=None, client=None, quiet=False, on_progress=None, first_round="auto", send_input=False,
         worker_malloc="auto", top_runs=0, kept_tiles="auto"):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
 
@@ -224,7 +228,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices (default LOCAL_BUDGET) runs here, whole. `on_progress(done,
     total)`: called as the tile tasks finish. `first_round`: where the first round's tiles are
-    built, "workers" or "here" (the whole map's engine here). With "workers", the first round's
+    built, "workers", "here" (the whole map's engine here) or "auto" (default: "workers" where the
+    input is read by parts and could not be held here whole, _input_too_big). With "workers", the first round's
     tasks read their parts of the input themselves where its format allows (Shapefiles,
     GeoPackages and FlatGeobufs of lines or polygons, written through GDAL: the input must then be at
     the same absolute path, unchanged, on every worker), and this process never holds the input's
@@ -237,12 +242,14 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     same output; "auto" (default), so when the live map after the first round could take more
     than half the memory this process may still take (_memory_here, _Tasks._keep_tiles); False,
     never."""
-    if first_round not in ("workers", "here"):
-        raise ValueError(f"first_round must be 'workers' or 'here', not {first_round!r}")
+    if first_round not in ("workers", "here", "auto"):
+        raise ValueError(f"first_round must be 'workers', 'here' or 'auto', not {first_round!r}")
     if kept_tiles not in (True, False, "auto"):
         raise ValueError(f"kept_tiles must be True, False or 'auto', not {kept_tiles!r}")
-    if kept_tiles is True and first_round != "workers":
+    if kept_tiles is True and first_round == "here":
         raise ValueError("kept_tiles needs first_round='workers'")
+    if first_round == "auto" and (kept_tiles is True or send_input):
+        first_round = "workers"  # (what they need)
     if local_budget is None:
         local_budget = LOCAL_BUDGET
     malloc = _worker_malloc(worker_malloc, os.environ) if client is None and not scheduler else {}
@@ -282,12 +289,13 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
         return own["client"]
 
     run_groups = _tasks(connected, task_threads, progress, on_progress, first_here=first_round == "here", top_runs=top_runs,
-                        kept=kept_tiles, verbose=verbose)
+                        kept=kept_tiles, verbose=verbose, by_parts_only=first_round == "auto")
     try:
         status, out, err = _toposimp.run_command(["map", *map_arguments], run_groups, tile_level,
                                                  lambda: fitting_tile_points(connected(), tile_points), local_budget, None,
                                                  sys.stderr.isatty(), _main_thread(),
-                                                 input_on_workers=first_round == "workers" and not send_input)
+                                                 input_on_workers=first_round != "here" and not send_input,
+                                                 in_file_if=(lambda size: _input_too_big(size, verbose)) if first_round == "auto" else None)
     finally:
         if connecting is not None:
             connecting.close()
@@ -437,6 +445,26 @@ def fitting_tile_points(client, wanted, timeout=120):
 # its stages (every tile's pieces, states, keys and flags, and a stage's copy of a batch: 31 to 54
 # bytes measured on the 45 M-vertex map and on GSHHG; taken with room to spare).
 FIRST_ROUND_BYTES_PER_VERTEX = 64
+
+
+# What `toposimp map` holds at its peak per byte of its input on disk: 4.7 on GSHHG (743 MiB for
+# 158 MiB of .shp), 2.0 and 2.5 on the generated maps of 22 M and 201 M vertices as stored (their
+# folders, with the control points' Shapefile).
+WHOLE_MAP_BYTES_PER_INPUT_BYTE = 5
+
+
+def _input_too_big(size, verbose=False):
+    """Whether an input of `size` bytes on disk, read here whole, could take more than half the
+    memory this process may still take (--first-round auto)."""
+    room = _memory_here()
+    needed = size * WHOLE_MAP_BYTES_PER_INPUT_BYTE
+    big = room is not None and needed > 0.5 * room
+    if verbose:
+        sys.stderr.write(f"toposimp.dask: debug: the input, {size / 2**20:.0f} MiB on disk, could take about {needed / 2**20:.0f} MiB here "
+                         "read whole, " + ("with no measure of the memory left here" if room is None else f"{room / 2**20:.0f} MiB left")
+                         + (": its first round runs on the workers, which read it by parts (--first-round workers)\n" if big
+                            else ": it is read here (--first-round here)\n"))
+    return big
 
 
 # What the command holds per live vertex once the first round's live map comes here (MapInParts):
@@ -887,7 +915,8 @@ class _Tasks:
     client `connected()` gives, their outcomes back in order; and the first round built on the
     workers (first_round), unless `first_here`."""
 
-    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False):
+    def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False,
+                 by_parts_only=False):
         self.connected, self.task_threads = connected, task_threads
         self.kept, self.verbose = kept, verbose  # (kept: True, False or "auto": _keep_tiles)
         self.progress, self.on_progress = progress, on_progress
@@ -896,6 +925,8 @@ class _Tasks:
         self.checked = []  # the clients whose workers were checked
         if not first_here:
             self.first_round = self._first_round
+            if by_parts_only:  # (read by the engine: on the workers only an input read by parts there)
+                self.first_round_by_parts_only = True
 
     def _client(self):
         client = self.connected()
@@ -1255,8 +1286,9 @@ def _submit(client, function, *arguments, **keywords):
         return client.submit(function, *arguments, pure=False, **keywords)
 
 
-def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False):
-    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs, kept, verbose)
+def _tasks(connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False,
+           by_parts_only=False):
+    return _Tasks(connected, task_threads, progress, on_progress, first_here, top_runs, kept, verbose, by_parts_only)
 
 
 class Tiles:

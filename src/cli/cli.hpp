@@ -2,6 +2,7 @@
 #pragma once
 
 #include <atomic>
+#include <cstdint>
 #include <functional>
 #include <iosfwd>
 #include <string>
@@ -38,6 +39,9 @@ struct Context {
     // --decimals, --precision or --levels). The map then holds its chains and control points,
     // and no vertex (io::VerticesInFile says where they are); this process never reads them all.
     std::function<map::SimplifyResult(const map::MapData&, const map::SimplifyOptions&, const io::VerticesInFile&)> map_engine_in_file{};
+    // And where set too: whether to leave them in the file, given the input's size on disk in
+    // bytes (a file's, or the regular files' of a folder). Empty: wherever the input allows it.
+    std::function<bool(std::uintmax_t bytes)> leave_in_file_if{};
 };
 
 // Runs `toposimp ARGS...` (args excludes the program name) and returns the exit status.

@@ -233,6 +233,26 @@ void log_input(spdlog::logger& log, const std::string& input, const io::DatasetS
     if (summary.arcs > 0) log.debug("polygon rings: {} arcs, {} of them shared", summary.arcs, summary.shared_arcs);
 }
 
+// The bytes of `path` on disk: a file's size, or the sum of a folder's regular files' (not its
+// subfolders'); 0 for anything else (a GDAL connection string, a /vsi path).
+std::uintmax_t size_on_disk(const std::string& path) {
+    std::error_code error;
+    if (std::filesystem::is_regular_file(path, error)) {
+        const std::uintmax_t size = std::filesystem::file_size(path, error);
+        return error ? 0 : size;
+    }
+    std::uintmax_t total = 0;
+    if (!std::filesystem::is_directory(path, error)) return 0;
+    for (std::filesystem::directory_iterator it(path, error), end; !error && it != end; it.increment(error)) {
+        if (it->is_regular_file(error)) {
+            const std::uintmax_t size = it->file_size(error);
+            if (!error) total += size;
+        }
+        error.clear();
+    }
+    return total;
+}
+
 // The layers through OGR, and the control points file on a second thread meanwhile.
 MapInput read_layers(const MapOptions& options, spdlog::logger& log, const MapMemory* memory, bool vertices_in_file) {
     MapInput input;
@@ -752,8 +772,11 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
 
     progress.phase("reading " + options.input);
     // (An engine that reads the vertices itself gets them left in the file where it can.)
-    const bool vertices_in_file = context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() &&
-                                  !publishing.decimal_grid && options.quantize == 0 && io::is_ogr_written_output(options.output, options.format);
+    // (Unless the engine's caller declines, told the input's size: the input is then read here.)
+    const bool could_leave = context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() && !publishing.decimal_grid &&
+                             options.quantize == 0 && io::is_ogr_written_output(options.output, options.format);
+    const bool declined = could_leave && context.leave_in_file_if && !context.leave_in_file_if(size_on_disk(options.input));
+    const bool vertices_in_file = could_leave && !declined;
     log.debug("heap: {}", heap_pages());
     MapInput input = options.giscup ? read_giscup(options) : read_layers(options, log, memory, vertices_in_file);
     time.read = seconds_since(start);
@@ -761,7 +784,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     const io::VerticesInFile* in_file = input.dataset ? input.dataset->vertices_in_file() : nullptr;
     log.debug("{} chains, {} vertices{}, {} control points", input.map.chains.size(), in_file ? in_file->vertices : input.map.vertices.size(),
               in_file ? " (left in the file)" : "", input.map.control_points.size());
-    if (context.map_engine_in_file && !in_file && !options.giscup) {
+    if (context.map_engine_in_file && !in_file && !options.giscup && !declined) {
         const std::string why = input.dataset ? input.dataset->summary().read_whole_because : std::string();
         log.debug("the input is read here, whole{}{}", why.empty() ? "" : ": ", why);
         log.debug("(only Shapefiles (a file, or a folder of them) of PolyLines or of polygons, GeoPackage "

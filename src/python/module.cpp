@@ -545,11 +545,12 @@ std::vector<std::string> write_mesh_file(const std::string& path, const py::obje
 
 // `toposimp ARGS...` in this process, the map engine run in parts through `run_groups` (see
 // python/parts.hpp). `input_on_workers` (run_groups has first_round): where the input allows it,
-// its vertices are read by the first round's tasks, not here (cli::Context::map_engine_in_file).
-// Returns (exit status, standard output, standard error).
+// its vertices are read by the first round's tasks, not here (cli::Context::map_engine_in_file);
+// and, with `in_file_if` (not None), where in_file_if(the input's bytes on disk) is true
+// (cli::Context::leave_in_file_if). Returns (exit status, standard output, standard error).
 py::tuple run_command(const std::vector<std::string>& args, const py::object& run_groups, int tile_level, const py::object& tile_points,
                       std::uint64_t local_budget, const py::object& progress, bool err_is_terminal, bool interruptible,
-                      bool input_on_workers) {
+                      bool input_on_workers, const py::object& in_file_if) {
     Run run(progress, interruptible);
     run.context.err_is_terminal = err_is_terminal;
     run.context.map_engine = [&](const map::MapData& map, const map::SimplifyOptions& options) {
@@ -559,6 +560,12 @@ py::tuple run_command(const std::vector<std::string>& args, const py::object& ru
         run.context.map_engine_in_file = [&](const map::MapData& map, const map::SimplifyOptions& options, const io::VerticesInFile& in_file) {
             return python::run_in_parts(map, options, run_groups, tile_level, tile_points, local_budget, &in_file);
         };
+        if (!in_file_if.is_none()) {
+            run.context.leave_in_file_if = [&](std::uintmax_t bytes) {
+                py::gil_scoped_acquire gil;
+                return in_file_if(bytes).cast<bool>();
+            };
+        }
     }
     int status = 0;
     run([&] { status = cli::run(args, run.context); });
@@ -595,7 +602,7 @@ PYBIND11_MODULE(_toposimp, module) {
                py::arg("vertex_columns"), py::arg("face_columns"), py::arg("format"), py::arg("ascii"), py::arg("overwrite"));
     module.def("run_command", &run_command, py::arg("args"), py::arg("run_groups"), py::arg("tile_level"), py::arg("tile_points"),
                py::arg("local_budget"), py::arg("progress"), py::arg("err_is_terminal"), py::arg("interruptible"),
-               py::arg("input_on_workers") = false);
+               py::arg("input_on_workers") = false, py::arg("in_file_if") = py::none());
     python::bind_parts(module);
     module.attr("version") = TOPOSIMP_VERSION;
     module.attr("parts_protocol") = python::kPartsProtocol;

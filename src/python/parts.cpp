@@ -777,7 +777,9 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     std::uint32_t top_runs = 0;  // the levels from the tile level up over a subset of the live map (run_groups.top_runs)
     {
         py::gil_scoped_acquire gil;
-        first_here = !py::hasattr(run_groups, "first_round");
+        // (run_groups.first_round_by_parts_only: on the workers only where the input is read by
+        // parts there; a map read here runs its first round here.)
+        first_here = !py::hasattr(run_groups, "first_round") || (py::hasattr(run_groups, "first_round_by_parts_only") && in_file == nullptr);
         if (py::hasattr(run_groups, "top_runs")) top_runs = run_groups.attr("top_runs").cast<std::uint32_t>();
     }
     if (in_file && first_here) throw std::logic_error("a map's vertices left in its file, and its first round here");

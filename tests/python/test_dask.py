@@ -346,6 +346,40 @@ def test_kept_tiles_chosen_by_the_memory_here(cluster, generated, binary, tmp_pa
         assert output.read_bytes() == reference.read_bytes(), f"memory left {room}"
 
 
+def test_first_round_chosen_by_the_input_size(cluster, generated, binary, tmp_path, monkeypatch, capsys):
+    """No first_round given: the first round runs on the workers, the input read by parts there,
+    when the input read here whole could take more than half the memory left here (about 5 times
+    its size on disk), else here; -v says which and why; the same bytes either way."""
+    from toposimp import dask as toposimp_dask
+
+    client, _ = cluster
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    size = polygons_and_lines.stat().st_size
+    stages = []
+    gather = toposimp_dask._Tasks._gather
+
+    def gather_seen(self, client_, futures, what, on_progress=None, each=None, release=True):
+        stages.append(what)
+        return gather(self, client_, futures, what, on_progress, each, release)
+
+    monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_seen)
+    for room, workers in ((8 * size, True), (12 * size, False), (None, False)):
+        monkeypatch.setattr(toposimp_dask, "_memory_here", lambda: room)
+        stages.clear()
+        output = tmp_path / f"auto{workers}{room}.gpkg"
+        assert toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, quiet=True) == 0
+        err = capsys.readouterr().err
+        assert f"the input, {size / 2**20:.0f} MiB on disk" in err, err
+        assert ("its first round runs on the workers, which read it by parts" in err) == workers, err
+        assert ("it is read here (--first-round here)" in err) == (not workers), err
+        assert ("vertices (left in the file)" in err) == workers
+        assert ("reading the input by parts and cutting it into tiles" in stages) == workers, stages
+        assert output.read_bytes() == reference.read_bytes(), f"memory left {room}"
+
+
 def test_memory_here_reads_the_machine_and_its_cgroup_limits(tmp_path):
     """_memory_here: the machine's MemAvailable, or less where a cgroup v2 or v1 limit leaves less;
     no limit ("max", or v1's number near 2^63) changes nothing; nothing readable, None."""
@@ -544,8 +578,8 @@ def test_command_line(generated, binary, tmp_path):
     wrong = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--first-round",
                             "nowhere"], capture_output=True, text=True)
     assert wrong.returncode == 2 and "--first-round" in wrong.stderr and not (tmp_path / "no.gpkg").exists()
-    here = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--kept-tiles"],
-                          capture_output=True, text=True)
+    here = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(tmp_path / "no.gpkg"), "--first-round", "here",
+                           "--kept-tiles"], capture_output=True, text=True)
     assert here.returncode == 2 and "--kept-tiles needs --first-round workers" in here.stderr and not (tmp_path / "no.gpkg").exists()
 
 
