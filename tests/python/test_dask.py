@@ -313,6 +313,21 @@ def test_several_tile_levels_give_the_same_bytes(cluster, generated, binary, tmp
                 f"{target}, tile level {level}, first round {first_round}, top runs {top_runs}, kept tiles {kept}"
 
 
+def stages_seen(monkeypatch):
+    """The stages the run waits for (what _Tasks._gather is told), in a list the run fills."""
+    from toposimp import dask as toposimp_dask
+
+    stages = []
+    gather = toposimp_dask._Tasks._gather
+
+    def gather_seen(self, client_, futures, what, on_progress=None, each=None, release=True):
+        stages.append(what)
+        return gather(self, client_, futures, what, on_progress, each, release)
+
+    monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_seen)
+    return stages
+
+
 def test_kept_tiles_chosen_by_the_memory_here(cluster, generated, binary, tmp_path, monkeypatch, capsys):
     """--first-round workers without --kept-tiles: the first round's tiles stay on the workers when
     the live map after it would take more than half the memory left here, else the live map comes
@@ -324,14 +339,7 @@ def test_kept_tiles_chosen_by_the_memory_here(cluster, generated, binary, tmp_pa
     arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
     reference = tmp_path / "reference.gpkg"
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
-    stages = []
-    gather = toposimp_dask._Tasks._gather
-
-    def gather_seen(self, client_, futures, what, on_progress=None, each=None, release=True):
-        stages.append(what)
-        return gather(self, client_, futures, what, on_progress, each, release)
-
-    monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_seen)
+    stages = stages_seen(monkeypatch)
     for room, kept in ((2**20, True), (2**45, False), (None, False)):
         monkeypatch.setattr(toposimp_dask, "_memory_here", lambda: room)
         stages.clear()
@@ -358,14 +366,7 @@ def test_first_round_chosen_by_the_input_size(cluster, generated, binary, tmp_pa
     reference = tmp_path / "reference.gpkg"
     subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
     size = polygons_and_lines.stat().st_size
-    stages = []
-    gather = toposimp_dask._Tasks._gather
-
-    def gather_seen(self, client_, futures, what, on_progress=None, each=None, release=True):
-        stages.append(what)
-        return gather(self, client_, futures, what, on_progress, each, release)
-
-    monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_seen)
+    stages = stages_seen(monkeypatch)
     for room, workers in ((8 * size, True), (12 * size, False), (None, False)):
         monkeypatch.setattr(toposimp_dask, "_memory_here", lambda: room)
         stages.clear()
