@@ -406,7 +406,7 @@ public:
                                in.column <= plan_.block_column({box.max_x, box.max_y}, tile_level) &&
                                plan_.block_row({box.min_x, box.min_y}, tile_level) <= in.row &&
                                in.row <= plan_.block_row({box.max_x, box.max_y}, tile_level);
-            if (meets) in_box(box, ask.skip, out);
+            if (meets) in_box(box, ask.skip, ask.reach, out);
         }
         for (const std::uint32_t c : ask.outside_rings) outside(c, ask.from_level, ask.runs, out);
     }
@@ -461,8 +461,9 @@ private:
         return static_cast<std::uint32_t>(std::partition_point(pieces.begin(), pieces.end(), [&](const Chain& c) { return c.last < v; }) - pieces.begin());
     }
     // Its own live vertices in the closed box, but those in `skip` (sorted): points without their
-    // neighbours.
-    void in_box(const Box& box, std::span<const std::uint32_t> skip, SubsetAnswer& out) const {
+    // neighbours; but one at a shared location with `reach` vertices of its piece either side, whole
+    // (the coincidence rule may make it a run of one: its walk then needs no more questions).
+    void in_box(const Box& box, std::span<const std::uint32_t> skip, std::uint32_t reach, SubsetAnswer& out) const {
         const TileInput& in = tile_.input;
         auto at = std::lower_bound(by_x_.begin(), by_x_.end(), box.min_x, [&](std::uint32_t v, double x) { return in.map.vertices[v].x < x; });
         for (; at != by_x_.end() && in.map.vertices[*at].x <= box.max_x; ++at) {
@@ -471,7 +472,13 @@ private:
             const std::uint32_t id = in.vertex_id[*at];
             if (std::binary_search(skip.begin(), skip.end(), id)) continue;
             out.in_boxes.push_back(id);
-            add(*at, in.chain_id[piece_of(id)], kNoVertex, kNoVertex, SubsetAnswer::own, out);
+            const std::uint32_t p = piece_of(id);
+            if (reach > 0 && shared_[*at]) {
+                const Chain piece = in.map.chains[p];
+                learn_window(*at - std::min(*at - piece.first, reach), *at + std::min(piece.last - *at, reach), out);
+            } else {
+                add(*at, in.chain_id[p], kNoVertex, kNoVertex, SubsetAnswer::own, out);
+            }
         }
     }
     // Ring `chain`'s pieces here: per level from `from` below the ring's whole level, the first 4
@@ -600,10 +607,12 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             const auto at = learnt_.find(id);
             return at != learnt_.end() && at->second.whole;
         }
+        // How far around a vertex asked for the tiles tell: a run, its cut end and the vertex beyond.
+        std::uint32_t reach() const { return runs_ >= (1u << 30) ? runs_ : std::max(runs_, 2u) + 1; }
         void learn(std::vector<std::uint32_t> ids) {
             SubsetAsk question;
             question.ids = std::move(ids);
-            question.reach = runs_ >= (1u << 30) ? runs_ : std::max(runs_, 2u) + 1;  // (a run, its cut end and the vertex beyond)
+            question.reach = reach();
             take(kept_.ask(question));
             for (const std::uint32_t id : question.ids) {
                 if (!known(id)) gone_.push_back(id);
@@ -641,6 +650,7 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             SubsetAsk question;
             question.boxes = boxes;
             question.skip = skip;
+            question.reach = std::min(reach(), 2u);  // (a run of one, its cut ends: the coincidence rule's walk)
             const SubsetAnswer found = take(kept_.ask(question));
             lone.insert(found.in_boxes.begin(), found.in_boxes.end());
             const std::vector<Point>& points = kept_.lead_.control_points();

@@ -488,7 +488,7 @@ private:
 // whole level.
 struct SubsetAsk {
     std::vector<std::uint32_t> ids, rings;
-    std::uint32_t reach = 0;  // around each of `ids`, this many vertices of its piece either side
+    std::uint32_t reach = 0;  // around each of `ids` (and each vertex at a shared location in `boxes`), this many vertices of its piece either side
     std::vector<Box> boxes;
     std::vector<std::uint32_t> skip;           // sorted
     std::vector<std::uint32_t> outside_rings;  // sorted
