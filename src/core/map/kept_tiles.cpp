@@ -369,16 +369,17 @@ public:
             }
         }
         std::sort(own_.begin(), own_.end(), [](const Own& a, const Own& b) { return a.id < b.id; });
-        by_x_.resize(own_.size());
-        for (std::uint32_t k = 0; k < own_.size(); ++k) by_x_[k] = own_[k].v;
-        std::sort(by_x_.begin(), by_x_.end(), [&](std::uint32_t a, std::uint32_t b) {
+        std::vector<std::uint32_t> by_x(own_.size());  // (own vertices by (x, y): those at one location side by side)
+        for (std::uint32_t k = 0; k < own_.size(); ++k) by_x[k] = own_[k].v;
+        std::sort(by_x.begin(), by_x.end(), [&](std::uint32_t a, std::uint32_t b) {
             const Point pa = in.map.vertices[a], pb = in.map.vertices[b];
             return pa.x < pb.x || (pa.x == pb.x && pa.y < pb.y);
         });
         shared_.assign(in.vertex_id.size(), 0);
-        for (std::size_t k = 1; k < by_x_.size(); ++k) {
-            if (same_location(in.map.vertices[by_x_[k - 1]], in.map.vertices[by_x_[k]])) shared_[by_x_[k - 1]] = shared_[by_x_[k]] = 1;
+        for (std::size_t k = 1; k < by_x.size(); ++k) {
+            if (same_location(in.map.vertices[by_x[k - 1]], in.map.vertices[by_x[k]])) shared_[by_x[k - 1]] = shared_[by_x[k]] = 1;
         }
+        cells_ = PointCells(in.map.vertices, by_x);
     }
 
     void answer(const SubsetAsk& ask, unsigned tile_level, SubsetAnswer& out) const {
@@ -418,7 +419,7 @@ private:
     const FirstTile& tile_;
     const GridPlan& plan_;
     std::vector<Own> own_;             // by id
-    std::vector<std::uint32_t> by_x_;  // own vertices by (x, y)
+    PointCells cells_;  // own vertices (a sort by x read every vertex in a box's x range: a fifth of a kept run's work on a coverage)
     std::vector<std::uint8_t> shared_;
 
     // The piece holding own vertex `id`, if any.
@@ -465,22 +466,20 @@ private:
     // (the coincidence rule may make it a run of one: its walk then needs no more questions).
     void in_box(const Box& box, std::span<const std::uint32_t> skip, std::uint32_t reach, SubsetAnswer& out) const {
         const TileInput& in = tile_.input;
-        auto at = std::lower_bound(by_x_.begin(), by_x_.end(), box.min_x, [&](std::uint32_t v, double x) { return in.map.vertices[v].x < x; });
-        for (; at != by_x_.end() && in.map.vertices[*at].x <= box.max_x; ++at) {
-            const Point q = in.map.vertices[*at];
-            if (q.y < box.min_y || q.y > box.max_y) continue;
-            const std::uint32_t id = in.vertex_id[*at];
-            if (std::binary_search(skip.begin(), skip.end(), id)) continue;
+        cells_.in_box(box, in.map.vertices, [&](std::uint32_t v) {
+            const std::uint32_t id = in.vertex_id[v];
+            if (std::binary_search(skip.begin(), skip.end(), id)) return;
             out.in_boxes.push_back(id);
             const std::uint32_t p = piece_of(id);
-            if (reach > 0 && shared_[*at]) {
+            if (reach > 0 && shared_[v]) {
                 const Chain piece = in.map.chains[p];
-                learn_window(*at - std::min(*at - piece.first, reach), *at + std::min(piece.last - *at, reach), out);
+                learn_window(v - std::min(v - piece.first, reach), v + std::min(piece.last - v, reach), out);
             } else {
-                add(*at, in.chain_id[p], kNoVertex, kNoVertex, SubsetAnswer::own, out);
+                add(v, in.chain_id[p], kNoVertex, kNoVertex, SubsetAnswer::own, out);
             }
-        }
+        });
     }
+
     // Ring `chain`'s pieces here: per level from `from` below the ring's whole level, the first 4
     // distinct locations, in chain order, of its own vertices not in `runs` (sorted) that are fixed
     // or above the level.
@@ -553,46 +552,6 @@ struct Learnt {
 
 }  // namespace
 
-std::uint32_t KeptTiles::PointCells::column(double x) const {
-    const double at = (x - min_x) * scale_x;  // (monotone in x: a point in a box is in its cells)
-    return !(at > 0) ? 0 : at >= columns - 1 ? columns - 1 : static_cast<std::uint32_t>(at);  // (not a number: 0)
-}
-
-std::uint32_t KeptTiles::PointCells::row(double y) const {
-    const double at = (y - min_y) * scale_y;
-    return !(at > 0) ? 0 : at >= rows - 1 ? rows - 1 : static_cast<std::uint32_t>(at);
-}
-
-KeptTiles::PointCells KeptTiles::PointCells::of(const std::vector<Point>& points) {
-    PointCells cells;
-    cells.columns = cells.rows = 1;
-    if (!points.empty()) {
-        double max_x = points[0].x, max_y = points[0].y;
-        cells.min_x = points[0].x;
-        cells.min_y = points[0].y;
-        for (const Point p : points) {
-            cells.min_x = std::min(cells.min_x, p.x);
-            cells.min_y = std::min(cells.min_y, p.y);
-            max_x = std::max(max_x, p.x);
-            max_y = std::max(max_y, p.y);
-        }
-        const auto side = static_cast<std::uint32_t>(std::clamp(std::sqrt(static_cast<double>(points.size()) / 4), 1.0, 4096.0));
-        cells.columns = max_x > cells.min_x ? side : 1;
-        cells.rows = max_y > cells.min_y ? side : 1;
-        cells.scale_x = max_x > cells.min_x ? cells.columns / (max_x - cells.min_x) : 0;
-        cells.scale_y = max_y > cells.min_y ? cells.rows / (max_y - cells.min_y) : 0;
-    }
-    const std::size_t count = std::size_t{cells.columns} * cells.rows;
-    cells.start.assign(count + 1, 0);
-    const auto cell = [&](Point p) { return std::size_t{cells.row(p.y)} * cells.columns + cells.column(p.x); };
-    for (const Point p : points) ++cells.start[cell(p) + 1];
-    for (std::size_t c = 0; c < count; ++c) cells.start[c + 1] += cells.start[c];
-    cells.order.resize(points.size());
-    std::vector<std::uint32_t> next(cells.start.begin(), cells.start.end() - 1);
-    for (std::uint32_t k = 0; k < points.size(); ++k) cells.order[next[cell(points[k])]++] = k;
-    return cells;
-}
-
 TileInput KeptTiles::top_subset(std::uint32_t runs) const {
     // The subset (top_subset.hpp) over what the tiles tell, asked in waves: windows of `reach`
     // live vertices around the vertices asked for, whole rings, the live vertices in boxes, the
@@ -655,18 +614,8 @@ TileInput KeptTiles::top_subset(std::uint32_t runs) const {
             lone.insert(found.in_boxes.begin(), found.in_boxes.end());
             const std::vector<Point>& points = kept_.lead_.control_points();
             PointCells& cells = kept_.point_cells_;
-            if (cells.start.empty()) cells = PointCells::of(points);
-            for (const Box& box : boxes) {
-                if (points.empty()) break;
-                const std::uint32_t c0 = cells.column(box.min_x), c1 = cells.column(box.max_x);
-                for (std::uint32_t r = cells.row(box.min_y), r1 = cells.row(box.max_y);; ++r) {
-                    const std::size_t from = std::size_t{r} * cells.columns;
-                    for (std::uint32_t k = cells.start[from + c0]; k < cells.start[from + c1 + 1]; ++k) {
-                        if (box_contains(box, points[cells.order[k]])) control.push_back(cells.order[k]);
-                    }
-                    if (r == r1) break;
-                }
-            }
+            if (!cells.built()) cells = PointCells::over_all(points);
+            for (const Box& box : boxes) cells.in_box(box, points, [&](std::uint32_t k) { control.push_back(k); });
         }
         Point control_point(std::uint32_t k) const { return kept_.lead_.control_points()[k]; }
         std::uint32_t id(std::uint32_t u) const { return u; }

@@ -28,6 +28,7 @@
 #pragma once
 
 #include "core/map/map_data.hpp"
+#include "core/map/point_cells.hpp"
 #include "core/map/point_grid.hpp"
 #include "core/map/simplify.hpp"
 
@@ -646,21 +647,10 @@ private:
     std::uint64_t removed_ = 0;
     std::vector<std::uint8_t> gone_;  // per vertex of the map: removed
     std::vector<std::vector<std::uint32_t>> later_;  // [level − T]: the candidates the tiles left for the levels from T up
-    // The control points in a grid of cells (top_subset's boxes), built at the first box: each
-    // cell's points' indices, cell after cell (rows of columns). A sort by x alone read every
-    // point in a box's x range: minutes a round with 2 M points. Not a PointGrid: that copies the
-    // points in cell order (24 bytes a point, against 4 here over the points the lead holds), and
-    // this lead is the one that must stay small: 609 against 648 MiB at its peak with 2 M points
-    // (BENCHMARKS.md, session 50).
-    struct PointCells {
-        double min_x = 0, min_y = 0, scale_x = 0, scale_y = 0;  // cells per unit
-        std::uint32_t columns = 0, rows = 0;
-        std::vector<std::uint32_t> start;  // per cell, and one past the last
-        std::vector<std::uint32_t> order;  // the points' indices
-        std::uint32_t column(double x) const;
-        std::uint32_t row(double y) const;
-        static PointCells of(const std::vector<Point>& points);  // about 4 points a cell
-    };
+    // The control points in cells (top_subset's boxes), built at the first box. (A sort by x
+    // alone read every point in a box's x range: minutes a round with 2 M points. Not a PointGrid:
+    // that copies the points, and this lead must stay small: 609 against 648 MiB at its peak with
+    // 2 M points, BENCHMARKS.md, session 50.)
     mutable PointCells point_cells_;
     Counts counts_;
 
