@@ -49,7 +49,9 @@ Dask options:
                        holds at most --tile-points vertices and control points)
   --tile-points N      see --tile-level (default 1000000, or less where the workers' memory
                        limit would not hold such a tile in half of it)
-  --task-threads N     threads each task's engine uses (default 1: the workers are the parallelism)
+  --task-threads N     threads each task's engine uses (default: a host's cores shared among the
+                       Dask threads of its workers, at least 1: 1 for the default LocalCluster
+                       of a worker a core, 2 for one worker on 2 cores)
   --local-budget N     a round of a count target that removes fewer than N vertices runs here,
                        whole, not as tasks (default 4000000, about a second of one core here,
                        less than cutting the live map into tiles again; 0: every round as tasks)
@@ -194,7 +196,7 @@ def _split_arguments(argv):
     parser.add_argument("--workers", type=int)
     parser.add_argument("--tile-level", type=int, default=-1)
     parser.add_argument("--tile-points", type=int, default=1_000_000)
-    parser.add_argument("--task-threads", type=int, default=1)
+    parser.add_argument("--task-threads", type=int)
     parser.add_argument("--local-budget", type=int, default=LOCAL_BUDGET)
     parser.add_argument("--first-round", choices=("workers", "here", "auto"), default="auto")
     parser.add_argument("--send-input", action="store_true")
@@ -204,7 +206,7 @@ def _split_arguments(argv):
     options, rest = parser.parse_known_args(argv)
     if options.workers is not None and options.workers < 1:
         parser.error("--workers must be at least 1")
-    if options.task_threads < 1:
+    if options.task_threads is not None and options.task_threads < 1:
         parser.error("--task-threads must be at least 1")
     if options.tile_points < 1:
         parser.error("--tile-points must be at least 1")
@@ -218,7 +220,7 @@ def _split_arguments(argv):
     return options, rest
 
 
-def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=1,
+def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_points=1_000_000, task_threads=None,
         local_budget=None, client=None, quiet=False, on_progress=None, first_round="auto", send_input=False,
         worker_malloc="auto", top_runs=0, kept_tiles="auto"):
     """Runs `toposimp map MAP_ARGUMENTS` with the tiles on Dask; returns the exit status.
@@ -227,7 +229,8 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
     of `workers` processes, when the first tasks are ready — not for a run that stops on bad usage
     or input before — and closed at the end). A count target's round that removes fewer
     than `local_budget` vertices (default LOCAL_BUDGET) runs here, whole. `on_progress(done,
-    total)`: called as the tile tasks finish. `first_round`: where the first round's tiles are
+    total)`: called as the tile tasks finish. `task_threads`: the threads of each task's engine
+    (default: task_threads_for the workers). `first_round`: where the first round's tiles are
     built, "workers", "here" (the whole map's engine here) or "auto" (default: "workers" where the
     input is read by parts and could not be held here whole, _input_too_big). With "workers", the first round's
     tasks read their parts of the input themselves where its format allows (Shapefiles,
@@ -533,25 +536,48 @@ _INSTALL_HINT = "make this toposimp package importable on every worker (PYTHONPA
 
 def check_workers(client):
     """Raises UsageError unless every worker of `client` runs tiles with this engine (the toposimp
-    package importable there, of this version and tile format)."""
+    package importable there, of this version and tile format); returns each worker's cores (those
+    its process may run on) by address."""
     from toposimp import UsageError
 
     def engine_there():  # (defined here so that Dask sends it by value: the worker may lack the package)
+        import os
+
         try:
             from toposimp import _toposimp as engine
         except ImportError as error:
             return f"cannot import toposimp ({error})"
-        return [engine.version, getattr(engine, "parts_protocol", 0)]
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+        return [engine.version, getattr(engine, "parts_protocol", 0), cores]
 
     mine = [_toposimp.version, _toposimp.parts_protocol]
+    cores = {}
     for address, answer in sorted(client.run(engine_there).items()):
-        if answer == mine:
+        if not isinstance(answer, str) and answer[:2] == mine:
+            cores[address] = answer[2]
             continue
         if isinstance(answer, str):
             why = answer
         else:
             why = f"it has toposimp {answer[0]} with tile format {answer[1]}, this is {mine[0]} with {mine[1]}"
         raise UsageError(f"the Dask worker {address} cannot run the tiles: {why}; {_INSTALL_HINT}")
+    return cores
+
+
+def task_threads_for(workers, cores):
+    """The threads each task's engine may use: on every host, its cores shared among the Dask
+    threads of its workers (at least 1 each; the least over the hosts). `workers`: the scheduler's
+    worker records by address ("host", "nthreads"); `cores`: each worker's cores by address (those
+    its process may run on; the largest on a host counts). A LocalCluster of one worker of one
+    thread on 2 cores gives each task 2 threads; one of a worker a core, 1."""
+    slots, host_cores = {}, {}
+    for address, worker in workers.items():
+        host = worker.get("host", address)
+        slots[host] = slots.get(host, 0) + max(1, int(worker.get("nthreads") or 1))
+        host_cores[host] = max(host_cores.get(host, 1), int(cores.get(address) or 1))
+    if not slots:
+        return 1
+    return max(1, min(host_cores[host] // slots[host] for host in slots))
 
 
 # A budget's selection gathers the (key, id) pairs of the bucket it falls in once that holds at
@@ -917,7 +943,8 @@ class _Tasks:
 
     def __init__(self, connected, task_threads, progress=None, on_progress=None, first_here=True, top_runs=0, kept=False, verbose=False,
                  by_parts_only=False):
-        self.connected, self.task_threads = connected, task_threads
+        self.connected, self.task_threads = connected, task_threads  # (None: task_threads_for the workers)
+        self.threads = task_threads or 1
         self.kept, self.verbose = kept, verbose  # (kept: True, False or "auto": _keep_tiles)
         self.progress, self.on_progress = progress, on_progress
         if top_runs > 0:
@@ -931,8 +958,13 @@ class _Tasks:
     def _client(self):
         client = self.connected()
         if not any(c is client for c in self.checked):
-            check_workers(client)
+            cores = check_workers(client)
             self.checked.append(client)
+            if self.task_threads is None:
+                self.threads = task_threads_for(client.scheduler_info()["workers"], cores)
+                if self.verbose:
+                    sys.stderr.write(f"toposimp.dask: debug: {self.threads} thread(s) a task (--task-threads: the workers' "
+                                     f"cores {sorted(set(cores.values()))} shared among their Dask threads)\n")
         return client
 
     def __call__(self, groups, plan, options, round_number):
@@ -988,8 +1020,8 @@ class _Tasks:
 
         if self.progress is not None:
             self.progress.round, self.progress.tile_level = 1, plan.get("tile_level", 0)
-        options = dict(options, threads=self.task_threads)
         client = self._client()
+        options = dict(options, threads=self.threads)
         workers = max(1, len(client.scheduler_info()["workers"]))
         check_first_round_fits(client, sum(steps.part_vertices(k) for k in range(len(steps))))
 
@@ -1132,8 +1164,8 @@ class _Tasks:
         progress, on_progress = self.progress, self.on_progress
         if progress is not None:
             progress.round, progress.tile_level = round_number, plan.get("tile_level", 0)
-        options = dict(options, threads=self.task_threads)
         client = self._client()
+        options = dict(options, threads=self.threads)
         workers = max(1, len(client.scheduler_info()["workers"]))
         batches = _batches([groups.points(k) for k in range(len(groups))], workers)
         total = len(batches)
@@ -1296,7 +1328,7 @@ class Tiles:
     toposimp.simplify(..., client=Tiles(client, tile_points=200_000)). A plain Client takes the
     defaults."""
 
-    def __init__(self, client, *, tile_level=-1, tile_points=1_000_000, task_threads=1, local_budget=None, first_round="here"):
+    def __init__(self, client, *, tile_level=-1, tile_points=1_000_000, task_threads=None, local_budget=None, first_round="here"):
         self.client, self.tile_level, self.tile_points = client, tile_level, tile_points
         self.task_threads = task_threads
         self.local_budget = LOCAL_BUDGET if local_budget is None else local_budget

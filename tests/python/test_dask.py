@@ -775,6 +775,40 @@ def test_quiet_local_cluster_after_a_killed_run(generated, binary, tmp_path):
     assert output.read_bytes() == reference.read_bytes()
 
 
+def test_task_threads_share_each_hosts_cores():
+    """Without --task-threads, each task's engine gets its host's cores shared among the Dask
+    threads of that host's workers, at least one, the least over the hosts."""
+    from toposimp.dask import task_threads_for
+
+    def workers(*hosts_and_threads):
+        return {f"tcp://{host}:{4000 + k}": {"host": host, "nthreads": threads} for k, (host, threads) in enumerate(hosts_and_threads)}
+
+    one = workers(("a", 1))
+    assert task_threads_for(one, {"tcp://a:4000": 2}) == 2  # (one worker on 2 cores)
+    assert task_threads_for(workers(("a", 1), ("a", 1)), {"tcp://a:4000": 2, "tcp://a:4001": 2}) == 1
+    assert task_threads_for(workers(("a", 1), ("a", 1), ("a", 1), ("a", 1)), dict.fromkeys(workers(*[("a", 1)] * 4), 2)) == 1
+    assert task_threads_for(workers(("a", 2)), {"tcp://a:4000": 8}) == 4  # (two Dask threads in one worker)
+    assert task_threads_for(workers(("a", 1), ("b", 1), ("b", 1)), {"tcp://a:4000": 16, "tcp://b:4001": 4, "tcp://b:4002": 4}) == 2
+    assert task_threads_for(one, {}) == 1  # (cores unknown)
+    assert task_threads_for({}, {}) == 1
+
+
+def test_one_local_worker_runs_its_tasks_on_every_core(generated, binary, tmp_path):
+    """A LocalCluster of one worker gives each task all the cores here (-v says so), and the bytes
+    are toposimp map's."""
+    polygons_and_lines, places = generated
+    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    output = tmp_path / "dask.gpkg"
+    done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "1",
+                           "--tile-level", "2", "--local-budget", "0", "-v"], capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    cores = len(os.sched_getaffinity(0))
+    assert f"toposimp.dask: debug: {cores} thread(s) a task" in done.stderr, done.stderr[-3000:]
+    assert output.read_bytes() == reference.read_bytes()
+
+
 def test_tiles_go_straight_only_to_workers_on_this_machine():
     """The command sends a round's tiles to the workers itself only where it surely reaches them:
     every worker on a loopback address or one of this host's; else through the scheduler."""
