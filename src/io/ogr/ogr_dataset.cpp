@@ -104,10 +104,13 @@ bool unchanged(const LayerInFile& layer) {
 // files of `file_bytes`: about as much as the files (a quarter of the ring points of a .shp, 16
 // bytes each, a pass: on a 1.9 M-vertex coverage, 2 to 4 passes took no more time than one and
 // the command's peak fell from 299 to 177 MiB), from 16 MiB to an eighth of the machine's.
-std::size_t coverage_pass_bytes(std::uintmax_t file_bytes) {
+std::uint64_t machine_memory() {
     const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
-    const std::uint64_t memory = pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
-    const std::uint64_t most = std::max<std::uint64_t>(memory / 8, std::uint64_t{16} << 20);
+    return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
+}
+
+std::size_t coverage_pass_bytes(std::uintmax_t file_bytes) {
+    const std::uint64_t most = std::max<std::uint64_t>(machine_memory() / 8, std::uint64_t{16} << 20);
     return static_cast<std::size_t>(std::clamp<std::uint64_t>(file_bytes, std::uint64_t{16} << 20, most));
 }
 
@@ -1696,6 +1699,30 @@ void add_record_lines(PolyLineWriter& shapes, const OgrDataset::Data::Layer& lay
     }
 }
 
+// About what a Shapefile output of `layers` takes, for the choice of writing it in memory first
+// (WriteOptions::in_memory_at_most): its records (each kept vertex twice, as a coverage's shared
+// borders are in two rings; a record's header, box and part), unless PolyLineWriter writes them
+// to disk (`shapes_on_disk`), and its attributes (a field of no stated width at 254 bytes).
+std::uint64_t shapefile_bytes(const std::vector<std::unique_ptr<OgrDataset::Data::Layer>>& layers, const std::vector<std::uint8_t>& kept,
+                              bool shapes_on_disk) {
+    std::uint64_t bytes = 0;
+    if (!shapes_on_disk) {
+        const auto kept_vertices = static_cast<std::uint64_t>(std::count_if(kept.begin(), kept.end(), [](std::uint8_t k) { return k != 0; }));
+        bool z_or_m = false;
+        for (const auto& layer : layers) z_or_m = z_or_m || OGR_GT_HasZ(layer->geometry_type) || OGR_GT_HasM(layer->geometry_type);
+        bytes += 2 * kept_vertices * (z_or_m ? 32 : 16);
+    }
+    for (const auto& layer : layers) {
+        std::uint64_t record = 1 + (shapes_on_disk ? 0 : 64);
+        for (int i = 0; i < layer->definition->GetFieldCount(); ++i) {
+            const int width = layer->definition->GetFieldDefn(i)->GetWidth();
+            record += width > 0 ? static_cast<std::uint64_t>(width) : 254;
+        }
+        bytes += record * layer->features.size();
+    }
+    return bytes;
+}
+
 // Whether `layer` goes to the Shapefile `options.path` through PolyLineWriter: a 2D LineString or
 // MultiLineString layer whose every feature is lines, NULL or empty, written as one .shp (a
 // lower-case extension: GDAL's name for the .shx is then ".shx") without creation options.
@@ -1857,9 +1884,15 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         CPLConfigOptionSetter precision("OGR_WKT_PRECISION", "17", true);
         // A Shapefile is written record by record, each with seeks and small writes (730 000
         // system calls for GSHHG's 180 000 lines, most of the write): it is written in memory,
-        // then copied to the staging folder a file at a time. The bytes are GDAL's either way.
+        // then copied to the staging folder a file at a time — unless it would take more than
+        // a sixteenth of the machine's memory (or what the options say): then straight to the
+        // staging folder, so that no process holds a big map's output. The bytes are GDAL's
+        // either way.
         std::optional<MemoryFolder> memory;
-        if (driver_name == "ESRI Shapefile") memory.emplace();
+        if (driver_name == "ESRI Shapefile") {
+            const bool shapes_on_disk = layer_count == 1 && lines_written_here(*data.layers.front(), options);
+            if (shapefile_bytes(data.layers, kept, shapes_on_disk) <= options.in_memory_at_most.value_or(machine_memory() / 16)) memory.emplace();
+        }
         const std::string create_at =
             memory ? memory->path() + "/" + std::filesystem::path(output.staging_path()).filename().string() : output.staging_path();
         DatasetPtr dataset(driver->Create(create_at.c_str(), 0, 0, 0, GDT_Unknown, dataset_options.List()));

@@ -65,6 +65,10 @@ struct WriteOptions {
     // A Shapefile of 2D lines gets its .shp and .shx through OGR too, as any other output, not
     // from PolyLineWriter (tests compare the two).
     bool shapes_through_ogr = false;
+    // A Shapefile is written in memory, then copied out, when it would take at most this many
+    // bytes (shapefile_bytes); else straight to its staging folder. Default: a sixteenth of the
+    // machine's memory. The bytes are the same either way.
+    std::optional<std::uint64_t> in_memory_at_most;
 };
 
 // Layers handed over in memory (the Python module): each feature's geometry as WKB, in order.

@@ -1235,5 +1235,40 @@ TEST(ShapefileWriter, LineLayerOutputIsOgrsOutput) {
     }
 }
 
+// A Shapefile output too big to be written in memory first goes straight to its staging folder:
+// the same bytes as written in memory (a coverage of polygons with a hole and a multipolygon,
+// and lines, each thinned, with their attributes and CRS).
+TEST(ShapefileWriter, StraightToDiskIsTheSameBytes) {
+    const ShapeFile polygons("cells", wkbPolygon,
+                             {"POLYGON ((0 0,0 4,1 5,2 4,4 4,4 0,3 -1,2 0,0 0),(1 1,2 1,2 2,1 2,1 1))",
+                              "MULTIPOLYGON (((4 0,4 4,6 4,6 0,5 -1,4 0)),((10 10,10 11,11 11,11 10,10 10)))", "",
+                              "POLYGON ((6 0,6 4,7 5,8 4,8 0,6 0))"});
+    const ShapeFile lines("roads", wkbLineString,
+                          {"LINESTRING (0 0,1 1,2 0,3 1,4 0)", "MULTILINESTRING ((10 10,11 12,12 10,13 12),(20 20,21 22,22 20))"});
+    const CPLConfigOptionSetter date("OGR_CURRENT_DATE", "2000-01-01T00:00:00Z", false);
+    for (const ShapeFile* input : {&polygons, &lines}) {
+        const std::filesystem::path out = std::filesystem::path(input->path()).parent_path() / "out";
+        std::filesystem::create_directories(out);
+        map::MapData map;
+        const OgrDataset dataset = OgrDataset::read(input->path(), {}, map, true);
+        const std::vector<std::uint8_t> kept = thinned(map, 2);
+        EXPECT_LT(std::count(kept.begin(), kept.end(), 1), static_cast<std::ptrdiff_t>(kept.size())) << input->path();
+        auto write = [&](const std::string& name, std::optional<std::uint64_t> in_memory_at_most) {
+            WriteOptions options;
+            options.path = (out / name).string();
+            options.overwrite = true;
+            options.in_memory_at_most = in_memory_at_most;
+            EXPECT_TRUE(dataset.write(options, map, kept).empty());
+        };
+        write("memory.shp", std::nullopt);
+        write("disk.shp", 0);
+        for (const char* extension : {".shp", ".shx", ".dbf", ".prj"}) {
+            const std::string expected = file_bytes(out / (std::string("memory") + extension));
+            EXPECT_FALSE(expected.empty()) << extension;
+            EXPECT_EQ(file_bytes(out / (std::string("disk") + extension)), expected) << input->path() << extension;
+        }
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::io
