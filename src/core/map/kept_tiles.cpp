@@ -415,8 +415,11 @@ private:
     struct Own {
         std::uint32_t id, v, piece;
     };
-    const FirstTile& tile_;
-    const GridPlan& plan_;
+    const FirstTile& tile_;  // (in its batch's map, whose nodes stay put: the batch holds this index)
+    // A copy: the index outlives the answer that built it, and its caller's plan may not (the
+    // Python binding's is a local of each call: a reference here once read a dead frame, and
+    // the answers then depended on the thread that asked: toposimp.dask, session 51).
+    const GridPlan plan_;
     std::vector<Own> own_;             // by id
     PointCells cells_;  // own vertices (a sort by x read every vertex in a box's x range: a fifth of a kept run's work on a coverage)
     std::vector<std::uint8_t> shared_;
