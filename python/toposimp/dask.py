@@ -299,6 +299,9 @@ def run(map_arguments, *, scheduler=None, workers=None, tile_level=-1, tile_poin
                                                  sys.stderr.isatty(), _main_thread(),
                                                  input_on_workers=first_round != "here" and not send_input,
                                                  in_file_if=(lambda size: _input_too_big(size, verbose)) if first_round == "auto" else None)
+        if verbose and any(run_groups.waves.values()):
+            sys.stderr.write(f"toposimp.dask: debug: the kept tiles' questions: {run_groups.waves['straight']} waves asked straight of "
+                             f"the workers, {run_groups.waves['through tasks']} through tasks\n")
     finally:
         if connecting is not None:
             connecting.close()
@@ -723,9 +726,19 @@ def _kept_many(calls, *batches):
     return [[getattr(engine, name)(batch, *arguments) for name, arguments in calls] for batch in batches]
 
 
-def _kept_each(name, arguments, *batches):
-    from toposimp import _toposimp as engine
-    return [getattr(engine, name)(batch, *arguments) for batch in batches]
+def _kept_direct(keys_at, calls, dask_worker=None):
+    """_kept_many's answers for the batches `keys_at[this worker's address]` (their keys), read
+    from this worker's store, run by Client.run: one message each way, no task. None where one of
+    them is not here (lost with a worker, or made elsewhere): then a task asks (_KeptStore._many)."""
+    keys = keys_at.get(dask_worker.address)
+    if keys is None:
+        return None
+    batches = []
+    for key in keys:
+        if key not in dask_worker.data:
+            return None
+        batches.append(dask_worker.data[key])
+    return _kept_many(calls, *batches)
 
 
 def _kept_run(batch, groups, points, marks, bound, plan, options):
@@ -757,6 +770,7 @@ class _KeptStore:
         self.plan, self.options, self.marks = plan, options, marks
         self.round = 1
         self._ahead = {}  # answers asked for ahead (queued)
+        self.direct = True  # questions asked straight of the workers (_many)
 
     def _gather(self, futures, what, release=True):
         import asyncio
@@ -783,9 +797,50 @@ class _KeptStore:
         return {"workers": [self.homes[b]], "allow_other_workers": True} if self.homes[b] else {}
 
     def _each(self, name, *arguments, what="the kept tiles"):
-        """engine.name(batch, *arguments) for every batch, in order: a task per worker, over the
-        batches made there (Dask's cost is per task, and these come in waves, one after another)."""
-        return self._by_home(lambda *batches, **at: _submit(self.client, _kept_each, name, arguments, *batches, **at), self.batches, what)
+        """engine.name(batch, *arguments) for every batch, in order (_many)."""
+        return [answers[0] for answers in self._many([(name, arguments)], what)]
+
+    def _many(self, calls, what):
+        """Per batch, in order, engine.name(batch, *arguments) for each (name, arguments) of
+        `calls`: questions that change nothing. These come in waves, one after another (hundreds
+        in a round's levels above the tiles), and a Dask task costs about 11 ms a wave here where a
+        Client.run costs 2-3: asked straight of the workers holding the batches (_kept_direct,
+        `direct`), and of a task per worker (over the batches made there) only for those a worker
+        does not hold (one lost: Dask builds them again from their lineage). The same answers."""
+        from distributed import wait
+
+        by_home = {}
+        for b, home in enumerate(self.homes):
+            by_home.setdefault(home, []).append(b)
+        results = [None] * len(self.batches)
+        left = list(by_home.items())
+        # (Only while every home is a worker the scheduler lists: a Client.run that names a worker
+        # just lost can wait on it without end. The first that fails ends them for the run.)
+        alive = self.client.scheduler_info()["workers"]
+        if self.direct and all(home in alive for home in by_home):
+            try:
+                wait([self.batches[b] for b in range(len(self.batches))])
+                keys_at = {home: [self.batches[b].key for b in held] for home, held in by_home.items()}
+                answers = self.tasks._run_direct(self.client, _kept_direct, keys_at, calls, what=what, workers=list(keys_at))
+            except Exception:  # (a worker gone, say: the tasks below ask again, and fail as the question would)
+                answers = {}
+                self.direct = False
+            left = []
+            self.tasks.waves["straight"] += 1
+            for home, held in by_home.items():
+                mine = answers.get(home)
+                if mine is None:
+                    left.append((home, held))
+                    continue
+                for b, answer in zip(held, mine):
+                    results[b] = answer
+        if left:
+            self.tasks.waves["through tasks"] += 1
+            tasks = [_submit(self.client, _kept_many, calls, *[self.batches[b] for b in held], **self._at(held[0])) for _, held in left]
+            for (_, held), answers in zip(left, self._gather(tasks, what)):
+                for b, answer in zip(held, answers):
+                    results[b] = answer
+        return results
 
     def _by_home(self, task, futures, what):
         """task(*futures of one worker's batches) → its list of results, one per batch; all the
@@ -828,8 +883,7 @@ class _KeptStore:
         # (With the count come the budget's first histogram, whose counts add up to it, and the
         # rings' locations at the tiles' borders: KeptTiles::next_round asks for the three in a
         # row, with no change to the tiles between. One wave instead of three.)
-        calls = [("kept_histogram", (48, 0)), ("kept_crossings", ())]
-        answers = self._by_home(lambda *batches, **at: _submit(self.client, _kept_many, calls, *batches, **at), self.batches, "the kept tiles")
+        answers = self._many([("kept_histogram", (48, 0)), ("kept_crossings", ())], "the kept tiles")
         self._ahead = {"histogram": [a[0] for a in answers], "crossings": [a[1] for a in answers]}
         return sum(int(a[0]["counts"].sum()) for a in answers)
 
@@ -945,6 +999,7 @@ class _Tasks:
                  by_parts_only=False):
         self.connected, self.task_threads = connected, task_threads  # (None: task_threads_for the workers)
         self.threads = task_threads or 1
+        self.waves = {"straight": 0, "through tasks": 0}  # the kept tiles' waves of questions (_KeptStore._many)
         self.kept, self.verbose = kept, verbose  # (kept: True, False or "auto": _keep_tiles)
         self.progress, self.on_progress = progress, on_progress
         if top_runs > 0:
@@ -980,6 +1035,13 @@ class _Tasks:
     def _stage(self, what, done, total):
         if self.progress is not None:
             self.progress.stage(what, done, total)
+
+    def _run_direct(self, client, function, *arguments, what, workers):
+        """client.run(function, *arguments) on `workers`: their answers by address."""
+        self._stage(what, 0, 1)
+        answers = client.run(function, *arguments, workers=workers)
+        self._stage(what, 1, 1)
+        return answers
 
     def _gather(self, client, futures, what, on_progress=None, each=None, release=True):
         """The futures' results in order, with progress; or, with `each`, each(result) as they come,

@@ -106,7 +106,12 @@ def main():
     env = dict(dask_bench.CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
+    from toposimp import _launch as toposimp_launch, dask as toposimp_dask
 
+    # The workers start as toposimp.dask's own LocalCluster's would (huge pages asked for,
+    # jemalloc where installed): what a user gets without --scheduler.
+    worker_env = {"GLIBC_TUNABLES": toposimp_launch.huge_pages(""), **toposimp_dask._worker_malloc("auto", dask_bench.CLEAN_ENV)}
+    os.environ.update(worker_env)  # (read by the worker processes as they start)
     cluster = LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=None,
                            memory_limit=a.memory_limit)
     client = Client(cluster)
@@ -127,7 +132,7 @@ def main():
           f"({sum(sizes.values()) / 2**20:.0f} MiB of .shp), `{a.target}`, {a.workers} workers limited to {a.memory_limit} each"
           + (f", toposimp.dask {a.dask_options}" if a.dask_options else "") + (", the rivers alone" if a.lines_only else "")
           + (", the cells alone" if a.cells_only else "") + (f" with Z (PolygonZ, {'0' if a.z == 'zero' else 'each cell its id'})" if a.cells_only and a.z else "")
-          + (", as one GeoPackage" if a.geopackage else ""))
+          + (", as one GeoPackage" if a.geopackage else "") + "; workers with " + " ".join(f"{k}={v}" for k, v in worker_env.items()))
     print()
     print("| run | seconds | command peak MiB | worker peaks MiB | output identical |")
     print("|---|---|---|---|---|")

@@ -4,6 +4,7 @@ worker is killed in the middle."""
 import json
 import os
 import pathlib
+import re
 import signal
 import socket
 import subprocess
@@ -192,7 +193,7 @@ def test_a_folder_of_layers_read_by_parts_on_the_workers(cluster, generated_shap
 
 
 @pytest.mark.parametrize("stage", ["round 2", "gathering the levels above the tiles"])
-def test_killed_worker_with_kept_tiles_changes_nothing(cluster, generated, binary, tmp_path, monkeypatch, stage):
+def test_killed_worker_with_kept_tiles_changes_nothing(cluster, generated, binary, tmp_path, monkeypatch, capsys, stage):
     """The first round's tiles kept on the workers for the rounds after (kept_tiles): a worker
     killed while the second round's tiles run, or while a later round gathers the levels above the
     tiles from them, loses the batches it held. Dask builds them again from the tasks that made
@@ -207,9 +208,9 @@ def test_killed_worker_with_kept_tiles_changes_nothing(cluster, generated, binar
     assert done.returncode == 0, done.stderr
     pids = client.run(os.getpid)
     killed, seen = {}, []
-    gather = toposimp_dask._Tasks._gather
+    gather, run_direct = toposimp_dask._Tasks._gather, toposimp_dask._Tasks._run_direct
 
-    def gather_killing(self, client_, futures, what, on_progress=None, each=None, release=True):
+    def kill(client_, what):
         seen.append(what)
         # (The second round's tiles; or the 40th wave of questions from the levels above, past the
         # first round's.)
@@ -220,14 +221,27 @@ def test_killed_worker_with_kept_tiles_changes_nothing(cluster, generated, binar
                     killed["address"] = address
                     os.kill(pid, signal.SIGKILL)
                     break
+
+    def gather_killing(self, client_, futures, what, on_progress=None, each=None, release=True):
+        kill(client_, what)
         return gather(self, client_, futures, what, on_progress, each, release)
 
+    def run_direct_killing(self, client_, function, *arguments, what, workers):
+        kill(client_, what)
+        return run_direct(self, client_, function, *arguments, what=what, workers=workers)
+
     monkeypatch.setattr(toposimp_dask._Tasks, "_gather", gather_killing)
+    monkeypatch.setattr(toposimp_dask._Tasks, "_run_direct", run_direct_killing)
     output = tmp_path / "kept.gpkg"
-    status = toposimp_dask.run([*arguments, "-o", str(output)], client=client, tile_level=1, local_budget=0, quiet=True,
+    status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, quiet=True,
                                first_round="workers", kept_tiles=True)
     assert killed, f"no worker held anything at {stage!r}"
     assert status == 0 and output.read_bytes() == reference.read_bytes()
+    # The questions that change nothing asked straight of the workers, and through tasks from the
+    # loss on.
+    waves = re.search(r"the kept tiles' questions: (\d+) waves asked straight of the workers, (\d+) through tasks", capsys.readouterr().err)
+    assert waves, "no count of the kept tiles' questions"
+    assert int(waves[1]) >= 1 and int(waves[2]) >= 1, waves[0]
     workers.append(client.start_worker())  # (three again for the tests after)
     client.wait_for_workers(3, timeout=60)
 
@@ -352,6 +366,9 @@ def test_kept_tiles_chosen_by_the_memory_here(cluster, generated, binary, tmp_pa
         assert ("no measure of the memory left here" in err) == (room is None)
         assert ("keeping the tiles" in stages) == kept, stages
         assert output.read_bytes() == reference.read_bytes(), f"memory left {room}"
+        if kept:  # (every worker there: every question that changes nothing asked straight of them)
+            waves = re.search(r"the kept tiles' questions: (\d+) waves asked straight of the workers, (\d+) through tasks", err)
+            assert waves and int(waves[1]) >= 10 and int(waves[2]) == 0, err[-2000:]
 
 
 def test_first_round_chosen_by_the_input_size(cluster, generated, binary, tmp_path, monkeypatch, capsys):
