@@ -92,7 +92,7 @@ Dask options:
                        the tiles run over subsets gathered from them: this process never holds
                        the live map (a byte a vertex for the result). The same output, also
                        when a worker is lost (Dask builds its tiles again); slower (GSHHG at
-                       10 % on 2 workers: 12.4 s against 5.6 s without it). WHEN: 'yes' (the
+                       10 % on 2 workers: 10.4 s against 4.9 s without it). WHEN: 'yes' (the
                        default of --kept-tiles alone), 'no', or 'auto' (the default without
                        it): yes when the live map after the first round could take more than
                        half the memory this process may still take (at most every vertex of the
