@@ -814,8 +814,8 @@ class _KeptStore:
             by_home.setdefault(home, []).append(b)
         results = [None] * len(self.batches)
         left = list(by_home.items())
-        # (Only while every home is a worker the scheduler lists: a Client.run that names a worker
-        # just lost can wait on it without end. The first that fails ends them for the run.)
+        # (Only while every home is a worker the scheduler lists, and until a Client.run fails:
+        # from a loss on, the tasks ask, and Dask builds the lost batches again for them.)
         alive = self.client.scheduler_info()["workers"]
         if self.direct and all(home in alive for home in by_home):
             try:

@@ -100,15 +100,16 @@ bool unchanged(const LayerInFile& layer) {
     return !error && size == layer.size && modified_ns(layer.path) == layer.time;
 }
 
-// Memory for a coverage plan's node passes (map::Coverage::plan, 56 bytes a ring point) over
-// files of `file_bytes`: about as much as the files (a quarter of the ring points of a .shp, 16
-// bytes each, a pass: on a 1.9 M-vertex coverage, 2 to 4 passes took no more time than one and
-// the command's peak fell from 299 to 177 MiB), from 16 MiB to an eighth of the machine's.
+// The machine's memory in bytes (0 if unknown).
 std::uint64_t machine_memory() {
     const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
     return pages > 0 && page > 0 ? static_cast<std::uint64_t>(pages) * static_cast<std::uint64_t>(page) : 0;
 }
 
+// Memory for a coverage plan's node passes (map::Coverage::plan, 56 bytes a ring point) over
+// files of `file_bytes`: about as much as the files (a quarter of the ring points of a .shp, 16
+// bytes each, a pass: on a 1.9 M-vertex coverage, 2 to 4 passes took no more time than one and
+// the command's peak fell from 299 to 177 MiB), from 16 MiB to an eighth of the machine's.
 std::size_t coverage_pass_bytes(std::uintmax_t file_bytes) {
     const std::uint64_t most = std::max<std::uint64_t>(machine_memory() / 8, std::uint64_t{16} << 20);
     return static_cast<std::size_t>(std::clamp<std::uint64_t>(file_bytes, std::uint64_t{16} << 20, most));
