@@ -819,7 +819,7 @@ class _KeptStore:
         alive = self.client.scheduler_info()["workers"]
         if self.direct and all(home in alive for home in by_home):
             try:
-                wait([self.batches[b] for b in range(len(self.batches))])
+                wait(self.batches)
                 keys_at = {home: [self.batches[b].key for b in held] for home, held in by_home.items()}
                 answers = self.tasks._run_direct(self.client, _kept_direct, keys_at, calls, what=what, workers=list(keys_at))
             except Exception:  # (a worker gone, say: the tasks below ask again, and fail as the question would)

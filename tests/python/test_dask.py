@@ -601,24 +601,31 @@ def test_command_line(generated, binary, tmp_path):
     assert here.returncode == 2 and "--kept-tiles needs --first-round workers" in here.stderr and not (tmp_path / "no.gpkg").exists()
 
 
-def test_command_line_asks_for_huge_pages(generated, tmp_path):
+def test_command_line_asks_for_huge_pages(generated, binary, tmp_path):
     """`python3 -m toposimp.dask` started without glibc.malloc.hugetlb in GLIBC_TUNABLES runs
     with it (the command's process started again with it, as its workers); one the user set is
-    kept."""
+    kept. Its LocalCluster of one worker gives each task all the cores here (-v says so), and the
+    bytes are toposimp map's."""
     import os
 
     polygons_and_lines, _ = generated
+    arguments = [str(polygons_and_lines), "--keep", "20%", *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    cores = len(os.sched_getaffinity(0))
     environment = {name: value for name, value in os.environ.items() if name != "GLIBC_TUNABLES"}
     for tunables, asked in ((None, True), ("glibc.malloc.check=0", True), ("glibc.malloc.hugetlb=0", False)):
         if tunables is not None:
             environment["GLIBC_TUNABLES"] = tunables
         output = tmp_path / ("out%s.gpkg" % len(str(tunables)))
-        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", str(polygons_and_lines), "--keep", "20%", "-o", str(output),
-                               "--workers", "1", "-v"], capture_output=True, text=True, timeout=300, env=environment)
+        done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "1", "-v"],
+                              capture_output=True, text=True, timeout=300, env=environment)
         assert done.returncode == 0, done.stderr
         assert ("transparent huge pages asked for" in done.stderr) == asked, (tunables, done.stderr[:2000])
         # (The command's heap thresholds with them, where the command asked.)
         assert ("glibc.malloc.mmap_threshold=33554432" in done.stderr) == asked, (tunables, done.stderr[:2000])
+        assert f"toposimp.dask: debug: {cores} thread(s) a task" in done.stderr, done.stderr[-3000:]
+        assert output.read_bytes() == reference.read_bytes(), tunables
 
 
 def test_the_command_restarts_before_the_engine_loads():
@@ -808,22 +815,6 @@ def test_task_threads_share_each_hosts_cores():
     assert task_threads_for(workers(("a", 1), ("b", 1), ("b", 1)), {"tcp://a:4000": 16, "tcp://b:4001": 4, "tcp://b:4002": 4}) == 2
     assert task_threads_for(one, {}) == 1  # (cores unknown)
     assert task_threads_for({}, {}) == 1
-
-
-def test_one_local_worker_runs_its_tasks_on_every_core(generated, binary, tmp_path):
-    """A LocalCluster of one worker gives each task all the cores here (-v says so), and the bytes
-    are toposimp map's."""
-    polygons_and_lines, places = generated
-    arguments = [str(polygons_and_lines), "-p", str(places), "--keep", "30%", *SAME_DATE]
-    reference = tmp_path / "reference.gpkg"
-    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
-    output = tmp_path / "dask.gpkg"
-    done = subprocess.run([sys.executable, "-m", "toposimp.dask", "map", *arguments, "-o", str(output), "--workers", "1",
-                           "--tile-level", "2", "--local-budget", "0", "-v"], capture_output=True, text=True, timeout=300)
-    assert done.returncode == 0, done.stderr
-    cores = len(os.sched_getaffinity(0))
-    assert f"toposimp.dask: debug: {cores} thread(s) a task" in done.stderr, done.stderr[-3000:]
-    assert output.read_bytes() == reference.read_bytes()
 
 
 def test_tiles_go_straight_only_to_workers_on_this_machine():
