@@ -57,7 +57,7 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
                   weld: bool = False, vertex_attributes: Optional[Dict[str, numpy.ndarray]] = None,
                   face_attributes: Optional[Dict[str, numpy.ndarray]] = None, measure: Optional[str] = "quick",
                   threads: Optional[int] = None, progress: Optional[Callable[[str, float], object]] = None,
-                  verbose: int = 0) -> Mesh:
+                  verbose: int = 0, contact_check: str = "after") -> Mesh:
     """Simplify a triangle mesh without self-intersections, flipped faces or non-manifold edges
     (``toposimp mesh``: quadric-error edge collapse, every collapse checked with exact predicates).
 
@@ -75,6 +75,10 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
     each surface spread by area, measured exactly: a lower bound of the Hausdorff distance, for a
     small part of the run), "full" (every vertex and ~4 points per face: slow on big meshes) or
     None.
+    ``contact_check``: "after" (the default: collapses made without searching for nearby faces, then
+    the result checked once, exactly, and simplified again with every collapse checked if it
+    meets itself anywhere) or "each" (every collapse checked: slower, the same result whenever no
+    collapse is refused for a contact); ``report["contact_check"]`` says what ran.
     ``threads``: None for all cores (the result is the same for any number). ``progress``: a
     callable taking (phase, share done).
 
@@ -88,8 +92,11 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
         raise _toposimp.UsageError("give one target, not " + " and ".join(given))
     if measure not in ("quick", "full", None):
         raise _toposimp.UsageError(f"measure is 'quick', 'full' or None, not {measure!r}")
+    if contact_check not in ("after", "each"):
+        raise _toposimp.UsageError(f"contact_check is 'after' or 'each', not {contact_check!r}")
     options = {"terrain": terrain is True, "no_terrain": terrain is False, "lock_boundary": bool(lock_boundary), "weld": bool(weld),
-               "measure": measure or "none", "threads": 0 if threads is None else int(threads), "verbosity": int(verbose)}
+               "measure": measure or "none", "threads": 0 if threads is None else int(threads), "verbosity": int(verbose),
+               "contact_check": contact_check}
     if keep is not None:
         options["keep"] = _share(keep)
     if keep_faces is not None:

@@ -83,6 +83,13 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
                                      "run), full (every vertex and ~4 points per face, up to 400 000: slow on big meshes) or none")
                          ->check(CLI::IsMember({"quick", "full", "none"}));
     mesh->add_flag("--no-hausdorff", options.no_hausdorff, "The same as --measure none")->excludes(measure);
+    mesh->add_option("--contact-check", options.contact_check,
+                     "How a mesh simplified in space is kept from touching or crossing itself: after (default: the "
+                     "collapses made without searching for nearby faces, then the result checked once, exactly, and "
+                     "simplified again with every collapse checked if it meets itself anywhere) or each (every collapse "
+                     "checked: slower; the same result whenever no collapse is refused for a contact). A terrain needs "
+                     "neither")
+        ->check(CLI::IsMember({"after", "each"}));
     mesh->add_option("-j,--threads", options.threads,
                      "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
         ->check(number_at_least(0));
@@ -311,6 +318,15 @@ void report(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engin
               "{} vertical error",
               stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
               stats.refused_intersection, stats.refused_vertical);
+    if (stats.simplified_again) {
+        const auto [f, g] = *stats.first_contact;
+        log.debug("contacts: the collapses made without a search left {} (the input met itself, or a collapse "
+                  "made a contact): simplified again with every collapse checked ({:.3f} s spent before)",
+                  f == g ? fmt::format("face {} degenerate", f) : fmt::format("faces {} and {} meeting", f, g),
+                  stats.seconds_first_run);
+    } else if (stats.contacts_checked_after) {
+        log.debug("contacts: none in the result, checked once after the collapses ({:.3f} s)", stats.seconds_check);
+    }
     log.debug("predicates: {} decided by the float filter, {} exactly in expansions, {} by GMP; peak memory {:.0f} MiB",
               stats.predicates.filter_decided, stats.predicates.expansion_decided, stats.predicates.gmp_fallbacks,
               peak_memory_mib());
@@ -391,6 +407,14 @@ std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyO
         json.field("samples_outside", vertical->outside).end();
     }
     json.object("parallel").field("threads", stats.threads).field("levels", stats.levels).field("rounds", stats.rounds).end();
+    // How contacts were kept out: "after" (the result checked; again: a second run, every collapse
+    // checked, because the first result met itself), "each", or "terrain" (no search needed).
+    json.object("contact_check")
+        .field("mode", stats.terrain ? "terrain" : stats.contacts_checked_after ? "after" : "each")
+        .field("simplified_again", stats.simplified_again)
+        .field("seconds_check", stats.seconds_check)
+        .field("seconds_first_run", stats.seconds_first_run)
+        .end();
     add_predicates(json, stats.predicates);
     json.object("seconds")
         .field("read", time.read)
@@ -463,11 +487,13 @@ int mesh_job(const MeshCommandOptions& options, Context& context, const MeshGdal
     // A height field is found by the engine's own exact test, which --terrain asks for anyway.
     engine->terrain = !options.no_terrain;
     engine->threads = options.threads;
+    engine->contacts = options.contact_check == "each" ? mesh::ContactCheck::every_collapse : mesh::ContactCheck::at_the_end;
     engine->cancel = context.cancel;
     const auto start = Clock::now();
     Timings time;
     Progress progress(context.err, progress_style(options.progress, context.err_is_terminal, options.quiet), context.progress);
     engine->progress = [&progress](double done) { progress.update(done); };
+    engine->phase = [&progress](const char* phase) { progress.phase(phase); };
     log.debug("heap: {}", heap_pages());
     // Refuse an existing output, or a layer in a format GDAL cannot tell or write, before any work.
     const io::MeshFormatInfo* format = memory ? nullptr : output_format(options);

@@ -34,6 +34,9 @@ struct MeshCommandOptions {
     bool ascii = false;
     bool no_hausdorff = false;  // --no-hausdorff: --measure none
     std::string measure = "quick";  // --measure quick|full|none: how the distance to the input is measured
+    // --contact-check after|each: the result checked once for contacts (a second run with every
+    // collapse checked if it has one), or every collapse checked (mesh::ContactCheck)
+    std::string contact_check = "after";
     int threads = 0;
     bool json = false;
     bool overwrite = false;

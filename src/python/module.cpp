@@ -491,6 +491,7 @@ py::tuple simplify_mesh_arrays(const py::object& points, const py::object& faces
     set_if(options, "threads", command.threads);
     set_if(options, "verbosity", command.verbosity);
     set_if(options, "measure", command.measure);
+    set_if(options, "contact_check", command.contact_check);
     cli::MeshMemory memory;
     memory.mesh = mesh_of(points, faces, vertex_columns, face_columns, memory.layout);
     Run run(progress, interruptible);

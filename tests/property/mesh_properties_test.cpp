@@ -444,6 +444,7 @@ TEST(MeshProperties, FlatRegionsSkipTheSearchButDecideTheSame) {
                 options.stop.value = keep;
                 options.threads = threads;
                 options.parallel_threshold = 0;
+                options.contacts = ContactCheck::every_collapse;  // (the shortcut belongs to the search)
                 options.flat_shortcut = false;
                 const SimplifyStats plain = simplify(searched, options);
                 options.flat_shortcut = true;
@@ -466,6 +467,74 @@ TEST(MeshProperties, FlatRegionsSkipTheSearchButDecideTheSame) {
     EXPECT_EQ(find_defects(inputs[0].mesh).total(), 0u);
     EXPECT_EQ(find_defects(inputs[1].mesh).total(), 0u);
     EXPECT_GT(find_defects(inputs[2].mesh).intersecting_pairs, 0u);
+}
+
+// ContactCheck::at_the_end against every_collapse on clean and self-intersecting inputs: its
+// result never meets itself where the input did not (the independent checker's count); it is
+// every_collapse's result when that refuses no collapse for a contact, and when the first
+// result met itself (then simplified again); the same for any thread count.
+TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
+    struct Input {
+        std::string name;
+        Mesh mesh;
+    };
+    Mesh crossing = testing::noisy_sphere(3, 0.02, 7);
+    {
+        const Mesh second = testing::noisy_sphere(3, 0.02, 8, {0.9, 0.3, 0.1});
+        const auto offset = static_cast<std::uint32_t>(crossing.points.size());
+        for (const Point3& p : second.points) crossing.points.push_back(p);
+        for (const Face& f : second.faces) crossing.faces.push_back({f[0] + offset, f[1] + offset, f[2] + offset});
+    }
+    const Input inputs[] = {{"smooth sphere", testing::noisy_sphere(3, 0.02, 1)},
+                            {"rough sphere", testing::noisy_sphere(3, 0.3, 2)},
+                            {"holed sheet", holed_sheet(30, 2, 1, 0.3, 3)},
+                            {"sheets 1 ulp apart", testing::near_sheets(16, 1, 4)},
+                            {"sheets 64 ulps apart", testing::near_sheets(16, 64, 5)},
+                            {"folded strip", testing::folded_strip(40, 1e-3, 6)},
+                            {"crossing spheres", crossing},
+                            {"grid with spikes", grid_with_spikes(18)},
+                            {"grid with a square lying in it", grid_with_lying_square(18)}};
+    int again = 0, same_without_refusal = 0;
+    for (const Input& input : inputs) {
+        const std::uint64_t before = find_defects(input.mesh).intersecting_pairs;
+        for (const double keep : {0.1, 0.02}) {
+            const std::string what = input.name + ", keep " + std::to_string(keep);
+            SimplifyOptions options;
+            options.stop.value = keep;
+            options.threads = 2;
+            options.parallel_threshold = 0;
+            Mesh each = input.mesh, after = input.mesh;
+            options.contacts = ContactCheck::every_collapse;
+            const SimplifyStats each_stats = simplify(each, options);
+            options.contacts = ContactCheck::at_the_end;
+            const SimplifyStats after_stats = simplify(after, options);
+            EXPECT_FALSE(each_stats.contacts_checked_after) << what;
+            EXPECT_TRUE(after_stats.contacts_checked_after) << what;
+            const auto defects = find_defects(after);
+            EXPECT_EQ(defects.total() - defects.intersecting_pairs, 0u) << what << ": " << defects.first;
+            if (after_stats.simplified_again) {
+                ++again;
+                EXPECT_TRUE(after_stats.first_contact.has_value()) << what;
+                EXPECT_TRUE(same(after, each)) << what;
+                EXPECT_EQ(after_stats.refused_intersection, each_stats.refused_intersection) << what;
+            } else {
+                EXPECT_FALSE(after_stats.first_contact.has_value()) << what;
+                EXPECT_EQ(defects.intersecting_pairs, 0u) << what << ": " << defects.first;  // the check was right
+                if (each_stats.refused_intersection == 0) {
+                    ++same_without_refusal;
+                    EXPECT_TRUE(same(after, each)) << what;
+                }
+            }
+            EXPECT_LE(defects.intersecting_pairs, before) << what;
+            Mesh three = input.mesh;
+            options.threads = 3;
+            simplify(three, options);
+            EXPECT_TRUE(same(after, three)) << what << ", 3 threads";
+        }
+    }
+    // Both ways out were taken.
+    EXPECT_GT(again, 0);
+    EXPECT_GT(same_without_refusal, 0);
 }
 
 TEST(MeshProperties, VerticalErrorIsTheHeightDifferenceAboveOrBelow) {

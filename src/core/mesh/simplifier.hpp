@@ -121,7 +121,10 @@ struct Collapse {
 
 class Simplifier {
 public:
-    Simplifier(Mesh& mesh, const SimplifyOptions& options) : mesh_(mesh), options_(options) {}
+    // `input_copy`: where to copy the mesh before any collapse when the result is to be checked
+    // after the run (quick_), for a second run.
+    Simplifier(Mesh& mesh, const SimplifyOptions& options, Mesh* input_copy = nullptr)
+        : mesh_(mesh), options_(options), input_copy_(input_copy) {}
 
     SimplifyStats run();
 
@@ -331,11 +334,15 @@ private:
 
     Mesh& mesh_;
     const SimplifyOptions& options_;
+    Mesh* input_copy_ = nullptr;
     int threads_ = 1;  // every parallel loop's (num_threads clauses: no process-wide OpenMP state)
     bool by_count_ = true;       // a count target (not max_error)
     std::uint64_t target_ = 0;   // its faces
     bool use_index_ = false;
     bool terrain_ = false;
+    // No contact search: the result is checked after the run (ContactCheck::at_the_end, a 3D
+    // mesh), so no face index, clean_ or twin_ is kept.
+    bool quick_ = false;
     bool lock_ = false;  // border vertices never move (asked for, or kept for the vertical bound)
     std::unique_ptr<VerticalBound> vertical_;  // terrains under a max_error target
     int terrain_turn_ = 0;  // the map-plane orientation all terrain faces share

@@ -9,6 +9,7 @@
 #include "core/cancel.hpp"
 
 #include "core/mesh/height_field.hpp"
+#include "core/mesh/self_contact.hpp"
 #include "core/mesh/simplifier.hpp"
 #include "core/parallel/select.hpp"
 
@@ -332,8 +333,12 @@ bool Simplifier::prepare(SimplifyStats& stats) {
     if (vertical_) touch_.assign(pos_.size(), 0);
     add_border_planes();
     choose_grid();
-    if (!terrain_) find_twins();
-    use_index_ = !terrain_ || !lock_;
+    quick_ = options_.contacts == ContactCheck::at_the_end && !terrain_;
+    stats.contacts_checked_after = quick_;
+    // (As it is after drop_unused, which finds nothing more to drop in it: the same run.)
+    if (quick_ && input_copy_ != nullptr) *input_copy_ = mesh_;
+    if (!terrain_ && !quick_) find_twins();
+    use_index_ = !quick_ && (!terrain_ || !lock_);
     return true;
 }
 
@@ -530,7 +535,32 @@ SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options) {
     };
     check(mesh.vertex_attributes, n, "vertex");
     check(mesh.face_attributes, mesh.faces.size(), "face");
-    return detail::Simplifier(mesh, options).run();
+    if (options.contacts == ContactCheck::every_collapse) return detail::Simplifier(mesh, options).run();
+
+    // Collapses without a contact search, then the result checked once; if it meets itself, the
+    // input (kept) simplified again with every collapse checked.
+    const auto start = detail::Clock::now();
+    Mesh input;
+    SimplifyStats stats = detail::Simplifier(mesh, options, &input).run();
+    if (!stats.contacts_checked_after) return stats;  // (a terrain, or not simplified)
+    if (options.phase) options.phase("checking the result for contacts");
+    const auto check_start = detail::Clock::now();
+    const SelfContact contact = find_self_contact(mesh, stats.threads, stats.predicates);
+    stats.seconds_check = std::chrono::duration<double>(detail::Clock::now() - check_start).count();
+    if (!contact.first) return stats;
+    stop_if_cancelled(options.cancel);
+    if (options.phase) options.phase("simplifying again, every collapse checked");
+    mesh = std::move(input);
+    SimplifyOptions careful = options;
+    careful.contacts = ContactCheck::every_collapse;
+    SimplifyStats again = detail::Simplifier(mesh, careful).run();
+    again.contacts_checked_after = true;
+    again.simplified_again = true;
+    again.first_contact = contact.first;
+    again.seconds_first_run = std::chrono::duration<double>(check_start - start).count() + stats.seconds_check;
+    again.seconds_check = stats.seconds_check;
+    again.predicates += stats.predicates;  // (all the exact tests made)
+    return again;
 }
 
 }  // namespace toposimp::mesh

@@ -42,8 +42,24 @@ struct StopCriterion {
     double value = 0.1;
 };
 
+// How a 3D mesh (not one simplified as a terrain) is kept free of new contacts between its faces.
+enum class ContactCheck {
+    // Each collapse is made without searching for the faces near its new ones; the result is
+    // then checked once, exactly, every pair of nearby faces (find_self_contact). If it meets
+    // itself anywhere (a collapse made a contact, or the input had one), the mesh is simplified
+    // again from the input as every_collapse does. Either way the result has no new contact; it
+    // is every_collapse's result whenever every_collapse refuses no collapse for a contact
+    // (then both make the same collapses), and it costs the check and, rarely, a second run
+    // instead of a search at every collapse (on smooth scans most of the simplification's time).
+    at_the_end,
+    // Each collapse searches the faces near its new ones and is refused if one would meet another
+    // face beyond their shared corners (contacts.cpp); a contact the input had may be inherited.
+    every_collapse,
+};
+
 struct SimplifyOptions {
     StopCriterion stop;
+    ContactCheck contacts = ContactCheck::at_the_end;
     // Border vertices (on an edge with one face) never move and are never removed.
     bool lock_boundary = false;
     // The faces triangulate the map plane (a terrain TIN, z = height): a collapse must keep every
@@ -66,6 +82,10 @@ struct SimplifyOptions {
     // Called on the calling thread after every round with the share of the work done (0…1):
     // faces removed of those to remove for count targets, levels done for --max-error.
     std::function<void(double done)> progress;
+    // Called on the calling thread when a later phase of the work begins (ContactCheck::at_the_end:
+    // "checking the result for contacts", then maybe "simplifying again, every collapse
+    // checked"); progress() then counts that phase from 0. May be empty.
+    std::function<void(const char* phase)> phase;
     // Set by the caller to stop: the engine then throws Cancelled (core/cancel.hpp) between two
     // rounds, the mesh left half simplified (not a result to use). May be null.
     const std::atomic<bool>* cancel = nullptr;
@@ -101,6 +121,16 @@ struct SimplifyStats {
     // Collapses in flat regions proven free of contacts without searching for nearby faces
     // (see flat_and_clean in contacts.cpp); included in `collapses`.
     std::uint64_t flat_unsearched = 0;
+    // ContactCheck::at_the_end: the collapses were made without a contact search and the result
+    // checked after (contacts_checked_after); if that check found faces meeting (first_contact,
+    // numbered as in that result: a degenerate face is paired with itself), the mesh was
+    // simplified again from the input with every collapse checked (simplified_again; the counts
+    // above are that run's). Neither for a terrain, whose checks need no search.
+    bool contacts_checked_after = false;
+    bool simplified_again = false;
+    std::optional<std::array<std::uint32_t, 2>> first_contact;
+    double seconds_first_run = 0.0;  // the run whose result met itself, and its check
+    double seconds_check = 0.0;      // the check of the result (of the run that found a contact, if any)
     double max_error = 0.0;  // largest quadric error (distance) of a collapse made
     int levels = 0;
     int rounds = 0;  // heap builds over all levels (count targets repeat a level while it progresses)
