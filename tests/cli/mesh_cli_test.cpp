@@ -474,6 +474,53 @@ TEST(MeshCli, TerrainOverlappingItselfInTheMapPlaneIsSimplifiedInSpace) {
     EXPECT_EQ(defects.total(), 0u) << defects.first;
 }
 
+std::string contents(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+// Issue 33: by default the collapses are made without the contact search and the result is
+// checked once (--contact-check after). The torus's result has no contact: checked, kept, and the
+// file --contact-check each writes. The bridge deck's first result meets itself: simplified
+// again with every collapse checked, the -v line names the faces, the progress lines the phase,
+// and the file is again --contact-check each's.
+TEST(MeshCli, Issue33ContactsAreCheckedOnceAfterTheCollapses) {
+    const auto dir = fresh_dir("mesh");
+    for (const auto& [input, keep, again] : {std::tuple<std::string, std::string, bool>{"mesh/torus.off", "10%", false},
+                                            {"mesh/bridge-deck.obj", "20%", true}}) {
+        const std::string after = (dir / "after.ply").string(), each = (dir / "each.ply").string();
+        const CliResult a = run_cli({"mesh", testdata(input), "-o", after, "--keep", keep, "--json", "-v", "--overwrite"});
+        ASSERT_EQ(a.code, 0) << a.err;
+        EXPECT_NE(a.out.find(std::string("\"contact_check\":{\"mode\":\"after\",\"simplified_again\":") + (again ? "true" : "false")),
+                  std::string::npos)
+            << input << ": " << a.out;
+        EXPECT_NE(a.err.find(again ? "simplified again with every collapse checked" : "contacts: none in the result"), std::string::npos)
+            << input << ": " << a.err;
+        if (again) {
+            EXPECT_NE(a.err.find("meeting"), std::string::npos) << a.err;
+        }
+        const CliResult e = run_cli({"mesh", testdata(input), "-o", each, "--keep", keep, "--json", "--overwrite", "--contact-check", "each"});
+        ASSERT_EQ(e.code, 0) << e.err;
+        EXPECT_NE(e.out.find("\"contact_check\":{\"mode\":\"each\""), std::string::npos) << e.out;
+        EXPECT_EQ(contents(after), contents(each)) << input;
+        const MeshDefects defects = find_defects(read_back(after));
+        EXPECT_EQ(defects.total(), 0u) << input << ": " << defects.first;
+        if (again) {
+            const CliResult p = run_cli({"mesh", testdata(input), "-o", after, "--keep", keep, "--overwrite", "--progress"});
+            ASSERT_EQ(p.code, 0) << p.err;
+            const auto checking = p.err.find("PROGRESS 0 checking the result for contacts");
+            const auto simplifying = p.err.find("PROGRESS 0 simplifying again, every collapse checked");
+            ASSERT_NE(checking, std::string::npos) << p.err;
+            EXPECT_NE(simplifying, std::string::npos) << p.err;
+            EXPECT_LT(checking, simplifying) << p.err;
+        }
+    }
+    const CliResult bad = run_cli({"mesh", testdata("mesh/torus.off"), "-o", (dir / "x.ply").string(), "--contact-check", "never"});
+    EXPECT_EQ(bad.code, 2);
+    EXPECT_NE(bad.err.find("--contact-check"), std::string::npos) << bad.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "x.ply"));
+}
+
 TEST(MeshCli, DemBandOutOfRangeIsAnError) {
     const auto dir = fresh_dir("mesh-dem");
     const std::string dem = write_dem(dir);

@@ -102,7 +102,8 @@ TEST(Progress, MeshReportsSimplificationUpToTheTarget) {
     const CliResult r = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "--progress"});
     ASSERT_EQ(r.code, 0) << r.err;
     const std::vector<ProgressLine> lines = progress_lines(r.err);
-    const std::vector<std::string> expected{"reading " + testdata("mesh/torus.off"), "simplifying", "writing " + out,
+    const std::vector<std::string> expected{"reading " + testdata("mesh/torus.off"), "simplifying",
+                                            "checking the result for contacts", "writing " + out,
                                             "measuring the Hausdorff distance"};
     EXPECT_EQ(phases(lines), expected) << r.err;
     // The target is reached, so the simplifying phase ends at 100.

@@ -70,3 +70,16 @@ def test_bad_meshes_raise():
         toposimp.read_mesh("/nonexistent/x.ply")
     with pytest.raises(toposimp.UsageError, match="not a mesh format"):
         toposimp.write_mesh("/tmp/x.xyz", (mesh.vertices, mesh.faces))
+
+
+def test_contact_check_after_or_each():
+    # The bridge deck's first result meets itself: simplified again, every collapse checked; the
+    # same mesh as contact_check="each" gives.
+    deck = toposimp.read_mesh(DATA / "mesh" / "bridge-deck.obj")
+    after = toposimp.simplify_mesh(deck.vertices, deck.faces, keep=0.2, measure=None)
+    each = toposimp.simplify_mesh(deck.vertices, deck.faces, keep=0.2, measure=None, contact_check="each")
+    assert after.report["contact_check"]["mode"] == "after" and after.report["contact_check"]["simplified_again"]
+    assert each.report["contact_check"]["mode"] == "each" and not each.report["contact_check"]["simplified_again"]
+    assert numpy.array_equal(after.vertices, each.vertices) and numpy.array_equal(after.faces, each.faces)
+    with pytest.raises(toposimp.UsageError, match="contact_check is 'after' or 'each'"):
+        toposimp.simplify_mesh(deck.vertices, deck.faces, contact_check="never")

@@ -317,6 +317,11 @@ bool Simplifier::prepare(SimplifyStats& stats) {
         return false;
     }
     check_terrain();
+    quick_ = options_.contacts == ContactCheck::at_the_end && !terrain_;
+    stats.contacts_checked_after = quick_;
+    // The mesh as it came but for drop_unused (which finds nothing more to drop in it), before it
+    // is renumbered: a second run from it is the same as from the input.
+    if (quick_ && input_copy_ != nullptr) *input_copy_ = mesh_;
     spatial_order();
     if (terrain_ && options_.stop.target == Target::max_error && std::isfinite(options_.stop.value)) {
         vertical_ = std::make_unique<VerticalBound>(mesh_, options_.stop.value);
@@ -333,10 +338,6 @@ bool Simplifier::prepare(SimplifyStats& stats) {
     if (vertical_) touch_.assign(pos_.size(), 0);
     add_border_planes();
     choose_grid();
-    quick_ = options_.contacts == ContactCheck::at_the_end && !terrain_;
-    stats.contacts_checked_after = quick_;
-    // (As it is after drop_unused, which finds nothing more to drop in it: the same run.)
-    if (quick_ && input_copy_ != nullptr) *input_copy_ = mesh_;
     if (!terrain_ && !quick_) find_twins();
     use_index_ = !quick_ && (!terrain_ || !lock_);
     return true;
@@ -547,6 +548,7 @@ SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options) {
     const auto check_start = detail::Clock::now();
     const SelfContact contact = find_self_contact(mesh, stats.threads, stats.predicates);
     stats.seconds_check = std::chrono::duration<double>(detail::Clock::now() - check_start).count();
+    if (options.progress) options.progress(1.0);
     if (!contact.first) return stats;
     stop_if_cancelled(options.cancel);
     if (options.phase) options.phase("simplifying again, every collapse checked");
