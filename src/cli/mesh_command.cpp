@@ -408,9 +408,12 @@ std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyO
     }
     json.object("parallel").field("threads", stats.threads).field("levels", stats.levels).field("rounds", stats.rounds).end();
     // How contacts were kept out: "after" (the result checked; again: a second run, every collapse
-    // checked, because the first result met itself), "each", or "terrain" (no search needed).
+    // checked, because the first result met itself), "each", or "terrain" (a terrain whose border
+    // stays: no search needed).
     json.object("contact_check")
-        .field("mode", stats.terrain ? "terrain" : stats.contacts_checked_after ? "after" : "each")
+        .field("mode", stats.contacts_checked_after                                          ? "after"
+                       : stats.terrain && (engine.lock_boundary || stats.vertical_bound) ? "terrain"
+                                                                                          : "each")
         .field("simplified_again", stats.simplified_again)
         .field("seconds_check", stats.seconds_check)
         .field("seconds_first_run", stats.seconds_first_run)

@@ -469,6 +469,41 @@ TEST(MeshProperties, FlatRegionsSkipTheSearchButDecideTheSame) {
     EXPECT_GT(find_defects(inputs[2].mesh).intersecting_pairs, 0u);
 }
 
+// Two bumpy terrain grids of n × n cells side by side, `gap` apart along x, their facing border
+// columns jittered towards each other by up to 0.45 gap: border collapses there can push one
+// grid's border over the other's in the map plane.
+Mesh facing_terrains(int n, double gap, std::uint64_t seed) {
+    std::mt19937_64 random(seed);
+    std::uniform_real_distribution<double> unit(0, 1);
+    Mesh m;
+    for (int part = 0; part < 2; ++part) {
+        const auto first = static_cast<std::uint32_t>(m.points.size());
+        const double x0 = part == 0 ? 0 : n + gap;
+        for (int j = 0; j <= n; ++j) {
+            for (int i = 0; i <= n; ++i) {
+                double x = x0 + i, y = j;
+                const bool facing = (part == 0 && i == n) || (part == 1 && i == 0);
+                if (facing) {
+                    x += (part == 0 ? 1 : -1) * 0.45 * gap * unit(random);
+                } else if (i > 0 && i < n && j > 0 && j < n) {
+                    x += 0.2 * (unit(random) - 0.5);
+                    y += 0.2 * (unit(random) - 0.5);
+                }
+                m.points.push_back({x, y, std::sin(0.4 * x) * std::cos(0.3 * y) + 0.3 * unit(random)});
+            }
+        }
+        const auto w = static_cast<std::uint32_t>(n + 1);
+        for (int j = 0; j < n; ++j) {
+            for (int i = 0; i < n; ++i) {
+                const std::uint32_t a = first + static_cast<std::uint32_t>(j) * w + static_cast<std::uint32_t>(i);
+                m.faces.push_back({a, a + 1, a + w + 1});
+                m.faces.push_back({a, a + w + 1, a + w});
+            }
+        }
+    }
+    return m;
+}
+
 // ContactCheck::at_the_end against every_collapse on clean and self-intersecting inputs: its
 // result never meets itself where the input did not (the independent checker's count); it is
 // every_collapse's result when that refuses no collapse for a contact, and when the first
@@ -477,6 +512,7 @@ TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
     struct Input {
         std::string name;
         Mesh mesh;
+        bool terrain = false;  // simplified as a terrain, its border free (checked in the map plane)
     };
     Mesh crossing = testing::noisy_sphere(3, 0.02, 7);
     {
@@ -493,8 +529,13 @@ TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
                             {"folded strip", testing::folded_strip(40, 1e-3, 6)},
                             {"crossing spheres", crossing},
                             {"grid with spikes", grid_with_spikes(18)},
-                            {"grid with a square lying in it", grid_with_lying_square(18)}};
-    int again = 0, same_without_refusal = 0;
+                            {"grid with a square lying in it", grid_with_lying_square(18)},
+                            {"holed terrain", holed_sheet(30, 2, 1, 0.3, 9), true},
+                            {"holed terrain, strips of two", holed_sheet(30, 2, 2, 0.3, 10), true},
+                            {"noisy terrain", testing::noisy_heightfield(40, 2.0, 11), true},
+                            {"terrains 1e-3 apart", facing_terrains(20, 1e-3, 12), true},
+                            {"terrains 1e-9 apart", facing_terrains(20, 1e-9, 13), true}};
+    int again = 0, same_without_refusal = 0, terrain_again = 0, terrain_kept = 0;
     for (const Input& input : inputs) {
         const std::uint64_t before = find_defects(input.mesh).intersecting_pairs;
         for (const double keep : {0.1, 0.02}) {
@@ -503,6 +544,7 @@ TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
             options.stop.value = keep;
             options.threads = 2;
             options.parallel_threshold = 0;
+            options.terrain = input.terrain;
             Mesh each = input.mesh, after = input.mesh;
             options.contacts = ContactCheck::every_collapse;
             const SimplifyStats each_stats = simplify(each, options);
@@ -510,6 +552,11 @@ TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
             const SimplifyStats after_stats = simplify(after, options);
             EXPECT_FALSE(each_stats.contacts_checked_after) << what;
             EXPECT_TRUE(after_stats.contacts_checked_after) << what;
+            EXPECT_EQ(after_stats.terrain, input.terrain) << what;
+            if (input.terrain) {
+                EXPECT_EQ(testing::count_map_plane_folds(after, 1), 0u) << what;
+                ++(after_stats.simplified_again ? terrain_again : terrain_kept);
+            }
             const auto defects = find_defects(after);
             EXPECT_EQ(defects.total() - defects.intersecting_pairs, 0u) << what << ": " << defects.first;
             if (after_stats.simplified_again) {
@@ -535,6 +582,8 @@ TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
     // Both ways out were taken.
     EXPECT_GT(again, 0);
     EXPECT_GT(same_without_refusal, 0);
+    EXPECT_GT(terrain_again, 0);  // (the terrains side by side: their borders crossed in the map plane)
+    EXPECT_GT(terrain_kept, 0);
 }
 
 TEST(MeshProperties, VerticalErrorIsTheHeightDifferenceAboveOrBelow) {

@@ -157,6 +157,10 @@ private:
     void choose_grid();
     void check_terrain();
     void build_face_index();
+    // After a run with quick_: two faces of the result meeting where no collapse checked with a
+    // search would have let them (a degenerate face paired with itself), or none. Numbered as in
+    // the result.
+    std::optional<std::array<std::uint32_t, 2>> result_contact(exact::PredicateStats& predicates) const;
     // The candidates of a block at the start of a level: the still valid ones of the blocks it
     // was made of at the level before (`before`, emptied), the others computed afresh.
     std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block,
@@ -340,8 +344,9 @@ private:
     std::uint64_t target_ = 0;   // its faces
     bool use_index_ = false;
     bool terrain_ = false;
-    // No contact search: the result is checked after the run (ContactCheck::at_the_end, a 3D
-    // mesh), so no face index, clean_ or twin_ is kept.
+    // No contact search (ContactCheck::at_the_end, a 3D mesh or a terrain whose border may
+    // move): the result is checked after the run (result_contact), and no face index, clean_ or
+    // twin_ is kept.
     bool quick_ = false;
     bool lock_ = false;  // border vertices never move (asked for, or kept for the vertical bound)
     std::unique_ptr<VerticalBound> vertical_;  // terrains under a max_error target

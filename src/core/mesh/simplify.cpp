@@ -317,7 +317,8 @@ bool Simplifier::prepare(SimplifyStats& stats) {
         return false;
     }
     check_terrain();
-    quick_ = options_.contacts == ContactCheck::at_the_end && !terrain_;
+    // (A terrain with its border kept searches for nothing: nothing to check after.)
+    quick_ = options_.contacts == ContactCheck::at_the_end && (!terrain_ || !lock_);
     stats.contacts_checked_after = quick_;
     // The mesh as it came but for drop_unused (which finds nothing more to drop in it), before it
     // is renumbered: a second run from it is the same as from the input.
@@ -511,7 +512,28 @@ SimplifyStats Simplifier::run() {
     stats.vertices_out = pos_.size();
     stats.faces_out = face_.size();
     stats.seconds_collapse = std::chrono::duration<double>(Clock::now() - sweep).count();
+    if (quick_) {
+        if (options_.phase) options_.phase("checking the result for contacts");
+        const auto check = Clock::now();
+        stats.first_contact = result_contact(stats.predicates);
+        stats.seconds_check = std::chrono::duration<double>(Clock::now() - check).count();
+        if (options_.progress) options_.progress(1.0);
+    }
     return stats;
+}
+
+std::optional<std::array<std::uint32_t, 2>> Simplifier::result_contact(exact::PredicateStats& predicates) const {
+    if (!terrain_) return find_self_contact(mesh_, threads_, predicates).first;
+    // A terrain: its faces all still turn its way in the map plane (every collapse kept them so,
+    // and none made a face without area there). If the border is simple loops that wind right
+    // (covers_once_by_border), they cover each point of the plane at most once and meet only
+    // along shared edges and corners: a planar triangulation, which the heights cannot make
+    // cross itself. Otherwise the faces flattened to the plane are tested pair by pair, as a
+    // collapse moving the border tests them (search_contacts with `flatten`).
+    if (covers_once_by_border(mesh_, terrain_turn_, border_edges(mesh_, threads_))) return std::nullopt;
+    Mesh flat{pos_, face_};
+    for (Point3& p : flat.points) p.z = 0;
+    return find_self_contact(flat, threads_, predicates).first;
 }
 
 }  // namespace detail
@@ -538,28 +560,23 @@ SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options) {
     check(mesh.face_attributes, mesh.faces.size(), "face");
     if (options.contacts == ContactCheck::every_collapse) return detail::Simplifier(mesh, options).run();
 
-    // Collapses without a contact search, then the result checked once; if it meets itself, the
-    // input (kept) simplified again with every collapse checked.
+    // Collapses without a contact search, the result checked (Simplifier::run); if it meets
+    // itself, the input (kept) simplified again with every collapse checked.
     const auto start = detail::Clock::now();
     Mesh input;
     SimplifyStats stats = detail::Simplifier(mesh, options, &input).run();
-    if (!stats.contacts_checked_after) return stats;  // (a terrain, or not simplified)
-    if (options.phase) options.phase("checking the result for contacts");
-    const auto check_start = detail::Clock::now();
-    const SelfContact contact = find_self_contact(mesh, stats.threads, stats.predicates);
-    stats.seconds_check = std::chrono::duration<double>(detail::Clock::now() - check_start).count();
-    if (options.progress) options.progress(1.0);
-    if (!contact.first) return stats;
+    if (!stats.first_contact) return stats;
     stop_if_cancelled(options.cancel);
     if (options.phase) options.phase("simplifying again, every collapse checked");
+    const double first_run = std::chrono::duration<double>(detail::Clock::now() - start).count();
     mesh = std::move(input);
     SimplifyOptions careful = options;
     careful.contacts = ContactCheck::every_collapse;
     SimplifyStats again = detail::Simplifier(mesh, careful).run();
     again.contacts_checked_after = true;
     again.simplified_again = true;
-    again.first_contact = contact.first;
-    again.seconds_first_run = std::chrono::duration<double>(check_start - start).count() + stats.seconds_check;
+    again.first_contact = stats.first_contact;
+    again.seconds_first_run = first_run;
     again.seconds_check = stats.seconds_check;
     again.predicates += stats.predicates;  // (all the exact tests made)
     return again;
