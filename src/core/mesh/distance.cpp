@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numeric>
 #include <optional>
 #include <span>
 #include <tuple>
@@ -229,11 +230,20 @@ public:
             for (std::size_t c = cells; c > 0; --c) start_[c] = start_[c - 1];
             start_[0] = 0;
         } else {
+            // Sorted by cell in passes of 12 bits of the key, each stable (a counting sort), so
+            // each cell's faces stay in face order. (std::sort took 0.08 s of the quick measure's
+            // 0.13 s on armadillo-832k, 1.4 M entries in 8.5 M cells; these passes, two, ~0.01 s.)
             keys_.resize(total);
-            std::vector<std::pair<std::int64_t, std::uint32_t>> entries;
+            std::vector<std::pair<std::int64_t, std::uint32_t>> entries, other(total);
             entries.reserve(total);
             for (const auto& part : listed) entries.insert(entries.end(), part.begin(), part.end());
-            std::sort(entries.begin(), entries.end());
+            for (int shift = 0; shift < 63 && (std::uint64_t{1} << shift) < cells; shift += 12) {
+                std::vector<std::size_t> first(4097, 0);
+                for (const auto& entry : entries) ++first[((static_cast<std::uint64_t>(entry.first) >> shift) & 4095) + 1];
+                std::partial_sum(first.begin(), first.end(), first.begin());
+                for (const auto& entry : entries) other[first[(static_cast<std::uint64_t>(entry.first) >> shift) & 4095]++] = entry;
+                entries.swap(other);
+            }
             for (std::size_t i = 0; i < entries.size(); ++i) keys_[i] = entries[i].first, faces_[i] = entries[i].second;
         }
     }

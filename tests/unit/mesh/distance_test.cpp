@@ -198,6 +198,19 @@ TEST(QuickMeasure, IndexingOnlyNearTheSpreadPointsFindsTheNearestFaces) {
     std::mt19937 random(5);
     expect_spread_same(scattered(random, 150, 10.0), scattered(random, 120, 3.0), 1500);
     expect_spread_same(fan(400, 1.0, 0.0, 1), fan(150, 1.05, 0.02, 2), 1000);
+    // Specks along the diagonal of a big box: a grid of millions of cells for a few thousand
+    // entries, which are sorted by cell in passes (not counted per cell).
+    auto specks = [](int count, double shift) {
+        Mesh m;
+        for (int i = 0; i < count; ++i) {
+            const double t = 100.0 * i / count + shift;
+            const auto first = static_cast<std::uint32_t>(m.points.size());
+            m.points.insert(m.points.end(), {{t, t, t}, {t + 0.01, t, t}, {t, t + 0.01, t + 0.003}});
+            m.faces.push_back({first, first + 1, first + 2});
+        }
+        return m;
+    };
+    expect_spread_same(specks(3000, 0.0), specks(800, 0.02), 1200);
 }
 
 TEST(QuickMeasure, PointsAreSpreadByAreaAndTheSameForAnyThreads) {
