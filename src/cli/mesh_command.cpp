@@ -319,11 +319,11 @@ void report(const mesh::SimplifyStats& stats, const mesh::SimplifyOptions& engin
               stats.refused_link, stats.refused_boundary, stats.refused_flip, stats.refused_degenerate,
               stats.refused_intersection, stats.refused_vertical);
     if (stats.simplified_again) {
-        const auto [f, g] = *stats.first_contact;
-        log.debug("contacts: the collapses made without a search left {} (the input met itself, or a collapse "
-                  "made a contact): simplified again with every collapse checked ({:.3f} s spent before)",
-                  f == g ? fmt::format("face {} degenerate", f) : fmt::format("faces {} and {} meeting", f, g),
-                  stats.seconds_first_run);
+        const Point3 at = *stats.contact_near;
+        log.debug("contacts: the collapses made without a search left faces meeting near ({}, {}, {}) (a collapse made a "
+                  "contact, or a face met one the input's faces met): simplified again with every collapse checked "
+                  "({:.3f} s spent before)",
+                  at.x, at.y, at.z, stats.seconds_first_run);
     } else if (stats.contacts_checked_after) {
         log.debug("contacts: none in the result, checked once after the collapses ({:.3f} s)", stats.seconds_check);
     }

@@ -561,12 +561,16 @@ TEST(MeshProperties, ContactsCheckedAfterTheRunAreNeverWorse) {
             EXPECT_EQ(defects.total() - defects.intersecting_pairs, 0u) << what << ": " << defects.first;
             if (after_stats.simplified_again) {
                 ++again;
-                EXPECT_TRUE(after_stats.first_contact.has_value()) << what;
+                EXPECT_TRUE(after_stats.contact_near.has_value()) << what;
                 EXPECT_TRUE(same(after, each)) << what;
                 EXPECT_EQ(after_stats.refused_intersection, each_stats.refused_intersection) << what;
             } else {
-                EXPECT_FALSE(after_stats.first_contact.has_value()) << what;
-                EXPECT_EQ(defects.intersecting_pairs, 0u) << what << ": " << defects.first;  // the check was right
+                EXPECT_FALSE(after_stats.contact_near.has_value()) << what;
+                // The check was right: no face a collapse made meets another (pairs of the input's
+                // faces that still meet are the input's).
+                if (before == 0) {
+                    EXPECT_EQ(defects.intersecting_pairs, 0u) << what << ": " << defects.first;
+                }
                 if (each_stats.refused_intersection == 0) {
                     ++same_without_refusal;
                     EXPECT_TRUE(same(after, each)) << what;

@@ -195,10 +195,8 @@ void Simplifier::apply(const Collapse& c, BlockResult& result, std::vector<std::
     stamp_[b] = (stamp_[b] + 1) & kStampMask;
     // Faces made by a collapse were checked against every face near them: clean, unless they
     // inherit a contact of the input's.
-    if (!quick_) {
-        for (std::uint32_t f : c.star) clean_[f] = c.inherits ? kConflicting : kClean;
-        if (!terrain_) twin_[a] = c.twin_after;
-    }
+    for (std::uint32_t f : c.star) clean_[f] = c.inherits ? kConflicting : kClean;
+    if (!terrain_ && !quick_) twin_[a] = c.twin_after;
     if (use_index_) {
         for (std::uint32_t f : c.shared) index_.mark_changed(f);
         for (std::uint32_t f : c.star) index_.enter_overlay(f, face_box(f), overlay);

@@ -68,13 +68,14 @@ struct Found {
 
 }  // namespace
 
-SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateStats& stats) {
+SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateStats& stats, std::span<const std::uint8_t> changed) {
     if (threads <= 0) threads = omp_get_max_threads();
     const std::vector<Point3>& pos = mesh.points;
     const std::vector<Face>& faces = mesh.faces;
     const auto m = static_cast<std::int64_t>(faces.size());
     SelfContact out;
     if (m == 0) return out;
+    auto is_changed = [&](std::size_t f) { return changed.empty() || changed[f] != 0; };
     auto triangle = [&](std::int64_t f) {
         const Face& c = faces[static_cast<std::size_t>(f)];
         return exact::Triangle3{pos[c[0]], pos[c[1]], pos[c[2]]};
@@ -100,7 +101,7 @@ SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateSta
             extents[me].add(box.hi);
             const double side = std::max({box.hi.x / 2 - box.lo.x / 2, box.hi.y / 2 - box.lo.y / 2, box.hi.z / 2 - box.lo.z / 2});
             sides[me] += side / static_cast<double>(m);
-            if (exact::degenerate(t, mine.stats)) {
+            if (is_changed(static_cast<std::size_t>(f)) && exact::degenerate(t, mine.stats)) {
                 degenerate[static_cast<std::size_t>(f)] = 1;
                 mine.add(static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(f));
             }
@@ -115,34 +116,61 @@ SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateSta
     // cells each on average (a few long faces across a fine grid).
     double size = 2 * std::accumulate(sides.begin(), sides.end(), 0.0);
     std::vector<std::uint64_t> first(faces.size() + 1, 0);  // each face's first entry
+    const std::uint64_t most = 8 * static_cast<std::uint64_t>(m) + 1024;
     for (;;) {
         const HalfGrid grid(all, size);
         std::uint64_t total = 0;
 #pragma omp parallel for schedule(static) reduction(+ : total) num_threads(threads)
         for (std::int64_t f = 0; f < m; ++f) {
             const auto k = static_cast<std::size_t>(f);
-            first[k + 1] = degenerate[k] ? 0 : grid.span(boxes[k]);
+            // (At most `most` + 1 a face, so the sum cannot overflow; one face over it is enough.)
+            first[k + 1] = degenerate[k] ? 0 : std::min(grid.span(boxes[k]), most + 1);
             total += first[k + 1];
         }
-        if (total <= 8 * static_cast<std::uint64_t>(m) + 1024 || !(size > 0) || !std::isfinite(size)) break;
+        if (total <= most || !(size > 0) || !std::isfinite(size)) break;
         size *= 2;
     }
     const HalfGrid grid(all, size);
+    // Each face's cells, in order; with `changed`, an unchanged face only in the cells a changed
+    // face meets (`marked`, sorted).
+    auto for_cells = [&](const Box3& box, auto visit) {
+        for (std::uint32_t x = grid.cell(box.lo.x, 0); x <= grid.cell(box.hi.x, 0); ++x) {
+            for (std::uint32_t y = grid.cell(box.lo.y, 1); y <= grid.cell(box.hi.y, 1); ++y) {
+                for (std::uint32_t z = grid.cell(box.lo.z, 2); z <= grid.cell(box.hi.z, 2); ++z) visit(HalfGrid::pack(x, y, z));
+            }
+        }
+    };
+    std::vector<std::uint64_t> marked;
+    if (!changed.empty()) {
+        for (std::size_t f = 0; f < faces.size(); ++f) {
+            if (changed[f] && !degenerate[f]) for_cells(boxes[f], [&](std::uint64_t key) { marked.push_back(key); });
+        }
+        std::sort(marked.begin(), marked.end());
+        marked.erase(std::unique(marked.begin(), marked.end()), marked.end());
+    }
+    auto listed = [&](std::size_t f, std::uint64_t key) {
+        return changed.empty() || changed[f] || std::binary_search(marked.begin(), marked.end(), key);
+    };
+    if (!changed.empty()) {
+#pragma omp parallel for schedule(static) num_threads(threads)
+        for (std::int64_t f = 0; f < m; ++f) {
+            const auto k = static_cast<std::size_t>(f);
+            if (degenerate[k] || changed[k]) continue;
+            std::uint64_t count = 0;
+            for_cells(boxes[k], [&](std::uint64_t key) { count += listed(k, key); });
+            first[k + 1] = count;
+        }
+    }
     std::partial_sum(first.begin(), first.end(), first.begin());
     std::vector<Entry> entries(first.back());
 #pragma omp parallel for schedule(static) num_threads(threads)
     for (std::int64_t f = 0; f < m; ++f) {
         const auto k = static_cast<std::size_t>(f);
         if (degenerate[k]) continue;
-        const Box3& box = boxes[k];
         std::uint64_t at = first[k];
-        for (std::uint32_t x = grid.cell(box.lo.x, 0); x <= grid.cell(box.hi.x, 0); ++x) {
-            for (std::uint32_t y = grid.cell(box.lo.y, 1); y <= grid.cell(box.hi.y, 1); ++y) {
-                for (std::uint32_t z = grid.cell(box.lo.z, 2); z <= grid.cell(box.hi.z, 2); ++z) {
-                    entries[at++] = {HalfGrid::pack(x, y, z), static_cast<std::uint32_t>(f)};
-                }
-            }
-        }
+        for_cells(boxes[k], [&](std::uint64_t key) {
+            if (listed(k, key)) entries[at++] = {key, static_cast<std::uint32_t>(f)};
+        });
     }
     std::sort(entries.begin(), entries.end());
     std::vector<std::size_t> runs;  // where each cell's entries begin, then the end
@@ -167,7 +195,7 @@ SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateSta
                 for (std::size_t j = i + 1; j < end; ++j) {
                     const std::uint32_t g = entries[j].face;
                     const Box3& b = boxes[g];
-                    if (!a.overlaps(b)) continue;
+                    if (!a.overlaps(b) || !(is_changed(f) || is_changed(g))) continue;
                     const Point3 low{std::max(a.lo.x, b.lo.x), std::max(a.lo.y, b.lo.y), std::max(a.lo.z, b.lo.z)};
                     if (grid.key(low) != here) continue;
                     if (exact::faces_conflict(triangle(f), triangle(g), mine.stats)) mine.add(f, g);

@@ -8,6 +8,7 @@
 #include <array>
 #include <cstdint>
 #include <optional>
+#include <span>
 
 namespace toposimp::mesh {
 
@@ -24,6 +25,9 @@ struct SelfContact {
 // grid (cells about twice the mean edge, larger while faces would fill too many cells) and each
 // pair tested once, in the cell holding the low corner of the overlap of their boxes. The answer
 // does not depend on the grid or on `threads` (0: OpenMP's default).
-SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateStats& stats);
+// `changed` (one flag per face, or empty: all): only pairs with a changed face count, and only a
+// changed face's degeneracy; the others are listed only in cells a changed face meets.
+SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateStats& stats,
+                              std::span<const std::uint8_t> changed = {});
 
 }  // namespace toposimp::mesh

@@ -157,10 +157,10 @@ private:
     void choose_grid();
     void check_terrain();
     void build_face_index();
-    // After a run with quick_: two faces of the result meeting where no collapse checked with a
-    // search would have let them (a degenerate face paired with itself), or none. Numbered as in
-    // the result.
-    std::optional<std::array<std::uint32_t, 2>> result_contact(exact::PredicateStats& predicates) const;
+    // After a run with quick_, its dead faces dropped: where two faces of the result meet (a
+    // corner of one), one a collapse made, as no collapse checked with a search would have let
+    // them, or a collapse made a degenerate face; none if nowhere.
+    std::optional<Point3> result_contact(exact::PredicateStats& predicates) const;
     // The candidates of a block at the start of a level: the still valid ones of the blocks it
     // was made of at the level before (`before`, emptied), the others computed afresh.
     std::vector<Candidate> block_candidates(int level, const std::uint32_t* vertices, std::size_t count, std::uint64_t block,
@@ -379,7 +379,8 @@ private:
     // Per face, whether it meets no other face beyond their shared corners/edge: kClean when made
     // by a collapse (checked against every face near it then, and every face made since against
     // it) or checked since (meets_another); kUnknown for an input face not checked yet;
-    // kConflicting when the check found a contact.
+    // kConflicting when the check found a contact. (With quick_: kClean for a face a collapse
+    // made, unchecked, kUnknown for one of the input's.)
     std::vector<std::uint8_t> clean_;
     static constexpr std::uint8_t kUnknown = 0, kClean = 1, kConflicting = 2;
     // Per vertex (3D meshes): another live vertex may have its location.

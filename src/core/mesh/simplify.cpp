@@ -504,26 +504,34 @@ SimplifyStats Simplifier::run() {
     }
     stats.target_reached = !by_count_ || live_faces_ <= target_;
 
-    // Compact: surviving faces and vertices in input order.
+    // Compact: surviving faces and vertices in input order (checked first, with quick_, while
+    // clean_ still tells the faces collapses made).
     drop_dead_faces(nullptr);
+    if (quick_) {
+        if (options_.phase) options_.phase("checking the result for contacts");
+        const auto check = Clock::now();
+        stats.contact_near = result_contact(stats.predicates);
+        stats.seconds_check = std::chrono::duration<double>(Clock::now() - check).count();
+        if (options_.progress) options_.progress(1.0);
+    }
     input_order();
     drop_unused(mesh_);
 
     stats.vertices_out = pos_.size();
     stats.faces_out = face_.size();
     stats.seconds_collapse = std::chrono::duration<double>(Clock::now() - sweep).count();
-    if (quick_) {
-        if (options_.phase) options_.phase("checking the result for contacts");
-        const auto check = Clock::now();
-        stats.first_contact = result_contact(stats.predicates);
-        stats.seconds_check = std::chrono::duration<double>(Clock::now() - check).count();
-        if (options_.progress) options_.progress(1.0);
-    }
     return stats;
 }
 
-std::optional<std::array<std::uint32_t, 2>> Simplifier::result_contact(exact::PredicateStats& predicates) const {
-    if (!terrain_) return find_self_contact(mesh_, threads_, predicates).first;
+std::optional<Point3> Simplifier::result_contact(exact::PredicateStats& predicates) const {
+    // The faces collapses made (and changed since): only pairs with one of them can be new.
+    std::vector<std::uint8_t> made(face_.size());
+    for (std::size_t f = 0; f < face_.size(); ++f) made[f] = clean_[f] != kUnknown;
+    auto near = [&](const SelfContact& found) -> std::optional<Point3> {
+        if (!found.first) return std::nullopt;
+        return pos_[face_[(*found.first)[0]][0]];
+    };
+    if (!terrain_) return near(find_self_contact(mesh_, threads_, predicates, made));
     // A terrain: its faces all still turn its way in the map plane (every collapse kept them so,
     // and none made a face without area there). If the border is simple loops that wind right
     // (covers_once_by_border), they cover each point of the plane at most once and meet only
@@ -533,7 +541,7 @@ std::optional<std::array<std::uint32_t, 2>> Simplifier::result_contact(exact::Pr
     if (covers_once_by_border(mesh_, terrain_turn_, border_edges(mesh_, threads_))) return std::nullopt;
     Mesh flat{pos_, face_};
     for (Point3& p : flat.points) p.z = 0;
-    return find_self_contact(flat, threads_, predicates).first;
+    return near(find_self_contact(flat, threads_, predicates, made));
 }
 
 }  // namespace detail
@@ -565,7 +573,7 @@ SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options) {
     const auto start = detail::Clock::now();
     Mesh input;
     SimplifyStats stats = detail::Simplifier(mesh, options, &input).run();
-    if (!stats.first_contact) return stats;
+    if (!stats.contact_near) return stats;
     stop_if_cancelled(options.cancel);
     if (options.phase) options.phase("simplifying again, every collapse checked");
     const double first_run = std::chrono::duration<double>(detail::Clock::now() - start).count();
@@ -575,7 +583,7 @@ SimplifyStats simplify(Mesh& mesh, const SimplifyOptions& options) {
     SimplifyStats again = detail::Simplifier(mesh, careful).run();
     again.contacts_checked_after = true;
     again.simplified_again = true;
-    again.first_contact = stats.first_contact;
+    again.contact_near = stats.contact_near;
     again.seconds_first_run = first_run;
     again.seconds_check = stats.seconds_check;
     again.predicates += stats.predicates;  // (all the exact tests made)

@@ -45,9 +45,10 @@ struct StopCriterion {
 // How a 3D mesh (not one simplified as a terrain) is kept free of new contacts between its faces.
 enum class ContactCheck {
     // Each collapse is made without searching for the faces near its new ones; the result is
-    // then checked once, exactly, every pair of nearby faces (find_self_contact). If it meets
-    // itself anywhere (a collapse made a contact, or the input had one), the mesh is simplified
-    // again from the input as every_collapse does. Either way the result has no new contact; it
+    // then checked once, exactly: every pair of nearby faces one of which a collapse made
+    // (find_self_contact; two faces of the input that still meet are the input's contact). If a
+    // pair meets (a collapse made a contact, or a new face meets one the input's faces met), the
+    // mesh is simplified again from the input as every_collapse does. Either way the result has no new contact; it
     // is every_collapse's result whenever every_collapse refuses no collapse for a contact
     // (then both make the same collapses), and it costs the check and, rarely, a second run
     // instead of a search at every collapse (on smooth scans most of the simplification's time).
@@ -122,13 +123,14 @@ struct SimplifyStats {
     // (see flat_and_clean in contacts.cpp); included in `collapses`.
     std::uint64_t flat_unsearched = 0;
     // ContactCheck::at_the_end: the collapses were made without a contact search and the result
-    // checked after (contacts_checked_after); if that check found faces meeting (first_contact,
-    // numbered as in that result: a degenerate face is paired with itself), the mesh was
+    // checked after (contacts_checked_after): every pair of faces with a face a collapse made (a
+    // contact between two faces of the input is the input's). If that check found two faces
+    // meeting (contact_near: a corner of one of them; or a degenerate face), the mesh was
     // simplified again from the input with every collapse checked (simplified_again; the counts
-    // above are that run's). Neither for a terrain, whose checks need no search.
+    // above are that run's). Neither for a terrain whose border is kept: it needs no search.
     bool contacts_checked_after = false;
     bool simplified_again = false;
-    std::optional<std::array<std::uint32_t, 2>> first_contact;
+    std::optional<Point3> contact_near;
     double seconds_first_run = 0.0;  // the run whose result met itself, and its check
     double seconds_check = 0.0;      // the check of the result (of the run that found a contact, if any)
     double max_error = 0.0;  // largest quadric error (distance) of a collapse made

@@ -18,7 +18,7 @@
 namespace toposimp::mesh {
 namespace {
 
-SelfContact by_every_pair(const Mesh& m) {
+SelfContact by_every_pair(const Mesh& m, const std::vector<std::uint8_t>& changed = {}) {
     exact::PredicateStats stats;
     SelfContact out;
     auto triangle = [&](std::uint32_t f) {
@@ -27,14 +27,18 @@ SelfContact by_every_pair(const Mesh& m) {
     };
     std::vector<bool> degenerate(m.faces.size());
     for (std::uint32_t f = 0; f < m.faces.size(); ++f) degenerate[f] = exact::degenerate(triangle(f), stats);
+    auto is_changed = [&](std::uint32_t f) { return changed.empty() || changed[f] != 0; };
     for (std::uint32_t f = 0; f < m.faces.size(); ++f) {
         if (degenerate[f]) {
-            ++out.pairs;
-            if (!out.first) out.first = {f, f};
+            if (is_changed(f)) {
+                ++out.pairs;
+                if (!out.first) out.first = {f, f};
+            }
             continue;
         }
         for (std::uint32_t g = f + 1; g < m.faces.size(); ++g) {
-            if (degenerate[g] || !exact::faces_conflict(triangle(f), triangle(g), stats)) continue;
+            if (degenerate[g] || !(is_changed(f) || is_changed(g))) continue;
+            if (!exact::faces_conflict(triangle(f), triangle(g), stats)) continue;
             ++out.pairs;
             if (!out.first) out.first = {f, g};
         }
@@ -42,9 +46,9 @@ SelfContact by_every_pair(const Mesh& m) {
     return out;
 }
 
-SelfContact found(const Mesh& m, int threads = 2) {
+SelfContact found(const Mesh& m, int threads = 2, const std::vector<std::uint8_t>& changed = {}) {
     exact::PredicateStats stats;
-    return find_self_contact(m, threads, stats);
+    return find_self_contact(m, threads, stats, changed);
 }
 
 void expect_same(const SelfContact& got, const SelfContact& want, const std::string& what) {
@@ -85,6 +89,17 @@ TEST(SelfContact, EveryPairTestedAgreesOnRandomSoups) {
             EXPECT_GT(want.pairs, 10u) << "seed " << seed;  // (crowded: many pairs meet)
         }
         for (int threads : {1, 3}) expect_same(found(m, threads), want, "seed " + std::to_string(seed));
+        // Only the pairs with a changed face (a third of them, at random): the others are listed
+        // only where a changed face is.
+        std::vector<std::uint8_t> changed(m.faces.size());
+        std::mt19937 pick(seed);
+        for (std::uint8_t& c : changed) c = pick() % 3 == 0;
+        const SelfContact some = by_every_pair(m, changed);
+        if (m.faces.size() == 300) {
+            EXPECT_GT(some.pairs, 0u) << "seed " << seed;
+            EXPECT_LT(some.pairs, want.pairs) << "seed " << seed;
+        }
+        for (int threads : {1, 3}) expect_same(found(m, threads, changed), some, "changed, seed " + std::to_string(seed));
     }
 }
 
