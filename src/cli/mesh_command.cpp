@@ -87,8 +87,8 @@ CLI::App* add_mesh_command(CLI::App& app, MeshCommandOptions& options) {
                      "How a mesh simplified in space is kept from touching or crossing itself: after (default: the "
                      "collapses made without searching for nearby faces, then the result checked once, exactly, and "
                      "simplified again with every collapse checked if it meets itself anywhere) or each (every collapse "
-                     "checked: slower; the same result whenever no collapse is refused for a contact). A terrain needs "
-                     "neither")
+                     "checked: slower; the same result whenever no collapse is refused for a contact). A terrain whose "
+                     "border may move is checked in the map plane; one whose border is kept needs neither")
         ->check(CLI::IsMember({"after", "each"}));
     mesh->add_option("-j,--threads", options.threads,
                      "Threads to use (default: all cores, or OMP_NUM_THREADS); the output is the same for any number")
@@ -416,8 +416,9 @@ std::string json_summary(const mesh::SimplifyStats& stats, const mesh::SimplifyO
                                                                                           : "each")
         .field("simplified_again", stats.simplified_again)
         .field("seconds_check", stats.seconds_check)
-        .field("seconds_first_run", stats.seconds_first_run)
-        .end();
+        .field("seconds_first_run", stats.seconds_first_run);
+    if (const std::optional<Point3>& at = stats.contact_near) json.array("contact_near").item(at->x).item(at->y).item(at->z).end();
+    json.end();
     add_predicates(json, stats.predicates);
     json.object("seconds")
         .field("read", time.read)

@@ -497,7 +497,10 @@ TEST(MeshCli, Issue33ContactsAreCheckedOnceAfterTheCollapses) {
         EXPECT_NE(a.err.find(again ? "simplified again with every collapse checked" : "contacts: none in the result"), std::string::npos)
             << input << ": " << a.err;
         if (again) {
-            EXPECT_NE(a.err.find("meeting"), std::string::npos) << a.err;
+            EXPECT_NE(a.err.find("meeting near ("), std::string::npos) << a.err;
+            EXPECT_NE(a.out.find("\"contact_near\":["), std::string::npos) << a.out;
+        } else {
+            EXPECT_EQ(a.out.find("\"contact_near\""), std::string::npos) << a.out;
         }
         const CliResult e = run_cli({"mesh", testdata(input), "-o", each, "--keep", keep, "--json", "--overwrite", "--contact-check", "each"});
         ASSERT_EQ(e.code, 0) << e.err;
