@@ -5,7 +5,8 @@
 // already crossed, and no part touches one it did not touch). A clean input never has such a
 // face, so its result does not change. Decided with exact predicates: first, in flat regions, by
 // a proof that needs no other face (flat_and_clean); otherwise by searching the face index for
-// the faces near the new ones and testing each pair.
+// the faces near the new ones and testing each pair. Only with ContactCheck::every_collapse (or
+// a second run): by default the result is checked once instead (self_contact.hpp).
 #include "core/mesh/simplifier.hpp"
 
 namespace toposimp::mesh::detail {

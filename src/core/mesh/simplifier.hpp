@@ -5,7 +5,8 @@
 //   spatial_order.cpp  vertices and faces numbered along a Z-order curve while simplifying
 //   face_index.cpp     faces by cell, for the contact search
 //   collapse.cpp       one collapse: its checks in order, then the change
-//   contacts.cpp       the no-new-contact check of a collapse
+//   contacts.cpp       the no-new-contact check of a collapse (every_collapse; else the result
+//                      is checked once: self_contact.cpp, result_contact in simplify.cpp)
 //   simplify.cpp       the driver: grid, levels, rounds, blocks, the count target's threshold
 #pragma once
 

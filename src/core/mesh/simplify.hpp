@@ -42,16 +42,19 @@ struct StopCriterion {
     double value = 0.1;
 };
 
-// How a 3D mesh (not one simplified as a terrain) is kept free of new contacts between its faces.
+// How a mesh is kept free of new contacts between its faces. (A terrain whose border is kept
+// needs neither: no collapse of it can make one. One whose border may move is checked in the map
+// plane, either way.)
 enum class ContactCheck {
     // Each collapse is made without searching for the faces near its new ones; the result is
     // then checked once, exactly: every pair of nearby faces one of which a collapse made
     // (find_self_contact; two faces of the input that still meet are the input's contact). If a
     // pair meets (a collapse made a contact, or a new face meets one the input's faces met), the
-    // mesh is simplified again from the input as every_collapse does. Either way the result has no new contact; it
-    // is every_collapse's result whenever every_collapse refuses no collapse for a contact
-    // (then both make the same collapses), and it costs the check and, rarely, a second run
-    // instead of a search at every collapse (on smooth scans most of the simplification's time).
+    // mesh is simplified again from the input as every_collapse does. Either way the result has
+    // no new contact; it is every_collapse's result whenever every_collapse refuses no collapse
+    // for a contact (then both make the same collapses), and it costs the check and, rarely, a
+    // second run instead of a search at every collapse (on smooth scans most of the
+    // simplification's time).
     at_the_end,
     // Each collapse searches the faces near its new ones and is refused if one would meet another
     // face beyond their shared corners (contacts.cpp); a contact the input had may be inherited.
