@@ -2,6 +2,7 @@
 
 #include "core/exact/predicates3d.hpp"
 #include "core/geometry.hpp"
+#include "core/mesh/grid.hpp"
 
 #include <omp.h>
 
@@ -34,8 +35,8 @@ public:
         if (!(c >= 1)) return 0;
         return c >= cells_[axis] - 1.0 ? cells_[axis] - 1 : static_cast<std::uint32_t>(c);
     }
-    std::uint64_t key(Point3 p) const { return pack(cell(p.x, 0), cell(p.y, 1), cell(p.z, 2)); }
-    static std::uint64_t pack(std::uint64_t x, std::uint64_t y, std::uint64_t z) { return x << 42 | y << 21 | z; }
+    // Keys as detail::Grid packs them.
+    std::uint64_t key(Point3 p) const { return detail::Grid::pack(cell(p.x, 0), cell(p.y, 1), cell(p.z, 2)); }
     // The cells a box spans, as a count (at most 2^60).
     std::uint64_t span(const Box3& box) const {
         return std::uint64_t{cell(box.hi.x, 0) - cell(box.lo.x, 0) + 1} * (cell(box.hi.y, 1) - cell(box.lo.y, 1) + 1) *
@@ -133,13 +134,7 @@ SelfContact find_self_contact(const Mesh& mesh, int threads, exact::PredicateSta
     const HalfGrid grid(all, size);
     // Each face's cells, in order; with `changed`, an unchanged face only in the cells a changed
     // face meets (`marked`, sorted).
-    auto for_cells = [&](const Box3& box, auto visit) {
-        for (std::uint32_t x = grid.cell(box.lo.x, 0); x <= grid.cell(box.hi.x, 0); ++x) {
-            for (std::uint32_t y = grid.cell(box.lo.y, 1); y <= grid.cell(box.hi.y, 1); ++y) {
-                for (std::uint32_t z = grid.cell(box.lo.z, 2); z <= grid.cell(box.hi.z, 2); ++z) visit(HalfGrid::pack(x, y, z));
-            }
-        }
-    };
+    auto for_cells = [&](const Box3& box, auto visit) { detail::for_cells(grid.key(box.lo), grid.key(box.hi), visit); };
     std::vector<std::uint64_t> marked;
     if (!changed.empty()) {
         for (std::size_t f = 0; f < faces.size(); ++f) {

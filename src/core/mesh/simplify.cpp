@@ -524,9 +524,10 @@ SimplifyStats Simplifier::run() {
 }
 
 std::optional<Point3> Simplifier::result_contact(exact::PredicateStats& predicates) const {
-    // The faces collapses made (and changed since): only pairs with one of them can be new.
-    std::vector<std::uint8_t> made(face_.size());
-    for (std::size_t f = 0; f < face_.size(); ++f) made[f] = clean_[f] != kUnknown;
+    // The faces collapses made (clean_ not kUnknown, which is 0): only pairs with one of them can
+    // be new.
+    static_assert(kUnknown == 0);
+    const std::span<const std::uint8_t> made = clean_;
     auto near = [&](const SelfContact& found) -> std::optional<Point3> {
         if (!found.first) return std::nullopt;
         return pos_[face_[(*found.first)[0]][0]];
