@@ -533,8 +533,10 @@ TEST(MeshCli, DemBandOutOfRangeIsAnError) {
     EXPECT_FALSE(std::filesystem::exists(dir / "out.obj"));
 }
 
-// The distance to the input: quick by default (8 192 points of each surface), every vertex and
-// more with --measure full (the quick one a lower bound of it), none with --measure none.
+// The distance to the input: quick by default (one point of each surface per 40 input faces, at
+// least 1 024: the torus's 1 024, with the share of a surface that may lie beyond the largest
+// distance found), every vertex and more with --measure full (the quick one a lower bound of it),
+// none with --measure none.
 TEST(MeshCli, Issue33MeasureIsQuickByDefaultFullOnRequest) {
     const auto dir = fresh_dir("mesh");
     const std::string out = (dir / "t.ply").string();
@@ -545,7 +547,13 @@ TEST(MeshCli, Issue33MeasureIsQuickByDefaultFullOnRequest) {
     };
     const CliResult quick = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "--json"});
     ASSERT_EQ(quick.code, 0) << quick.err;
-    EXPECT_NE(quick.out.find("\"samples\":8192"), std::string::npos) << quick.out;
+    EXPECT_NE(quick.out.find("\"samples\":1024"), std::string::npos) << quick.out;
+    const std::string share = "\"share_beyond_max\":";
+    ASSERT_NE(quick.out.find(share), std::string::npos) << quick.out;
+    EXPECT_NEAR(std::stod(quick.out.substr(quick.out.find(share) + share.size())), 1 - std::pow(0.001, 1.0 / 1024), 1e-5);
+    const CliResult told = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "-v", "--overwrite"});
+    ASSERT_EQ(told.code, 0) << told.err;
+    EXPECT_NE(told.err.find("quick, 1024 points of each surface"), std::string::npos) << told.err;
     const CliResult full = run_cli({"mesh", testdata("mesh/torus.off"), "-o", out, "--keep", "10%", "--json", "--measure", "full", "--overwrite"});
     ASSERT_EQ(full.code, 0) << full.err;
     const double q = largest(quick.out, "quick"), f = largest(full.out, "full");

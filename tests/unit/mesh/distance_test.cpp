@@ -189,6 +189,18 @@ void expect_spread_same(const Mesh& a, const Mesh& b, std::size_t count) {
     }
 }
 
+// Specks along the diagonal of a big box: a grid of millions of cells for a few thousand faces.
+Mesh specks(int count, double shift) {
+    Mesh m;
+    for (int i = 0; i < count; ++i) {
+        const double t = 100.0 * i / count + shift;
+        const auto first = static_cast<std::uint32_t>(m.points.size());
+        m.points.insert(m.points.end(), {{t, t, t}, {t + 0.01, t, t}, {t, t + 0.01, t + 0.003}});
+        m.faces.push_back({first, first + 1, first + 2});
+    }
+    return m;
+}
+
 TEST(QuickMeasure, IndexingOnlyNearTheSpreadPointsFindsTheNearestFaces) {
     const Mesh fine = toposimp::testing::noisy_sphere(3, 0.0, 1);
     const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
@@ -198,19 +210,47 @@ TEST(QuickMeasure, IndexingOnlyNearTheSpreadPointsFindsTheNearestFaces) {
     std::mt19937 random(5);
     expect_spread_same(scattered(random, 150, 10.0), scattered(random, 120, 3.0), 1500);
     expect_spread_same(fan(400, 1.0, 0.0, 1), fan(150, 1.05, 0.02, 2), 1000);
-    // Specks along the diagonal of a big box: a grid of millions of cells for a few thousand
-    // entries, which are sorted by cell in passes (not counted per cell).
-    auto specks = [](int count, double shift) {
-        Mesh m;
-        for (int i = 0; i < count; ++i) {
-            const double t = 100.0 * i / count + shift;
-            const auto first = static_cast<std::uint32_t>(m.points.size());
-            m.points.insert(m.points.end(), {{t, t, t}, {t + 0.01, t, t}, {t, t + 0.01, t + 0.003}});
-            m.faces.push_back({first, first + 1, first + 2});
-        }
-        return m;
-    };
+    // Specks: the entries of millions of cells are sorted by cell in passes (not counted per cell).
     expect_spread_same(specks(3000, 0.0), specks(800, 0.02), 1200);
+}
+
+// At least four times as many faces as points (the input, measured from the points of the output):
+// one pass over the faces measures the points in blocks of a quarter cell around them, the
+// indexed search only those it leaves open. The same numbers as every face measured, for any
+// thread count.
+TEST(QuickMeasure, OnePassOverManyFacesFindsTheNearestFaces) {
+    const Mesh fine = toposimp::testing::noisy_sphere(4, 0.01, 1);  // 5 120 faces: two chunks of the pass
+    const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
+    expect_spread_same(coarse, fine, 300);
+    expect_spread_same(fine, fine, 1000);  // every distance zero
+    // Far apart: the pass leaves every point open; the search finishes them.
+    expect_spread_same(toposimp::testing::noisy_sphere(2, 0.05, 3, {6.0, 1.0, -2.0}), fine, 200);
+    // Long thin faces, whose boxes span many cells; specks in a grid of millions of cells.
+    expect_spread_same(fan(150, 1.05, 0.02, 2), fan(4000, 1.0, 0.0, 1), 400);
+    expect_spread_same(specks(800, 0.02), specks(6000, 0.0), 300);
+    std::mt19937 random(7);
+    expect_spread_same(scattered(random, 100, 3.0), scattered(random, 1500, 10.0), 200);
+    for (const int threads : {2, 3}) {
+        const HausdorffDistance one = spread_hausdorff(coarse, fine, 300, 1), more = spread_hausdorff(coarse, fine, 300, threads);
+        EXPECT_EQ(one.backward.max, more.backward.max);
+        EXPECT_EQ(one.backward.mean, more.backward.mean);
+    }
+}
+
+// The quick measure's points: one per 40 input faces, from 1 024 to 8 192; and the share of a
+// surface that may lie beyond the largest distance they find, at 99.9 % confidence.
+TEST(QuickMeasure, PointsGrowWithTheInputWithinBounds) {
+    EXPECT_EQ(quick_points(0), 1024u);
+    EXPECT_EQ(quick_points(40 * 1024 - 1), 1024u);
+    EXPECT_EQ(quick_points(40 * 3000), 3000u);
+    EXPECT_EQ(quick_points(40 * 8192 + 39), 8192u);
+    EXPECT_EQ(quick_points(100000000), 8192u);
+    for (const std::size_t points : {1024u, 2000u, 8192u}) {
+        const double share = share_beyond(points);
+        EXPECT_NEAR(std::pow(1 - share, static_cast<double>(points)), 0.001, 1e-9) << points;
+    }
+    EXPECT_NEAR(share_beyond(8192), 8.43e-4, 1e-6);
+    EXPECT_GT(share_beyond(1024), share_beyond(8192));
 }
 
 TEST(QuickMeasure, PointsAreSpreadByAreaAndTheSameForAnyThreads) {
