@@ -1,7 +1,8 @@
 #!/usr/bin/python3
 """What toposimp mesh's distance measurement costs against its simplification, on the mesh
-benchmark's datasets (as scripts/bench/mesh.py makes them): the default quick measure (8 192
-points of each surface, spread by area) and --measure full, with the largest distances each finds.
+benchmark's datasets (as scripts/bench/mesh.py makes them): the default quick measure (one point
+of each surface per 40 input faces, 1 024 to 8 192, spread by area) and --measure full, with the
+largest distances each finds.
 
     scripts/bench/measure_cost.py [--data build/bench-data] [--datasets a,b,...] [--keep 10%]
 

@@ -214,22 +214,35 @@ TEST(QuickMeasure, IndexingOnlyNearTheSpreadPointsFindsTheNearestFaces) {
     expect_spread_same(specks(3000, 0.0), specks(800, 0.02), 1200);
 }
 
-// At least four times as many faces as points (the input, measured from the points of the output):
-// one pass over the faces measures the points in blocks of a quarter cell around them, the
-// indexed search only those it leaves open. The same numbers as every face measured, for any
-// thread count.
+// At least eight times as many faces as points (the input, measured from the points of the
+// output): one pass over the faces measures the points in blocks of a quarter cell around them;
+// up to 8 it leaves open finish in one more pass, more in the indexed search. The same numbers as
+// every face measured, for any thread count.
 TEST(QuickMeasure, OnePassOverManyFacesFindsTheNearestFaces) {
     const Mesh fine = toposimp::testing::noisy_sphere(4, 0.01, 1);  // 5 120 faces: two chunks of the pass
     const Mesh coarse = toposimp::testing::noisy_sphere(2, 0.05, 2, {0.1, -0.05, 0.02});
     expect_spread_same(coarse, fine, 300);
-    expect_spread_same(fine, fine, 1000);  // every distance zero
-    // Far apart: the pass leaves every point open; the search finishes them.
+    expect_spread_same(fine, fine, 600);  // every distance zero
+    // Points a little off the surface, farther than their blocks reach: with 8 points, 4 are left
+    // to the second pass, with 50, 20 to the search; 8 points further off leave 7 to the second
+    // pass, three of them nearer to a face outside their blocks (the counts when this test was
+    // written).
+    auto scaled = [](Mesh m, double by) {
+        for (Point3& p : m.points) p = {p.x * by, p.y * by, p.z * by};
+        return m;
+    };
+    const Mesh around = scaled(toposimp::testing::noisy_sphere(1, 0.0, 9), 1.01);
+    expect_spread_same(around, fine, 8);
+    expect_spread_same(around, fine, 50);
+    expect_spread_same(scaled(toposimp::testing::noisy_sphere(2, 0.0, 9), 1.08), fine, 8);
+    // Far apart: the pass leaves every point open, with no face measured; the search finishes them.
     expect_spread_same(toposimp::testing::noisy_sphere(2, 0.05, 3, {6.0, 1.0, -2.0}), fine, 200);
+    expect_spread_same(toposimp::testing::noisy_sphere(2, 0.05, 3, {6.0, 1.0, -2.0}), fine, 5);
     // Long thin faces, whose boxes span many cells; specks in a grid of millions of cells.
     expect_spread_same(fan(150, 1.05, 0.02, 2), fan(4000, 1.0, 0.0, 1), 400);
     expect_spread_same(specks(800, 0.02), specks(6000, 0.0), 300);
     std::mt19937 random(7);
-    expect_spread_same(scattered(random, 100, 3.0), scattered(random, 1500, 10.0), 200);
+    expect_spread_same(scattered(random, 100, 3.0), scattered(random, 1500, 10.0), 150);
     for (const int threads : {2, 3}) {
         const HausdorffDistance one = spread_hausdorff(coarse, fine, 300, 1), more = spread_hausdorff(coarse, fine, 300, threads);
         EXPECT_EQ(one.backward.max, more.backward.max);
