@@ -429,11 +429,11 @@ std::vector<V> spread_samples(const Mesh& m, std::size_t count, int threads, Pla
     // Each face's (twice) area on all threads, in fixed chunks (with their boxes if asked), then
     // their running sum in face order.
     std::vector<double> running(m.faces.size());
-    constexpr std::size_t kChunk = 1 << 15;
+    constexpr std::size_t kChunk = 1 << 13;
     const std::size_t faces = m.faces.size();
     const auto chunks = static_cast<std::int64_t>((faces + kChunk - 1) / kChunk);
     std::vector<PlanExtent> boxes(box ? static_cast<std::size_t>(chunks) : 0);
-#pragma omp parallel for schedule(static) num_threads(threads) if (faces >= 65536)
+#pragma omp parallel for schedule(static) num_threads(threads) if (faces >= 4 * kChunk)
     for (std::int64_t k = 0; k < chunks; ++k) {
         const std::size_t first = static_cast<std::size_t>(k) * kChunk, last = std::min(faces, first + kChunk);
         const Point3& start = m.points[m.faces[first][0]];
