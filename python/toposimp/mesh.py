@@ -73,7 +73,8 @@ def simplify_mesh(vertices, faces, keep: Union[float, str, None] = None, *, keep
     value per vertex (face) by column name; a merged vertex gets the blend of its two ends'.
     ``measure``: how far the output lies from the input, in the report: "quick" (one point of
     each surface per 40 input faces, 1 024 to 8 192, spread by area and measured exactly: a lower
-    bound of the Hausdorff distance, for under a tenth of the simplification's time), "full" (every vertex and ~4 points per face: slow on big meshes) or
+    bound of the Hausdorff distance, for under a tenth of the simplification's time from some
+    30 000 faces up), "full" (every vertex and ~4 points per face: slow on big meshes) or
     None.
     ``contact_check``: "after" (the default: collapses made without searching for nearby faces, then
     the result checked once, exactly, and simplified again with every collapse checked if it
