@@ -483,17 +483,39 @@ std::vector<V> spread_samples(const Mesh& m, std::size_t count, int threads, Pla
     return out;
 }
 
-// Is the face whose box is [low, high] (`extent` its longest side) farther from p than a squared
-// distance `best`, by its box, beyond what distance2 could round it to? Then measuring it cannot
-// lower `best`: skipping it leaves every minimum as it is, whatever the order of the faces. (The
-// gap to the box bounds the distance to the face; distance2 rounds its differences of corners,
-// within the box's extent and the gap of p, to a few ulps: 1e-10 of their square is far more.)
-bool far_from_box(V p, V low, V high, double extent, double best) {
-    const double gx = std::max(std::max(low.x - p.x, p.x - high.x), 0.0), gy = std::max(std::max(low.y - p.y, p.y - high.y), 0.0),
-                 gz = std::max(std::max(low.z - p.z, p.z - high.z), 0.0);
-    const double gap2 = gx * gx + gy * gy + gz * gz;
-    const double scale = std::max(std::max(gx, gy), gz) + 2 * extent;
-    return gap2 > best * (1 + 1e-9) + 1e-10 * scale * scale;
+// A face's corners and box, read once for the passes over the faces below.
+struct FaceBox {
+    V a, b, c, low, high;
+    double extent;  // the box's longest side
+
+    FaceBox(const Mesh& m, const Face& f)
+        : a(v(m.points[f[0]])), b(v(m.points[f[1]])), c(v(m.points[f[2]])),
+          low{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})},
+          high{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})},
+          extent(std::max(std::max(high.x - low.x, high.y - low.y), high.z - low.z)) {}
+
+    // Is the face farther from p than a squared distance `best`, by its box, beyond what
+    // distance2 could round it to? Then measuring it cannot lower `best`: skipping it leaves every
+    // minimum as it is, whatever the order of the faces. (The gap to the box bounds the distance
+    // to the face; distance2 rounds its differences of corners, within the box's extent and the
+    // gap of p, to a few ulps: 1e-10 of their square is far more.)
+    bool far(V p, double best) const {
+        const double gx = std::max(std::max(low.x - p.x, p.x - high.x), 0.0), gy = std::max(std::max(low.y - p.y, p.y - high.y), 0.0),
+                     gz = std::max(std::max(low.z - p.z, p.z - high.z), 0.0);
+        const double gap2 = gx * gx + gy * gy + gz * gz;
+        const double scale = std::max(std::max(gx, gy), gz) + 2 * extent;
+        return gap2 > best * (1 + 1e-9) + 1e-10 * scale * scale;
+    }
+    // best, or the squared distance from p to the face if nearer.
+    double nearer(V p, double best) const { return far(p, best) ? best : std::min(best, distance2(p, a, b, c)); }
+};
+
+// The least of `start` and each thread's value for sample i.
+double least(const std::vector<std::vector<double>>& per_thread, std::size_t i, double start) {
+    for (const std::vector<double>& mine : per_thread) {
+        if (!mine.empty()) start = std::min(start, mine[i]);
+    }
+    return start;
 }
 
 // Cells, by key, each with a run of values (open addressing, linear probing): the blocks of cells
@@ -608,13 +630,9 @@ void sweep(const std::vector<V>& samples, const Mesh& to, const Cells& cells, do
             const auto first = static_cast<std::uint32_t>(static_cast<std::size_t>(chunk) * kChunk);
             const auto end = static_cast<std::uint32_t>(std::min(faces, static_cast<std::size_t>(first) + kChunk));
             for (std::uint32_t f = first; f < end; ++f) {
-                const Face& face = to.faces[f];
-                const V a = v(to.points[face[0]]), b = v(to.points[face[1]]), c = v(to.points[face[2]]);
-                const V low{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
-                const V high{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
-                const double extent = std::max(std::max(high.x - low.x, high.y - low.y), high.z - low.z);
-                const std::int64_t lo[3] = {cells.cell(low.x, 0), cells.cell(low.y, 1), cells.cell(low.z, 2)};
-                const std::int64_t hi[3] = {cells.cell(high.x, 0), cells.cell(high.y, 1), cells.cell(high.z, 2)};
+                const FaceBox face(to, to.faces[f]);
+                const std::int64_t lo[3] = {cells.cell(face.low.x, 0), cells.cell(face.low.y, 1), cells.cell(face.low.z, 2)};
+                const std::int64_t hi[3] = {cells.cell(face.high.x, 0), cells.cell(face.high.y, 1), cells.cell(face.high.z, 2)};
                 for (std::int64_t x = lo[0]; x <= hi[0]; ++x) {
                     for (std::int64_t y = lo[1]; y <= hi[1]; ++y) {
                         for (std::int64_t z = lo[2]; z <= hi[2]; ++z) {
@@ -623,8 +641,7 @@ void sweep(const std::vector<V>& samples, const Mesh& to, const Cells& cells, do
                                 const std::uint32_t i = runs.values()[j];
                                 if (seen[i] == f) continue;
                                 seen[i] = f;
-                                if (far_from_box(points[j], low, high, extent, mine[i])) continue;
-                                mine[i] = std::min(mine[i], distance2(points[j], a, b, c));
+                                mine[i] = face.nearer(points[j], mine[i]);
                             }
                         }
                     }
@@ -635,10 +652,7 @@ void sweep(const std::vector<V>& samples, const Mesh& to, const Cells& cells, do
     std::vector<std::size_t> still;
     bounds.clear();
     for (std::size_t i = 0; i < open.size(); ++i) {
-        double best = std::numeric_limits<double>::infinity();
-        for (const std::vector<double>& mine : nearest) {
-            if (!mine.empty()) best = std::min(best, mine[i]);
-        }
+        const double best = least(nearest, i, std::numeric_limits<double>::infinity());
         const V p = samples[open[i]];
         double reach = std::numeric_limits<double>::infinity();
         for (int k = 0; k < 3; ++k) {
@@ -659,7 +673,7 @@ void sweep(const std::vector<V>& samples, const Mesh& to, const Cells& cells, do
 
 // The few samples a sweep left open, each with the squared distance of a face it measured:
 // one more pass over the faces, measuring from each sample only the faces whose boxes come
-// nearer than the nearest so far (far_from_box), finds its nearest face wherever it is. For a
+// nearer than the nearest so far (FaceBox::far), finds its nearest face wherever it is. For a
 // handful of samples this costs less than indexing the faces near them (the armadillo's 3 of
 // 1 300: 0.86 and 0.46 ms on one and two threads, against 1.28 and 1.03 ms).
 void finish_few(const std::vector<V>& samples, const Mesh& to, const std::vector<std::size_t>& open, const std::vector<double>& bounds,
@@ -676,25 +690,12 @@ void finish_few(const std::vector<V>& samples, const Mesh& to, const std::vector
         for (std::int64_t chunk = 0; chunk < chunks; ++chunk) {
             const std::size_t first = static_cast<std::size_t>(chunk) * kChunk, end = std::min(faces, first + kChunk);
             for (std::size_t f = first; f < end; ++f) {
-                const Face& face = to.faces[f];
-                const V a = v(to.points[face[0]]), b = v(to.points[face[1]]), c = v(to.points[face[2]]);
-                const V low{std::min({a.x, b.x, c.x}), std::min({a.y, b.y, c.y}), std::min({a.z, b.z, c.z})};
-                const V high{std::max({a.x, b.x, c.x}), std::max({a.y, b.y, c.y}), std::max({a.z, b.z, c.z})};
-                const double extent = std::max(std::max(high.x - low.x, high.y - low.y), high.z - low.z);
-                for (std::size_t k = 0; k < open.size(); ++k) {
-                    const V p = samples[open[k]];
-                    if (!far_from_box(p, low, high, extent, mine[k])) mine[k] = std::min(mine[k], distance2(p, a, b, c));
-                }
+                const FaceBox face(to, to.faces[f]);
+                for (std::size_t k = 0; k < open.size(); ++k) mine[k] = face.nearer(samples[open[k]], mine[k]);
             }
         }
     }
-    for (std::size_t k = 0; k < open.size(); ++k) {
-        double best = bounds[k];
-        for (const std::vector<double>& mine : nearest) {
-            if (!mine.empty()) best = std::min(best, mine[k]);
-        }
-        distance[open[k]] = std::sqrt(best);
-    }
+    for (std::size_t k = 0; k < open.size(); ++k) distance[open[k]] = std::sqrt(least(nearest, k, bounds[k]));
 }
 
 // From each sample to the nearest face of `to`: where `to` has many more faces than there are
