@@ -3,6 +3,12 @@
 (a LocalCluster started here, outside the timing), on the same input in the same run: wall time,
 the command's peak memory, each worker's peak memory, and whether the output is byte-identical.
 
+Each row's runs alternate with runs of the single process (single, dask, single, dask, ...), and
+its ratio is the median of its own runs over the median of the single runs beside them: on a
+shared machine whose speed drifts (the single process moved by 0.5 s between two bench runs in a
+row), runs taken minutes apart would compare two machines. The first run on each new cluster is
+timed apart ("first"): its workers still import the engine.
+
     scripts/bench/dask_bench.py BUILD_DIR [--input build/bench-data/gshhg.shp] [--runs 3]
                                 [--workers 1,2,4] [--target "--keep 10%" --target "--max"]
                                 [--variant "" --variant "--first-round here"]
@@ -11,8 +17,9 @@ the command's peak memory, each worker's peak memory, and whether the output is 
 BUILD_DIR holds the toposimp executable and python/ (the package). Each --variant (toposimp.dask
 options; default: none) is a row of its own, on a LocalCluster of its own. The LocalCluster's workers
 start with --worker-env's variables (default: what toposimp.dask gives the workers of the
-LocalCluster it starts: transparent huge pages asked for, and jemalloc preloaded where it is
-installed, as --worker-malloc auto does; none with --worker-env ""). Prints a Markdown table.
+LocalCluster it starts, local_worker_environment and local_worker_config: transparent huge pages
+asked for, jemalloc preloaded where it is installed, as --worker-malloc auto does, and Dask's
+profiler off; none of them with --worker-env ""). Prints a Markdown table.
 """
 import argparse
 import os
@@ -75,48 +82,61 @@ def main():
     env = dict(CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
-    from toposimp import _launch as toposimp_launch, dask as toposimp_dask
+    from toposimp import dask as toposimp_dask
+
+    import dask.config
 
     if a.worker_env:
-        worker_env = dict(v.split("=", 1) for v in a.worker_env if v)
+        worker_env, worker_config = dict(v.split("=", 1) for v in a.worker_env if v), {}
     else:
-        worker_env = {"GLIBC_TUNABLES": toposimp_launch.huge_pages(""), **toposimp_dask._worker_malloc("auto", CLEAN_ENV)}
+        worker_env = toposimp_dask.local_worker_environment("auto", CLEAN_ENV)
+        worker_config = toposimp_dask.local_worker_config(CLEAN_ENV)
 
     rows = []
     with tempfile.TemporaryDirectory() as folder:
         out = pathlib.Path(folder)
         for target in targets:
             reference = out / "single.shp"
-            single = [timed([str(build / "toposimp"), "map", a.input, "-o", str(reference), "-q", "--overwrite", "-j", str(a.threads),
-                             *shlex.split(target)]) for _ in range(a.runs)]
-            seconds = statistics.median(s for s, _ in single)
-            rows.append((target, f"toposimp map -j {a.threads}", seconds, 1.0, max(m for _, m in single), "", "yes"))
+
+            def single_run():
+                return timed([str(build / "toposimp"), "map", a.input, "-o", str(reference), "-q", "--overwrite", "-j", str(a.threads),
+                              *shlex.split(target)])
+
+            single_run()  # (the input in the page cache, the reference written)
             for workers, variant in [(int(w), v) for w in a.workers.split(",") for v in (a.variant or [""])]:
                 os.environ.update(worker_env)  # (read by the worker processes as they start)
-                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
+                with dask.config.set(worker_config):
+                    cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None)
                 client = Client(cluster)
-                runs = []
+                output = out / "dask.shp"
+                command = [sys.executable, "-m", "toposimp.dask", "map", a.input, "-o", str(output), "-q", "--overwrite",
+                           "--scheduler", cluster.scheduler_address, *shlex.split(target), *shlex.split(variant)]
+                first, _ = timed(command, env=env)
+                singles, runs = [], []
                 identical = True
                 for _ in range(a.runs):
-                    output = out / "dask.shp"
-                    runs.append(timed([sys.executable, "-m", "toposimp.dask", "map", a.input, "-o", str(output), "-q", "--overwrite",
-                                       "--scheduler", cluster.scheduler_address, *shlex.split(target), *shlex.split(variant)],
-                                      env=env))
+                    singles.append(single_run())
+                    runs.append(timed(command, env=env))
                     identical = identical and all((out / f"dask{ext}").read_bytes() == (out / f"single{ext}").read_bytes()
                                                   for ext in (".shp", ".shx", ".dbf"))
                 peaks = worker_peaks(client)
                 client.close()
                 cluster.close()
-                d = statistics.median(s for s, _ in runs)
-                rows.append((target, f"toposimp.dask{' ' + variant if variant else ''}, {workers} worker{'s' if workers > 1 else ''}", d, d / seconds,
-                             max(m for _, m in runs), " / ".join(f"{p:.0f}" for p in peaks), "yes" if identical else "NO"))
-    print(f"input: {a.input}; median of {a.runs} runs; LocalCluster started before the timing, one thread per worker"
-          f"{', workers with ' + ' '.join(f'{k}={v}' for k, v in worker_env.items()) if worker_env else ''}")
+                s = statistics.median(t for t, _ in singles)
+                d = statistics.median(t for t, _ in runs)
+                rows.append((target, f"toposimp.dask{' ' + variant if variant else ''}, {workers} worker{'s' if workers > 1 else ''}", d,
+                             s, d / s, min(t for t, _ in runs) / s, max(t for t, _ in runs) / s, first, max(m for _, m in runs),
+                             max(m for _, m in singles), " / ".join(f"{p:.0f}" for p in peaks), "yes" if identical else "NO"))
+    print(f"input: {a.input}; medians of {a.runs} runs, each beside a run of toposimp map -j {a.threads}; LocalCluster started "
+          f"before the timing, one thread per worker{', workers with ' + ' '.join(f'{k}={v}' for k, v in worker_env.items()) if worker_env else ''}"
+          f"{', Dask settings ' + ' '.join(f'{k}={v}' for k, v in worker_config.items()) if worker_config else ''}")
     print()
-    print("| target | run | seconds | × single | command peak MiB | worker peaks MiB | output identical |")
-    print("|---|---|---|---|---|---|---|")
-    for target, run, seconds, ratio, peak, workers, same in rows:
-        print(f"| `{target}` | {run} | {seconds:.2f} | {ratio:.2f} | {peak:.0f} | {workers} | {same} |")
+    print("| target | run | seconds | single s (beside) | × single | runs × single | first run s | command peak MiB (single) "
+          "| worker peaks MiB | output identical |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for target, run, seconds, single, ratio, low, high, first, peak, single_peak, workers, same in rows:
+        print(f"| `{target}` | {run} | {seconds:.2f} | {single:.2f} | {ratio:.2f} | {low:.2f}–{high:.2f} | {first:.2f} | "
+              f"{peak:.0f} ({single_peak:.0f}) | {workers} | {same} |")
 
 
 if __name__ == "__main__":

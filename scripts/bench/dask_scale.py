@@ -106,14 +106,17 @@ def main():
     env = dict(dask_bench.CLEAN_ENV, PYTHONPATH=str(build / "python"))
     sys.path.insert(0, str(build / "python"))
     from distributed import Client, LocalCluster
-    from toposimp import _launch as toposimp_launch, dask as toposimp_dask
+    from toposimp import dask as toposimp_dask
 
     # The workers start as toposimp.dask's own LocalCluster's would (huge pages asked for,
-    # jemalloc where installed): what a user gets without --scheduler.
-    worker_env = {"GLIBC_TUNABLES": toposimp_launch.huge_pages(""), **toposimp_dask._worker_malloc("auto", dask_bench.CLEAN_ENV)}
+    # jemalloc where installed, Dask's profiler off): what a user gets without --scheduler.
+    import dask.config
+
+    worker_env = toposimp_dask.local_worker_environment("auto", dask_bench.CLEAN_ENV)
     os.environ.update(worker_env)  # (read by the worker processes as they start)
-    cluster = LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                           memory_limit=a.memory_limit)
+    with dask.config.set(toposimp_dask.local_worker_config(dask_bench.CLEAN_ENV)):
+        cluster = LocalCluster(n_workers=a.workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               memory_limit=a.memory_limit)
     client = Client(cluster)
     distributed = dask_bench.timed([sys.executable, "-m", "toposimp.dask", "map", *map_arguments, "-o", str(dask_out),
                                     "--scheduler", cluster.scheduler_address, *shlex.split(a.dask_options)], env=env)

@@ -861,6 +861,21 @@ def test_tiles_go_uncompressed_unless_the_user_chose_a_compression():
     assert toposimp_dask._run_groups((toposimp_dask._given, []), {}, {}) == []
 
 
+def test_local_workers_get_huge_pages_their_malloc_and_no_profiler(monkeypatch):
+    """local_worker_environment and local_worker_config: what a LocalCluster's workers start with;
+    settings of the user's are kept."""
+    import ctypes.util
+
+    from toposimp import dask as toposimp_dask
+
+    monkeypatch.setattr(ctypes.util, "find_library", lambda name: None)
+    assert toposimp_dask.local_worker_environment("auto", {}) == {"GLIBC_TUNABLES": "glibc.malloc.hugetlb=1"}
+    assert toposimp_dask.local_worker_environment("glibc", {"GLIBC_TUNABLES": "glibc.malloc.hugetlb=0"}) == \
+        {"GLIBC_TUNABLES": "glibc.malloc.hugetlb=0"}
+    assert toposimp_dask.local_worker_config({}) == {"distributed.worker.profile.enabled": False}
+    assert toposimp_dask.local_worker_config({"DASK_DISTRIBUTED__WORKER__PROFILE__ENABLED": "True"}) == {}
+
+
 def test_worker_malloc_is_chosen_as_asked(monkeypatch):
     """--worker-malloc: 'auto' preloads jemalloc where it is installed and leaves glibc's malloc
     where not, 'jemalloc' where it is not installed is a usage error, and an LD_PRELOAD or
@@ -884,8 +899,8 @@ def test_worker_malloc_is_chosen_as_asked(monkeypatch):
 
 def test_local_cluster_workers_run_the_malloc_asked_for(generated, binary, tmp_path):
     """The LocalCluster's workers really run jemalloc's malloc by default where it is installed
-    (CI installs Debian's libjemalloc2), glibc's with --worker-malloc glibc, and the output is
-    toposimp map's either way."""
+    (CI installs Debian's libjemalloc2), glibc's with --worker-malloc glibc, without Dask's
+    profiler, and the output is toposimp map's either way."""
     import ctypes.util
 
     if ctypes.util.find_library("jemalloc") is None:
@@ -901,5 +916,6 @@ def test_local_cluster_workers_run_the_malloc_asked_for(generated, binary, tmp_p
                                "--local-budget", "0", "--worker-malloc", choice, "-v"],
                               capture_output=True, text=True, timeout=300, env=environment)
         assert done.returncode == 0, done.stderr
-        assert f"the LocalCluster's workers' malloc: {expected} (--worker-malloc {choice})" in done.stderr, done.stderr[-2000:]
+        assert f"the LocalCluster's workers' malloc: {expected} (--worker-malloc {choice}); Dask's profiler: off" in done.stderr, \
+            done.stderr[-2000:]
         assert output.read_bytes() == reference.read_bytes()
