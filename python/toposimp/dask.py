@@ -82,6 +82,8 @@ Dask options:
                        (GSHHG at 10 % on 2 workers here: 7.4-7.5 s against 8.7-9.9 s). Workers started by
                        you (--scheduler) use what their environment says, e.g.
                        LD_PRELOAD=libjemalloc.so.2 MALLOC_CONF=thp:always dask worker ...
+                       (The LocalCluster's workers also run without Dask's profiler, which
+                       serves a dashboard they do not have; -v says so.)
   --top-runs N         the levels above the tiles over a small part of the live map, not all
                        of it: runs of N live vertices on either side of their candidates, the
                        points near them (N twice as long while they fall short; 0, the default:
