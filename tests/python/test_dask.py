@@ -172,18 +172,21 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
         assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension
 
 
-def test_a_folder_of_layers_read_by_parts_on_the_workers(cluster, generated_shapefiles, binary, tmp_path, capsys):
-    """Cells, rivers and roads of a folder of Shapefiles to a GeoPackage, read by parts on real
-    workers: the same bytes as toposimp map."""
+@pytest.mark.parametrize("layers, suffix", [(["cells", "rivers", "roads"], "gpkg"), (["rivers"], "geojson"), (["cells"], "geojson")])
+def test_a_folder_of_layers_read_by_parts_on_the_workers(cluster, generated_shapefiles, binary, tmp_path, capsys, layers, suffix):
+    """Cells, rivers and roads of a folder of Shapefiles to a GeoPackage, and the rivers (lines)
+    or the cells (a polygon coverage) alone to a GeoJSON (toposimp's own writer, each feature's
+    vertices read again from its file), read by parts on real workers: the same bytes as
+    toposimp map."""
     from toposimp import dask as toposimp_dask
 
     client, _ = cluster
     rivers, places = generated_shapefiles
-    arguments = [str(rivers.parent), "-l", "cells", "-l", "rivers", "-l", "roads", "-p", str(places), "--keep", "10%", *SAME_DATE]
-    reference = tmp_path / "reference.gpkg"
+    arguments = [str(rivers.parent), *(a for layer in layers for a in ("-l", layer)), "-p", str(places), "--keep", "10%", *SAME_DATE]
+    reference = tmp_path / f"reference.{suffix}"
     done = subprocess.run([binary, "map", *arguments, "-o", str(reference)], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
-    output = tmp_path / "dask.gpkg"
+    output = tmp_path / f"dask.{suffix}"
     capsys.readouterr()
     status = toposimp_dask.run([*arguments, "-o", str(output), "-v"], client=client, tile_level=1, local_budget=0, first_round="workers")
     err = capsys.readouterr().err

@@ -17,9 +17,6 @@ void check_vector_output(const std::string& path, const std::string& format);
 
 // Will `path` be written by GDAL's Shapefile driver?
 bool is_shapefile_output(const std::string& path, const std::string& format);
-// Will the output (path, -f format) be written through GDAL (not by toposimp's own GeoJSON or
-// TopoJSON writer)?
-bool is_ogr_written_output(const std::string& path, const std::string& format);
 // Is the output (path, -f format) TopoJSON?
 bool is_topojson_output(const std::string& path, const std::string& format);
 

@@ -113,11 +113,6 @@ bool is_topojson_output(const std::string& path, const std::string& format) {
     return vector_driver_for(path, format)->GetDescription() == std::string("TopoJSON");
 }
 
-bool is_ogr_written_output(const std::string& path, const std::string& format) {
-    const MapFormatRules* rules = map_format_rules(vector_driver_for(path, format)->GetDescription());
-    return !(rules && rules->own_writer);
-}
-
 bool is_shapefile_output(const std::string& path, const std::string& format) {
     return vector_driver_for(path, format)->GetDescription() == std::string("ESRI Shapefile");
 }

@@ -1838,15 +1838,20 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
         source.definition = layer.definition;
         source.feature_count = layer.features.size();
         source.feature = [&layer](std::size_t i) { return layer.features[i].get(); };
-        source.geometry = [&data, &layer, &map, &kept](std::size_t i) { return data.build_geometry(layer, i, map, kept); };
+        // (Features in order: a layer left in its file is read again once, feature after feature.)
+        auto vertices = std::make_shared<VertexCursor>(data.vertex_cursor(map, layer));
+        source.geometry = [&data, &layer, &map, &kept, vertices](std::size_t i) {
+            return data.build_geometry(layer, i, map, vertices->at(i), kept);
+        };
         return source;
     };
     const bool topology = driver_name == "TopoJSON";
     if (options.transform && !topology) throw OutputError("a quantized output (--quantize) is TopoJSON: name it .topojson or use -f TopoJSON");
     if (rules && rules->own_writer) {
         // GDAL 3.6's GeoJSON writer rounds coordinates, and GDAL cannot write TopoJSON: toposimp
-        // writes both itself (from the map's vertices: not from files read again).
-        if (data.in_file) throw std::logic_error("a map left in its files written as " + driver_name);
+        // writes both itself (a GeoJSON's features from their files read again where the map was
+        // left there; a TopoJSON's arcs from the map's vertices only).
+        if (data.in_file && topology) throw std::logic_error("a map left in its files written as " + driver_name);
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
             warnings.push_back("-lco/-dsco are ignored for " + driver_name + ": toposimp writes it itself to keep coordinates exact");
         }

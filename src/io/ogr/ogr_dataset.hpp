@@ -173,8 +173,8 @@ public:
     // (its FIDs rising in read order, as a table's are), Z and M allowed, or of 2D points (read
     // whole), their vertices are left in the files
     // (vertices_in_file() says where; the map gets its chains only), for an engine that reads
-    // them by parts; else read as without it. (The output must then be written by write() through
-    // OGR, which reads them again: not as GeoJSON or TopoJSON.)
+    // them by parts; else read as without it. (The output must then be written by write(), which
+    // reads them again: not as TopoJSON.)
     static OgrDataset read(const std::string& path, const std::vector<std::string>& layers, map::MapData& map,
                            bool prj_as_file = false, bool vertices_in_file = false);
 
