@@ -249,6 +249,7 @@ TEST(QuickMeasure, OnePassOverManyFacesFindsTheNearestFaces) {
         EXPECT_EQ(one.forward.max, more.forward.max);
         EXPECT_EQ(one.forward.mean, more.forward.mean);
         EXPECT_EQ(one.backward.max, more.backward.max);
+        EXPECT_EQ(one.backward.mean, more.backward.mean);
     }
 }
 
