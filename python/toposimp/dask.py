@@ -47,8 +47,8 @@ Dask options:
   --workers N          the LocalCluster's worker processes (default: the cores here)
   --tile-level T       the block level cut into tasks (default: the coarsest whose biggest tile
                        holds at most --tile-points vertices and control points)
-  --tile-points N      see --tile-level (default 1000000, or less where the workers' memory
-                       limit would not hold such a tile in half of it)
+  --tile-points N      see --tile-level (default 1000000, or less where a worker's memory limit
+                       would not hold such a tile for each of its Dask threads in half of it)
   --task-threads N     threads each task's engine uses (default: a host's cores shared among the
                        Dask threads of its workers, at least 1: 1 for the default LocalCluster
                        of a worker a core, 2 for one worker on 2 cores)
@@ -457,23 +457,28 @@ BYTES_PER_POINT = 320
 
 def fitting_tile_points(client, wanted, timeout=120):
     """The tile size (vertices and control points) to use on `client`'s workers: `wanted`, or less
-    where the workers' memory limit (Dask's memory_limit) would not hold such a tile in half of
-    it. (A worker over 80 % of its limit stops taking tasks, and memory the engine frees stays
-    counted until it is given back: a tile too big for a worker would stall the run.)"""
+    where the workers' memory limit (Dask's memory_limit) would not hold their tasks' tiles in half
+    of it: as many tasks at once as the worker has Dask threads (`dask worker` starts with a thread
+    a core by default), each with a tile at most. (A worker over 80 % of its limit stops taking
+    tasks, and memory the engine frees stays counted until it is given back: a tile too big for a
+    worker would stall the run.)"""
     from toposimp import UsageError
 
     try:
         client.wait_for_workers(1, timeout=timeout)
     except Exception as error:  # (distributed raises TimeoutError, or OSError when the scheduler is gone)
         raise UsageError(f"no Dask worker joined the scheduler within {timeout} s ({error})") from None
-    limits = [worker.get("memory_limit") or 0 for worker in client.scheduler_info()["workers"].values()]
-    limits = [limit for limit in limits if limit > 0]
-    if not limits:
+    limited = [(worker["memory_limit"], max(1, int(worker.get("nthreads") or 1)))
+               for worker in client.scheduler_info()["workers"].values() if (worker.get("memory_limit") or 0) > 0]
+    if not limited:
         return wanted
-    fits = int((0.5 * min(limits) - WORKER_BASE) // BYTES_PER_POINT)
+    limit, threads = min(limited, key=lambda w: (0.5 * w[0] - WORKER_BASE) / w[1])
+    fits = int((0.5 * limit - WORKER_BASE) / threads // BYTES_PER_POINT)
     if fits < 10_000:
-        raise UsageError(f"the Dask workers' memory limit ({min(limits) / 2**20:.0f} MiB) leaves no room for a tile: "
-                         f"give them at least {(2 * (WORKER_BASE + 10_000 * BYTES_PER_POINT)) / 2**20:.0f} MiB")
+        each = "a task" if threads == 1 else f"{threads} tasks at once (its Dask threads)"
+        raise UsageError(f"a Dask worker's memory limit ({limit / 2**20:.0f} MiB) leaves no room for the tiles of {each}: "
+                         f"give them at least {(2 * (WORKER_BASE + threads * 10_000 * BYTES_PER_POINT)) / 2**20:.0f} MiB"
+                         + (" or fewer threads (dask worker --nthreads)" if threads > 1 else ""))
     return min(wanted, fits)
 
 

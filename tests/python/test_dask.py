@@ -727,27 +727,38 @@ def test_python_api_with_a_client(cluster, generated):
 
 
 def test_tiles_fit_the_workers_memory_limit():
-    """Under a memory limit the tiles shrink to fit half of it; a limit too small is refused."""
+    """Under a memory limit the tiles shrink to fit half of it, shared among the tasks a worker runs
+    at once (its Dask threads); a limit too small is refused."""
     from toposimp import UsageError
     from toposimp.dask import BYTES_PER_POINT, WORKER_BASE, fitting_tile_points
 
     class Workers:
-        def __init__(self, *limits):
-            self.limits = limits
+        def __init__(self, *limits, threads=None):
+            self.limits, self.threads = limits, threads
 
         def wait_for_workers(self, n, timeout):
             pass
 
         def scheduler_info(self):
-            return {"workers": {f"tcp://w{k}": {"memory_limit": limit} for k, limit in enumerate(self.limits)}}
+            return {"workers": {f"tcp://w{k}": {"memory_limit": limit, "nthreads": (self.threads or [1] * len(self.limits))[k]}
+                                for k, limit in enumerate(self.limits)}}
 
     assert fitting_tile_points(Workers(0, 0), 1_000_000) == 1_000_000  # no limit
     assert fitting_tile_points(Workers(8 * 2**30), 1_000_000) == 1_000_000
     fits = fitting_tile_points(Workers(8 * 2**30, 512 * 2**20), 1_000_000)  # the smallest limit counts
     assert fits == (256 * 2**20 - WORKER_BASE) // BYTES_PER_POINT
     assert fits * BYTES_PER_POINT + WORKER_BASE <= 256 * 2**20
+    # A worker of 4 threads runs 4 tasks at once: its half holds 4 tiles (the worker with the least
+    # room a task counts, not the smallest limit).
+    shared = fitting_tile_points(Workers(2 * 2**30, 1 * 2**30, threads=[4, 1]), 1_000_000)
+    assert shared == int((2**30 - WORKER_BASE) / 4 // BYTES_PER_POINT)
+    assert 4 * shared * BYTES_PER_POINT + WORKER_BASE <= 2**30
+    assert shared < fitting_tile_points(Workers(2 * 2**30, 1 * 2**30), 1_000_000)
     with pytest.raises(UsageError, match="memory limit"):
         fitting_tile_points(Workers(200 * 2**20), 1_000_000)
+    with pytest.raises(UsageError, match=r"the tiles of 8 tasks at once \(its Dask threads\).* or fewer threads"):
+        fitting_tile_points(Workers(300 * 2**20, threads=[8]), 1_000_000)
+    assert fitting_tile_points(Workers(300 * 2**20), 1_000_000) > 70_000  # (the same limit, a thread)
 
 
 def test_first_round_on_the_workers_must_fit_their_memory():
