@@ -477,7 +477,7 @@ def fitting_tile_points(client, wanted, timeout=120):
     if fits < 10_000:
         each = "a task" if threads == 1 else f"{threads} tasks at once (its Dask threads)"
         raise UsageError(f"a Dask worker's memory limit ({limit / 2**20:.0f} MiB) leaves no room for the tiles of {each}: "
-                         f"give them at least {(2 * (WORKER_BASE + threads * 10_000 * BYTES_PER_POINT)) / 2**20:.0f} MiB"
+                         f"give each worker at least {(2 * (WORKER_BASE + threads * 10_000 * BYTES_PER_POINT)) / 2**20:.0f} MiB"
                          + (" or fewer threads (dask worker --nthreads)" if threads > 1 else ""))
     return min(wanted, fits)
 
