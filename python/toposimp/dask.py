@@ -51,7 +51,8 @@ Dask options:
                        would not hold such a tile for each of its Dask threads in half of it)
   --task-threads N     threads each task's engine uses (default: a host's cores shared among the
                        Dask threads of its workers, at least 1: 1 for the default LocalCluster
-                       of a worker a core, 2 for one worker on 2 cores)
+                       of a worker a core, 2 for one worker on 2 cores); a task of at least as
+                       many groups of tiles runs them side by side, a thread each
   --local-budget N     a round of a count target that removes fewer than N vertices runs here,
                        whole, not as tasks (default 4000000, about a second of one core here,
                        less than cutting the live map into tiles again; 0: every round as tasks)
@@ -114,11 +115,12 @@ LOCAL_BUDGET = 4_000_000
 
 
 def _run_groups(groups, plan, options):
-    """A Dask task: groups of tiles, each through the levels below the tile level in turn."""
+    """A Dask task: groups of tiles, each through the levels below the tile level; side by side,
+    a thread each, when there are at least as many as the task's threads (run_tile_groups)."""
     from toposimp import _toposimp as engine
     if type(groups) is tuple and groups and groups[0] is _given:  # (a Dask that hands nested tasks over as they are)
         groups = groups[1]
-    return [engine.run_tile_group(group, plan, options) for group in groups]
+    return engine.run_tile_groups(list(groups), plan, options) if groups else []
 
 
 def _given(value):

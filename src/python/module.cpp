@@ -608,6 +608,7 @@ PYBIND11_MODULE(_toposimp, module) {
     module.attr("version") = TOPOSIMP_VERSION;
     module.attr("parts_protocol") = python::kPartsProtocol;
     module.def("run_tile_group", &python::run_tile_group, py::arg("group"), py::arg("plan"), py::arg("options"));
+    module.def("run_tile_groups", &python::run_tile_groups, py::arg("groups"), py::arg("plan"), py::arg("options"));
     module.def("check_layers", &check_layers, py::arg("original"), py::arg("simplified"), py::arg("points"), py::arg("precision"),
                py::arg("interruptible"), py::arg("shapely_geos"));
 }

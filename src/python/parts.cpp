@@ -969,26 +969,60 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
     return result;
 }
 
-py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options) {
+namespace {
+
+// A group's tile dicts as engine inputs, checked to be of one level of the plan.
+std::vector<map::TileInput> group_of(const py::list& group, const map::GridPlan& grid) {
     std::vector<map::TileInput> tiles;
     for (const py::handle tile : group) tiles.push_back(tile_of(tile.cast<py::dict>()));
-    const map::GridPlan grid = plan_of(plan);
-    const map::SimplifyOptions simplify = options_of(options);
     for (const map::TileInput& tile : tiles) {
         if (tile.level != tiles.front().level || tile.level > grid.levels) malformed("the tiles are not of one level of the plan");
     }
+    return tiles;
+}
+
+// After a task's engine ran: its arrays are freed; give their pages back, so that the worker's
+// memory (what Dask's memory limit watches) falls back to what it holds.
+void give_pages_back() {
+#ifdef __GLIBC__
+    malloc_trim(0);
+#endif
+}
+
+py::list outcome_list(const std::vector<map::TileOutcome>& outcomes) {
+    py::list out;
+    for (const map::TileOutcome& outcome : outcomes) out.append(outcome_dict(outcome));
+    return out;
+}
+
+}  // namespace
+
+py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options) {
+    const map::GridPlan grid = plan_of(plan);
+    std::vector<map::TileInput> tiles = group_of(group, grid);
+    const map::SimplifyOptions simplify = options_of(options);
     std::vector<map::TileOutcome> outcomes;
     {
         py::gil_scoped_release release;
         outcomes = map::run_tile_group(std::move(tiles), grid, simplify);
-#ifdef __GLIBC__
-        // The engine's arrays are freed; give their pages back, so that the worker's memory (what
-        // Dask's memory limit watches) falls back to what it holds.
-        malloc_trim(0);
-#endif
+        give_pages_back();
+    }
+    return outcome_list(outcomes);
+}
+
+py::list run_tile_groups(const py::list& groups, const py::dict& plan, const py::dict& options) {
+    const map::GridPlan grid = plan_of(plan);
+    std::vector<std::vector<map::TileInput>> inputs;
+    for (const py::handle group : groups) inputs.push_back(group_of(group.cast<py::list>(), grid));
+    const map::SimplifyOptions simplify = options_of(options);
+    std::vector<std::vector<map::TileOutcome>> outcomes;
+    {
+        py::gil_scoped_release release;
+        outcomes = map::run_tile_groups(std::move(inputs), grid, simplify);
+        give_pages_back();
     }
     py::list out;
-    for (const map::TileOutcome& outcome : outcomes) out.append(outcome_dict(outcome));
+    for (const std::vector<map::TileOutcome>& group : outcomes) out.append(outcome_list(group));
     return out;
 }
 

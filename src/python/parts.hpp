@@ -18,7 +18,7 @@ namespace py = pybind11;
 
 // The tile and outcome dicts' format: a worker whose engine has another cannot run this one's
 // tiles (python/toposimp/dask.py checks before the first round). Raise it when they change.
-inline constexpr int kPartsProtocol = 5;  // 2: orientations known but not yet counted (3 to 5, 7 to 9); 3: the first round's tasks; 4: polygon layers read by parts; 5: vertex ids as runs
+inline constexpr int kPartsProtocol = 6;  // 2: orientations known but not yet counted (3 to 5, 7 to 9); 3: the first round's tasks; 4: polygon layers read by parts; 5: vertex ids as runs; 6: a task's groups in one call (run_tile_groups)
 
 // A round's tile groups as run_groups sees them: a sequence whose item k is group k's tiles (a
 // list of dicts), built when asked for, so that the round's tiles never all exist at once (ask
@@ -125,5 +125,9 @@ map::SimplifyResult run_in_parts(const map::MapData& map, const map::SimplifyOpt
 
 // A task: one group of tile dicts → their outcome dicts (the engine runs without the GIL).
 py::list run_tile_group(const py::list& group, const py::dict& plan, const py::dict& options);
+
+// A task of several groups: a list of such groups → a list of their outcome lists (map::run_tile_groups:
+// side by side when there are at least as many as threads).
+py::list run_tile_groups(const py::list& groups, const py::dict& plan, const py::dict& options);
 
 }  // namespace toposimp::python

@@ -51,6 +51,39 @@ def test_groups_built_when_asked_for(binary, tmp_path):
         rounds[0][0]
 
 
+def test_a_tasks_groups_side_by_side_give_the_same_bytes(binary, tmp_path):
+    """A task's groups in one call (run_tile_groups, as python/toposimp/dask.py's _run_groups runs
+    them): side by side, a thread each, when there are at least as many as the task's threads; the
+    output toposimp map's, at 1, 2 and 3 threads a task. A damaged tile among them stops the run."""
+    import subprocess
+
+    arguments = [str(DATA / "nh_borders.gpkg"), "-l", "borders", "-p", f"{DATA / 'nh_borders.gpkg'}:places", "--keep", "10%",
+                 *SAME_DATE]
+    reference = tmp_path / "reference.gpkg"
+    subprocess.run([binary, "map", *arguments, "-o", str(reference)], check=True, capture_output=True)
+    for threads in (1, 2, 3):
+        widths = []
+
+        def run_groups(groups, plan, options, round_number):
+            widths.append(len(groups))
+            return _toposimp.run_tile_groups(list(groups), plan, dict(options, threads=threads))
+
+        output = tmp_path / f"side_by_side_{threads}.gpkg"  # (tile level 0: 3 to 8 groups a round)
+        status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output)], run_groups, 0, 0, 0, None, False, False)
+        assert status == 0, err
+        assert max(widths) >= 3, "some rounds should run groups side by side"
+        assert output.read_bytes() == reference.read_bytes(), f"{threads} threads a task"
+
+    def damaged(groups, plan, options, round_number):
+        groups = [list(group) for group in groups]
+        groups[-1][0] = dict(groups[-1][0], vertex_runs=numpy.array([[0, 0]], dtype=numpy.uint32))
+        return _toposimp.run_tile_groups(groups, plan, dict(options, threads=2))
+
+    with pytest.raises(ValueError, match="a tile task's data is malformed"):
+        _toposimp.run_command(["map", *arguments, "-o", str(tmp_path / "damaged.gpkg")], damaged, 0, 0, 0, None, False, False)
+    assert not (tmp_path / "damaged.gpkg").exists()
+
+
 def test_vertex_ids_travel_as_runs_while_they_are_consecutive(binary, tmp_path):
     """A tile's whole-map vertex ids travel as (first, count) runs of consecutive ids where that takes
     at most half the room (the first round: every vertex live, a piece of a chain is a run), one

@@ -2,6 +2,7 @@
 // then the levels above over the whole map, give simplify()'s result exactly.
 #include "core/map/tiles.hpp"
 
+#include "core/cancel.hpp"
 #include "support/random_maps.hpp"
 
 #include <gtest/gtest.h>
@@ -279,6 +280,86 @@ TEST(MapTiles, GroupSizesAreWhatTheGroupsHold) {
     EXPECT_GT(rounds, 1);
     EXPECT_GT(groups_seen, rounds);
     EXPECT_EQ(parts.result().stats.removed, simplify(map, options).stats.removed);
+}
+
+void expect_same_outcome(const TileOutcome& a, const TileOutcome& b, const std::string& what) {
+    EXPECT_EQ(a.ids, b.ids) << what;
+    EXPECT_EQ(a.states, b.states) << what;
+    EXPECT_EQ(a.waits, b.waits) << what;
+    // (A later list's order follows the threads that filled it; the engine takes it as a set.)
+    ASSERT_EQ(a.later.size(), b.later.size()) << what;
+    for (std::size_t k = 0; k < a.later.size(); ++k) {
+        std::vector<std::uint32_t> x = a.later[k], y = b.later[k];
+        std::sort(x.begin(), x.end());
+        std::sort(y.begin(), y.end());
+        EXPECT_EQ(x, y) << what << ", level T+" << k;
+    }
+    EXPECT_EQ(a.locations_lost, b.locations_lost) << what;
+    EXPECT_EQ(a.oriented, b.oriented) << what;
+    EXPECT_EQ(a.orientations, b.orientations) << what;
+    EXPECT_EQ(a.stats.removed, b.stats.removed) << what;
+    EXPECT_EQ(a.stats.blocked(), b.stats.blocked()) << what;
+    EXPECT_EQ(a.stats.predicates.filter_decided, b.stats.predicates.filter_decided) << what;
+    EXPECT_EQ(a.exhausted, b.exhausted) << what;
+}
+
+// A task's groups run side by side, a thread each (run_tile_groups, with at least as many groups
+// as threads), or one after the other on all threads (fewer): the outcomes of each group run on
+// its own, in the groups' order, every round; and the run goes on to the single process's result.
+TEST(MapTiles, ATasksGroupsSideBySideGiveEachGroupsOwnOutcomes) {
+    const MapData map = random_map(11, 6, true);
+    SimplifyOptions options = on_two_threads({Target::keep_fraction, 0.5});
+    const SimplifyResult whole = simplify(map, options);
+    MapInParts parts(map, options, 1);
+    int rounds = 0, side_by_side = 0;
+    while (parts.next_round()) {
+        ++rounds;
+        const std::size_t count = parts.split_round();
+        std::vector<std::vector<TileInput>> groups;
+        std::vector<std::vector<TileOutcome>> alone;
+        for (std::size_t k = 0; k < count; ++k) {
+            groups.push_back(parts.group(k));
+            alone.push_back(run_tile_group(parts.group(k), parts.plan(), options));
+        }
+        for (const int threads : {1, 2, 3, 64}) {
+            SimplifyOptions task = options;
+            task.threads = threads;
+            if (count >= static_cast<std::size_t>(threads) && threads > 1) ++side_by_side;
+            const std::vector<std::vector<TileOutcome>> together = run_tile_groups(groups, parts.plan(), task);
+            ASSERT_EQ(together.size(), count);
+            for (std::size_t k = 0; k < count; ++k) {
+                ASSERT_EQ(together[k].size(), alone[k].size());
+                for (std::size_t t = 0; t < alone[k].size(); ++t) {
+                    expect_same_outcome(together[k][t], alone[k][t], "round " + std::to_string(rounds) + ", group " + std::to_string(k) +
+                                                                         ", tile " + std::to_string(t) + ", " + std::to_string(threads) +
+                                                                         " threads");
+                }
+            }
+        }
+        std::vector<TileOutcome> outcomes;
+        for (std::vector<TileOutcome>& group : alone) {
+            for (TileOutcome& outcome : group) outcomes.push_back(std::move(outcome));
+        }
+        parts.finish_round(outcomes);
+    }
+    EXPECT_GT(side_by_side, 1) << "some rounds should have run their groups side by side";
+    expect_same(parts.result(), whole, "groups side by side");
+}
+
+// A group that throws (here: told to stop) does not end the program from inside the threads
+// running the groups side by side: its exception reaches the caller.
+TEST(MapTiles, AGroupsExceptionSideBySideReachesTheCaller) {
+    const MapData map = random_map(12, 0, true);
+    SimplifyOptions options = on_two_threads({Target::keep_fraction, 0.5});
+    MapInParts parts(map, options, 1);
+    ASSERT_TRUE(parts.next_round());
+    const std::size_t count = parts.split_round();
+    ASSERT_GE(count, 2u);
+    std::vector<std::vector<TileInput>> groups;
+    for (std::size_t k = 0; k < count; ++k) groups.push_back(parts.group(k));
+    const std::atomic<bool> stop{true};
+    options.cancel = &stop;
+    EXPECT_THROW(run_tile_groups(groups, parts.plan(), options), Cancelled);
 }
 
 // A ring whose only segments across the tile border are one segment out and the same one back
