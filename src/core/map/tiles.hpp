@@ -172,9 +172,11 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 // threads. The outcomes are the same either way (a tile's run does not depend on its threads),
 // and so is the memory bound of a task: its groups together are at most its biggest group's size
 // or a tile's (python/toposimp/dask.py: _batches). Why: within one tile the levels' blocks are few
-// and uneven, and a tile on 2 threads ran only 1.27 times as fast as on 1 (GSHHG's first round);
-// side by side, the threads seldom wait. A group that throws does not stop the others; the first
-// group's exception in order is rethrown once all have run. `options.progress` is not called.
+// and uneven (GSHHG's first round's tiles, in one process, ran only 1.27 times as fast on 2 threads
+// as on 1); side by side, a thread waits less on the other. On a Dask worker with glibc's malloc
+// that cut the first round's compute from 5.33 to 4.68 s; with jemalloc it changed nothing
+// (BENCHMARKS.md, session 56). A group that throws does not stop the others; the first group's
+// exception in order is rethrown once all have run. `options.progress` is not called.
 std::vector<std::vector<TileOutcome>> run_tile_groups(std::vector<std::vector<TileInput>> groups, const GridPlan& plan,
                                                       const SimplifyOptions& options);
 
