@@ -689,8 +689,14 @@ def _first_run(queued, groups, points, marks, bound, plan, options, live=True):
     from toposimp import _toposimp as engine
     tiles = queued[0]
     outcomes, lives, running = [], [], set()
-    for group, inside in zip(groups, points):
-        done, those = engine.first_run([tiles[i] for i in group], inside, marks, bound, plan, options, live)
+    threads = options.get("threads", 1)
+    if threads >= 2 and len(groups) >= threads:
+        # (side by side, a thread each, as _run_groups' tasks run theirs; their control points all at once)
+        answers = engine.first_runs([[tiles[i] for i in group] for group in groups], list(points), marks, bound, plan, options, live)
+    else:
+        answers = (engine.first_run([tiles[i] for i in group], inside, marks, bound, plan, options, live)
+                   for group, inside in zip(groups, points))
+    for group, (done, those) in zip(groups, answers):
         outcomes.extend(done)
         lives.extend(those)
         running.update(group)

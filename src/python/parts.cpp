@@ -9,6 +9,7 @@
 #endif
 
 #include "core/map/coverage.hpp"
+#include "core/parallel/side_by_side.hpp"
 #include "io/common/errors.hpp"
 #include "io/map/shapefile.hpp"
 
@@ -27,6 +28,14 @@
 namespace toposimp::python {
 
 namespace {
+
+// After a task's engine ran: its arrays are freed; give their pages back, so that the worker's
+// memory (what Dask's memory limit watches) falls back to what it holds.
+void give_pages_back() {
+#ifdef __GLIBC__
+    malloc_trim(0);
+#endif
+}
 
 // The coarsest level below the top whose biggest tile holds at most `budget` vertices and
 // control points (0 if none does: every level-0 block a tile). Counted in a dense array at the
@@ -629,44 +638,102 @@ py::dict first_pairs_in(const py::list& tiles, int shift, std::uint64_t prefix) 
     return dict;
 }
 
-// A group of queued tiles run, with their control points → (their outcomes, their live vertices).
-py::tuple first_run(const py::list& tiles, const py::list& points, bool marks, std::pair<double, std::uint32_t> bound, const py::dict& plan,
-                    const py::dict& options, bool live_too) {
-    const std::vector<const map::FirstTile*> group = tiles_in(tiles);
-    if (points.size() != group.size()) malformed("not one list of control points per tile");
+// A group of queued tiles with their control points, checked (with the GIL).
+struct FirstGroup {
+    std::vector<const map::FirstTile*> tiles;
     std::vector<std::vector<Point>> inside;
+};
+
+FirstGroup first_group(const py::list& tiles, const py::list& points, bool marks, const map::GridPlan& grid) {
+    FirstGroup group{tiles_in(tiles), {}};
+    if (points.size() != group.tiles.size()) malformed("not one list of control points per tile");
     for (const py::handle one : points) {
         py::dict holder;
         holder["points"] = one;
-        inside.push_back(points_of(holder, "points"));
+        group.inside.push_back(points_of(holder, "points"));
     }
-    const map::GridPlan grid = plan_of(plan);
-    const map::SimplifyOptions simplify = options_of(options);
-    for (const map::FirstTile* tile : group) {
+    for (const map::FirstTile* tile : group.tiles) {
         if (tile->input.state.size() != tile->input.vertex_id.size() || (marks && tile->keys.size() != tile->queued())) {
             malformed("a tile run before it is queued");
         }
-        if (tile->input.level != group.front()->input.level || tile->input.level > grid.levels) malformed("the tiles are not of one level of the plan");
+        if (tile->input.level != group.tiles.front()->input.level || tile->input.level > grid.levels) malformed("the tiles are not of one level of the plan");
     }
+    return group;
+}
+
+struct FirstGroupRun {
     std::vector<map::TileOutcome> outcomes;
     std::vector<map::LiveVertices> live;
+};
+
+// (Without the GIL.) A group's tiles run; with live_too, their live vertices after.
+FirstGroupRun run_first_group(FirstGroup& group, bool marks, std::pair<double, std::uint32_t> bound, const map::GridPlan& grid,
+                              const map::SimplifyOptions& options, bool live_too) {
+    FirstGroupRun run;
+    std::vector<map::TileInput> inputs;
+    for (std::size_t k = 0; k < group.tiles.size(); ++k) {
+        inputs.push_back(group.tiles[k]->run_input(marks, bound.first, bound.second, std::move(group.inside[k])));
+    }
+    run.outcomes = map::run_tile_group(std::move(inputs), grid, options);
+    if (live_too) {
+        const auto changed = map::changed_states(run.outcomes);
+        for (const map::FirstTile* tile : group.tiles) run.live.push_back(map::live_vertices(*tile, changed, marks, bound.first, bound.second));
+    }
+    return run;
+}
+
+py::tuple first_run_tuple(const FirstGroupRun& run) {
+    py::list outcome_list, live_list;
+    for (const map::TileOutcome& outcome : run.outcomes) outcome_list.append(outcome_dict(outcome));
+    for (const map::LiveVertices& one : run.live) live_list.append(live_dict(one));
+    return py::make_tuple(outcome_list, live_list);
+}
+
+// A group of queued tiles run, with their control points → (their outcomes, their live vertices).
+py::tuple first_run(const py::list& tiles, const py::list& points, bool marks, std::pair<double, std::uint32_t> bound, const py::dict& plan,
+                    const py::dict& options, bool live_too) {
+    const map::GridPlan grid = plan_of(plan);
+    FirstGroup group = first_group(tiles, points, marks, grid);
+    const map::SimplifyOptions simplify = options_of(options);
+    FirstGroupRun run;
     {
         py::gil_scoped_release release;
-        std::vector<map::TileInput> inputs;
-        for (std::size_t k = 0; k < group.size(); ++k) inputs.push_back(group[k]->run_input(marks, bound.first, bound.second, std::move(inside[k])));
-        outcomes = map::run_tile_group(std::move(inputs), grid, simplify);
-        if (live_too) {
-            const auto changed = map::changed_states(outcomes);
-            for (const map::FirstTile* tile : group) live.push_back(map::live_vertices(*tile, changed, marks, bound.first, bound.second));
-        }
-#ifdef __GLIBC__
-        malloc_trim(0);
-#endif
+        run = run_first_group(group, marks, bound, grid, simplify, live_too);
+        give_pages_back();
     }
-    py::list outcome_list, live_list;
-    for (const map::TileOutcome& outcome : outcomes) outcome_list.append(outcome_dict(outcome));
-    for (const map::LiveVertices& one : live) live_list.append(live_dict(one));
-    return py::make_tuple(outcome_list, live_list);
+    return first_run_tuple(run);
+}
+
+// A batch's groups (`groups`: a list of tile lists; `points`: per group, its tiles' control
+// points) → first_run's answer per group. Side by side, a thread each, when there are at least as
+// many as threads (parallel::side_by_side; all their control points here at once, where
+// first_run group after group holds one group's).
+py::list first_runs(const py::list& groups, const py::list& points, bool marks, std::pair<double, std::uint32_t> bound, const py::dict& plan,
+                    const py::dict& options, bool live_too) {
+    const map::GridPlan grid = plan_of(plan);
+    if (points.size() != groups.size()) malformed("not one list of control points per group");
+    std::vector<FirstGroup> all;
+    for (std::size_t k = 0; k < groups.size(); ++k) all.push_back(first_group(groups[k].cast<py::list>(), points[k].cast<py::list>(), marks, grid));
+    const map::SimplifyOptions simplify = options_of(options);
+    std::vector<FirstGroupRun> runs(all.size());
+    {
+        py::gil_scoped_release release;
+        const auto size = [&](std::size_t k) {
+            std::size_t sum = 0;
+            for (std::size_t t = 0; t < all[k].tiles.size(); ++t) sum += all[k].tiles[t]->input.vertex_id.size() + all[k].inside[t].size();
+            return sum;
+        };
+        parallel::side_by_side(all.size(), simplify.threads > 0 ? simplify.threads : omp_get_max_threads(), size,
+                               [&](std::size_t k, int threads) {
+                                   map::SimplifyOptions mine = simplify;
+                                   mine.threads = threads;
+                                   runs[k] = run_first_group(all[k], marks, bound, grid, mine, live_too);
+                               });
+        give_pages_back();
+    }
+    py::list out;
+    for (const FirstGroupRun& run : runs) out.append(first_run_tuple(run));
+    return out;
 }
 
 // A queued tile whose group sat the round out → its live vertices.
@@ -761,6 +828,8 @@ void bind_parts(py::module_& module) {
     module.def("first_ids_at", &first_ids_at, py::arg("tiles"), py::arg("key"));
     module.def("first_pairs_in", &first_pairs_in, py::arg("tiles"), py::arg("shift"), py::arg("prefix"));
     module.def("first_run", &first_run, py::arg("tiles"), py::arg("points"), py::arg("marks"), py::arg("bound"), py::arg("plan"),
+               py::arg("options"), py::arg("live") = true);
+    module.def("first_runs", &first_runs, py::arg("groups"), py::arg("points"), py::arg("marks"), py::arg("bound"), py::arg("plan"),
                py::arg("options"), py::arg("live") = true);
     module.def("first_live", &first_live, py::arg("tile"), py::arg("marks"), py::arg("bound"));
     bind_kept(module);
@@ -979,14 +1048,6 @@ std::vector<map::TileInput> group_of(const py::list& group, const map::GridPlan&
         if (tile.level != tiles.front().level || tile.level > grid.levels) malformed("the tiles are not of one level of the plan");
     }
     return tiles;
-}
-
-// After a task's engine ran: its arrays are freed; give their pages back, so that the worker's
-// memory (what Dask's memory limit watches) falls back to what it holds.
-void give_pages_back() {
-#ifdef __GLIBC__
-    malloc_trim(0);
-#endif
 }
 
 py::list outcome_list(const std::vector<map::TileOutcome>& outcomes) {

@@ -18,7 +18,7 @@ namespace py = pybind11;
 
 // The tile and outcome dicts' format: a worker whose engine has another cannot run this one's
 // tiles (python/toposimp/dask.py checks before the first round). Raise it when they change.
-inline constexpr int kPartsProtocol = 6;  // 2: orientations known but not yet counted (3 to 5, 7 to 9); 3: the first round's tasks; 4: polygon layers read by parts; 5: vertex ids as runs; 6: a task's groups in one call (run_tile_groups)
+inline constexpr int kPartsProtocol = 7;  // 2: orientations known but not yet counted (3 to 5, 7 to 9); 3: the first round's tasks; 4: polygon layers read by parts; 5: vertex ids as runs; 6: a task's groups in one call (run_tile_groups); 7: the first round's too (first_runs)
 
 // A round's tile groups as run_groups sees them: a sequence whose item k is group k's tiles (a
 // list of dicts), built when asked for, so that the round's tiles never all exist at once (ask

@@ -189,10 +189,11 @@ class FirstRoundHere:
     between workers), the pairs of the budget's bucket gathered after the first pass or not
     (`gather_after`), and `damage(stage, value)` to break one answer."""
 
-    def __init__(self, gather_after=0, damage=None):
+    def __init__(self, gather_after=0, damage=None, side_by_side=False):
         import pickle
 
         self.gather_after, self.damage = gather_after, damage or (lambda stage, value: value)
+        self.side_by_side, self.widths = side_by_side, []  # (the groups run by first_runs on 2 threads, as toposimp.dask's tasks do)
         self.moved = lambda tile: pickle.loads(pickle.dumps(tile))
         self.stages = []
 
@@ -255,8 +256,14 @@ class FirstRoundHere:
         now = steps.bound_now
         live, outcomes = [], []
         running = set()
-        for group in groups:
-            done, lives = _toposimp.first_run([queued[n] for n in group], [steps.points(n) for n in group], steps.marks, now, plan, options)
+        if self.side_by_side:
+            self.widths.append(len(groups))
+            answers = _toposimp.first_runs([[queued[n] for n in group] for group in groups], [[steps.points(n) for n in group] for group in groups],
+                                           steps.marks, now, plan, dict(options, threads=2))
+        else:
+            answers = [_toposimp.first_run([queued[n] for n in group], [steps.points(n) for n in group], steps.marks, now, plan, options)
+                       for group in groups]
+        for group, (done, lives) in zip(groups, answers):
             outcomes.extend(done)
             live.extend(lives)
             running.update(group)
@@ -285,7 +292,8 @@ def crossing_map(tmp_path_factory):
 @pytest.mark.parametrize("level, gather_after", [(0, 0), (2, 0), (2, 3), (3, 1)])
 def test_first_round_by_stages_gives_the_same_bytes(binary, tmp_path, crossing_map, target, level, gather_after):
     """The first round built, searched, selected and run by the stages' tasks (each tile pickled
-    between them), the rounds after as usual: toposimp map's output, byte for byte."""
+    between them), the rounds after as usual: toposimp map's output, byte for byte. At level 0 the
+    first round's groups run side by side (first_runs)."""
     import subprocess
 
     lines, places = crossing_map
@@ -293,12 +301,14 @@ def test_first_round_by_stages_gives_the_same_bytes(binary, tmp_path, crossing_m
     reference = tmp_path / "reference.gpkg"
     done = subprocess.run([binary, "map", *arguments, "-o", str(reference), "--json"], check=True, capture_output=True, text=True)
     assert '"pinned_by_crossing":0' not in done.stdout  # (crossings to find)
-    first = FirstRoundHere(gather_after)
+    first = FirstRoundHere(gather_after, side_by_side=level == 0)
     output = tmp_path / "stages.gpkg"
     # (parts of about 700 vertices: several)
     status, out, err = _toposimp.run_command(["map", *arguments, "-o", str(output)], first, level, 700, 0, None, False, False)
     assert status == 0, err
     assert output.read_bytes() == reference.read_bytes()
+    if level == 0:
+        assert max(first.widths) >= 2, "the first round's groups should have run side by side"
     swept = '"swept_as_max":true' in done.stdout
     assert swept == (target == ["--keep", "10%"])
     if target[0] in ("--keep", "--keep-points"):

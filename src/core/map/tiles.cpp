@@ -1,13 +1,13 @@
 #include "core/map/tiles.hpp"
 
 
+#include "core/parallel/side_by_side.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
-#include <exception>
 #include <limits>
 #include <map>
-#include <numeric>
 
 namespace toposimp::map {
 
@@ -66,38 +66,19 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 std::vector<std::vector<TileOutcome>> run_tile_groups(std::vector<std::vector<TileInput>> groups, const GridPlan& plan,
                                                       const SimplifyOptions& options) {
     std::vector<std::vector<TileOutcome>> outcomes(groups.size());
-    const int threads = options.threads > 0 ? options.threads : omp_get_max_threads();
-    if (threads < 2 || groups.size() < static_cast<std::size_t>(threads)) {
-        for (std::size_t k = 0; k < groups.size(); ++k) outcomes[k] = run_tile_group(std::move(groups[k]), plan, options);
-        return outcomes;
-    }
     const auto points = [&](std::size_t k) {
         std::size_t sum = 0;
         for (const TileInput& tile : groups[k]) sum += tile.map.vertices.size() + tile.map.control_points.size();
         return sum;
     };
-    std::vector<std::size_t> order(groups.size());
-    std::iota(order.begin(), order.end(), std::size_t{0});
-    std::vector<std::size_t> size(groups.size());
-    for (std::size_t k = 0; k < groups.size(); ++k) size[k] = points(k);
-    std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return size[a] > size[b]; });
-    SimplifyOptions one = options;
-    one.threads = 1;
-    one.progress = {};
-    std::vector<std::exception_ptr> failed(groups.size());
-    const auto count = static_cast<std::ptrdiff_t>(groups.size());
-#pragma omp parallel for schedule(dynamic, 1) num_threads(threads)
-    for (std::ptrdiff_t i = 0; i < count; ++i) {
-        const std::size_t k = order[static_cast<std::size_t>(i)];
-        try {
-            outcomes[k] = run_tile_group(std::move(groups[k]), plan, one);
-        } catch (...) {
-            failed[k] = std::current_exception();
-        }
-    }
-    for (const std::exception_ptr& error : failed) {
-        if (error) std::rethrow_exception(error);
-    }
+    SimplifyOptions each = options;
+    each.progress = {};
+    parallel::side_by_side(groups.size(), options.threads > 0 ? options.threads : omp_get_max_threads(), points,
+                           [&](std::size_t k, int threads) {
+                               SimplifyOptions mine = each;
+                               mine.threads = threads;
+                               outcomes[k] = run_tile_group(std::move(groups[k]), plan, mine);
+                           });
     return outcomes;
 }
 

@@ -3,15 +3,18 @@
 #include "core/map/tiles.hpp"
 
 #include "core/cancel.hpp"
+#include "core/parallel/side_by_side.hpp"
 #include "support/random_maps.hpp"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <map>
 #include <random>
+#include <stdexcept>
 #include <string>
 
 namespace toposimp::map {
@@ -360,6 +363,35 @@ TEST(MapTiles, AGroupsExceptionSideBySideReachesTheCaller) {
     const std::atomic<bool> stop{true};
     options.cancel = &stop;
     EXPECT_THROW(run_tile_groups(groups, parts.plan(), options), Cancelled);
+}
+
+// Items side by side (parallel::side_by_side): each runs once, on one thread when there are at
+// least as many items as threads, else on all of them in order; of several that throw, the first
+// in order reaches the caller either way.
+TEST(SideBySide, EachItemRunsOnceAndTheFirstErrorInOrderReachesTheCaller) {
+    for (const int threads : {1, 2, 3, 8, 9}) {
+        std::vector<int> ran(8, 0), given(8, 0);
+        std::atomic<int> calls{0};
+        const auto throwing = [&](std::size_t k, int each) {
+            ++calls;
+            ran[k] += 1;
+            given[k] = each;
+            if (k == 3 || k == 5) throw std::runtime_error(std::to_string(k));
+        };
+        try {
+            parallel::side_by_side(ran.size(), threads, [](std::size_t k) { return k % 3; }, throwing);
+            ADD_FAILURE() << "no exception at " << threads << " threads";
+        } catch (const std::runtime_error& error) {
+            EXPECT_STREQ(error.what(), "3") << threads << " threads";
+        }
+        const bool side = threads >= 2 && threads <= 8;
+        EXPECT_EQ(calls.load(), side ? 8 : 4) << threads << " threads";  // (in order, the run stops at item 3)
+        for (std::size_t k = 0; k < ran.size(); ++k) {
+            if (!side && k > 3) continue;
+            EXPECT_EQ(ran[k], 1) << "item " << k << ", " << threads << " threads";
+            EXPECT_EQ(given[k], side ? 1 : threads) << "item " << k << ", " << threads << " threads";
+        }
+    }
 }
 
 // A ring whose only segments across the tile border are one segment out and the same one back
