@@ -170,8 +170,8 @@ std::vector<TileOutcome> run_tile_group(std::vector<TileInput> group, const Grid
 // With at least as many groups as threads (options.threads; 0: OpenMP's default), the groups run
 // side by side, a thread each, the biggest first; else one after the other, each on all the
 // threads. The outcomes are the same either way (a tile's run does not depend on its threads),
-// and so is the memory bound of a task: its groups together are at most its biggest group's size
-// or a tile's (python/toposimp/dask.py: _batches). Why: within one tile the levels' blocks are few
+// and so is the memory bound of a task: its groups together hold at most the round's biggest
+// group (python/toposimp/dask.py: _batches). Why: within one tile the levels' blocks are few
 // and uneven (GSHHG's first round's tiles, in one process, ran only 1.27 times as fast on 2 threads
 // as on 1); side by side, a thread waits less on the other. On a Dask worker with glibc's malloc
 // that cut the first round's compute from 5.33 to 4.68 s; with jemalloc it changed nothing
