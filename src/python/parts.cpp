@@ -723,7 +723,7 @@ py::list first_runs(const py::list& groups, const py::list& points, bool marks, 
             for (std::size_t t = 0; t < all[k].tiles.size(); ++t) sum += all[k].tiles[t]->input.vertex_id.size() + all[k].inside[t].size();
             return sum;
         };
-        parallel::side_by_side(all.size(), simplify.threads > 0 ? simplify.threads : omp_get_max_threads(), size,
+        parallel::side_by_side(all.size(), simplify.threads, size,
                                [&](std::size_t k, int threads) {
                                    map::SimplifyOptions mine = simplify;
                                    mine.threads = threads;

@@ -1,9 +1,6 @@
 #include "core/map/tiles.hpp"
 
-
 #include "core/parallel/side_by_side.hpp"
-
-#include <omp.h>
 
 #include <algorithm>
 #include <limits>
@@ -71,12 +68,11 @@ std::vector<std::vector<TileOutcome>> run_tile_groups(std::vector<std::vector<Ti
         for (const TileInput& tile : groups[k]) sum += tile.map.vertices.size() + tile.map.control_points.size();
         return sum;
     };
-    SimplifyOptions each = options;
-    each.progress = {};
-    parallel::side_by_side(groups.size(), options.threads > 0 ? options.threads : omp_get_max_threads(), points,
+    parallel::side_by_side(groups.size(), options.threads, points,
                            [&](std::size_t k, int threads) {
-                               SimplifyOptions mine = each;
+                               SimplifyOptions mine = options;
                                mine.threads = threads;
+                               mine.progress = {};
                                outcomes[k] = run_tile_group(std::move(groups[k]), plan, mine);
                            });
     return outcomes;

@@ -14,11 +14,12 @@
 namespace toposimp::parallel {
 
 // Calls work(k, threads_each) for each k in [0, count). With at least as many items as `threads`
-// (≥ 2), side by side, a thread each (threads_each = 1), the biggest first (by size(k)); else one
+// (≥ 2; 0 or less: OpenMP's default), side by side, a thread each (threads_each = 1), the biggest first (by size(k)); else one
 // after the other, each with all `threads`. An item that throws does not stop the others side by
 // side; either way the first item's exception in order reaches the caller.
 template <class Size, class Work>
 void side_by_side(std::size_t count, int threads, Size&& size, Work&& work) {
+    if (threads <= 0) threads = omp_get_max_threads();
     if (threads < 2 || count < static_cast<std::size_t>(threads)) {
         for (std::size_t k = 0; k < count; ++k) work(k, threads);
         return;
