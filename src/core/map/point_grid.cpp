@@ -51,14 +51,11 @@ PointGrid::Geometry PointGrid::Geometry::plan(double min_x, double min_y, double
     return g;
 }
 
-PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second, double points_per_cell, int threads_wanted,
-                     unsigned row_split, const std::atomic<bool>* cancel) {
+PointGrid::Geometry PointGrid::Geometry::of(std::span<const Point> first, std::span<const Point> second, double points_per_cell,
+                                            unsigned row_split, int threads_wanted) {
     const std::size_t f = first.size(), n = f + second.size();
+    if (n == 0) return {};
     auto point = [&](std::size_t i) { return i < f ? first[i] : second[i - f]; };
-    if (n == 0) {
-        cell_start_.assign(2, 0);
-        return;
-    }
     double min_x = INFINITY, min_y = INFINITY, max_x = -INFINITY, max_y = -INFINITY;
 #pragma omp parallel for reduction(min : min_x, min_y) reduction(max : max_x, max_y) schedule(static) \
     num_threads(threads_wanted > 0 ? threads_wanted : omp_get_max_threads()) if (n >= 1 << 14)
@@ -69,10 +66,19 @@ PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second
         max_x = std::max(max_x, p.x);
         max_y = std::max(max_y, p.y);
     }
-    geometry_ = Geometry::plan(min_x, min_y, max_x, max_y, n, points_per_cell, row_split);
-    columns_ = geometry_.columns;
-    rows_ = geometry_.rows;
-    row_split_ = geometry_.row_split;
+    return plan(min_x, min_y, max_x, max_y, n, points_per_cell, row_split);
+}
+
+PointGrid::PointGrid(std::span<const Point> first, std::span<const Point> second, double points_per_cell, int threads_wanted,
+                     unsigned row_split, const std::atomic<bool>* cancel)
+    : geometry_(Geometry::of(first, second, points_per_cell, row_split, threads_wanted)),
+      columns_(geometry_.columns),
+      rows_(geometry_.rows),
+      row_split_(geometry_.row_split) {
+    if (first.size() + second.size() == 0) {
+        cell_start_.assign(2, 0);
+        return;
+    }
     build<false>(first, second, threads_wanted, {}, cancel);
 }
 

@@ -39,6 +39,11 @@ public:
         static Geometry plan(double min_x, double min_y, double max_x, double max_y, std::size_t points,
                              double points_per_cell, unsigned row_split);
 
+        // The cells the first constructor below gives a grid over `first` and `second` (their
+        // bounds found on `threads` threads, 0: OpenMP's default), without building it.
+        static Geometry of(std::span<const Point> first, std::span<const Point> second, double points_per_cell,
+                           unsigned row_split, int threads = 0);
+
         std::uint32_t column(double x) const { return cell_of(x, origin_x, scale_x, columns); }
         std::uint32_t row(double y) const { return cell_of(y, origin_y, scale_y, rows); }
         std::uint32_t base_column(double x) const { return cell_of(x, origin_x, base_scale_x, base_columns); }

@@ -57,6 +57,9 @@ constexpr std::uint32_t kMaxBlocksPerSide = 256;
 // The point grid's rows are split in 4 (PointGrid): on GSHHG's shorelines, 7 % off the sweep.
 constexpr unsigned kRowSplit = 2;
 
+// Points a cell of the point grid holds on average.
+constexpr double kPointsPerCell = 2.0;
+
 // whole_level_ of an open chain.
 constexpr std::uint8_t kOpen = 0xff;
 
@@ -96,13 +99,6 @@ struct FirstLocations {
         return true;
     }
 };
-
-// The distinct locations of a ring's vertices but the closing one.
-std::uint32_t count_locations(std::span<const Point> open_ring) {
-    std::vector<LocationKey> keys(open_ring.begin(), open_ring.end());
-    std::sort(keys.begin(), keys.end());
-    return static_cast<std::uint32_t>(std::unique(keys.begin(), keys.end()) - keys.begin());
-}
 
 // The groups of a round's tiles (indices 0 to tiles − 1, row-major): tiles joined by the split
 // rings their cut ends do not settle (union-find over `open(i, join)`, which calls join(c) for
@@ -589,8 +585,7 @@ public:
 
     // Set up and pinned; `tile_level` capped at the levels.
     unsigned start_parts(unsigned tile_level) {
-        set_up();
-        drop_grid();
+        set_up_parts();
         std::vector<std::uint8_t> pinned = find_improper_segments(map_, options_.arithmetic, stats_.predicates, threads_, options_.cancel);
         stop_if_cancelled(options_.cancel);
         pin_from_improper(map_, pinned, threads_, vertex_count_ >= parallel_min_);
@@ -1222,15 +1217,33 @@ public:
         build_chains();
     }
 
+    // A run in parts (MapInParts) sets up without the whole map's grid: the tiles build their
+    // own, and ensure_grid one over the live vertices when the levels from the tile level up
+    // first run here. Only the grid's geometry is needed now (the blocks); the rings' distinct
+    // locations are counted ring by ring instead of from shared_ (which ensure_grid finds).
+    // On GSHHG with 1 worker, round 1's first task then went out at 1.76–2.19 s into the run
+    // instead of 2.09–2.70 s (the grid took 0.33–0.43 s of that).
+    void set_up_parts() {
+        geometry_ = PointGrid::Geometry::of(map_.vertices, control_points_, kPointsPerCell, kRowSplit, threads_);
+        take_control_points();
+        set_up_levels();
+        build_chains();
+    }
+
     // One grid over vertices (ids [0, n), removable) and control points (ids [n, n+m)); a tile's
     // over the whole map's cells that hold its points.
     void index_points() {
         if (tile_) {
             index_tile_points();
         } else {
-            grid_.emplace(map_.vertices, control_points_, 2.0, threads_, kRowSplit, options_.cancel);
+            grid_.emplace(map_.vertices, control_points_, kPointsPerCell, threads_, kRowSplit, options_.cancel);
         }
         geometry_ = grid_->geometry();
+        take_control_points();
+    }
+
+    // The control points from now on in indexed_points_ (in the grid too, once built).
+    void take_control_points() {
         stats_.control_points = control_points_.size();
         indexed_points_ = control_points_;
         control_points_ = {};
@@ -1243,17 +1256,18 @@ public:
     }
 
     // A run in parts: the whole map's grid is needed only for the rounds run here and the levels
-    // from the tile level up. It goes after the set-up and comes back over the live vertices when
-    // first needed (after the first round of tiles, a fraction of the map), answering as the
-    // grid over all of them with the removed ones taken out would (PointGrid).
-    void drop_grid() { grid_.reset(); }
-
+    // from the tile level up. It is built over the live vertices when first needed (after the
+    // first round of tiles, a fraction of the map), answering as the grid over all of them with
+    // the removed ones taken out would (PointGrid), and shared_ with it: live vertices sharing a
+    // location, all that rule 3 and the subsets of the top ask (coincides_with_other_segment,
+    // top_subset.hpp). Later removals leave a flag set, which only costs a look.
     void ensure_grid() {
         if (grid_) return;
         std::vector<std::uint8_t> removed(vertex_count_);
         for (std::uint32_t v = 0; v < vertex_count_; ++v) removed[v] = state_[v] == State::removed ? 1 : 0;
         grid_.emplace(geometry_, map_.vertices, indexed_points_, removed, threads_);
         compacted_at_ = stats_.removed;
+        find_shared_locations();
     }
 
     // Removed vertices stay in the grid, taken out, and every query reads past them; once they are
@@ -1349,28 +1363,32 @@ public:
         orientation_.assign(chains, 2);  // 2: not computed yet
         whole_level_.assign(chains, kOpen);
         ring_clear_.assign(chains, 0);
-#pragma omp parallel for schedule(dynamic, 64) num_threads(threads_) if (vertex_count_ >= parallel_min_)
-        for (std::uint32_t c = 0; c < chains; ++c) {
-            const Chain& chain = map_.chains[c];
-            std::uint32_t min_column = kNone, max_column = 0, min_row = kNone, max_row = 0;
-            for (std::uint32_t v = chain.first; v <= chain.last; ++v) {
-                chain_of_[v] = c;
-                if (v > chain.first) prev_[v] = v - 1;
-                if (v < chain.last) next_[v] = v + 1;
-                const std::uint32_t column = block_column(map_.vertices[v]), row = block_row(map_.vertices[v]);
-                block_xy_[v] = column << 16 | row;
-                min_column = std::min(min_column, column);
-                max_column = std::max(max_column, column);
-                min_row = std::min(min_row, row);
-                max_row = std::max(max_row, row);
-            }
-            if (tile_ && tile_->whole_level[c] != kOpen) {
-                whole_level_[c] = tile_->whole_level[c];  // the whole map's chain's
-                if (!split_over_tiles(c)) distinct_[c] = tile_->distinct[c];
-            } else if (!tile_ && is_closed(c)) {
-                distinct_[c] = count_distinct_locations(chain);
-                whole_level_[c] = static_cast<std::uint8_t>(
-                    std::max(Blocks::shared_level(min_column, max_column), Blocks::shared_level(min_row, max_row)));
+#pragma omp parallel num_threads(threads_) if (vertex_count_ >= parallel_min_)
+        {
+            std::vector<std::uint32_t> table;  // (count_locations' scratch)
+#pragma omp for schedule(dynamic, 64)
+            for (std::uint32_t c = 0; c < chains; ++c) {
+                const Chain& chain = map_.chains[c];
+                std::uint32_t min_column = kNone, max_column = 0, min_row = kNone, max_row = 0;
+                for (std::uint32_t v = chain.first; v <= chain.last; ++v) {
+                    chain_of_[v] = c;
+                    if (v > chain.first) prev_[v] = v - 1;
+                    if (v < chain.last) next_[v] = v + 1;
+                    const std::uint32_t column = block_column(map_.vertices[v]), row = block_row(map_.vertices[v]);
+                    block_xy_[v] = column << 16 | row;
+                    min_column = std::min(min_column, column);
+                    max_column = std::max(max_column, column);
+                    min_row = std::min(min_row, row);
+                    max_row = std::max(max_row, row);
+                }
+                if (tile_ && tile_->whole_level[c] != kOpen) {
+                    whole_level_[c] = tile_->whole_level[c];  // the whole map's chain's
+                    if (!split_over_tiles(c)) distinct_[c] = tile_->distinct[c];
+                } else if (!tile_ && is_closed(c)) {
+                    distinct_[c] = count_distinct_locations(chain, table);
+                    whole_level_[c] = static_cast<std::uint8_t>(
+                        std::max(Blocks::shared_level(min_column, max_column), Blocks::shared_level(min_row, max_row)));
+                }
             }
         }
         split_rings_.clear();
@@ -1385,13 +1403,15 @@ public:
     }
 
     // A ring's distinct locations: all its vertices but the closing one when none of the others
-    // shares its location with any vertex (shared_, which says so for every vertex of the map);
-    // else counted.
-    std::uint32_t count_distinct_locations(const Chain& chain) const {
-        bool alone = true;
-        for (std::uint32_t v = chain.first + 1; v < chain.last && alone; ++v) alone = !shared_[v];
-        if (alone) return chain.last - chain.first;
-        return count_locations(std::span<const Point>(map_.vertices.data() + chain.first, chain.last - chain.first));
+    // shares its location with any vertex (shared_, which says so for every vertex of the map,
+    // when found: not in a run in parts' set-up); else counted.
+    std::uint32_t count_distinct_locations(const Chain& chain, std::vector<std::uint32_t>& table) const {
+        if (!shared_.empty()) {
+            bool alone = true;
+            for (std::uint32_t v = chain.first + 1; v < chain.last && alone; ++v) alone = !shared_[v];
+            if (alone) return chain.last - chain.first;
+        }
+        return count_locations(std::span<const Point>(map_.vertices.data() + chain.first, chain.last - chain.first), table);
     }
 
     // Vertices whose location another vertex holds too (a node, a ring's closing vertex, a
@@ -2290,7 +2310,7 @@ public:
     Blocks blocks_;
     unsigned levels_ = 1;
     std::vector<std::uint32_t> prev_, next_, chain_of_;
-    std::vector<std::uint8_t> shared_;     // per vertex: another vertex is at its location
+    std::vector<std::uint8_t> shared_;     // per vertex: another vertex is at its location (ensure_grid: another live one)
     std::vector<std::uint32_t> block_xy_;  // per vertex: level-0 block, column << 16 | row
     std::vector<State> state_;
     std::vector<std::uint8_t> marked_;       // count targets: this round's budget
@@ -2383,7 +2403,7 @@ GridPlan plan_grid(const MapData& map) {
 GridPlan plan_grid(double min_x, double min_y, double max_x, double max_y, std::size_t points) {
     GridPlan plan;
     if (points == 0) return plan;
-    plan.grid = PointGrid::Geometry::plan(min_x, min_y, max_x, max_y, points, 2.0, kRowSplit);
+    plan.grid = PointGrid::Geometry::plan(min_x, min_y, max_x, max_y, points, kPointsPerCell, kRowSplit);
     plan.shift = block_shift(plan.grid.base_columns, plan.grid.base_rows);
     parallel::BlockLevels<2> blocks;
     blocks.cells = {plan.grid.base_columns, plan.grid.base_rows};
@@ -2507,6 +2527,7 @@ struct Cutter {
     const SimplifyOptions& options;
     CutPart out;
     std::map<std::uint32_t, FirstTile> tiles;
+    std::vector<std::uint32_t> table;  // (count_locations' scratch)
 
     std::uint32_t columns() const { return ((plan.grid.base_columns - 1) >> (plan.shift + t)) + 1; }
     std::uint32_t tile_of(Point p) const { return plan.block_row(p, t) * columns() + plan.block_column(p, t); }
@@ -2567,7 +2588,7 @@ struct Cutter {
             }
             using Blocks = parallel::BlockLevels<2>;
             level = static_cast<std::uint8_t>(std::max(Blocks::shared_level(c0, c1), Blocks::shared_level(r0, r1)));
-            count = count_locations(points.first(last));
+            count = count_locations(points.first(last), table);
             // The input orientation, counted where asked (Simplifier::know_orientation).
             if (options.arithmetic == exact::Arithmetic::rational) {
                 turn = static_cast<std::int8_t>(exact::ring_area_sign_gmp(points));
@@ -2634,7 +2655,7 @@ void append(std::vector<T>& to, std::vector<T>&& from) {
 
 CutPart cut_part(const MapData& part, std::uint32_t first_vertex, std::uint32_t first_chain, const GridPlan& plan, unsigned tile_level,
                  const SimplifyOptions& options) {
-    Cutter cutter{plan, std::min(tile_level, plan.levels), options, {}, {}};
+    Cutter cutter{plan, std::min(tile_level, plan.levels), options, {}, {}, {}};
     for (std::uint32_t c = 0; c < part.chains.size(); ++c) {
         const Chain& chain = part.chains[c];
         cutter.add_chain(std::span<const Point>(part.vertices.data() + chain.first, chain.last - chain.first + 1), first_chain + c,
