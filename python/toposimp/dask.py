@@ -67,8 +67,8 @@ Dask options:
                        Shapefiles (a .shp, or a folder of them) of PolyLines or of polygons,
                        GeoPackages and FlatGeobufs (a .fgb or a folder of them,
                        with their index of features) of (Multi)LineString and (Multi)Polygon
-                       layers, Z or M too, written to any output but TopoJSON (at one
-                       target, without --decimals, --precision or --levels)
+                       layers, Z or M too, written at one target without --decimals,
+                       --precision, --levels or --quantize
                        are read by parts on the workers (2D point layers among them
                        are read here, as control points): this process then never holds their
                        vertices, and the input files must be at the same absolute paths,

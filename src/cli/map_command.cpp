@@ -774,7 +774,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
     // (An engine that reads the vertices itself gets them left in the file where it can.)
     // (Unless the engine's caller declines, told the input's size: the input is then read here.)
     const bool could_leave = context.map_engine_in_file && !memory && !options.giscup && options.levels.empty() && !publishing.decimal_grid &&
-                             options.quantize == 0 && !io::is_topojson_output(options.output, options.format);
+                             options.quantize == 0;
     const bool declined = could_leave && context.leave_in_file_if && !context.leave_in_file_if(size_on_disk(options.input));
     const bool vertices_in_file = could_leave && !declined;
     log.debug("heap: {}", heap_pages());
@@ -789,8 +789,7 @@ int map_job(const MapOptions& options, Context& context, spdlog::logger& log, Ma
         log.debug("the input is read here, whole{}{}", why.empty() ? "" : ": ", why);
         log.debug("(only Shapefiles (a file, or a folder of them) of PolyLines or of polygons, GeoPackage "
                   "and FlatGeobuf (indexed) layers of (Multi)LineStrings or (Multi)Polygons (Z or M too), and points, "
-                  "written to any format but TopoJSON, at one target without --decimals, --precision or "
-                  "--levels, are read by parts)");
+                  "at one target without --decimals, --precision, --levels or --quantize, are read by parts)");
     }
 
     // The engine builds chains, indexes and ranks inside simplify().

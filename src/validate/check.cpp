@@ -106,7 +106,8 @@ private:
 bool match_line(const std::vector<Point>& original, const std::vector<Point>& simplified, std::vector<std::size_t>& at,
                 const VertexMatch& same_location) {
     at.clear();
-    if (original.empty() || simplified.size() < 2) {
+    if (original.empty()) return simplified.empty();  // (an empty part that stays empty: its own subset)
+    if (simplified.size() < 2) {
         std::size_t i = 0;
         for (const Point p : simplified) {
             while (i < original.size() && !same_location(original[i], p)) ++i;
@@ -500,8 +501,16 @@ private:
             }
             std::unordered_map<std::string, const Feature*> by_key;
             for (const Feature& feature : target->features) by_key.emplace(feature.key, &feature);
+            // Matched by order from a TopoJSON: the simplified features are the original's with
+            // a geometry (Layer::without_nulls), each the next of those.
+            const bool by_order_without_nulls = options_.key.empty() && target->without_nulls;
+            std::size_t next = 0;
             for (const Feature& feature : original_[l].features) {
-                const auto found = by_key.find(feature.key);
+                if (by_order_without_nulls && !feature.has_geometry) {
+                    matched_.push_back({l, &feature, nullptr});
+                    continue;
+                }
+                const auto found = by_key.find(by_order_without_nulls ? std::to_string(next++) : feature.key);
                 matched_.push_back({l, &feature, found == by_key.end() ? nullptr : found->second});
             }
         }

@@ -75,6 +75,7 @@ std::vector<Layer> read_layers(const std::string& path, const std::vector<std::s
     for (OGRLayer* source : sources) {
         Layer layer;
         layer.name = source->GetName();
+        layer.without_nulls = std::string(dataset->GetDriverName()) == "TopoJSON";
         const int key_field = key.empty() ? -1 : source->GetLayerDefn()->GetFieldIndex(key.c_str());
         if (!key.empty() && key_field < 0) {
             throw io::InputError("'" + path + "', layer '" + layer.name + "' has no field '" + key + "' (--key)");

@@ -30,6 +30,10 @@ struct Feature {
 struct Layer {
     std::string name;
     std::vector<Feature> features;
+    // Read from a TopoJSON: GDAL's reader drops the features whose geometry is null (the
+    // specification's {"type":null}, which toposimp writes for a feature without one), so the
+    // features in order are the others.
+    bool without_nulls = false;
 };
 
 // The named layers of `path` (none named: every layer); InputError for an unreadable dataset, a

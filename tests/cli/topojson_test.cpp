@@ -125,5 +125,45 @@ TEST(TopoJson, QuantizedKeepsTheTopologyOrIsRefused) {
     EXPECT_EQ(files, (std::vector<std::string>{"plain.topojson", "q.topojson"}));
 }
 
+// Features without a geometry are written as the specification's null objects, which GDAL's
+// TopoJSON reader drops: toposimp's read-back compares each feature GDAL gives back with the
+// input's next one that has a geometry (it once took them for the features in order, and
+// refused the file: "0 parts became 1"), and so does check (which found features lost and
+// borders no longer shared). Empty geometries are written and read back empty.
+TEST(TopoJson, NullAndEmptyGeometriesAreWrittenAndReadBack) {
+    const auto dir = fresh_dir("topojson");
+    const std::string lines = (dir / "lines.gpkg").string(), cells = (dir / "cells.gpkg").string();
+    write_layer(lines, "GPKG", wkbLineString,
+                {{"", "null first"},
+                 {"LINESTRING (0 0, 1 0.1, 2 0, 3 0.2, 4 0)", "a"},
+                 {"", "null"},
+                 {"LINESTRING EMPTY", "empty"},
+                 {"LINESTRING (0 1, 1 1.1, 2 1, 3 1.2, 4 1)", "b"},
+                 {"", "null last"}});
+    write_layer(cells, "GPKG", wkbPolygon,
+                {{"POLYGON ((0 0, 1 0, 1 1, 0.5 1.1, 0 1, 0 0))", "left"},
+                 {"", "null"},
+                 {"POLYGON ((1 0, 2 0, 2 1, 1 1, 1 0))", "right"},
+                 {"POLYGON EMPTY", "empty"}},
+                "cells");
+    for (const std::string& input : {lines, cells}) {
+        const std::string topo = (dir / (std::filesystem::path(input).stem().string() + ".topojson")).string();
+        const CliResult map = run_cli({"map", input, "-o", topo, "--keep", "50%"});
+        ASSERT_EQ(map.code, 0) << map.err;
+        const std::string text = contents(topo);
+        const std::size_t nulls = input == lines ? 3 : 1;
+        std::size_t found = 0;
+        for (std::size_t at = text.find("{\"type\":null,"); at != std::string::npos; at = text.find("{\"type\":null,", at + 1)) ++found;
+        EXPECT_EQ(found, nulls) << text.substr(0, 600);
+        const ReadLayer read = read_layer(topo);
+        ASSERT_EQ(read.features.size(), (input == lines ? 6u : 4u) - nulls);
+        const auto empty = std::find_if(read.features.begin(), read.features.end(), [](const ReadFeature& f) { return f.name == "empty"; });
+        ASSERT_NE(empty, read.features.end());
+        EXPECT_TRUE(empty->coordinates.empty() || empty->coordinates.front().empty());
+        const CliResult check = run_cli({"check", input, topo});
+        EXPECT_EQ(check.code, 0) << check.out;
+    }
+}
+
 }  // namespace
 }  // namespace toposimp::testing

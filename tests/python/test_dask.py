@@ -172,12 +172,14 @@ def test_killed_worker_changes_nothing(cluster, generated, generated_shapefiles,
         assert output.with_suffix(extension).read_bytes() == reference.with_suffix(extension).read_bytes(), extension
 
 
-@pytest.mark.parametrize("layers, suffix", [(["cells", "rivers", "roads"], "gpkg"), (["rivers"], "geojson"), (["cells"], "geojson")])
+@pytest.mark.parametrize("layers, suffix", [(["cells", "rivers", "roads"], "gpkg"), (["rivers"], "geojson"), (["cells"], "geojson"),
+                                            (["cells", "rivers", "roads"], "topojson")])
 def test_a_folder_of_layers_read_by_parts_on_the_workers(cluster, generated_shapefiles, binary, tmp_path, capsys, layers, suffix):
     """Cells, rivers and roads of a folder of Shapefiles to a GeoPackage, and the rivers (lines)
     or the cells (a polygon coverage) alone to a GeoJSON (toposimp's own writer, each feature's
-    vertices read again from its file), read by parts on real workers: the same bytes as
-    toposimp map."""
+    vertices read again from its file), and all three to a TopoJSON (its arcs read again from the
+    files: a coverage's from the rings that make them), read by parts on real workers: the same
+    bytes as toposimp map."""
     from toposimp import dask as toposimp_dask
 
     client, _ = cluster

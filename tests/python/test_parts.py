@@ -532,6 +532,26 @@ def test_first_round_reads_a_flatgeobuf_by_parts(binary, tmp_path, shapefile_fol
         assert runs[0][0] == 0 and all(one[1] == other[0] for one, other in zip(runs, runs[1:]))
 
 
+@pytest.mark.parametrize("which", ["lines", "polygons", "folder", "geopackage"])
+@pytest.mark.parametrize("target", [["--keep", "10%"], ["--max"]])
+def test_a_topojson_is_written_by_parts(binary, tmp_path, line_shapefile, polygon_shapefile, shapefile_folder, geopackage, which,
+                                        target):
+    """A TopoJSON of a map left in its files: every arc written from the files read again (a line
+    from its feature, a coverage's arc from the rings of the feature that makes it), the objects
+    from the plan. Lines with null records and two parts; a coverage with a null record, a hole and
+    a flat ring; a folder, and a GeoPackage, of polygon, line and point layers: toposimp map's bytes."""
+    layers = ["-l", "rivers", "-l", "places", "-l", "cells", "-l", "roads"]
+    arguments = {"lines": [str(line_shapefile[0]), "-p", str(line_shapefile[1])],
+                 "polygons": [str(polygon_shapefile[0]), "-p", str(polygon_shapefile[1])],
+                 "folder": [str(shapefile_folder), *layers],
+                 "geopackage": [str(geopackage[1]), *layers]}[which]
+    first, err, output, reference, _ = _by_parts_as_toposimp_map(binary, tmp_path, [*arguments, *target, *SAME_DATE], 1, 300,
+                                                              ".topojson")
+    assert output.read_bytes() == reference.read_bytes()
+    assert len(first.parts) > 2 and '"arcs":[' in output.read_text()
+    assert any("polygons_file" in part for part in first.parts) == (which != "lines")
+
+
 @pytest.mark.parametrize("damage, message", [
     (lambda part: _touched(pathlib.Path(part.get("lines_file", part.get("polygons_file")))) or part,
      "cannot be read here as it was when the map was read"),
@@ -801,20 +821,24 @@ def test_a_part_read_from_a_changed_input_stops_the_run(tmp_path, line_shapefile
     assert not output.exists()
 
 
-def test_an_input_changed_before_writing_leaves_no_output(tmp_path, line_shapefile):
-    """The input read again to write the output, changed since the map was read: refused."""
+@pytest.mark.parametrize("input_name, suffix", [("line_shapefile", ".shp"), ("polygon_shapefile", ".topojson")])
+def test_an_input_changed_before_writing_leaves_no_output(request, tmp_path, input_name, suffix):
+    """The input read again to write the output (a Shapefile's lines; a TopoJSON's arcs, a
+    coverage's made again from its rings), changed since the map was read: refused, nothing
+    written."""
     import shutil
 
+    given = request.getfixturevalue(input_name)[0]
     for extension in (".shp", ".shx", ".dbf"):
-        shutil.copy(line_shapefile[0].with_suffix(extension), tmp_path / ("lines" + extension))
-    lines = tmp_path / "lines.shp"
-    first = FirstRoundHere(damage=lambda at, value: (_touched(lines), value)[1] if at == "live" else value)
-    output = tmp_path / "out.shp"
-    status, out, err = _toposimp.run_command(["map", str(lines), "--keep", "10%", "-o", str(output)], first, 2, 400, 0, None, False, False,
+        shutil.copy(given.with_suffix(extension), tmp_path / ("in" + extension))
+    path = tmp_path / "in.shp"
+    first = FirstRoundHere(damage=lambda at, value: (_touched(path), value)[1] if at == "live" else value)
+    output = tmp_path / ("out" + suffix)
+    status, out, err = _toposimp.run_command(["map", str(path), "--keep", "10%", "-o", str(output)], first, 2, 300, 0, None, False, False,
                                              input_on_workers=True)
     assert status == 2
-    assert f"'{lines.resolve()}' changed while toposimp ran" in err
-    assert not output.exists()
+    assert f"'{path.resolve()}' changed while toposimp ran" in err
+    assert not output.exists() and not list(tmp_path.glob("*.tmp*"))
 
 
 def _drop_a_live_vertex(live):

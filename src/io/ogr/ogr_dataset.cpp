@@ -1590,6 +1590,95 @@ private:
     std::size_t next_ = 0;
 };
 
+// The arcs of a map left in its files, in order, as a TopoJSON writes them (write_topojson asks
+// for arc 0, 1, …): chain a's kept vertices, from the feature that holds it (a lines layer's) or
+// from the feature whose rings make it (a polygon coverage's arcs, made again from those rings
+// alone by map::arcs_of, each vertex with the bits of the ring that made the arc, as build()
+// takes them), read again feature after feature: each file once, a feature at a time held.
+class ArcCursor {
+public:
+    ArcCursor(const map::MapData& map, const VerticesInFile& in_file, const map::Coverage& coverage, const std::vector<std::uint8_t>& kept)
+        : map_(map), layers_(in_file.in_chain_order()), coverage_(coverage), kept_(kept) {
+        if (!layers_.empty()) cursor_.emplace(map_, layers_.front());
+    }
+
+    void arc(std::size_t a, std::vector<Point>& positions) {
+        if (a < asked_) throw std::logic_error("arcs asked for out of order");
+        asked_ = a;
+        const auto chain = static_cast<std::uint32_t>(a);
+        while (layer_ < layers_.size() && chain >= chains_end(*layers_[layer_])) next_layer();
+        if (layer_ == layers_.size()) throw std::logic_error("an arc beyond the layers' chains");
+        const LayerInFile& layer = *layers_[layer_];
+        positions.clear();
+        const map::Chain range = map_.chains.at(a);
+        if (!layer.polygons) {
+            while (layer.record_chain[feature_ + 1] <= chain) ++feature_;
+            if (loaded_ != feature_) view_ = read_up_to_feature();
+            for (std::uint32_t v = range.first; v <= range.last; ++v) {
+                if (kept_[v]) positions.push_back(view_[v]);
+            }
+            return;
+        }
+        while (coverage_.chains_before(layer.record_ring[feature_ + 1]) <= chain) ++feature_;
+        if (loaded_ != feature_) make_arcs(layer, read_up_to_feature());
+        const map::Chain made = made_.chains.at(chain - made_first_);
+        if (made.last - made.first != range.last - range.first) changed(layer);
+        for (std::uint32_t k = 0; k <= range.last - range.first; ++k) {
+            if (kept_[range.first + k]) positions.push_back(made_.vertices[made.first + k]);
+        }
+    }
+
+private:
+    std::uint32_t chains_end(const LayerInFile& layer) const {
+        return layer.polygons ? coverage_.chains_before(layer.record_ring.back()) : layer.record_chain.back();
+    }
+
+    void next_layer() {
+        ++layer_;
+        feature_ = next_ = 0;
+        loaded_ = kNoFeature;
+        if (layer_ < layers_.size()) cursor_.emplace(map_, layers_[layer_]);
+    }
+
+    // Feature feature_, the features before it read too (and passed over: they hold none of the
+    // arcs asked for), so that the file is read in order once.
+    VertexView read_up_to_feature() {
+        VertexView view{nullptr};
+        while (next_ <= feature_) view = cursor_->at(next_++);
+        loaded_ = feature_;
+        return view;
+    }
+
+    // The arcs the rings of feature_ make.
+    void make_arcs(const LayerInFile& layer, const VertexView& rings) {
+        const map::CoverageSlice slice = coverage_.slice(layer.record_ring[feature_], layer.record_ring[feature_ + 1]);
+        try {
+            made_ = map::arcs_of(slice, [&](const std::function<void(std::span<const Point>)>& visit) {
+                for (const std::vector<Point>& ring : *rings.rings) visit(ring);
+            });
+        } catch (const std::invalid_argument&) {
+            changed(layer);
+        }
+        made_first_ = slice.first_chain;
+    }
+
+    [[noreturn]] void changed(const LayerInFile& layer) const {
+        throw InputError("'" + layer.path + "' changed while toposimp ran: feature " + std::to_string(feature_) +
+                         " is not what it was when it was read; nothing written");
+    }
+
+    static constexpr std::size_t kNoFeature = std::numeric_limits<std::size_t>::max();
+    const map::MapData& map_;
+    std::vector<const LayerInFile*> layers_;
+    const map::Coverage& coverage_;
+    const std::vector<std::uint8_t>& kept_;
+    std::optional<VertexCursor> cursor_;
+    std::size_t layer_ = 0, feature_ = 0, next_ = 0, loaded_ = kNoFeature, asked_ = 0;
+    VertexView view_{nullptr};  // (a lines layer's feature loaded_)
+    map::MapData made_;         // (the arcs feature loaded_'s rings make, the first of them made_first_)
+    std::uint32_t made_first_ = 0;
+};
+
 VertexCursor OgrDataset::Data::vertex_cursor(const map::MapData& map, const Layer& layer) const {
     if (!in_file) return VertexCursor(map, nullptr);
     for (std::size_t k = 0; k < layers.size(); ++k) {
@@ -1849,9 +1938,11 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     if (options.transform && !topology) throw OutputError("a quantized output (--quantize) is TopoJSON: name it .topojson or use -f TopoJSON");
     if (rules && rules->own_writer) {
         // GDAL 3.6's GeoJSON writer rounds coordinates, and GDAL cannot write TopoJSON: toposimp
-        // writes both itself (a GeoJSON's features from their files read again where the map was
-        // left there; a TopoJSON's arcs from the map's vertices only).
-        if (data.in_file && topology) throw std::logic_error("a map left in its files written as " + driver_name);
+        // writes both itself (where the map was left in its files, a GeoJSON's features and a
+        // TopoJSON's arcs from those files read again).
+        if (data.in_file && topology && (options.transform || options.vertex_ranks)) {
+            throw std::logic_error("a map left in its files written as a quantized or ranked TopoJSON");
+        }
         if (!options.layer_options.empty() || !options.dataset_options.empty()) {
             warnings.push_back("-lco/-dsco are ignored for " + driver_name + ": toposimp writes it itself to keep coordinates exact");
         }
@@ -1868,7 +1959,10 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 topo.geometry = [&data, &layer](std::size_t i) { return data.topo_geometry(layer, i); };
                 layers.push_back(std::move(topo));
             }
-            auto arc = [&map, &kept, &options](std::size_t a, std::vector<Point>& positions, std::vector<int>& ranks) {
+            std::optional<ArcCursor> in_files;
+            if (data.in_file) in_files.emplace(map, *data.in_file, data.coverage, kept);
+            auto arc = [&map, &kept, &options, &in_files](std::size_t a, std::vector<Point>& positions, std::vector<int>& ranks) {
+                if (in_files) return in_files->arc(a, positions);
                 positions.clear();
                 for (std::uint32_t v = map.chains[a].first; v <= map.chains[a].last; ++v) {
                     if (!kept[v]) continue;
@@ -2022,9 +2116,20 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 if (rules && rules->keeps_fid_column && !layer.fid_column.empty()) {
                     for (std::size_t k = 0; k < layer.features.size(); ++k) by_fid.emplace(layer.features[k]->GetFID(), k);
                 }
-                std::size_t i = 0;
+                // GDAL's TopoJSON reader drops the features whose geometry is null (written as the
+                // specification's {"type":null}): each feature a TopoJSON gives back is the
+                // input's next one that is not.
+                const auto null = [&](std::size_t k) { return topology && layer.shapes[k].kind == Data::Layer::Kind::null; };
+                const auto nulls = static_cast<std::size_t>(std::count_if(layer.shapes.begin(), layer.shapes.end(), [&](const auto& shape) {
+                    return topology && shape.kind == Data::Layer::Kind::null;
+                }));
+                std::size_t i = 0, next = 0;  // (next: the input's feature after the last one compared)
                 for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
                     std::size_t at = i;
+                    if (topology) {
+                        while (next < layer.features.size() && null(next)) vertices.at(next++);  // (read in order)
+                        at = next++;
+                    }
                     if (!by_fid.empty()) {
                         const auto found = by_fid.find(feature->GetFID());
                         if (found == by_fid.end()) {
@@ -2035,7 +2140,7 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                     }
                     if (at < layer.features.size()) check_geometry(layer, at, feature->GetGeometryRef(), vertices.at(at));
                 }
-                check_count(layer, i);
+                check_count(layer, i + nulls);
             }
         }
     }
