@@ -2064,10 +2064,23 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
     // would make the driver parse the .prj again. (Not a TopoJSON whose positions carry a rank:
     // GDAL 3.6's reader drops arcs with a third coordinate. Nor one of a map left in its files:
     // GDAL's reader holds the whole file as a JSON tree, about 21 times its size (856 MiB for
-    // GSHHG's 41 MB at 10 %), the whole output map this process never holds otherwise. Their
-    // x and y are printed by the same code as the TopoJSON that is read back, and the by-parts
-    // one is that TopoJSON's bytes: tests/python/test_parts.py.)
-    if (!(topology && (options.vertex_ranks || data.in_file))) {
+    // GSHHG's 41 MB at 10 %), the whole output map this process never holds otherwise; nor one
+    // whose tree would take more than `read_back_at_most`, which could end the run for want of
+    // memory. Their x and y are printed by the same code as the TopoJSON that is read back, and
+    // the by-parts one is that TopoJSON's bytes: tests/python/test_parts.py.)
+    bool read_back = !(topology && (options.vertex_ranks || data.in_file));
+    if (read_back && topology) {
+        std::error_code error;
+        const std::uintmax_t size = std::filesystem::file_size(output.staging_path(), error);
+        constexpr std::uint64_t kTreePerByte = 21;
+        if (!error && size > options.read_back_at_most.value_or(machine_memory() / 4) / kTreePerByte) {
+            read_back = false;
+            warnings.push_back("'" + options.path + "' (" + std::to_string(size >> 20) + " MiB) was not read back through GDAL to check it: " +
+                               "GDAL's TopoJSON reader would hold about " + std::to_string(kTreePerByte) +
+                               " times its size; its coordinates are printed exactly (shortest round-trip decimals)");
+        }
+    }
+    if (read_back) {
         auto check_geometry = [&](const Data::Layer& layer, std::size_t i, const OGRGeometry* actual, VertexView at) {
             std::string difference;
             const auto expected = data.build_geometry(layer, i, map, at, kept, topology);

@@ -69,6 +69,10 @@ struct WriteOptions {
     // bytes (shapefile_bytes); else straight to its staging folder. Default: a sixteenth of the
     // machine's memory. The bytes are the same either way.
     std::optional<std::uint64_t> in_memory_at_most;
+    // A TopoJSON is read back through GDAL, whose reader holds the whole file as a JSON tree
+    // (about 21 times its size), only when that takes at most this many bytes; else it is
+    // moved into place unread, with a warning. Default: a quarter of the machine's memory.
+    std::optional<std::uint64_t> read_back_at_most;
 };
 
 // Layers handed over in memory (the Python module): each feature's geometry as WKB, in order.

@@ -1270,5 +1270,35 @@ TEST(ShapefileWriter, StraightToDiskIsTheSameBytes) {
     }
 }
 
+// A TopoJSON whose reading back through GDAL would take more than `read_back_at_most` (GDAL's
+// reader holds about 21 times the file) is moved into place unread, with a warning that says
+// why: the same bytes as one read back.
+TEST(TopoJsonWriter, TooBigToReadBackIsWrittenWithAWarning) {
+    const ShapeFile polygons("cells", wkbPolygon,
+                             {"POLYGON ((0 0,0 4,1 5,2 4,4 4,4 0,3 -1,2 0,0 0),(1 1,2 1,2 2,1 2,1 1))", "",
+                              "POLYGON ((4 0,4 4,6 4,6 0,5 -1,4 0))"});
+    const std::filesystem::path out = std::filesystem::path(polygons.path()).parent_path() / "out";
+    std::filesystem::create_directories(out);
+    map::MapData map;
+    const OgrDataset dataset = OgrDataset::read(polygons.path(), {}, map, true);
+    const std::vector<std::uint8_t> kept = thinned(map, 2);
+    auto write = [&](const std::string& name, std::optional<std::uint64_t> read_back_at_most) {
+        WriteOptions options;
+        options.path = (out / name).string();
+        options.overwrite = true;
+        options.read_back_at_most = read_back_at_most;
+        return dataset.write(options, map, kept);
+    };
+    EXPECT_TRUE(write("read.topojson", std::nullopt).empty());
+    const std::uint64_t size = std::filesystem::file_size(out / "read.topojson");
+    EXPECT_TRUE(write("just.topojson", 21 * size).empty());
+    const std::vector<std::string> warnings = write("unread.topojson", 21 * size - 1);
+    ASSERT_EQ(warnings.size(), 1u);
+    EXPECT_NE(warnings.front().find("was not read back through GDAL"), std::string::npos) << warnings.front();
+    EXPECT_NE(warnings.front().find("unread.topojson"), std::string::npos) << warnings.front();
+    EXPECT_EQ(file_bytes(out / "unread.topojson"), file_bytes(out / "read.topojson"));
+    EXPECT_EQ(file_bytes(out / "just.topojson"), file_bytes(out / "read.topojson"));
+}
+
 }  // namespace
 }  // namespace toposimp::io
