@@ -2136,9 +2136,8 @@ std::vector<std::string> OgrDataset::write(const WriteOptions& options, const ma
                 // specification's {"type":null}): each feature a TopoJSON gives back is the
                 // input's next one that is not.
                 const auto null = [&](std::size_t k) { return topology && layer.shapes[k].kind == Data::Layer::Kind::null; };
-                const auto nulls = static_cast<std::size_t>(std::count_if(layer.shapes.begin(), layer.shapes.end(), [&](const auto& shape) {
-                    return topology && shape.kind == Data::Layer::Kind::null;
-                }));
+                std::size_t nulls = 0;
+                for (std::size_t k = 0; k < layer.shapes.size(); ++k) nulls += null(k) ? 1 : 0;
                 std::size_t i = 0, next = 0;  // (next: the input's feature after the last one compared)
                 for (OGRFeatureUniquePtr feature{check->GetNextFeature()}; feature; feature.reset(check->GetNextFeature()), ++i) {
                     std::size_t at = i;
