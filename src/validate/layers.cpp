@@ -27,7 +27,9 @@ void add_geometry(Feature& feature, const OGRGeometry& geometry) {
                 feature.parts.push_back(points_of(*ring));
                 ++rings;
             }
-            feature.rings_per_polygon.push_back(rings);
+            // (An empty polygon, a multipolygon's EMPTY member, holds nothing to compare, and
+            // GDAL's GeoJSON and TopoJSON readers leave it out of what they give back.)
+            if (rings > 0) feature.rings_per_polygon.push_back(rings);
             break;
         }
         case wkbPoint:
