@@ -85,8 +85,14 @@ TEST(TopoJson, SeveralLayersLinesPointsAndAGrid) {
     EXPECT_FALSE(std::regex_search(arcs, std::regex(R"(\.[0-9]{2})"))) << arcs.substr(0, 300);
     EXPECT_EQ(read_layer(topo, 0).features.size(), 27u);
     EXPECT_EQ(read_layer(topo, 1).features.size(), 26u);
-    // A file of that name is refused without --overwrite; standard output works too.
+    // A file of that name is refused without --overwrite, and replaced with it (removed by
+    // toposimp, not by GDAL, which would parse it whole to list its files); standard output
+    // works too.
     EXPECT_EQ(run_cli({"map", input, "-o", topo, "-f", "TopoJSON"}).code, 2);
+    const CliResult again = run_cli({"map", input, "-o", topo, "-f", "TopoJSON", "--decimals", "1", "--overwrite"});
+    ASSERT_EQ(again.code, 0) << again.err;
+    EXPECT_EQ(contents(topo), text);
+    EXPECT_EQ(files_in(dir), std::vector<std::string>{"nh.topojson"});
     const CliResult piped = run_cli({"map", input, "-o", "/vsistdout/", "-f", "TopoJSON"});
     ASSERT_EQ(piped.code, 0) << piped.err;
     EXPECT_EQ(piped.out.rfind("{\"type\":\"Topology\"", 0), 0u) << piped.out.substr(0, 200);
