@@ -93,6 +93,13 @@ LayerInFile layer_in_file(const std::string& shp, const std::string& layer, std:
     return planned;
 }
 
+// The error for a feature (or a Shapefile's record) of a layer left in its file that is not, read
+// again, what it was when the map was read.
+InputError changed_while_running(const LayerInFile& layer, std::size_t index, const char* what = "feature") {
+    return InputError("'" + layer.path + "' changed while toposimp ran: " + what + " " + std::to_string(index) +
+                      " is not what it was when it was read; nothing written");
+}
+
 // Is a layer's file still what it was when it was read (its size and modification time)?
 bool unchanged(const LayerInFile& layer) {
     std::error_code error;
@@ -1175,10 +1182,7 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
     // (Z and M from the feature read again where its vertices were left in the file.)
     const bool rings_again = at.rings != nullptr;
     const bool has_z = rings_again ? at.ring_z != nullptr : at.z != nullptr, has_m = rings_again ? at.ring_m != nullptr : at.m != nullptr;
-    if (at.file != nullptr && ((with_z && !has_z) || (with_m && !has_m))) {
-        throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
-                         " is not what it was when it was read; nothing written");
-    }
+    if (at.file != nullptr && ((with_z && !has_z) || (with_m && !has_m))) throw changed_while_running(*at.file, index);
     const double* const z_of = at.z != nullptr ? at.z - at.first : z.data();
     const double* const m_of = at.m != nullptr ? at.m - at.first : m.data();
     auto fill = [&](OGRSimpleCurve& curve, const std::vector<std::uint32_t>& vertices) {
@@ -1240,8 +1244,7 @@ std::unique_ptr<OGRGeometry> OgrDataset::Data::build_geometry(const Layer& layer
                                 set_point(*ring, static_cast<int>(i), points[i].point, with_z, with_m, point_z, point_m);
                             }
                         } catch (const std::invalid_argument&) {
-                            throw InputError("'" + at.file->path + "' changed while toposimp ran: feature " + std::to_string(index) +
-                                             " is not what it was when it was read; nothing written");
+                            throw changed_while_running(*at.file, index);
                         }
                     }
                     polygon->addRingDirectly(ring.release());
@@ -1511,8 +1514,7 @@ public:
 
 private:
     [[noreturn]] void changed(std::size_t record) const {
-        throw InputError("'" + in_file_->path + "' changed while toposimp ran: " + (in_file_->polygons || in_file_->ogr_lines ? "feature " : "record ") +
-                         std::to_string(record) + " is not what it was when it was read; nothing written");
+        throw changed_while_running(*in_file_, record, in_file_->polygons || in_file_->ogr_lines ? "feature" : "record");
     }
 
     // Feature i read again through OGR (features from i on, if it is not the next one).
@@ -1662,10 +1664,7 @@ private:
         made_first_ = slice.first_chain;
     }
 
-    [[noreturn]] void changed(const LayerInFile& layer) const {
-        throw InputError("'" + layer.path + "' changed while toposimp ran: feature " + std::to_string(feature_) +
-                         " is not what it was when it was read; nothing written");
-    }
+    [[noreturn]] void changed(const LayerInFile& layer) const { throw changed_while_running(layer, feature_); }
 
     static constexpr std::size_t kNoFeature = std::numeric_limits<std::size_t>::max();
     const map::MapData& map_;
